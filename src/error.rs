@@ -1,0 +1,61 @@
+//! The library's error type. Every failure says which file, strand, line or key is at fault,
+//! and sorts itself into "bad input" (exit code 2) or "something else went wrong" (exit code 1).
+use std::path::{Path, PathBuf};
+
+use crate::groom::GroomError;
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The input file is malformed: wrong magic, truncated, inconsistent counts, bad numbers.
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
+
+    /// The groom read fine but breaks an invariant of the groom model.
+    #[error("{path}: {source}")]
+    InvalidGroom {
+        path: PathBuf,
+        #[source]
+        source: GroomError,
+    },
+
+    /// A groom built in memory (generated, simulated) breaks an invariant.
+    #[error(transparent)]
+    Groom(#[from] GroomError),
+
+    /// The user asked for something that cannot be done (bad option value, unknown extension).
+    #[error("{0}")]
+    Usage(String),
+
+    /// The operating system refused a read or write.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// An external library or helper program failed.
+    #[error("{0}")]
+    External(String),
+}
+
+impl Error {
+    pub fn format(path: &Path, message: impl Into<String>) -> Self {
+        Error::Format { path: path.to_path_buf(), message: message.into() }
+    }
+
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        Error::Io { path: path.to_path_buf(), source }
+    }
+
+    /// The process exit code the CLI uses for this error: 2 for bad input or usage, 1 otherwise.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Format { .. } | Error::InvalidGroom { .. } | Error::Groom(_) | Error::Usage(_) => 2,
+            Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => 2,
+            Error::Io { .. } | Error::External(_) => 1,
+        }
+    }
+}

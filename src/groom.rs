@@ -1,0 +1,341 @@
+//! The one in-memory groom model every reader produces, every writer consumes and the simulator
+//! reads and writes. Struct-of-arrays: all strands' points in one array, cut into strands by
+//! `strand_offsets`. Units are metres, Y is up.
+use std::ops::Range;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// Canonical names of the attributes coif itself reads or writes. Format modules map them to
+/// their own conventions (`displayColor` in USD, `groom_color` in Alembic…).
+pub mod attr {
+    /// Hair colour, linear RGB, per vertex or per strand.
+    pub const COLOR: &str = "color";
+    /// Cem Yuksel `.hair` per-vertex transparency.
+    pub const TRANSPARENCY: &str = "transparency";
+}
+
+/// How the control points of a strand are interpolated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CurveBasis {
+    #[default]
+    Linear,
+    Bezier,
+    BSpline,
+    CatmullRom,
+}
+
+/// Whether an attribute holds one value per vertex or one per strand.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AttributeRate {
+    Vertex,
+    Strand,
+}
+
+/// A named float attribute with 1–4 components per element (bond rates, wetness, rest positions…).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attribute {
+    pub name: String,
+    pub rate: AttributeRate,
+    pub components: usize,
+    pub data: Vec<f32>,
+}
+
+impl Attribute {
+    pub fn new(name: impl Into<String>, rate: AttributeRate, components: usize, data: Vec<f32>) -> Self {
+        Attribute { name: name.into(), rate, components, data }
+    }
+
+    /// Number of elements (vertices or strands) the data covers.
+    pub fn len(&self) -> usize {
+        self.data.len() / self.components.max(1)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+}
+
+/// Ways a groom can break the model's invariants; each names the strand or attribute at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GroomError {
+    #[error("strand offsets are malformed: {0}")]
+    BadOffsets(String),
+    #[error("strand {strand} has {count} vertices; a strand needs at least 2")]
+    TooFewVertices { strand: usize, count: usize },
+    #[error("strand {strand}, vertex {vertex}: coordinate is not finite")]
+    NonFinite { strand: usize, vertex: usize },
+    #[error("strand {strand}, segment {segment}: zero-length segment")]
+    ZeroLengthSegment { strand: usize, segment: usize },
+    #[error("strand {strand}, vertex {vertex}: width {width} is negative or not finite")]
+    BadWidth { strand: usize, vertex: usize, width: f32 },
+    #[error("{what} has {found} entries, expected {expected}")]
+    Length { what: String, expected: usize, found: usize },
+    #[error("attribute '{name}' has {components} components; 1 to 4 are allowed")]
+    AttributeComponents { name: String, components: usize },
+    #[error("attribute '{name}' appears twice")]
+    DuplicateAttribute { name: String },
+}
+
+/// A groom: many strands, each a polyline (or cubic control polygon) rooted on the scalp.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Groom {
+    /// All strands' points, root first within each strand.
+    pub points: Vec<Vec3>,
+    /// `strand_offsets[i]..strand_offsets[i + 1]` are strand `i`'s points; starts with 0.
+    pub strand_offsets: Vec<u32>,
+    /// Per-vertex diameter in metres.
+    pub widths: Vec<f32>,
+    /// Per-strand stable identifier (Epic's `groom_id`).
+    pub strand_ids: Vec<u32>,
+    /// Per-strand root position on the scalp's UV layout, when known.
+    pub root_uvs: Option<Vec<[f32; 2]>>,
+    /// Per-strand guide flag, when the groom distinguishes guides from rendered strands.
+    pub guides: Option<Vec<bool>>,
+    pub basis: CurveBasis,
+    /// Named attributes, sorted by name (use [`Groom::set_attribute`] to add one).
+    pub attributes: Vec<Attribute>,
+}
+
+impl Groom {
+    /// Builds a groom from strands given as point lists, with one width for every vertex.
+    pub fn from_strands<S: AsRef<[Vec3]>>(strands: &[S], width: f32) -> Self {
+        let mut groom = Groom { strand_offsets: vec![0], ..Default::default() };
+        for strand in strands {
+            groom.points.extend_from_slice(strand.as_ref());
+            groom.strand_offsets.push(groom.points.len() as u32);
+        }
+        groom.widths = vec![width; groom.points.len()];
+        groom.strand_ids = (0..strands.len() as u32).collect();
+        groom
+    }
+
+    pub fn strand_count(&self) -> usize {
+        self.strand_offsets.len().saturating_sub(1)
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Index range of strand `strand`'s vertices in the per-vertex arrays.
+    pub fn strand_range(&self, strand: usize) -> Range<usize> {
+        self.strand_offsets[strand] as usize..self.strand_offsets[strand + 1] as usize
+    }
+
+    pub fn strand_points(&self, strand: usize) -> &[Vec3] {
+        &self.points[self.strand_range(strand)]
+    }
+
+    /// Vertex count of each strand, in order.
+    pub fn vertex_counts(&self) -> impl Iterator<Item = usize> + '_ {
+        self.strand_offsets.windows(2).map(|w| (w[1] - w[0]) as usize)
+    }
+
+    /// Arc length of a strand's control polygon.
+    pub fn strand_length(&self, strand: usize) -> f32 {
+        polyline_length(self.strand_points(strand))
+    }
+
+    /// Axis-aligned bounds of all points, or `None` for an empty groom.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.points.first()?;
+        Some(self.points.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+    }
+
+    pub fn attribute(&self, name: &str) -> Option<&Attribute> {
+        self.attributes.iter().find(|a| a.name == name)
+    }
+
+    pub fn attribute_mut(&mut self, name: &str) -> Option<&mut Attribute> {
+        self.attributes.iter_mut().find(|a| a.name == name)
+    }
+
+    /// Adds an attribute, replacing one of the same name. Attributes stay sorted by name, so
+    /// grooms compare equal and files come out the same whatever order attributes were set in.
+    pub fn set_attribute(&mut self, attribute: Attribute) {
+        match self.attributes.binary_search_by(|a| a.name.as_str().cmp(&attribute.name)) {
+            Ok(index) => self.attributes[index] = attribute,
+            Err(index) => self.attributes.insert(index, attribute),
+        }
+    }
+
+    pub fn remove_attribute(&mut self, name: &str) -> Option<Attribute> {
+        let index = self.attributes.iter().position(|a| a.name == name)?;
+        Some(self.attributes.remove(index))
+    }
+
+    /// Elements an attribute of the given rate must have.
+    pub fn element_count(&self, rate: AttributeRate) -> usize {
+        match rate {
+            AttributeRate::Vertex => self.vertex_count(),
+            AttributeRate::Strand => self.strand_count(),
+        }
+    }
+
+    /// Scales all positions and widths (unit conversion at import/export).
+    pub fn scale(&mut self, factor: f32) {
+        self.points.iter_mut().for_each(|p| *p *= factor);
+        self.widths.iter_mut().for_each(|w| *w *= factor);
+    }
+
+    /// Checks every invariant of the model; the first violation is returned.
+    pub fn validate(&self) -> Result<(), GroomError> {
+        self.validate_offsets()?;
+        let strands = self.strand_count();
+        let vertices = self.vertex_count();
+        check_len("widths", vertices, self.widths.len())?;
+        check_len("strand ids", strands, self.strand_ids.len())?;
+        if let Some(uvs) = &self.root_uvs {
+            check_len("root UVs", strands, uvs.len())?;
+        }
+        if let Some(guides) = &self.guides {
+            check_len("guide flags", strands, guides.len())?;
+        }
+        for strand in 0..strands {
+            let range = self.strand_range(strand);
+            let points = &self.points[range.clone()];
+            if points.len() < 2 {
+                return Err(GroomError::TooFewVertices { strand, count: points.len() });
+            }
+            for (vertex, p) in points.iter().enumerate() {
+                if !p.is_finite() {
+                    return Err(GroomError::NonFinite { strand, vertex });
+                }
+            }
+            for (segment, pair) in points.windows(2).enumerate() {
+                if pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH {
+                    return Err(GroomError::ZeroLengthSegment { strand, segment });
+                }
+            }
+            for (vertex, &width) in self.widths[range].iter().enumerate() {
+                if !(width.is_finite() && width >= 0.0) {
+                    return Err(GroomError::BadWidth { strand, vertex, width });
+                }
+            }
+        }
+        for (i, attribute) in self.attributes.iter().enumerate() {
+            if !(1..=4).contains(&attribute.components) {
+                return Err(GroomError::AttributeComponents {
+                    name: attribute.name.clone(),
+                    components: attribute.components,
+                });
+            }
+            if self.attributes[..i].iter().any(|a| a.name == attribute.name) {
+                return Err(GroomError::DuplicateAttribute { name: attribute.name.clone() });
+            }
+            let expected = self.element_count(attribute.rate) * attribute.components;
+            check_len(&format!("attribute '{}'", attribute.name), expected, attribute.data.len())?;
+        }
+        Ok(())
+    }
+
+    fn validate_offsets(&self) -> Result<(), GroomError> {
+        match self.strand_offsets.first() {
+            None => {
+                return if self.points.is_empty() {
+                    Ok(())
+                } else {
+                    Err(GroomError::BadOffsets("points without strand offsets".into()))
+                }
+            }
+            Some(&first) if first != 0 => {
+                return Err(GroomError::BadOffsets(format!("first offset is {first}, not 0")))
+            }
+            Some(_) => {}
+        }
+        if let Some(strand) = self.strand_offsets.windows(2).position(|w| w[1] < w[0]) {
+            return Err(GroomError::BadOffsets(format!("strand {strand} ends before it starts")));
+        }
+        let last = *self.strand_offsets.last().unwrap() as usize;
+        if last != self.points.len() {
+            return Err(GroomError::BadOffsets(format!(
+                "offsets cover {last} points but the groom has {}",
+                self.points.len()
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Segments shorter than this (metres) count as zero-length: a solver cannot give them a direction.
+pub const MIN_SEGMENT_LENGTH: f32 = 1e-9;
+
+fn check_len(what: &str, expected: usize, found: usize) -> Result<(), GroomError> {
+    if expected == found {
+        Ok(())
+    } else {
+        Err(GroomError::Length { what: what.to_string(), expected, found })
+    }
+}
+
+/// Sum of segment lengths of a polyline.
+pub fn polyline_length(points: &[Vec3]) -> f32 {
+    points.windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn two_strands() -> Groom {
+        Groom::from_strands(
+            &[vec![Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0)], vec![Vec3::Y, Vec3::new(0.0, 2.0, 0.0)]],
+            1e-4,
+        )
+    }
+
+    #[test]
+    fn accessors_follow_offsets() {
+        let groom = two_strands();
+        assert_eq!(groom.strand_count(), 2);
+        assert_eq!(groom.vertex_count(), 5);
+        assert_eq!(groom.strand_points(1), &[Vec3::Y, Vec3::new(0.0, 2.0, 0.0)]);
+        assert_eq!(groom.vertex_counts().collect::<Vec<_>>(), vec![3, 2]);
+        assert_eq!(groom.strand_length(0), 2.0);
+        assert!(groom.validate().is_ok());
+    }
+
+    #[test]
+    fn validation_names_the_culprit() {
+        let mut groom = two_strands();
+        groom.points[3] = Vec3::new(f32::NAN, 0.0, 0.0);
+        assert_eq!(groom.validate(), Err(GroomError::NonFinite { strand: 1, vertex: 0 }));
+
+        let mut groom = two_strands();
+        groom.points[2] = groom.points[1];
+        assert_eq!(groom.validate(), Err(GroomError::ZeroLengthSegment { strand: 0, segment: 1 }));
+
+        let mut groom = two_strands();
+        groom.strand_offsets = vec![0, 4, 5];
+        assert_eq!(groom.validate(), Err(GroomError::TooFewVertices { strand: 1, count: 1 }));
+
+        let mut groom = two_strands();
+        groom.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, vec![0.0; 4]));
+        assert!(matches!(groom.validate(), Err(GroomError::Length { what, .. }) if what.contains("wetness")));
+
+        let mut groom = two_strands();
+        groom.set_attribute(Attribute::new("big", AttributeRate::Strand, 5, vec![0.0; 10]));
+        assert!(matches!(groom.validate(), Err(GroomError::AttributeComponents { .. })));
+
+        let mut groom = two_strands();
+        groom.widths[4] = -1.0;
+        assert!(matches!(groom.validate(), Err(GroomError::BadWidth { strand: 1, vertex: 1, .. })));
+
+        let mut groom = two_strands();
+        groom.strand_offsets = vec![0, 3, 6];
+        assert!(matches!(groom.validate(), Err(GroomError::BadOffsets(_))));
+    }
+
+    #[test]
+    fn set_attribute_replaces_by_name() {
+        let mut groom = two_strands();
+        groom.set_attribute(Attribute::new("w", AttributeRate::Strand, 1, vec![0.0, 0.0]));
+        groom.set_attribute(Attribute::new("w", AttributeRate::Strand, 1, vec![1.0, 1.0]));
+        assert_eq!(groom.attributes.len(), 1);
+        assert_eq!(groom.attribute("w").unwrap().data, vec![1.0, 1.0]);
+        assert!(groom.validate().is_ok());
+    }
+}

@@ -1,0 +1,113 @@
+//! Reading and writing grooms. One module per format, each a reader and a writer of [`Groom`];
+//! the format is chosen by magic bytes when reading and by extension when writing. Units and
+//! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
+pub mod atomic;
+pub mod hair;
+
+use std::path::Path;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+
+/// The file formats coif reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// Cem Yuksel's binary `.hair`.
+    Hair,
+}
+
+impl Format {
+    const ALL: &'static [(Format, &'static str)] = &[(Format::Hair, "hair")];
+
+    /// The format a file name's extension names.
+    pub fn from_extension(path: &Path) -> Result<Format> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+        Format::ALL.iter().find(|(_, e)| *e == ext).map(|(f, _)| *f).ok_or_else(|| {
+            let known: Vec<_> = Format::ALL.iter().map(|(_, e)| format!(".{e}")).collect();
+            Error::Usage(format!(
+                "{}: unknown groom file extension; coif reads and writes {}",
+                path.display(),
+                known.join(", ")
+            ))
+        })
+    }
+
+    /// The format a file's first bytes announce, if any.
+    pub fn from_magic(head: &[u8]) -> Option<Format> {
+        head.starts_with(hair::SIGNATURE).then_some(Format::Hair)
+    }
+
+    pub fn name(self) -> &'static str {
+        Format::ALL.iter().find(|(f, _)| *f == self).map(|(_, e)| *e).unwrap()
+    }
+}
+
+/// Axis that points up in a file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum UpAxis {
+    #[default]
+    Y,
+    Z,
+}
+
+/// How to interpret a file that does not say its own units or up axis (`.hair`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ImportOptions {
+    /// Metres per file unit (0.01 for centimetres); `None` keeps the file's own or metres.
+    pub meters_per_unit: Option<f32>,
+    /// The file's up axis; `None` keeps the file's own or Y.
+    pub up_axis: Option<UpAxis>,
+}
+
+/// A groom read from disk, with the format it came in.
+pub struct Loaded {
+    pub groom: Groom,
+    pub format: Format,
+}
+
+/// Reads a groom file, converts it to metres and Y up, and validates it.
+pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let format = match Format::from_magic(&bytes) {
+        Some(format) => format,
+        None => Format::from_extension(path)?,
+    };
+    let mut groom = match format {
+        Format::Hair => hair::read(&bytes, path)?,
+    };
+    apply_import_options(&mut groom, options);
+    groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
+    Ok(Loaded { groom, format })
+}
+
+fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
+    if options.up_axis == Some(UpAxis::Z) {
+        // Z up to Y up: (x, y, z) -> (x, z, -y), a rotation, so handedness is kept.
+        groom.points.iter_mut().for_each(|p| *p = Vec3::new(p.x, p.z, -p.y));
+    }
+    if let Some(scale) = options.meters_per_unit {
+        groom.scale(scale);
+    }
+}
+
+/// Writes a groom in the format its extension names, atomically. Returns warnings about data
+/// the format cannot carry.
+pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
+    groom.validate()?;
+    let format = Format::from_extension(path)?;
+    match format {
+        Format::Hair => {
+            hair::check_writable(groom, path)?;
+            atomic::write_atomically(path, |w| hair::write(groom, w).map_err(|e| Error::io(path, e)))?;
+            Ok(hair::unsupported(groom)
+                .into_iter()
+                .map(|what| format!("{}: .hair drops {what}", path.display()))
+                .collect())
+        }
+    }
+}

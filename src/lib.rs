@@ -1,0 +1,16 @@
+//! coif: offline hair-groom styling. Import groom curves, style them with a Cosserat-rod
+//! simulation whose side-chain bonds make deformation plastic, settle the new rest shape, export
+//! to USD and Alembic, and preview with an Embree path tracer.
+//!
+//! Data flows one way: `io` readers produce a [`Groom`], the simulation transforms it, `io`
+//! writers and the renderer consume it.
+pub mod embree;
+pub mod error;
+pub mod generate;
+pub mod groom;
+pub mod head;
+pub mod info;
+pub mod io;
+
+pub use error::{Error, Result};
+pub use groom::Groom;

@@ -1,0 +1,29 @@
+//! Helpers shared by the integration tests: run the `coif` binary and inspect what it did.
+#![allow(dead_code)]
+use std::path::Path;
+use std::process::{Command, Output};
+
+pub fn coif(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coif")).args(args).output().expect("the coif binary runs")
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+pub fn stdout_json(output: &Output) -> serde_json::Value {
+    assert!(output.status.success(), "coif failed: {}", stderr(output));
+    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
+}
+
+pub fn path_str(path: &Path) -> &str {
+    path.to_str().expect("test paths are UTF-8")
+}
+
+/// Files in a directory, sorted, to check that nothing (not even a temporary) was left behind.
+pub fn dir_listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
