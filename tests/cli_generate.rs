@@ -32,7 +32,10 @@ fn generate_then_info_reports_what_was_asked() {
         assert_eq!(groom["vertices_per_strand"]["max"], vertices as f64);
         for key in ["min", "mean", "max"] {
             let measured = groom["strand_length"][key].as_f64().unwrap();
-            assert!((measured - length).abs() < 0.01 * length, "{style}: {key} length {measured} vs {length}");
+            assert!(
+                (measured - length).abs() < 0.01 * length,
+                "{style}: {key} length {measured} vs {length}"
+            );
         }
     }
 }
@@ -45,8 +48,11 @@ fn length_variation_spreads_lengths_within_bounds() {
     assert!(coif(&args).status.success());
     let info = stdout_json(&coif(&["info", "--json", path_str(&out)]));
     let lengths = &info["groom"]["strand_length"];
-    let (min, max, mean) =
-        (lengths["min"].as_f64().unwrap(), lengths["max"].as_f64().unwrap(), lengths["mean"].as_f64().unwrap());
+    let (min, max, mean) = (
+        lengths["min"].as_f64().unwrap(),
+        lengths["max"].as_f64().unwrap(),
+        lengths["mean"].as_f64().unwrap(),
+    );
     assert!(min >= 0.24 * 0.8 - 1e-4 && max <= 0.24 * 1.2 + 1e-4, "{min}..{max}");
     assert!(max - min > 0.24 * 0.3, "lengths barely vary: {min}..{max}");
     assert!((mean - 0.24).abs() < 0.24 * 0.03, "mean {mean}");

@@ -8,15 +8,27 @@ use glam::Vec3;
 
 fn sample_groom() -> Groom {
     let strands: Vec<Vec<Vec3>> = (0..5)
-        .map(|s| (0..(3 + s)).map(|k| Vec3::new(s as f32 * 0.01, -(k as f32) * 0.02, 0.001 * k as f32)).collect())
+        .map(|s| {
+            (0..(3 + s)).map(|k| Vec3::new(s as f32 * 0.01, -(k as f32) * 0.02, 0.001 * k as f32)).collect()
+        })
         .collect();
     let mut groom = Groom::from_strands(&strands, 70e-6);
     for (i, w) in groom.widths.iter_mut().enumerate() {
         *w = 60e-6 + i as f32 * 1e-7;
     }
     let n = groom.vertex_count();
-    groom.set_attribute(Attribute::new(attr::COLOR, AttributeRate::Vertex, 3, (0..3 * n).map(|i| i as f32 / 100.0).collect()));
-    groom.set_attribute(Attribute::new(attr::TRANSPARENCY, AttributeRate::Vertex, 1, (0..n).map(|i| i as f32 / 50.0).collect()));
+    groom.set_attribute(Attribute::new(
+        attr::COLOR,
+        AttributeRate::Vertex,
+        3,
+        (0..3 * n).map(|i| i as f32 / 100.0).collect(),
+    ));
+    groom.set_attribute(Attribute::new(
+        attr::TRANSPARENCY,
+        AttributeRate::Vertex,
+        1,
+        (0..n).map(|i| i as f32 / 50.0).collect(),
+    ));
     groom
 }
 

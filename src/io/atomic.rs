@@ -22,9 +22,7 @@ where
     // Temporary files are private (0600) by default; an output should get the usual 0666 & !umask.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let temp = builder
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
+    let temp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     let mut writer = BufWriter::with_capacity(1 << 20, temp);
     fill(&mut writer)?;
     writer.flush().map_err(|e| Error::io(path, e))?;

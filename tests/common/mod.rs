@@ -22,8 +22,10 @@ pub fn path_str(path: &Path) -> &str {
 
 /// Files in a directory, sorted, to check that nothing (not even a temporary) was left behind.
 pub fn dir_listing(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
     names.sort();
     names
 }
