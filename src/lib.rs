@@ -10,6 +10,7 @@ pub mod generate;
 pub mod groom;
 pub mod head;
 pub mod info;
+pub mod interact;
 pub mod io;
 
 pub use error::{Error, Result};

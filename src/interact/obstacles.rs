@@ -1,0 +1,221 @@
+//! Solid obstacles a strand meets while it is styled — the head, a floor or pillow, perm rods —
+//! as signed distance functions, and the position-projection contact with friction the solver
+//! applies to every vertex after each constraint iteration.
+use std::sync::Arc;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use super::mesh_sdf::MeshSdf;
+
+/// An obstacle's shape. Distances are signed: negative inside the solid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", tag = "shape")]
+pub enum Shape {
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    /// An axis-aligned ellipsoid, e.g. the analytic head (`coif::head::Head`).
+    Ellipsoid {
+        center: Vec3,
+        radii: Vec3,
+    },
+    /// The half-space below the plane through `point` with outward `normal` (a floor).
+    Plane {
+        point: Vec3,
+        normal: Vec3,
+    },
+    /// An axis-aligned box (a pillow, a table).
+    Box {
+        center: Vec3,
+        half_extents: Vec3,
+    },
+    /// A segment `a`–`b` swept by a sphere: a perm rod (curler).
+    Capsule {
+        a: Vec3,
+        b: Vec3,
+        radius: f32,
+    },
+    /// A triangle mesh through its baked signed distance field.
+    #[serde(skip)]
+    Mesh(Arc<MeshSdf>),
+}
+
+impl Shape {
+    /// Signed distance from `p` to the surface and the outward unit normal there.
+    pub fn distance(&self, p: Vec3) -> (f32, Vec3) {
+        match self {
+            Shape::Sphere { center, radius } => {
+                let d = p - *center;
+                let len = d.length();
+                (len - radius, if len > 0.0 { d / len } else { Vec3::Y })
+            }
+            Shape::Ellipsoid { center, radii } => {
+                // Quílez's first-order distance bound: exact on the surface, tight close to it.
+                let q = p - *center;
+                let k0 = (q / *radii).length();
+                let gradient = q / (*radii * *radii);
+                let k1 = gradient.length();
+                if k1 == 0.0 {
+                    return (-radii.min_element(), Vec3::Y);
+                }
+                (k0 * (k0 - 1.0) / k1, gradient / k1)
+            }
+            Shape::Plane { point, normal } => {
+                let n = normal.normalize();
+                ((p - *point).dot(n), n)
+            }
+            Shape::Box { center, half_extents } => box_distance(p - *center, *half_extents),
+            Shape::Capsule { a, b, radius } => {
+                let ab = *b - *a;
+                let t = ((p - *a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+                let d = p - (*a + ab * t);
+                let len = d.length();
+                let normal = if len > 0.0 { d / len } else { ab.any_orthonormal_vector() };
+                (len - radius, normal)
+            }
+            Shape::Mesh(sdf) => sdf.distance(p),
+        }
+    }
+
+    /// The same shape moved by `offset` (rods slide along during a stage).
+    pub fn translated(&self, offset: Vec3) -> Shape {
+        match self {
+            Shape::Sphere { center, radius } => Shape::Sphere { center: *center + offset, radius: *radius },
+            Shape::Ellipsoid { center, radii } => {
+                Shape::Ellipsoid { center: *center + offset, radii: *radii }
+            }
+            Shape::Plane { point, normal } => Shape::Plane { point: *point + offset, normal: *normal },
+            Shape::Box { center, half_extents } => {
+                Shape::Box { center: *center + offset, half_extents: *half_extents }
+            }
+            Shape::Capsule { a, b, radius } => {
+                Shape::Capsule { a: *a + offset, b: *b + offset, radius: *radius }
+            }
+            Shape::Mesh(sdf) => Shape::Mesh(Arc::new(sdf.translated(offset))),
+        }
+    }
+}
+
+fn box_distance(q: Vec3, half: Vec3) -> (f32, Vec3) {
+    let d = q.abs() - half;
+    let outside = d.max(Vec3::ZERO);
+    if outside.length_squared() > 0.0 {
+        let len = outside.length();
+        return (len, (outside * q.signum()) / len);
+    }
+    // Inside: the nearest face is the one with the largest (least negative) d.
+    let axis = if d.x >= d.y && d.x >= d.z {
+        Vec3::X
+    } else if d.y >= d.z {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    (d.max_element(), axis * q.signum())
+}
+
+/// Coulomb friction for position-based contacts (Macklin et al. 2014): a vertex pushed out by
+/// `depth` keeps still (static) if it slid less than `static_friction · depth` along the
+/// surface this step, else its slide is shortened by `dynamic_friction · depth`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Friction {
+    pub static_friction: f32,
+    pub dynamic_friction: f32,
+}
+
+impl Default for Friction {
+    /// Hair on skin or cotton: μs ≈ 0.4, μk ≈ 0.3.
+    fn default() -> Self {
+        Friction { static_friction: 0.4, dynamic_friction: 0.3 }
+    }
+}
+
+/// Pushes `p` (this step's predicted position of a vertex of the given `radius`, which started
+/// the step at `previous`) out of `shape`, with friction. Returns the corrected position, or
+/// `None` when the vertex does not touch the obstacle.
+pub fn resolve_contact(
+    shape: &Shape,
+    p: Vec3,
+    previous: Vec3,
+    radius: f32,
+    friction: Friction,
+) -> Option<Vec3> {
+    let (distance, normal) = shape.distance(p);
+    let depth = radius - distance;
+    if depth <= 0.0 {
+        return None;
+    }
+    let pushed = p + normal * depth;
+    let motion = pushed - previous;
+    let slide = motion - normal * motion.dot(normal);
+    let slide_length = slide.length();
+    let correction = if slide_length < friction.static_friction * depth {
+        slide
+    } else if slide_length > 0.0 {
+        slide * (friction.dynamic_friction * depth / slide_length).min(1.0)
+    } else {
+        Vec3::ZERO
+    };
+    Some(pushed - correction)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_distances_match_geometry() {
+        let sphere = Shape::Sphere { center: Vec3::ZERO, radius: 1.0 };
+        assert_eq!(sphere.distance(Vec3::new(0.0, 3.0, 0.0)), (2.0, Vec3::Y));
+        let plane = Shape::Plane { point: Vec3::new(0.0, -1.0, 0.0), normal: Vec3::Y };
+        assert_eq!(plane.distance(Vec3::new(5.0, -1.5, 2.0)).0, -0.5);
+        let capsule = Shape::Capsule { a: Vec3::ZERO, b: Vec3::X, radius: 0.1 };
+        let (d, n) = capsule.distance(Vec3::new(0.5, 0.0, 0.3));
+        assert!((d - 0.2).abs() < 1e-6 && n.abs_diff_eq(Vec3::Z, 1e-6));
+        let (d, n) = capsule.distance(Vec3::new(1.5, 0.0, 0.0));
+        assert!((d - 0.4).abs() < 1e-6 && n.abs_diff_eq(Vec3::X, 1e-6));
+        let bx = Shape::Box { center: Vec3::ZERO, half_extents: Vec3::new(1.0, 0.5, 2.0) };
+        let (d, n) = bx.distance(Vec3::new(0.2, 0.4, 0.0));
+        assert!((d + 0.1).abs() < 1e-6 && n == Vec3::Y);
+        assert!((bx.distance(Vec3::new(2.0, 1.5, 0.0)).0 - 2f32.sqrt()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn ellipsoid_distance_is_exact_on_the_axes_and_zero_on_the_surface() {
+        let e = Shape::Ellipsoid { center: Vec3::ZERO, radii: Vec3::new(0.078, 0.1, 0.095) };
+        let (d, n) = e.distance(Vec3::new(0.0, 0.15, 0.0));
+        assert!((d - 0.05).abs() < 1e-6 && n.abs_diff_eq(Vec3::Y, 1e-6));
+        let surface = Vec3::new(0.078, 0.1, 0.095) * Vec3::new(0.3, 0.8, -0.2).normalize();
+        assert!(e.distance(surface).0.abs() < 1e-6);
+        assert!(e.distance(Vec3::new(0.01, 0.0, 0.0)).0 < 0.0);
+    }
+
+    #[test]
+    fn contact_pushes_out_to_the_radius_and_friction_holds_or_slows_sliding() {
+        let floor = Shape::Plane { point: Vec3::ZERO, normal: Vec3::Y };
+        let r = 0.001;
+        assert!(
+            resolve_contact(&floor, Vec3::new(0.0, 0.01, 0.0), Vec3::ZERO, r, Friction::default()).is_none()
+        );
+        // Pressed straight down: lands at height r.
+        let p = resolve_contact(
+            &floor,
+            Vec3::new(0.0, -0.01, 0.0),
+            Vec3::new(0.0, 0.0, 0.0),
+            r,
+            Friction::default(),
+        )
+        .unwrap();
+        assert!((p.y - r).abs() < 1e-7 && p.x == 0.0);
+        // A small slide with a deep push: static friction holds the vertex in place.
+        let previous = Vec3::new(0.0, r, 0.0);
+        let p =
+            resolve_contact(&floor, Vec3::new(0.001, -0.01, 0.0), previous, r, Friction::default()).unwrap();
+        assert!(p.abs_diff_eq(previous, 1e-7), "{p:?}");
+        // A fast slide with a shallow push: kinetic friction shortens it by μk·depth.
+        let p = resolve_contact(&floor, Vec3::new(0.1, 0.0, 0.0), previous, r, Friction::default()).unwrap();
+        assert!((p.x - (0.1 - 0.3 * r)).abs() < 1e-6 && (p.y - r).abs() < 1e-7, "{p:?}");
+    }
+}
