@@ -12,6 +12,7 @@ pub mod head;
 pub mod info;
 pub mod interact;
 pub mod io;
+pub mod style;
 
 pub use error::{Error, Result};
 pub use groom::Groom;

@@ -1,0 +1,680 @@
+//! Styling recipes: TOML files that describe a perm, a water set, a blow-dry or a bed-head as
+//! global settings, obstacles, perm rods and an ordered timeline of stages.
+//!
+//! Parsing is strict, because a recipe that silently ignores a misspelt key styles the wrong
+//! hair on a farm at night: unknown keys, wrong types, impossible values, references to rods or
+//! obstacles that do not exist and impossible stage orders are all errors that name the line.
+use std::path::Path;
+
+use glam::Vec3;
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::error::{Error, Result};
+use crate::interact::water::WaterParams;
+use crate::interact::wetness::WetnessParams;
+
+/// A parsed and checked recipe.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Recipe {
+    #[serde(default)]
+    pub settings: Settings,
+    #[serde(default)]
+    pub bonds: BondInfluences,
+    #[serde(default)]
+    pub contacts: Contacts,
+    #[serde(default)]
+    pub wetness: WetnessParams,
+    #[serde(default)]
+    pub water: Option<WaterSpec>,
+    #[serde(default)]
+    pub obstacles: Vec<Spanned<Obstacle>>,
+    #[serde(default)]
+    pub rods: Vec<Spanned<Rod>>,
+    pub stages: Vec<Spanned<Stage>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Settings {
+    /// Time step, seconds (Table 1: 1/360).
+    pub dt: f32,
+    /// Solver iterations per step (Table 1: 5).
+    pub iterations: u32,
+    /// m/s², Y up.
+    pub gravity: [f32; 3],
+    /// Bending stiffness at the root, k_o ∈ (0, 1] (Table 1: 0.05).
+    pub stiffness: f32,
+    /// Cuticle peel rate per metre from the root (Table 1: 0.33 %/cm = 0.33 /m).
+    pub cuticle_peel_per_metre: f32,
+    /// Velocity damping per second.
+    pub damping: f32,
+    /// Seed for every random choice the recipe makes (masks, droplet placement).
+    pub seed: u64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            dt: 1.0 / 360.0,
+            iterations: 5,
+            gravity: [0.0, -9.8, 0.0],
+            stiffness: 0.05,
+            cuticle_peel_per_metre: 0.33,
+            damping: 2.0,
+            seed: 1,
+        }
+    }
+}
+
+/// Each bond kind's share of the rest shape (S1-15's `f_j`).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BondInfluences {
+    pub hydrogen: f32,
+    pub ionic: f32,
+    pub disulfide: f32,
+    pub peptide: f32,
+}
+
+impl Default for BondInfluences {
+    /// Table 1, scene 3.
+    fn default() -> Self {
+        BondInfluences { hydrogen: 0.33, ionic: 0.30, disulfide: 0.20, peptide: 0.17 }
+    }
+}
+
+/// Bond amounts per kind for a chemistry stage: the fraction broken by a lotion, or re-formed by
+/// a neutraliser or rinse. Kinds left out are untouched.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BondAmounts {
+    pub hydrogen: Option<f32>,
+    pub ionic: Option<f32>,
+    pub disulfide: Option<f32>,
+    pub peptide: Option<f32>,
+}
+
+impl BondAmounts {
+    fn entries(&self) -> [(&'static str, Option<f32>); 4] {
+        [
+            ("hydrogen", self.hydrogen),
+            ("ionic", self.ionic),
+            ("disulfide", self.disulfide),
+            ("peptide", self.peptide),
+        ]
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Contacts {
+    /// S1-18 hair–hair penalty.
+    pub hair_hair: bool,
+    /// α of S1-18, m/s².
+    pub hair_stiffness: f32,
+    pub static_friction: f32,
+    pub dynamic_friction: f32,
+}
+
+impl Default for Contacts {
+    fn default() -> Self {
+        Contacts { hair_hair: false, hair_stiffness: 50.0, static_friction: 0.4, dynamic_friction: 0.3 }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaterSpec {
+    /// Droplets scattered among the hair when a `wet` stage starts.
+    pub droplets: usize,
+    #[serde(default, flatten)]
+    pub params: WaterParams,
+}
+
+/// A solid the hair meets, named so stages can refer to it.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Obstacle {
+    /// The analytic head the groom grows on (`coif::head::Head`), optionally moved or resized.
+    Head {
+        name: String,
+        center: Option<[f32; 3]>,
+        radii: Option<[f32; 3]>,
+    },
+    Sphere {
+        name: String,
+        center: [f32; 3],
+        radius: f32,
+    },
+    /// A floor: the half-space below the plane.
+    Plane {
+        name: String,
+        point: [f32; 3],
+        normal: [f32; 3],
+    },
+    /// An axis-aligned box: a pillow, a table.
+    Box {
+        name: String,
+        center: [f32; 3],
+        half_extents: [f32; 3],
+    },
+}
+
+impl Obstacle {
+    pub fn name(&self) -> &str {
+        match self {
+            Obstacle::Head { name, .. }
+            | Obstacle::Sphere { name, .. }
+            | Obstacle::Plane { name, .. }
+            | Obstacle::Box { name, .. } => name,
+        }
+    }
+}
+
+/// A perm rod (curler): a capsule strands are wound onto.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rod {
+    pub name: String,
+    /// The rod's two end centres, metres.
+    pub a: [f32; 3],
+    pub b: [f32; 3],
+    pub radius: f32,
+}
+
+/// Which strands a stage acts on.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Mask {
+    pub region: Region,
+    /// Keep this fraction of the region's strands, chosen with the recipe's seed.
+    pub fraction: f32,
+}
+
+impl Default for Mask {
+    fn default() -> Self {
+        Mask { region: Region::All, fraction: 1.0 }
+    }
+}
+
+/// A scalp region, by the direction from the head centre to the strand's root.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Region {
+    #[default]
+    All,
+    Crown,
+    Front,
+    Sides,
+    Back,
+    Nape,
+}
+
+impl Region {
+    /// Whether a root whose unit direction from the head centre is `dir` lies in the region.
+    pub fn contains(self, dir: Vec3) -> bool {
+        match self {
+            Region::All => true,
+            Region::Crown => dir.y > 0.7,
+            Region::Front => dir.z > 0.3 && dir.y <= 0.7,
+            Region::Sides => dir.x.abs() > 0.6 && dir.y <= 0.7,
+            Region::Back => dir.z < -0.3 && dir.y <= 0.7 && dir.y > 0.0,
+            Region::Nape => dir.z < -0.3 && dir.y <= 0.0,
+        }
+    }
+}
+
+/// How a `wrap` stage assigns strands to rods.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Layout {
+    /// Each strand goes to the rod nearest its tip.
+    #[default]
+    Nearest,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DryerSpec {
+    pub position: [f32; 3],
+    pub target: [f32; 3],
+    /// α of S1-17, m/s².
+    pub strength: f32,
+    #[serde(default = "default_falloff")]
+    pub falloff: f32,
+    /// Degrees off the axis beyond which the jet does not reach.
+    pub cone_degrees: Option<f32>,
+}
+
+fn default_falloff() -> f32 {
+    0.05
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+/// One stage of the timeline. Durations are seconds of simulated time.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Stage {
+    /// Soak the hair: wetness rises to `amount` (breaking hydrogen bonds).
+    Wet {
+        duration: f32,
+        #[serde(default = "one")]
+        amount: f32,
+        #[serde(default)]
+        mask: Mask,
+    },
+    /// Wind strands onto rods over the duration, then hold them there.
+    Wrap {
+        duration: f32,
+        /// Rods to use (all when empty).
+        #[serde(default)]
+        rods: Vec<String>,
+        #[serde(default)]
+        layout: Layout,
+        #[serde(default)]
+        mask: Mask,
+    },
+    /// Apply a lotion that breaks bonds by kind (e.g. ionic 1.0, disulfide 0.2).
+    Lotion {
+        duration: f32,
+        #[serde(rename = "break")]
+        breaks: BondAmounts,
+        #[serde(default)]
+        mask: Mask,
+    },
+    /// Wait (the lotion works, the hair relaxes).
+    Process { duration: f32 },
+    /// Oxidising neutraliser: re-form bonds by kind at the current shape.
+    #[serde(alias = "neutralize")]
+    Neutralise { duration: f32, reform: BondAmounts },
+    /// Rinse: restores pH, re-forming ionic bonds unless told otherwise; leaves hair wet.
+    Rinse {
+        duration: f32,
+        #[serde(default)]
+        reform: Option<BondAmounts>,
+    },
+    /// Dry in still air, or under a dryer.
+    Dry {
+        duration: f32,
+        #[serde(default)]
+        dryer: Option<DryerSpec>,
+        #[serde(default = "one")]
+        heat: f32,
+    },
+    /// Press the hair onto an obstacle (a floor, a pillow) and hold it there.
+    Press {
+        duration: f32,
+        obstacle: String,
+        #[serde(default)]
+        mask: Mask,
+    },
+    /// Let go of rods and pressing.
+    Release { duration: f32 },
+    /// Relax to static equilibrium and bake the new rest shape (model.md §6).
+    Settle {
+        #[serde(default = "default_settle_seconds")]
+        max_seconds: f32,
+        /// Stop once no vertex moves faster than this, m/s.
+        #[serde(default = "default_settle_speed")]
+        max_speed: f32,
+        /// Settle without gravity (to measure the free curl).
+        #[serde(default)]
+        gravity: Option<bool>,
+    },
+}
+
+fn default_settle_seconds() -> f32 {
+    10.0
+}
+
+fn default_settle_speed() -> f32 {
+    1e-3
+}
+
+impl Stage {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Stage::Wet { .. } => "wet",
+            Stage::Wrap { .. } => "wrap",
+            Stage::Lotion { .. } => "lotion",
+            Stage::Process { .. } => "process",
+            Stage::Neutralise { .. } => "neutralise",
+            Stage::Rinse { .. } => "rinse",
+            Stage::Dry { .. } => "dry",
+            Stage::Press { .. } => "press",
+            Stage::Release { .. } => "release",
+            Stage::Settle { .. } => "settle",
+        }
+    }
+
+    /// Simulated seconds the stage lasts (a settle's is its cap).
+    pub fn duration(&self) -> f32 {
+        match self {
+            Stage::Wet { duration, .. }
+            | Stage::Wrap { duration, .. }
+            | Stage::Lotion { duration, .. }
+            | Stage::Process { duration }
+            | Stage::Neutralise { duration, .. }
+            | Stage::Rinse { duration, .. }
+            | Stage::Dry { duration, .. }
+            | Stage::Press { duration, .. }
+            | Stage::Release { duration } => *duration,
+            Stage::Settle { max_seconds, .. } => *max_seconds,
+        }
+    }
+}
+
+/// Reads and checks a recipe file.
+pub fn load(path: &Path) -> Result<Recipe> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(&text, path)
+}
+
+/// Parses and checks recipe text; `path` names it in errors.
+pub fn parse(text: &str, path: &Path) -> Result<Recipe> {
+    let recipe: Recipe = toml::from_str(text).map_err(|e| Error::format(path, toml_message(&e, text)))?;
+    check(&recipe, text).map_err(|message| Error::format(path, message))?;
+    Ok(recipe)
+}
+
+/// "line N, column M: what" from a TOML error, on one line.
+fn toml_message(error: &toml::de::Error, text: &str) -> String {
+    let what = error.message().trim();
+    match error.span() {
+        Some(span) => {
+            let (line, column) = line_column(text, span.start);
+            format!("line {line}, column {column}: {what}")
+        }
+        None => what.to_string(),
+    }
+}
+
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, column)
+}
+
+/// Semantic checks the types cannot express; each failure names its line.
+fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
+    let line_of = |span: std::ops::Range<usize>| line_column(text, span.start).0;
+    let settings = &recipe.settings;
+    let positive = |value: f32| value.is_finite() && value > 0.0;
+    if !positive(settings.dt) || settings.dt > 0.1 {
+        return Err(format!("[settings] dt = {} must be a positive time step of at most 0.1 s", settings.dt));
+    }
+    if settings.iterations == 0 || settings.iterations > 1000 {
+        return Err(format!("[settings] iterations = {} must be between 1 and 1000", settings.iterations));
+    }
+    if !(settings.stiffness > 0.0 && settings.stiffness <= 1.0) {
+        return Err(format!("[settings] stiffness = {} must be in (0, 1]", settings.stiffness));
+    }
+    if !(settings.cuticle_peel_per_metre >= 0.0 && settings.damping >= 0.0) {
+        return Err("[settings] cuticle_peel_per_metre and damping must not be negative".into());
+    }
+    let b = &recipe.bonds;
+    let influences = [b.hydrogen, b.ionic, b.disulfide, b.peptide];
+    if influences.iter().any(|f| !(f.is_finite() && *f >= 0.0)) || influences.iter().sum::<f32>() <= 0.0 {
+        return Err("[bonds] influences must be non-negative and not all zero".into());
+    }
+
+    let mut names: Vec<&str> = Vec::new();
+    for obstacle in &recipe.obstacles {
+        let line = line_of(obstacle.span());
+        let name = obstacle.get_ref().name();
+        if names.contains(&name) {
+            return Err(format!("line {line}: a second obstacle or rod named '{name}'"));
+        }
+        names.push(name);
+        let bad = match obstacle.get_ref() {
+            Obstacle::Sphere { radius, .. } => !positive(*radius),
+            Obstacle::Head { radii: Some(r), .. } => !r.iter().all(|&x| positive(x)),
+            Obstacle::Plane { normal, .. } => Vec3::from(*normal).length() < 1e-6,
+            Obstacle::Box { half_extents, .. } => !half_extents.iter().all(|&x| positive(x)),
+            Obstacle::Head { .. } => false,
+        };
+        if bad {
+            return Err(format!("line {line}: obstacle '{name}' has a zero or negative size"));
+        }
+    }
+    for rod in &recipe.rods {
+        let line = line_of(rod.span());
+        let r = rod.get_ref();
+        if names.contains(&r.name.as_str()) {
+            return Err(format!("line {line}: a second obstacle or rod named '{}'", r.name));
+        }
+        names.push(&r.name);
+        if !positive(r.radius) || Vec3::from(r.a).distance(Vec3::from(r.b)) < 1e-6 {
+            return Err(format!(
+                "line {line}: rod '{}' needs a positive radius and two distinct ends",
+                r.name
+            ));
+        }
+    }
+
+    if recipe.stages.is_empty() {
+        return Err("the recipe has no [[stages]]".into());
+    }
+    let (mut held, mut lotion_applied) = (None::<&str>, false);
+    let last = recipe.stages.len() - 1;
+    for (index, spanned) in recipe.stages.iter().enumerate() {
+        let line = line_of(spanned.span());
+        let stage = spanned.get_ref();
+        let kind = stage.kind();
+        let fail = |what: String| Err(format!("line {line}: stage {} ({kind}): {what}", index + 1));
+        let duration = stage.duration();
+        if !(duration.is_finite() && duration >= 0.0) {
+            return fail(format!("duration {duration} must be zero or more seconds"));
+        }
+        let check_mask = |mask: &Mask| (0.0..=1.0).contains(&mask.fraction);
+        match stage {
+            Stage::Wet { amount, mask, .. } => {
+                if !(0.0..=1.0).contains(amount) || !check_mask(mask) {
+                    return fail("amount and mask fraction must be in [0, 1]".into());
+                }
+            }
+            Stage::Wrap { rods, mask, .. } => {
+                if let Some(holder) = held {
+                    return fail(format!("the hair is still held by the earlier {holder}; release it first"));
+                }
+                if recipe.rods.is_empty() {
+                    return fail("there are no [[rods]] to wrap onto".into());
+                }
+                if let Some(missing) =
+                    rods.iter().find(|r| !recipe.rods.iter().any(|x| &x.get_ref().name == *r))
+                {
+                    return fail(format!("there is no rod named '{missing}'"));
+                }
+                if !check_mask(mask) {
+                    return fail("mask fraction must be in [0, 1]".into());
+                }
+                held = Some("wrap");
+            }
+            Stage::Lotion { breaks, mask, .. } => {
+                check_amounts(breaks).or_else(|e| fail(e))?;
+                if breaks.peptide.is_some_and(|x| x > 0.0) {
+                    return fail("peptide bonds do not break (model.md §2)".into());
+                }
+                if !check_mask(mask) {
+                    return fail("mask fraction must be in [0, 1]".into());
+                }
+                lotion_applied = true;
+            }
+            Stage::Neutralise { reform, .. } => {
+                check_amounts(reform).or_else(|e| fail(e))?;
+                if !lotion_applied {
+                    return fail("nothing to neutralise: no lotion stage comes before it".into());
+                }
+            }
+            Stage::Rinse { reform: Some(reform), .. } => check_amounts(reform).or_else(|e| fail(e))?,
+            Stage::Dry { dryer, heat, .. } => {
+                if !(heat.is_finite() && *heat >= 0.0) {
+                    return fail(format!("heat {heat} must not be negative"));
+                }
+                if let Some(d) = dryer {
+                    if !(d.strength.is_finite() && d.strength >= 0.0 && positive(d.falloff)) {
+                        return fail("dryer strength must be >= 0 and falloff > 0".into());
+                    }
+                    if Vec3::from(d.position).distance(Vec3::from(d.target)) < 1e-6 {
+                        return fail("dryer position and target must differ".into());
+                    }
+                }
+            }
+            Stage::Press { obstacle, mask, .. } => {
+                if let Some(holder) = held {
+                    return fail(format!("the hair is still held by the earlier {holder}; release it first"));
+                }
+                match recipe.obstacles.iter().find(|o| o.get_ref().name() == obstacle) {
+                    None => return fail(format!("there is no obstacle named '{obstacle}'")),
+                    Some(o) if !matches!(o.get_ref(), Obstacle::Plane { .. } | Obstacle::Box { .. }) => {
+                        return fail(format!("'{obstacle}' is not a plane or box to press onto"))
+                    }
+                    Some(_) => {}
+                }
+                if !check_mask(mask) {
+                    return fail("mask fraction must be in [0, 1]".into());
+                }
+                held = Some("press");
+            }
+            Stage::Release { .. } => {
+                if held.is_none() {
+                    return fail("nothing to release: no wrap or press stage holds the hair".into());
+                }
+                held = None;
+            }
+            Stage::Settle { max_speed, .. } => {
+                if index != last {
+                    return fail("settle must be the last stage".into());
+                }
+                if let Some(holder) = held {
+                    return fail(format!("the hair is still held by the earlier {holder}; release it first"));
+                }
+                if !positive(*max_speed) {
+                    return fail(format!("max_speed {max_speed} must be positive"));
+                }
+            }
+            Stage::Process { .. } | Stage::Rinse { reform: None, .. } => {}
+        }
+    }
+    Ok(())
+}
+
+fn check_amounts(amounts: &BondAmounts) -> std::result::Result<(), String> {
+    for (kind, value) in amounts.entries() {
+        if let Some(v) = value {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!("{kind} = {v} must be a fraction in [0, 1]"));
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PERM: &str = r#"
+[settings]
+dt = 0.0027777778
+iterations = 5
+
+[bonds]
+hydrogen = 0.33
+ionic = 0.30
+disulfide = 0.20
+peptide = 0.17
+
+[[rods]]
+name = "rod"
+a = [-0.1, -0.2, 0.1]
+b = [0.1, -0.2, 0.1]
+radius = 0.01
+
+[[stages]]
+kind = "wrap"
+duration = 2.0
+
+[[stages]]
+kind = "lotion"
+duration = 1.0
+break = { ionic = 1.0, disulfide = 0.2 }
+
+[[stages]]
+kind = "neutralise"
+duration = 1.0
+reform = { ionic = 1.0, disulfide = 1.0 }
+
+[[stages]]
+kind = "release"
+duration = 0.5
+
+[[stages]]
+kind = "settle"
+"#;
+
+    fn error_of(text: &str) -> String {
+        parse(text, Path::new("r.toml")).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn a_perm_recipe_parses() {
+        let recipe = parse(PERM, Path::new("perm.toml")).unwrap();
+        assert_eq!(recipe.stages.len(), 5);
+        assert_eq!(recipe.stages[1].get_ref().kind(), "lotion");
+        assert!(
+            matches!(recipe.stages[4].get_ref(), Stage::Settle { max_seconds, .. } if *max_seconds == 10.0)
+        );
+        assert_eq!(recipe.rods[0].get_ref().radius, 0.01);
+    }
+
+    #[test]
+    fn mistakes_name_their_line() {
+        let unknown = PERM.replace("iterations = 5", "iterations = 5\nsubsteps = 3");
+        let e = error_of(&unknown);
+        assert!(e.contains("line 5") && e.contains("substeps"), "{e}");
+
+        let wrong_type = PERM.replace("iterations = 5", "iterations = \"five\"");
+        assert!(error_of(&wrong_type).contains("line 4"), "{}", error_of(&wrong_type));
+
+        let negative = PERM.replace("duration = 2.0", "duration = -2.0");
+        let e = error_of(&negative);
+        assert!(e.contains("line 18") && e.contains("duration"), "{e}");
+
+        let missing_rod = PERM.replace("duration = 2.0", "duration = 2.0\nrods = [\"curler\"]");
+        let e = error_of(&missing_rod);
+        assert!(e.contains("line 18") && e.contains("no rod named 'curler'"), "{e}");
+
+        let no_release = PERM.replace("kind = \"release\"", "kind = \"process\"");
+        let e = error_of(&no_release);
+        assert!(e.contains("settle") && e.contains("release it first"), "{e}");
+
+        let early_settle = PERM.replace(
+            "[[stages]]\nkind = \"wrap\"",
+            "[[stages]]\nkind = \"settle\"\n\n[[stages]]\nkind = \"wrap\"",
+        );
+        assert!(error_of(&early_settle).contains("last stage"));
+
+        let neutralise_first = PERM.replace(
+            "kind = \"lotion\"\nduration = 1.0\nbreak = { ionic = 1.0, disulfide = 0.2 }",
+            "kind = \"process\"\nduration = 1.0",
+        );
+        assert!(
+            error_of(&neutralise_first).contains("nothing to neutralise"),
+            "{}",
+            error_of(&neutralise_first)
+        );
+
+        let peptide = PERM.replace("disulfide = 0.2 }", "peptide = 0.5 }");
+        assert!(error_of(&peptide).contains("peptide bonds do not break"));
+
+        let unknown_stage = PERM.replace("kind = \"release\"", "kind = \"curl\"");
+        assert!(error_of(&unknown_stage).contains("line 33"), "{}", error_of(&unknown_stage));
+    }
+}
