@@ -497,7 +497,7 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 held = Some("wrap");
             }
             Stage::Lotion { breaks, mask, .. } => {
-                check_amounts(breaks).or_else(|e| fail(e))?;
+                check_amounts(breaks).or_else(fail)?;
                 if breaks.peptide.is_some_and(|x| x > 0.0) {
                     return fail("peptide bonds do not break (model.md §2)".into());
                 }
@@ -507,12 +507,12 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 lotion_applied = true;
             }
             Stage::Neutralise { reform, .. } => {
-                check_amounts(reform).or_else(|e| fail(e))?;
+                check_amounts(reform).or_else(fail)?;
                 if !lotion_applied {
                     return fail("nothing to neutralise: no lotion stage comes before it".into());
                 }
             }
-            Stage::Rinse { reform: Some(reform), .. } => check_amounts(reform).or_else(|e| fail(e))?,
+            Stage::Rinse { reform: Some(reform), .. } => check_amounts(reform).or_else(fail)?,
             Stage::Dry { dryer, heat, .. } => {
                 if !(heat.is_finite() && *heat >= 0.0) {
                     return fail(format!("heat {heat} must not be negative"));
