@@ -1,0 +1,345 @@
+//! Job manifests: the grooms, recipes and parameter wedges a TD wants run, expanded into an
+//! ordered list of independent tasks. Task `i` of a manifest is always the same work, so a farm
+//! array job can hand out indices and a re-run can resume.
+//!
+//! ```toml
+//! [defaults]
+//! groom = "grooms/seed_100x48cm.hair"
+//! recipe = "grooms/recipes/perm_scene3.toml"
+//! outputs = ["out/{name}/groom.usda"]
+//! preview = "out/{name}/preview.png"      # optional
+//!
+//! [[tasks]]
+//! name = "perm"
+//!
+//! [[wedges]]
+//! name = "rods"
+//! parameters = { "rods.0.radius" = [0.008, 0.012], "stages.1.break.disulfide" = [0.1, 0.2, 0.3] }
+//! ```
+//! Paths are relative to the manifest's folder. Templates: `{name}`, `{index}`, `{groom}` and
+//! `{recipe}` (file stems).
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::error::{Error, Result};
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ManifestFile {
+    #[serde(default)]
+    defaults: TaskSpec,
+    #[serde(default)]
+    tasks: Vec<Spanned<TaskSpec>>,
+    #[serde(default)]
+    wedges: Vec<Spanned<WedgeSpec>>,
+    /// Where per-task logs go (default `logs/` beside the manifest).
+    logs: Option<String>,
+    /// A labelled grid of the wedges' previews, assembled after a local batch.
+    contact_sheet: Option<String>,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TaskSpec {
+    name: Option<String>,
+    groom: Option<String>,
+    recipe: Option<String>,
+    outputs: Option<Vec<String>>,
+    preview: Option<String>,
+    /// Recipe values replaced for this task: dotted paths into the recipe (`rods.0.radius`).
+    #[serde(default)]
+    overrides: BTreeMap<String, toml::Value>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WedgeSpec {
+    name: String,
+    #[serde(flatten)]
+    task: TaskSpec,
+    /// Each recipe path with the values to sweep; tasks are the cartesian product.
+    parameters: BTreeMap<String, Vec<toml::Value>>,
+}
+
+/// One unit of work: a groom styled by a recipe (with overrides), written to outputs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Task {
+    pub index: usize,
+    pub name: String,
+    pub groom: PathBuf,
+    pub recipe: PathBuf,
+    pub overrides: Vec<(String, toml::Value)>,
+    pub outputs: Vec<PathBuf>,
+    pub preview: Option<PathBuf>,
+    /// "key = value" for each swept parameter (labels on the contact sheet).
+    pub wedge_values: Vec<String>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Manifest {
+    pub path: PathBuf,
+    pub tasks: Vec<Task>,
+    pub logs: PathBuf,
+    pub contact_sheet: Option<PathBuf>,
+}
+
+/// Reads a manifest and expands its tasks and wedges.
+pub fn load(path: &Path) -> Result<Manifest> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(&text, path)
+}
+
+pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
+    let bad = |message: String| Error::format(path, message);
+    let file: ManifestFile = toml::from_str(text).map_err(|e| bad(toml_error(&e, text)))?;
+    let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let resolve = |p: &str| if Path::new(p).is_absolute() { PathBuf::from(p) } else { base.join(p) };
+
+    let mut tasks = Vec::new();
+    let mut add = |spec: &TaskSpec,
+                   name: String,
+                   overrides: Vec<(String, toml::Value)>,
+                   wedge_values: Vec<String>,
+                   line: usize|
+     -> Result<()> {
+        let pick = |field: &Option<String>, default: &Option<String>, what: &str| {
+            field.clone().or_else(|| default.clone()).ok_or_else(|| {
+                bad(format!("line {line}: task '{name}' has no {what} (and [defaults] gives none)"))
+            })
+        };
+        let groom = pick(&spec.groom, &file.defaults.groom, "groom")?;
+        let recipe = pick(&spec.recipe, &file.defaults.recipe, "recipe")?;
+        let outputs = spec.outputs.clone().or_else(|| file.defaults.outputs.clone()).unwrap_or_default();
+        let preview = spec.preview.clone().or_else(|| file.defaults.preview.clone());
+        if outputs.is_empty() && preview.is_none() {
+            return Err(bad(format!("line {line}: task '{name}' writes nothing: give outputs or a preview")));
+        }
+        let index = tasks.len();
+        let stem =
+            |p: &str| Path::new(p).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let fill = |template: &str| {
+            template
+                .replace("{name}", &name)
+                .replace("{index}", &index.to_string())
+                .replace("{groom}", &stem(&groom))
+                .replace("{recipe}", &stem(&recipe))
+        };
+        let mut all_overrides: Vec<(String, toml::Value)> =
+            file.defaults.overrides.clone().into_iter().collect();
+        all_overrides.extend(spec.overrides.clone());
+        all_overrides.extend(overrides);
+        tasks.push(Task {
+            index,
+            name: name.clone(),
+            groom: resolve(&groom),
+            recipe: resolve(&recipe),
+            overrides: all_overrides,
+            outputs: outputs.iter().map(|o| resolve(&fill(o))).collect(),
+            preview: preview.map(|p| resolve(&fill(&p))),
+            wedge_values,
+        });
+        Ok(())
+    };
+
+    for spanned in &file.tasks {
+        let line = line_of(text, spanned.span().start);
+        let spec = spanned.get_ref();
+        let name = spec.name.clone().ok_or_else(|| bad(format!("line {line}: a task needs a name")))?;
+        add(spec, name, Vec::new(), Vec::new(), line)?;
+    }
+    for spanned in &file.wedges {
+        let line = line_of(text, spanned.span().start);
+        let wedge = spanned.get_ref();
+        if wedge.task.name.is_some() {
+            return Err(bad(format!(
+                "line {line}: a wedge's tasks are named after the wedge; drop `name` from its task fields"
+            )));
+        }
+        if wedge.parameters.is_empty() || wedge.parameters.values().any(|v| v.is_empty()) {
+            return Err(bad(format!(
+                "line {line}: wedge '{}' needs parameters, each with at least one value",
+                wedge.name
+            )));
+        }
+        let combinations: usize = wedge.parameters.values().map(Vec::len).product();
+        if combinations > 100_000 {
+            return Err(bad(format!(
+                "line {line}: wedge '{}' expands to {combinations} tasks; split it",
+                wedge.name
+            )));
+        }
+        for combination in 0..combinations {
+            // Mixed-radix counting over the parameters, last parameter fastest.
+            let mut rest = combination;
+            let mut chosen = Vec::new();
+            for (key, values) in wedge.parameters.iter().rev() {
+                chosen.push((key.clone(), values[rest % values.len()].clone()));
+                rest /= values.len();
+            }
+            chosen.reverse();
+            let labels = chosen.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            let name = format!("{}-{:03}", wedge.name, combination);
+            add(&wedge.task, name, chosen, labels, line)?;
+        }
+    }
+    if tasks.is_empty() {
+        return Err(bad("the manifest has no [[tasks]] or [[wedges]]".into()));
+    }
+    let mut names: Vec<&str> = tasks.iter().map(|t| t.name.as_str()).collect();
+    names.sort_unstable();
+    if let Some(pair) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(bad(format!("two tasks are named '{}'", pair[0])));
+    }
+    let mut outputs: Vec<&PathBuf> =
+        tasks.iter().flat_map(|t| t.outputs.iter().chain(t.preview.iter())).collect();
+    outputs.sort_unstable();
+    if let Some(pair) = outputs.windows(2).find(|w| w[0] == w[1]) {
+        return Err(bad(format!(
+            "two tasks write {}; put {{name}} in the output templates",
+            pair[0].display()
+        )));
+    }
+    Ok(Manifest {
+        path: path.to_path_buf(),
+        logs: resolve(file.logs.as_deref().unwrap_or("logs")),
+        contact_sheet: file.contact_sheet.as_deref().map(resolve),
+        tasks,
+    })
+}
+
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+fn toml_error(error: &toml::de::Error, text: &str) -> String {
+    match error.span() {
+        Some(span) => format!("line {}: {}", line_of(text, span.start), error.message().trim()),
+        None => error.message().trim().to_string(),
+    }
+}
+
+/// Replaces the value at a dotted path (`stages.1.break.disulfide`) in a parsed recipe. Tables
+/// missing along the way are created (the recipe's own checks then reject unknown keys);
+/// array indices must exist.
+pub fn apply_override(
+    root: &mut toml::Value,
+    path: &str,
+    value: toml::Value,
+) -> std::result::Result<(), String> {
+    let keys: Vec<&str> = path.split('.').collect();
+    let (last, parents) = keys.split_last().expect("split always yields a key");
+    let mut node = root;
+    for (depth, key) in parents.iter().enumerate() {
+        node = match node {
+            toml::Value::Array(items) => list_entry(items, key, path)?,
+            toml::Value::Table(table) => {
+                table.entry(key.to_string()).or_insert_with(|| toml::Value::Table(Default::default()))
+            }
+            _ => return Err(not_a_container(path, &keys[..depth])),
+        };
+    }
+    match node {
+        toml::Value::Array(items) => *list_entry(items, last, path)? = value,
+        toml::Value::Table(table) => {
+            table.insert(last.to_string(), value);
+        }
+        _ => return Err(not_a_container(path, parents)),
+    }
+    Ok(())
+}
+
+fn list_entry<'a>(
+    items: &'a mut [toml::Value],
+    key: &str,
+    path: &str,
+) -> std::result::Result<&'a mut toml::Value, String> {
+    let index: usize =
+        key.parse().map_err(|_| format!("override '{path}': '{key}' is not an index into a list"))?;
+    let len = items.len();
+    items
+        .get_mut(index)
+        .ok_or_else(|| format!("override '{path}': index {index} is past the list's {len} entries"))
+}
+
+fn not_a_container(path: &str, keys: &[&str]) -> String {
+    format!("override '{path}': '{}' is a value, not a table or list", keys.join("."))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MANIFEST: &str = r#"
+[defaults]
+groom = "grooms/a.hair"
+recipe = "recipes/perm.toml"
+outputs = ["out/{name}/groom.usda", "out/{name}/{groom}.abc"]
+
+[[tasks]]
+name = "plain"
+overrides = { "settings.seed" = 3 }
+
+[[wedges]]
+name = "w"
+preview = "out/{name}.png"
+parameters = { "rods.0.radius" = [0.008, 0.012], "stages.1.break.disulfide" = [0.1, 0.2, 0.3] }
+"#;
+
+    #[test]
+    fn wedges_expand_to_the_cartesian_product_in_a_stable_order() {
+        let manifest = parse(MANIFEST, Path::new("/jobs/m.toml")).unwrap();
+        assert_eq!(manifest.tasks.len(), 1 + 6);
+        let plain = &manifest.tasks[0];
+        assert_eq!(
+            plain.outputs,
+            vec![PathBuf::from("/jobs/out/plain/groom.usda"), PathBuf::from("/jobs/out/plain/a.abc")]
+        );
+        assert_eq!(plain.overrides, vec![("settings.seed".to_string(), toml::Value::Integer(3))]);
+        let names: Vec<_> = manifest.tasks.iter().map(|t| t.name.as_str()).collect();
+        assert_eq!(names, ["plain", "w-000", "w-001", "w-002", "w-003", "w-004", "w-005"]);
+        // Keys sorted: rods.0.radius first (slowest), then the disulfide amount.
+        assert_eq!(
+            manifest.tasks[2].wedge_values,
+            vec!["rods.0.radius = 0.008", "stages.1.break.disulfide = 0.2"]
+        );
+        assert_eq!(
+            manifest.tasks[4].wedge_values,
+            vec!["rods.0.radius = 0.012", "stages.1.break.disulfide = 0.1"]
+        );
+        assert_eq!(manifest.tasks[4].preview, Some(PathBuf::from("/jobs/out/w-003.png")));
+        assert_eq!(manifest.logs, PathBuf::from("/jobs/logs"));
+    }
+
+    #[test]
+    fn manifest_mistakes_are_reported_with_lines() {
+        let e = parse(&MANIFEST.replace("name = \"plain\"", "nmae = \"plain\""), Path::new("m.toml"))
+            .unwrap_err();
+        assert!(e.to_string().contains("line 8"), "{e}");
+        let clash = MANIFEST.replace("out/{name}/groom.usda\", \"out/{name}/{groom}.abc", "out/groom.usda");
+        let e = parse(&clash, Path::new("m.toml")).unwrap_err();
+        assert!(e.to_string().contains("two tasks write"), "{e}");
+        let e = parse("[defaults]\n", Path::new("m.toml")).unwrap_err();
+        assert!(e.to_string().contains("no [[tasks]]"), "{e}");
+    }
+
+    #[test]
+    fn overrides_reach_into_tables_and_lists() {
+        let mut recipe: toml::Value = toml::from_str(
+            "[settings]\ndt = 0.01\n[[rods]]\nname = \"r\"\nradius = 0.01\n[[stages]]\nkind = \"wet\"\n",
+        )
+        .unwrap();
+        apply_override(&mut recipe, "rods.0.radius", toml::Value::Float(0.02)).unwrap();
+        apply_override(&mut recipe, "settings.iterations", toml::Value::Integer(8)).unwrap();
+        apply_override(&mut recipe, "bonds.ionic", toml::Value::Float(0.4)).unwrap();
+        assert_eq!(recipe["rods"][0]["radius"].as_float(), Some(0.02));
+        assert_eq!(recipe["settings"]["iterations"].as_integer(), Some(8));
+        assert_eq!(recipe["bonds"]["ionic"].as_float(), Some(0.4));
+        assert!(apply_override(&mut recipe, "rods.3.radius", toml::Value::Float(1.0))
+            .unwrap_err()
+            .contains("index 3"));
+        assert!(apply_override(&mut recipe, "settings.dt.x", toml::Value::Float(1.0)).is_err());
+    }
+}

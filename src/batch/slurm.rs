@@ -1,0 +1,114 @@
+//! Slurm submission: one sbatch array job whose task `i` runs `coif batch MANIFEST --task i`.
+//! Every array task is an independent, idempotent coif invocation, so Slurm's requeueing and a
+//! TD's re-submission both just finish what is missing.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::error::{Error, Result};
+use crate::io::atomic::write_bytes_atomically;
+
+#[derive(Clone, Debug, Default)]
+pub struct SubmitOptions {
+    pub partition: Option<String>,
+    /// CPUs each task asks for (and the threads coif uses inside it).
+    pub cpus_per_task: usize,
+    /// Tasks Slurm may run at once (`%N` on the array), if limited.
+    pub max_parallel: Option<usize>,
+}
+
+/// Where `coif farm submit` keeps the script and the submitted job id, beside the manifest.
+pub fn farm_dir(manifest: &Path) -> PathBuf {
+    let stem = manifest.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    manifest.parent().unwrap_or(Path::new(".")).join("farm").join(stem)
+}
+
+/// The sbatch script for a manifest of `tasks` tasks.
+pub fn script(coif: &Path, manifest: &Path, tasks: usize, logs: &Path, options: &SubmitOptions) -> String {
+    let stem = manifest.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let quote = |p: &Path| shell_quote(&p.to_string_lossy());
+    let mut array = format!("0-{}", tasks.saturating_sub(1));
+    if let Some(n) = options.max_parallel {
+        array.push_str(&format!("%{n}"));
+    }
+    let mut lines = vec![
+        "#!/bin/bash".to_string(),
+        format!("#SBATCH --job-name=coif-{stem}"),
+        format!("#SBATCH --array={array}"),
+        format!("#SBATCH --cpus-per-task={}", options.cpus_per_task.max(1)),
+        format!("#SBATCH --output={}/slurm-%A_%a.out", logs.to_string_lossy()),
+    ];
+    if let Some(partition) = &options.partition {
+        lines.push(format!("#SBATCH --partition={partition}"));
+    }
+    lines.extend([
+        "set -euo pipefail".to_string(),
+        format!("export RAYON_NUM_THREADS={}", options.cpus_per_task.max(1)),
+        format!("exec {} batch {} --task \"$SLURM_ARRAY_TASK_ID\"", quote(coif), quote(manifest)),
+        String::new(),
+    ]);
+    lines.join("\n")
+}
+
+fn shell_quote(text: &str) -> String {
+    format!("'{}'", text.replace('\'', r"'\''"))
+}
+
+/// Writes the script (atomically, executable) and returns its path.
+pub fn write_script(dir: &Path, text: &str) -> Result<PathBuf> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let path = dir.join("array.sbatch");
+    write_bytes_atomically(&path, text.as_bytes())?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755))
+            .map_err(|e| Error::io(&path, e))?;
+    }
+    Ok(path)
+}
+
+/// Runs `sbatch` on the script and returns the job id it reports.
+pub fn submit(script: &Path) -> Result<String> {
+    let output = Command::new("sbatch").arg("--parsable").arg(script).output().map_err(|e| {
+        Error::External(format!("could not run sbatch ({e}); is Slurm installed and on PATH? Use --dry-run to only write the script"))
+    })?;
+    if !output.status.success() {
+        return Err(Error::External(format!(
+            "sbatch failed: {}",
+            String::from_utf8_lossy(&output.stderr).trim()
+        )));
+    }
+    let text = String::from_utf8_lossy(&output.stdout);
+    // --parsable prints "jobid" or "jobid;cluster".
+    let id = text.trim().split(';').next().unwrap_or_default().to_string();
+    if id.is_empty() || !id.chars().all(|c| c.is_ascii_digit()) {
+        return Err(Error::External(format!("sbatch printed no job id: {text:?}")));
+    }
+    Ok(id)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn script_runs_one_coif_task_per_array_index() {
+        let options =
+            SubmitOptions { partition: Some("gpu-free".into()), cpus_per_task: 2, max_parallel: Some(4) };
+        let text = script(
+            Path::new("/opt/coif"),
+            Path::new("/jobs/it's.toml"),
+            6,
+            Path::new("/jobs/logs"),
+            &options,
+        );
+        assert!(text.starts_with("#!/bin/bash\n"));
+        assert!(text.contains("#SBATCH --array=0-5%4\n"));
+        assert!(text.contains("#SBATCH --partition=gpu-free\n"));
+        assert!(text.contains("#SBATCH --cpus-per-task=2\n"));
+        assert!(
+            text.contains(r#"exec '/opt/coif' batch '/jobs/it'\''s.toml' --task "$SLURM_ARRAY_TASK_ID""#),
+            "{text}"
+        );
+    }
+}
