@@ -7,6 +7,10 @@
 //! (the `4·wq·l²` in the denominator) and the mass-weighted step along it is
 //! `Δq = 2·wq·l²/(w1 + w2 + 4·wq·l²) · (0,γ)⊗q⊗ē`. With this factor one projection removes the
 //! linearised error completely; the seed's `wq·l²` would leave `2·wq·l²/D` of it (see tests).
+//! One refinement over the paper: a rotation moves `d3` only perpendicular to itself, so the
+//! stretch part of `γ` (along `d3`) is corrected by the vertices alone, with denominator `w1 + w2`;
+//! in the paper's form the frame absorbs part of it and normalisation throws that part away, so
+//! stretch converges at only `(w1 + w2)/D` per iteration and hanging strands visibly lengthen.
 //!
 //! **Bend–twist** is projected in XPBD form with a per-component compliance (bend, bend, twist):
 //! `Δλ = (−C − α̃λ)/(wq1 + wq2 + α̃)`, `α̃ = α/Δt²`, `Δq1 = −wq1·q2⊗(0,Δλ)`, `Δq2 = +wq2·q1⊗(0,Δλ)`.
@@ -69,13 +73,20 @@ fn project_stretch_shear_factor(
     if denominator <= 0.0 {
         return;
     }
-    let gamma = (*p2 - *p1) / l - director3(*q);
-    let scale = 1.0 / denominator;
-    *p1 += (w1 * l * scale) * gamma;
-    *p2 -= (w2 * l * scale) * gamma;
+    let d3 = director3(*q);
+    let gamma = (*p2 - *p1) / l - d3;
+    // Rotating q moves d3 only perpendicular to itself, so the stretch part of γ (along d3) can
+    // only be fixed by the vertices: it gets its own denominator w1 + w2.
+    let stretch = gamma.dot(d3) * d3;
+    let shear = gamma - stretch;
+    let vertex_share = w1 + w2;
+    let along = if vertex_share > 0.0 { stretch / vertex_share } else { Vec3::ZERO };
+    let step = shear / denominator + along;
+    *p1 += (w1 * l) * step;
+    *p2 -= (w2 * l) * step;
     if wq > 0.0 {
-        let dq = pure(gamma) * times_e_bar(*q);
-        *q = (*q + dq * (factor * wq * l * l * scale)).normalize();
+        let dq = pure(shear) * times_e_bar(*q);
+        *q = (*q + dq * (factor * wq * l * l / denominator)).normalize();
     }
 }
 
@@ -145,8 +156,7 @@ mod tests {
         }
     }
 
-    /// Repeated projection converges to a state that satisfies the constraint, the error falling
-    /// every time (the stretch part only through the vertices, at rate `(w1 + w2)/D`).
+    /// A stretched and sheared edge is fixed by one projection too (stretch through the vertices).
     #[test]
     fn stretch_shear_error_falls_every_iteration() {
         let l = 0.01;
@@ -154,13 +164,13 @@ mod tests {
         let mut p2 = Vec3::new(0.004, 0.002, 0.008);
         let mut q = Quat::IDENTITY;
         let mut last = f32::INFINITY;
-        for _ in 0..40 {
+        for _ in 0..6 {
             project_stretch_shear(&mut p1, &mut p2, &mut q, 1.0, 1.0, 1.0 / (l * l), l);
             let error = ((p2 - p1) / l - director3(q)).length();
-            assert!(error < last || error < 1e-6, "error {error} did not fall below {last}");
+            assert!(error < 0.2 * last || error < 1e-6, "error {error} did not fall well below {last}");
             last = error;
         }
-        assert!(last < 1e-5, "final error {last}");
+        assert!(last < 1e-6, "final error {last}");
     }
 
     #[test]

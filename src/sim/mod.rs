@@ -11,7 +11,9 @@
 //! * [`constraints`]: stretch–shear and bend–twist projections.
 //! * [`bonds`]: the four bond kinds, S1-15 rest shape, S1-16 breaking and re-forming.
 //! * [`cuticle`]: S1-13/14 stiffness gradient.
-//! * [`solver`]: the stepper (Gauss–Seidel along strands, strands in parallel).
+//! * [`solver`]: the stepper: per iteration a direct (tridiagonal) solve of the edge lengths, then
+//!   Gauss–Seidel sweeps of stretch–shear and bend–twist along each strand, alternating direction;
+//!   strands in parallel.
 //! * [`settle`]: static equilibrium with a convergence report; zero-stress rest curves; export.
 //!
 //! # Stiffness: XPBD with physical moduli
@@ -80,7 +82,7 @@ impl Default for SimParams {
             damping: 2.0,
             material: Material::default(),
             influences: BondInfluences::default(),
-            frame_inertia_factor: 1.0,
+            frame_inertia_factor: 0.1,
         }
     }
 }

@@ -70,6 +70,9 @@ pub struct Rods {
     pub(crate) previous_positions: Vec<Vec3>,
     pub(crate) previous_frames: Vec<Quat>,
     pub(crate) lambdas: Vec<Vec3>,
+    pub(crate) edge_directions: Vec<Vec3>,
+    pub(crate) solve_upper: Vec<f32>,
+    pub(crate) solve_values: Vec<f32>,
 }
 
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
@@ -102,6 +105,9 @@ impl Rods {
             previous_positions: groom.points.clone(),
             previous_frames: vec![Quat::IDENTITY; n],
             lambdas: vec![Vec3::ZERO; n],
+            edge_directions: vec![Vec3::ZERO; n],
+            solve_upper: vec![0.0; n],
+            solve_values: vec![0.0; n],
         };
         let radius = |i: usize| {
             let w = groom.widths.get(i).copied().unwrap_or(0.0);

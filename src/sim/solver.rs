@@ -51,6 +51,9 @@ struct Strand<'a> {
     omega: &'a mut [Vec3],
     rest: &'a mut [Vec3],
     lambda: &'a mut [Vec3],
+    directions: &'a mut [Vec3],
+    upper: &'a mut [f32],
+    values: &'a mut [f32],
     w: &'a [f32],
     kinematic: &'a [bool],
     targets: &'a [Vec3],
@@ -80,6 +83,9 @@ pub(crate) fn step_all(
     let omega = SharedMut::new(&mut rods.angular_velocities);
     let rest = SharedMut::new(&mut rods.rest_darboux);
     let lambda = SharedMut::new(&mut rods.lambdas);
+    let directions = SharedMut::new(&mut rods.edge_directions);
+    let upper = SharedMut::new(&mut rods.solve_upper);
+    let values = SharedMut::new(&mut rods.solve_values);
     let (w, kinematic, targets, external) =
         (&rods.inv_mass, &rods.kinematic, &rods.kinematic_targets, &rods.external_acceleration);
     let (wq, length, compliance) = (&rods.frame_inv_inertia, &rods.rest_lengths, &rods.compliance);
@@ -97,6 +103,9 @@ pub(crate) fn step_all(
                 omega: omega.slice(r.clone()),
                 rest: rest.slice(r.clone()),
                 lambda: lambda.slice(r.clone()),
+                directions: directions.slice(r.clone()),
+                upper: upper.slice(r.clone()),
+                values: values.slice(r.clone()),
                 w: &w[r.clone()],
                 kinematic: &kinematic[r.clone()],
                 targets: &targets[r.clone()],
@@ -112,7 +121,87 @@ pub(crate) fn step_all(
     });
 }
 
-fn step_strand(s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+/// Makes every edge its rest length at once (to first order): the length constraints of a strand
+/// form a tridiagonal system `J·W·Jᵀ·λ = −C`, solved exactly by the Thomas algorithm. Gauss–Seidel
+/// alone carries a correction one edge per sweep, so under gravity a strand of n edges keeps a
+/// stretch that shrinks only like 1/iterations — and the look would depend on the iteration count.
+fn solve_lengths(s: &mut Strand<'_>) {
+    let edges = s.x.len() - 1;
+    for i in 0..edges {
+        let d = s.x[i + 1] - s.x[i];
+        let length = d.length();
+        s.directions[i] = d / length;
+        // Right-hand side −C_i, kept in `values` until elimination replaces it.
+        s.values[i] = s.length[i] - length;
+    }
+    // Row i: a_i·λ_{i−1} + b_i·λ_i + c_i·λ_{i+1} = −C_i with b_i = w_i + w_{i+1},
+    // a_i = −w_i·(n_{i−1}·n_i), c_i = −w_{i+1}·(n_i·n_{i+1}). Thomas forward elimination:
+    let mut upper_prev = 0.0; // c'_{i−1}
+    let mut value_prev = 0.0; // d'_{i−1}
+    for i in 0..edges {
+        let n = s.directions[i];
+        let a = if i > 0 { -s.w[i] * n.dot(s.directions[i - 1]) } else { 0.0 };
+        let b = s.w[i] + s.w[i + 1];
+        let c = if i + 1 < edges { -s.w[i + 1] * n.dot(s.directions[i + 1]) } else { 0.0 };
+        let pivot = b - a * upper_prev;
+        if pivot > 1e-7 * b && b > 0.0 {
+            upper_prev = c / pivot;
+            value_prev = (s.values[i] - a * value_prev) / pivot;
+        } else {
+            // Both ends kinematic: the edge cannot change; decouple its row.
+            upper_prev = 0.0;
+            value_prev = 0.0;
+        }
+        s.upper[i] = upper_prev;
+        s.values[i] = value_prev;
+    }
+    // Back substitution: λ_i = d'_i − c'_i·λ_{i+1}.
+    let mut next = 0.0;
+    for i in (0..edges).rev() {
+        next = s.values[i] - s.upper[i] * next;
+        s.values[i] = next;
+    }
+    // Δp_j = w_j·(n_{j−1}·λ_{j−1} − n_j·λ_j).
+    for j in 0..=edges {
+        let mut dp = Vec3::ZERO;
+        if j > 0 {
+            dp += s.directions[j - 1] * s.values[j - 1];
+        }
+        if j < edges {
+            dp -= s.directions[j] * s.values[j];
+        }
+        s.x[j] += s.w[j] * dp;
+    }
+}
+
+/// Stretch–shear of edge `e`.
+#[inline(always)]
+fn project_edge(s: &mut Strand<'_>, e: usize) {
+    let (mut p1, mut p2, mut q) = (s.x[e], s.x[e + 1], s.q[e]);
+    project_stretch_shear(&mut p1, &mut p2, &mut q, s.w[e], s.w[e + 1], s.wq[e], s.length[e]);
+    s.x[e] = p1;
+    s.x[e + 1] = p2;
+    s.q[e] = q;
+}
+
+/// Bend–twist of the pair of edges `e − 1`, `e`.
+#[inline(always)]
+fn project_pair(s: &mut Strand<'_>, e: usize, inv_dt2: f32) {
+    let (mut q1, mut q2) = (s.q[e - 1], s.q[e]);
+    project_bend_twist(
+        &mut q1,
+        &mut q2,
+        s.wq[e - 1],
+        s.wq[e],
+        s.rest[e],
+        s.compliance[e] * inv_dt2,
+        &mut s.lambda[e],
+    );
+    s.q[e - 1] = q1;
+    s.q[e] = q2;
+}
+
+fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
     let n = s.x.len();
     let edges = n - 1;
     let dt = k.dt;
@@ -143,27 +232,25 @@ fn step_strand(s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usiz
         }
     }
 
-    // Gauss–Seidel along the strand, root to tip.
-    for _ in 0..k.iterations {
-        for e in 0..edges {
-            let (mut p1, mut p2, mut q) = (s.x[e], s.x[e + 1], s.q[e]);
-            project_stretch_shear(&mut p1, &mut p2, &mut q, s.w[e], s.w[e + 1], s.wq[e], s.length[e]);
-            s.x[e] = p1;
-            s.x[e + 1] = p2;
-            if e >= 1 {
-                let mut q1 = s.q[e - 1];
-                project_bend_twist(
-                    &mut q1,
-                    &mut q,
-                    s.wq[e - 1],
-                    s.wq[e],
-                    s.rest[e],
-                    s.compliance[e] * inv_dt2,
-                    &mut s.lambda[e],
-                );
-                s.q[e - 1] = q1;
+    // Gauss–Seidel along the strand, alternating root→tip and tip→root sweeps: a one-way sweep
+    // passes a correction only one edge against its direction per iteration, and a hanging strand
+    // needs tension carried from the tip up as much as positions carried from the root down.
+    for iteration in 0..k.iterations {
+        solve_lengths(&mut s);
+        if iteration % 2 == 0 {
+            for e in 0..edges {
+                project_edge(&mut s, e);
+                if e >= 1 {
+                    project_pair(&mut s, e, inv_dt2);
+                }
             }
-            s.q[e] = q;
+        } else {
+            for e in (0..edges).rev() {
+                project_edge(&mut s, e);
+                if e + 1 < edges {
+                    project_pair(&mut s, e + 1, inv_dt2);
+                }
+            }
         }
         hooks.project(strand, first, s.x, s.w);
     }
