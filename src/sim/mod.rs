@@ -156,15 +156,15 @@ pub enum BondTarget {
 /// Energies of the current state, joules.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Energy {
-    pub kinetic: f32,
+    pub kinetic: f64,
     /// Relative to the origin: `−Σ m·g·x`.
-    pub gravitational: f32,
+    pub gravitational: f64,
     /// Bend–twist energy against the bonds' zero-stress shape.
-    pub elastic: f32,
+    pub elastic: f64,
 }
 
 impl Energy {
-    pub fn total(&self) -> f32 {
+    pub fn total(&self) -> f64 {
         self.kinetic + self.gravitational + self.elastic
     }
 }
@@ -346,9 +346,9 @@ impl Simulation {
             if r.kinematic[i] {
                 continue;
             }
-            let m = r.mass[i] * r.mass_scale[i];
-            energy.kinetic += 0.5 * m * r.velocities[i].length_squared();
-            energy.gravitational -= m * self.params.gravity.dot(r.positions[i]);
+            let m = (r.mass[i] * r.mass_scale[i]) as f64;
+            energy.kinetic += 0.5 * m * r.velocities[i].as_dvec3().length_squared();
+            energy.gravitational -= m * self.params.gravity.as_dvec3().dot(r.positions[i].as_dvec3());
         }
         for i in 0..r.vertex_count() {
             if !r.is_pair_centre(i) {
@@ -359,7 +359,7 @@ impl Simulation {
             let rest =
                 if (omega - rest).length_squared() > (omega + rest).length_squared() { -rest } else { rest };
             let c = omega - rest;
-            energy.elastic += 0.5 * (c * c / r.compliance[i]).element_sum();
+            energy.elastic += 0.5 * (c * c / r.compliance[i]).as_dvec3().element_sum();
         }
         energy
     }
