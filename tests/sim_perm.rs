@@ -43,6 +43,7 @@ fn fitted_radius(points: &[Vec3]) -> f64 {
     ((d * d + e * e) / 4.0 - f).sqrt()
 }
 
+#[allow(clippy::needless_range_loop)] // index loops read clearest for Gaussian elimination
 fn solve3(mut m: [[f64; 3]; 3], mut b: [f64; 3]) -> [f64; 3] {
     for col in 0..3 {
         let pivot = (col..3).max_by(|&a, &c| m[a][col].abs().total_cmp(&m[c][col].abs())).unwrap();
@@ -133,7 +134,7 @@ fn other_bond_amounts_match_their_own_prediction() {
 fn broken_bonds_that_do_not_re_form_spring_back() {
     // Breaking alone forgets nothing: without re-forming, the released strand returns straight.
     let straight: Vec<Vec3> = (0..VERTICES).map(|i| Vec3::new(EDGE * i as f32, 0.0, 0.0)).collect();
-    let groom = Groom::from_strands(&[straight.clone()], 80e-6);
+    let groom = Groom::from_strands(std::slice::from_ref(&straight), 80e-6);
     let params = SimParams { gravity: Vec3::ZERO, damping: 8.0, ..SimParams::default() };
     let mut sim = Simulation::new(&groom, params).unwrap();
     for (vertex, target) in wound(ROD_RADIUS).into_iter().enumerate().skip(1) {

@@ -146,10 +146,10 @@ impl Bonds {
         let total = self.influences.total();
         let mut bonded = Vec3::ZERO;
         let mut broken = 0.0;
-        for k in 0..4 {
+        for (k, f) in f.iter().enumerate() {
             let b = self.rates[k][pair];
-            bonded += f[k] * b * self.shapes[k][pair];
-            broken += f[k] * (1.0 - b);
+            bonded += f * b * self.shapes[k][pair];
+            broken += f * (1.0 - b);
         }
         self.bonded[pair] = bonded / total;
         self.broken[pair] = broken / total;
@@ -165,9 +165,9 @@ impl Bonds {
     pub fn rest_shape_literal(&self, pair: usize, omega: Vec3) -> Vec3 {
         let f = self.influences.0;
         let mut sum = Vec3::ZERO;
-        for k in 0..4 {
+        for (k, f) in f.iter().enumerate() {
             let shape = self.shapes[k][pair];
-            sum += f[k] * (shape + (1.0 - self.rates[k][pair]) * (omega - shape));
+            sum += f * (shape + (1.0 - self.rates[k][pair]) * (omega - shape));
         }
         sum / self.influences.total()
     }

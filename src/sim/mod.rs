@@ -41,6 +41,7 @@
 pub mod bonds;
 pub mod constraints;
 pub mod cuticle;
+pub mod driver;
 pub mod rod;
 pub mod settle;
 pub mod solver;

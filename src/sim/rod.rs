@@ -236,7 +236,7 @@ mod tests {
                 Vec3::new(0.01 * t.cos(), -0.004 * t, 0.01 * t.sin())
             })
             .collect();
-        let groom = Groom::from_strands(&[points.clone()], 80e-6);
+        let groom = Groom::from_strands(std::slice::from_ref(&points), 80e-6);
         let rods = Rods::from_groom(&groom, &Material::default(), 1.0);
         for i in 0..points.len() - 1 {
             let t = (points[i + 1] - points[i]).normalize();
