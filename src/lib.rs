@@ -13,6 +13,7 @@ pub mod head;
 pub mod info;
 pub mod interact;
 pub mod io;
+pub mod sim;
 pub mod style;
 
 pub use error::{Error, Result};

@@ -1,0 +1,367 @@
+//! The simulation core: strands as Cosserat rods solved with position-based dynamics
+//! (Kugelstadt & Schömer 2016; model.md §1), side-chain bond plasticity (§2), cuticle stiffness
+//! gradient, and settling (§6).
+//!
+//! ```text
+//! Groom ──Simulation::new──▶ Rods + Bonds ──step()…──▶ settle() ──write_to_groom()──▶ Groom
+//! ```
+//!
+//! * [`rod`]: state from a groom (positions, velocities, masses, edge frames parallel-transported
+//!   from a root frame, rest lengths, rest Darboux vectors of the imported shape).
+//! * [`constraints`]: stretch–shear and bend–twist projections.
+//! * [`bonds`]: the four bond kinds, S1-15 rest shape, S1-16 breaking and re-forming.
+//! * [`cuticle`]: S1-13/14 stiffness gradient.
+//! * [`solver`]: the stepper: per iteration a direct (tridiagonal) solve of the edge lengths, then
+//!   Gauss–Seidel sweeps of stretch–shear and bend–twist along each strand, alternating direction;
+//!   strands in parallel.
+//! * [`settle`]: static equilibrium with a convergence report; zero-stress rest curves; export.
+//!
+//! # Stiffness: XPBD with physical moduli
+//! Bend–twist uses the compliance form (`α = l̄/(4·E·I)` from the Young's and shear moduli and the
+//! groom's widths, scaled by the cuticle factor); stretch–shear is hard. For converged iterations
+//! the static shape then depends only on the moduli, not on Δt or the iteration count
+//! (`tests/sim_invariance.rs`). The seed's `k' = 1 − (1 − k)^(1/n)` only removes the
+//! iteration-count dependence: its per-step stiffness makes the sag under gravity scale with Δt².
+//!
+//! # Extension points (for interactions and recipes)
+//! * **External acceleration**: [`Simulation::external_acceleration_mut`] (per vertex, m/s², added to
+//!   gravity before prediction: wind, water adhesion, penalty forces computed from a snapshot), and
+//!   [`Hooks::accelerate`] (per strand, may read the strand's positions and edit velocities).
+//! * **Position projection**: [`Hooks::project`], called once per iteration per strand after the
+//!   constraints (head, floor, curler rods). It may only move vertices with non-zero inverse mass.
+//!   Hooks run concurrently on different strands; anything they read from other strands must be a
+//!   snapshot taken before the step, so results stay independent of thread count.
+//! * **Mass scale**: [`Simulation::set_mass_scale`] (wet hair is heavier).
+//! * **Kinematic attachment**: [`Simulation::attach`] / [`Simulation::detach`] pin any vertex to a
+//!   moving target (winding on rods); [`Simulation::set_root`] drives root vertex and frame
+//!   (an animated head).
+//! * **Bond rates**: [`Simulation::change_bond_rate`], [`Simulation::set_bond_rate`] (uniform, per
+//!   strand or per vertex via [`BondTarget`]) and [`Simulation::change_bond_rates_with`] (a
+//!   per-vertex field such as wetness).
+pub mod bonds;
+pub mod constraints;
+pub mod cuticle;
+pub mod driver;
+pub mod rod;
+pub mod settle;
+pub mod solver;
+
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+pub use bonds::{BondInfluences, BondKind, Bonds};
+pub use cuticle::Cuticle;
+pub use rod::{Material, Rods};
+pub use settle::{SettleOptions, SettleReport};
+
+use crate::error::{Error, Result};
+use crate::groom::{AttributeRate, Groom};
+
+/// Simulation settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SimParams {
+    /// Time step, seconds (Table 1: 1/360).
+    pub dt: f32,
+    /// Solver iterations per step (Table 1: 5).
+    pub iterations: u32,
+    /// m/s².
+    pub gravity: Vec3,
+    /// Velocity damping rate, 1/s (velocities decay as `exp(−damping·t)`).
+    pub damping: f32,
+    pub material: Material,
+    pub influences: BondInfluences,
+    /// Frame inverse inertia relative to the vertices' (see [`Rods::update_inverse_masses`]).
+    pub frame_inertia_factor: f32,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            dt: 1.0 / 360.0,
+            iterations: 5,
+            gravity: Vec3::new(0.0, -9.8, 0.0),
+            damping: 2.0,
+            material: Material::default(),
+            influences: BondInfluences::default(),
+            frame_inertia_factor: 0.1,
+        }
+    }
+}
+
+impl SimParams {
+    pub fn check(&self) -> Result<()> {
+        let bad = |what: String| Err(Error::Usage(format!("simulate: {what}")));
+        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 1.0) {
+            return bad(format!("time step {} must be in (0, 1] seconds", self.dt));
+        }
+        if !(1..=1000).contains(&self.iterations) {
+            return bad(format!("iterations {} must be between 1 and 1000", self.iterations));
+        }
+        if !self.gravity.is_finite() {
+            return bad("gravity must be finite".into());
+        }
+        if !(self.damping.is_finite() && self.damping >= 0.0) {
+            return bad(format!("damping {} must be a non-negative rate", self.damping));
+        }
+        let m = &self.material;
+        if [m.density, m.youngs_modulus, m.shear_modulus, m.fallback_width, self.frame_inertia_factor]
+            .iter()
+            .any(|v| !(v.is_finite() && *v > 0.0))
+        {
+            return bad("density, moduli, fallback width and frame inertia factor must be positive".into());
+        }
+        if let Err(message) = self.influences.check() {
+            return bad(message);
+        }
+        Ok(())
+    }
+}
+
+/// Per-strand (or per-vertex) callbacks inside a step. Both run concurrently for different
+/// strands; `first_vertex` is the strand's offset in the groom-wide arrays.
+pub trait Hooks: Sync {
+    /// Edit velocities after gravity and external acceleration, before prediction.
+    fn accelerate(
+        &self,
+        _strand: usize,
+        _first_vertex: usize,
+        _positions: &[Vec3],
+        _velocities: &mut [Vec3],
+        _dt: f32,
+    ) {
+    }
+    /// Project positions onto obstacles, once per solver iteration. Must leave vertices whose
+    /// inverse mass is 0 where they are.
+    fn project(
+        &self,
+        _strand: usize,
+        _first_vertex: usize,
+        _positions: &mut [Vec3],
+        _inverse_masses: &[f32],
+    ) {
+    }
+}
+
+/// No callbacks.
+pub struct NoHooks;
+impl Hooks for NoHooks {}
+
+/// Which edge pairs a bond-rate change applies to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BondTarget {
+    All,
+    Strand(usize),
+    Vertex(usize),
+}
+
+/// Energies of the current state, joules.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Energy {
+    pub kinetic: f64,
+    /// Relative to the origin: `−Σ m·g·x`.
+    pub gravitational: f64,
+    /// Bend–twist energy against the bonds' zero-stress shape.
+    pub elastic: f64,
+}
+
+impl Energy {
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.gravitational + self.elastic
+    }
+}
+
+/// A groom being simulated.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    params: SimParams,
+    pub rods: Rods,
+    pub bonds: Bonds,
+    masses_dirty: bool,
+    steps: u64,
+}
+
+impl Simulation {
+    /// Rods at rest in the groom's shape, all bonds intact and remembering that shape. Bond rates
+    /// the groom carries as `bond_*` attributes are applied (as breaking, so shapes stay).
+    pub fn new(groom: &Groom, params: SimParams) -> Result<Simulation> {
+        params.check()?;
+        groom.validate()?;
+        let rods = Rods::from_groom(groom, &params.material, params.frame_inertia_factor);
+        let bonds = Bonds::new(params.influences, &rods.rest_darboux);
+        let mut sim = Simulation { params, rods, bonds, masses_dirty: false, steps: 0 };
+        for kind in BondKind::ALL {
+            if let Some(attribute) = groom.attribute(kind.attribute_name()) {
+                if attribute.rate != AttributeRate::Vertex || attribute.components != 1 {
+                    return Err(Error::Usage(format!(
+                        "attribute '{}' must be one float per vertex to drive bond rates",
+                        attribute.name
+                    )));
+                }
+                let rates = attribute.data.clone();
+                sim.set_bond_rates_with(kind, |vertex| rates[vertex]);
+            }
+        }
+        Ok(sim)
+    }
+
+    pub fn params(&self) -> &SimParams {
+        &self.params
+    }
+
+    /// Changes time step, iterations, gravity or damping (material and influences are fixed).
+    pub fn set_step_params(&mut self, dt: f32, iterations: u32, gravity: Vec3, damping: f32) -> Result<()> {
+        let params = SimParams { dt, iterations, gravity, damping, ..self.params.clone() };
+        params.check()?;
+        self.params = params;
+        Ok(())
+    }
+
+    pub fn steps_taken(&self) -> u64 {
+        self.steps
+    }
+
+    /// Advances one time step.
+    pub fn step(&mut self) {
+        self.step_with(&NoHooks);
+    }
+
+    /// Advances one time step with callbacks.
+    pub fn step_with(&mut self, hooks: &dyn Hooks) {
+        if self.masses_dirty {
+            self.rods.update_inverse_masses(self.params.frame_inertia_factor);
+            self.masses_dirty = false;
+        }
+        let constants = solver::StepConstants {
+            dt: self.params.dt,
+            iterations: self.params.iterations,
+            gravity: self.params.gravity,
+            velocity_keep: (-self.params.damping * self.params.dt).exp(),
+        };
+        let (bonded, broken) = self.bonds.affine();
+        solver::step_all(&mut self.rods, bonded, broken, &constants, hooks);
+        self.steps += 1;
+    }
+
+    /// Runs whole steps covering `seconds`; returns the number of steps taken.
+    pub fn run(&mut self, seconds: f32, hooks: &dyn Hooks) -> u64 {
+        let steps = (seconds / self.params.dt).round().max(0.0) as u64;
+        (0..steps).for_each(|_| self.step_with(hooks));
+        steps
+    }
+
+    /// Moves a strand's root vertex and root frame (kinematic: an animated head drives them).
+    /// The frame's third director should point along the first edge.
+    pub fn set_root(&mut self, strand: usize, position: Vec3, frame: Quat) {
+        let first = self.rods.strand_range(strand).start;
+        self.rods.kinematic_targets[first] = position;
+        self.rods.frames[first] = frame.normalize();
+    }
+
+    /// The strand's root frame.
+    pub fn root_frame(&self, strand: usize) -> Quat {
+        self.rods.frames[self.rods.strand_range(strand).start]
+    }
+
+    /// Makes a vertex kinematic, following `target` from the next step on.
+    pub fn attach(&mut self, vertex: usize, target: Vec3) {
+        self.rods.kinematic_targets[vertex] = target;
+        if !self.rods.kinematic[vertex] {
+            self.rods.kinematic[vertex] = true;
+            self.masses_dirty = true;
+        }
+    }
+
+    /// Releases a vertex attached by [`attach`](Self::attach). Roots stay pinned.
+    pub fn detach(&mut self, vertex: usize) {
+        let strand = self.rods.strand_of(vertex);
+        if vertex != self.rods.strand_range(strand).start && self.rods.kinematic[vertex] {
+            self.rods.kinematic[vertex] = false;
+            self.masses_dirty = true;
+        }
+    }
+
+    /// Scales a vertex's mass (1 = dry hair).
+    pub fn set_mass_scale(&mut self, vertex: usize, scale: f32) {
+        if scale.is_finite() && scale > 0.0 {
+            self.rods.mass_scale[vertex] = scale;
+            self.masses_dirty = true;
+        }
+    }
+
+    /// Per-vertex external acceleration (m/s²) added before prediction every step until changed.
+    pub fn external_acceleration_mut(&mut self) -> &mut [Vec3] {
+        &mut self.rods.external_acceleration
+    }
+
+    fn target_vertices(&self, target: BondTarget) -> std::ops::Range<usize> {
+        match target {
+            BondTarget::All => 0..self.rods.vertex_count(),
+            BondTarget::Strand(s) => self.rods.strand_range(s),
+            BondTarget::Vertex(v) => v..v + 1,
+        }
+    }
+
+    /// Changes one kind's bond rate by `delta` (S1-16: positive re-forms in the current shape).
+    pub fn change_bond_rate(&mut self, kind: BondKind, target: BondTarget, delta: f32) {
+        for vertex in self.target_vertices(target) {
+            let current = self.rods.darboux_at(vertex);
+            self.bonds.change_rate(kind, vertex, delta, current);
+        }
+    }
+
+    /// Sets one kind's bond rate (as the change from the present rate).
+    pub fn set_bond_rate(&mut self, kind: BondKind, target: BondTarget, rate: f32) {
+        for vertex in self.target_vertices(target) {
+            let current = self.rods.darboux_at(vertex);
+            let delta = rate - self.bonds.rate(kind, vertex);
+            self.bonds.change_rate(kind, vertex, delta, current);
+        }
+    }
+
+    /// Changes one kind's rate at every vertex by `delta(vertex)` (a field: wetness, lotion…).
+    pub fn change_bond_rates_with(&mut self, kind: BondKind, delta: impl Fn(usize) -> f32) {
+        for vertex in 0..self.rods.vertex_count() {
+            let current = self.rods.darboux_at(vertex);
+            self.bonds.change_rate(kind, vertex, delta(vertex), current);
+        }
+    }
+
+    /// Sets one kind's rate at every vertex to `rate(vertex)`.
+    pub fn set_bond_rates_with(&mut self, kind: BondKind, rate: impl Fn(usize) -> f32) {
+        for vertex in 0..self.rods.vertex_count() {
+            let current = self.rods.darboux_at(vertex);
+            let delta = rate(vertex) - self.bonds.rate(kind, vertex);
+            self.bonds.change_rate(kind, vertex, delta, current);
+        }
+    }
+
+    /// Largest vertex speed, m/s.
+    pub fn max_speed(&self) -> f32 {
+        self.rods.velocities.iter().map(|v| v.length()).fold(0.0, f32::max)
+    }
+
+    pub fn energy(&self) -> Energy {
+        let r = &self.rods;
+        let mut energy = Energy::default();
+        for i in 0..r.vertex_count() {
+            if r.kinematic[i] {
+                continue;
+            }
+            let m = (r.mass[i] * r.mass_scale[i]) as f64;
+            energy.kinetic += 0.5 * m * r.velocities[i].as_dvec3().length_squared();
+            energy.gravitational -= m * self.params.gravity.as_dvec3().dot(r.positions[i].as_dvec3());
+        }
+        for i in 0..r.vertex_count() {
+            if !r.is_pair_centre(i) {
+                continue;
+            }
+            let omega = r.darboux_at(i);
+            let rest = self.bonds.zero_stress_shape(i).unwrap_or(omega);
+            let rest =
+                if (omega - rest).length_squared() > (omega + rest).length_squared() { -rest } else { rest };
+            let c = omega - rest;
+            energy.elastic += 0.5 * (c * c / r.compliance[i]).as_dvec3().element_sum();
+        }
+        energy
+    }
+}

@@ -1,0 +1,270 @@
+//! The time stepper: per strand, prediction → Gauss–Seidel iterations along the strand
+//! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`) → velocity update.
+//! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
+//! results are bit-identical at any thread count and any chunking.
+use std::ops::Range;
+
+use glam::{Quat, Vec3};
+use rayon::prelude::*;
+
+use super::constraints::{darboux, project_bend_twist, project_stretch_shear, pure};
+use super::rod::Rods;
+use super::Hooks;
+
+/// Per-step constants shared by every strand.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StepConstants {
+    pub dt: f32,
+    pub iterations: u32,
+    pub gravity: Vec3,
+    /// Velocity factor per step, `exp(−damping·Δt)`, so damping per second does not depend on Δt.
+    pub velocity_keep: f32,
+}
+
+/// A raw pointer that may cross threads; strands hand out disjoint slices of it.
+#[derive(Clone, Copy)]
+struct SharedMut<T>(*mut T);
+// SAFETY: only used to create slices over disjoint per-strand ranges (see `step_all`).
+unsafe impl<T: Send> Send for SharedMut<T> {}
+unsafe impl<T: Send> Sync for SharedMut<T> {}
+
+impl<T> SharedMut<T> {
+    fn new(v: &mut [T]) -> Self {
+        SharedMut(v.as_mut_ptr())
+    }
+
+    /// # Safety
+    /// `range` must be in bounds, and no two live slices may overlap.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn slice<'a>(&self, range: Range<usize>) -> &'a mut [T] {
+        std::slice::from_raw_parts_mut(self.0.add(range.start), range.len())
+    }
+}
+
+/// One strand's view of the rod arrays.
+struct Strand<'a> {
+    x: &'a mut [Vec3],
+    v: &'a mut [Vec3],
+    x_prev: &'a mut [Vec3],
+    q: &'a mut [Quat],
+    q_prev: &'a mut [Quat],
+    omega: &'a mut [Vec3],
+    rest: &'a mut [Vec3],
+    lambda: &'a mut [Vec3],
+    directions: &'a mut [Vec3],
+    upper: &'a mut [f32],
+    values: &'a mut [f32],
+    w: &'a [f32],
+    kinematic: &'a [bool],
+    targets: &'a [Vec3],
+    external: &'a [Vec3],
+    wq: &'a [f32],
+    length: &'a [f32],
+    compliance: &'a [Vec3],
+    bonded: &'a [Vec3],
+    broken: &'a [f32],
+}
+
+/// Advances every strand by one step.
+pub(crate) fn step_all(
+    rods: &mut Rods,
+    bonded: &[Vec3],
+    broken: &[f32],
+    k: &StepConstants,
+    hooks: &dyn Hooks,
+) {
+    let strands = rods.strand_count();
+    let offsets = &rods.strand_offsets;
+    let x = SharedMut::new(&mut rods.positions);
+    let v = SharedMut::new(&mut rods.velocities);
+    let x_prev = SharedMut::new(&mut rods.previous_positions);
+    let q = SharedMut::new(&mut rods.frames);
+    let q_prev = SharedMut::new(&mut rods.previous_frames);
+    let omega = SharedMut::new(&mut rods.angular_velocities);
+    let rest = SharedMut::new(&mut rods.rest_darboux);
+    let lambda = SharedMut::new(&mut rods.lambdas);
+    let directions = SharedMut::new(&mut rods.edge_directions);
+    let upper = SharedMut::new(&mut rods.solve_upper);
+    let values = SharedMut::new(&mut rods.solve_values);
+    let (w, kinematic, targets, external) =
+        (&rods.inv_mass, &rods.kinematic, &rods.kinematic_targets, &rods.external_acceleration);
+    let (wq, length, compliance) = (&rods.frame_inv_inertia, &rods.rest_lengths, &rods.compliance);
+    (0..strands).into_par_iter().with_min_len(16).for_each(|s| {
+        let r = offsets[s] as usize..offsets[s + 1] as usize;
+        // SAFETY: strand ranges are disjoint and within the arrays (validated groom offsets);
+        // each strand index is visited exactly once.
+        let strand = unsafe {
+            Strand {
+                x: x.slice(r.clone()),
+                v: v.slice(r.clone()),
+                x_prev: x_prev.slice(r.clone()),
+                q: q.slice(r.clone()),
+                q_prev: q_prev.slice(r.clone()),
+                omega: omega.slice(r.clone()),
+                rest: rest.slice(r.clone()),
+                lambda: lambda.slice(r.clone()),
+                directions: directions.slice(r.clone()),
+                upper: upper.slice(r.clone()),
+                values: values.slice(r.clone()),
+                w: &w[r.clone()],
+                kinematic: &kinematic[r.clone()],
+                targets: &targets[r.clone()],
+                external: &external[r.clone()],
+                wq: &wq[r.clone()],
+                length: &length[r.clone()],
+                compliance: &compliance[r.clone()],
+                bonded: &bonded[r.clone()],
+                broken: &broken[r.clone()],
+            }
+        };
+        step_strand(strand, k, hooks, s, r.start);
+    });
+}
+
+/// Makes every edge its rest length at once (to first order): the length constraints of a strand
+/// form a tridiagonal system `J·W·Jᵀ·λ = −C`, solved exactly by the Thomas algorithm. Gauss–Seidel
+/// alone carries a correction one edge per sweep, so under gravity a strand of n edges keeps a
+/// stretch that shrinks only like 1/iterations — and the look would depend on the iteration count.
+fn solve_lengths(s: &mut Strand<'_>) {
+    let edges = s.x.len() - 1;
+    for i in 0..edges {
+        let d = s.x[i + 1] - s.x[i];
+        let length = d.length();
+        s.directions[i] = d / length;
+        // Right-hand side −C_i, kept in `values` until elimination replaces it.
+        s.values[i] = s.length[i] - length;
+    }
+    // Row i: a_i·λ_{i−1} + b_i·λ_i + c_i·λ_{i+1} = −C_i with b_i = w_i + w_{i+1},
+    // a_i = −w_i·(n_{i−1}·n_i), c_i = −w_{i+1}·(n_i·n_{i+1}). Thomas forward elimination:
+    let mut upper_prev = 0.0; // c'_{i−1}
+    let mut value_prev = 0.0; // d'_{i−1}
+    for i in 0..edges {
+        let n = s.directions[i];
+        let a = if i > 0 { -s.w[i] * n.dot(s.directions[i - 1]) } else { 0.0 };
+        let b = s.w[i] + s.w[i + 1];
+        let c = if i + 1 < edges { -s.w[i + 1] * n.dot(s.directions[i + 1]) } else { 0.0 };
+        let pivot = b - a * upper_prev;
+        if pivot > 1e-7 * b && b > 0.0 {
+            upper_prev = c / pivot;
+            value_prev = (s.values[i] - a * value_prev) / pivot;
+        } else {
+            // Both ends kinematic: the edge cannot change; decouple its row.
+            upper_prev = 0.0;
+            value_prev = 0.0;
+        }
+        s.upper[i] = upper_prev;
+        s.values[i] = value_prev;
+    }
+    // Back substitution: λ_i = d'_i − c'_i·λ_{i+1}.
+    let mut next = 0.0;
+    for i in (0..edges).rev() {
+        next = s.values[i] - s.upper[i] * next;
+        s.values[i] = next;
+    }
+    // Δp_j = w_j·(n_{j−1}·λ_{j−1} − n_j·λ_j).
+    for j in 0..=edges {
+        let mut dp = Vec3::ZERO;
+        if j > 0 {
+            dp += s.directions[j - 1] * s.values[j - 1];
+        }
+        if j < edges {
+            dp -= s.directions[j] * s.values[j];
+        }
+        s.x[j] += s.w[j] * dp;
+    }
+}
+
+/// Stretch–shear of edge `e`.
+#[inline(always)]
+fn project_edge(s: &mut Strand<'_>, e: usize) {
+    let (mut p1, mut p2, mut q) = (s.x[e], s.x[e + 1], s.q[e]);
+    project_stretch_shear(&mut p1, &mut p2, &mut q, s.w[e], s.w[e + 1], s.wq[e], s.length[e]);
+    s.x[e] = p1;
+    s.x[e + 1] = p2;
+    s.q[e] = q;
+}
+
+/// Bend–twist of the pair of edges `e − 1`, `e`.
+#[inline(always)]
+fn project_pair(s: &mut Strand<'_>, e: usize, inv_dt2: f32) {
+    let (mut q1, mut q2) = (s.q[e - 1], s.q[e]);
+    project_bend_twist(
+        &mut q1,
+        &mut q2,
+        s.wq[e - 1],
+        s.wq[e],
+        s.rest[e],
+        s.compliance[e] * inv_dt2,
+        &mut s.lambda[e],
+    );
+    s.q[e - 1] = q1;
+    s.q[e] = q2;
+}
+
+fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+    let n = s.x.len();
+    let edges = n - 1;
+    let dt = k.dt;
+    let inv_dt2 = 1.0 / (dt * dt);
+
+    // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers.
+    for i in 1..edges {
+        let omega = darboux(s.q[i - 1], s.q[i]);
+        s.rest[i] = s.bonded[i] + s.broken[i] * omega;
+        s.lambda[i] = Vec3::ZERO;
+    }
+
+    // External forces act on velocities before prediction.
+    for i in 0..n {
+        s.v[i] += (k.gravity + s.external[i]) * dt;
+    }
+    hooks.accelerate(strand, first, s.x, s.v, dt);
+
+    // Prediction.
+    for i in 0..n {
+        s.x_prev[i] = s.x[i];
+        s.x[i] = if s.kinematic[i] { s.targets[i] } else { s.x[i] + s.v[i] * dt };
+    }
+    for e in 0..edges {
+        s.q_prev[e] = s.q[e];
+        if s.wq[e] > 0.0 {
+            s.q[e] = (s.q[e] + s.q[e] * pure(s.omega[e]) * (0.5 * dt)).normalize();
+        }
+    }
+
+    // Gauss–Seidel along the strand, alternating root→tip and tip→root sweeps: a one-way sweep
+    // passes a correction only one edge against its direction per iteration, and a hanging strand
+    // needs tension carried from the tip up as much as positions carried from the root down.
+    for iteration in 0..k.iterations {
+        solve_lengths(&mut s);
+        if iteration % 2 == 0 {
+            for e in 0..edges {
+                project_edge(&mut s, e);
+                if e >= 1 {
+                    project_pair(&mut s, e, inv_dt2);
+                }
+            }
+        } else {
+            for e in (0..edges).rev() {
+                project_edge(&mut s, e);
+                if e + 1 < edges {
+                    project_pair(&mut s, e + 1, inv_dt2);
+                }
+            }
+        }
+        hooks.project(strand, first, s.x, s.w);
+    }
+
+    // Velocities from the positions and frames actually reached.
+    let inv_dt = 1.0 / dt;
+    for i in 0..n {
+        s.v[i] = (s.x[i] - s.x_prev[i]) * (inv_dt * k.velocity_keep);
+    }
+    for e in 0..edges {
+        let mut r = s.q_prev[e].conjugate() * s.q[e];
+        if r.w < 0.0 {
+            r = -r;
+        }
+        s.omega[e] = Vec3::new(r.x, r.y, r.z) * (2.0 * inv_dt * k.velocity_keep);
+    }
+}

@@ -1,0 +1,46 @@
+//! `coif simulate` through the binary: runs, reports, writes; bad options exit 2 and write nothing.
+mod common;
+use common::{coif, dir_listing, path_str, stderr, stdout_json};
+
+#[test]
+fn simulate_writes_the_groom_and_reports_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    let output = dir.path().join("out.hair");
+    let generated = coif(&["generate", "-o", path_str(&input), "--strands", "20", "--vertices", "8"]);
+    assert!(generated.status.success(), "{}", stderr(&generated));
+    let json = stdout_json(&coif(&[
+        "simulate",
+        path_str(&input),
+        path_str(&output),
+        "--seconds",
+        "0.05",
+        "--dt",
+        "1/360",
+        "--json",
+    ]));
+    assert_eq!(json["simulation"]["steps"], 18);
+    assert_eq!(json["groom"]["strands"], 20);
+    // The groom fell under gravity: it is no longer the input.
+    assert_ne!(std::fs::read(&input).unwrap(), std::fs::read(&output).unwrap());
+}
+
+#[test]
+fn bad_simulate_options_exit_2_without_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    assert!(coif(&["generate", "-o", path_str(&input), "--strands", "5"]).status.success());
+    let output = dir.path().join("out.hair");
+    for bad in [
+        vec!["--dt", "0"],
+        vec!["--iterations", "0"],
+        vec!["--influences", "0,0,0,0"],
+        vec!["--seconds", "-1"],
+    ] {
+        let mut args = vec!["simulate", path_str(&input), path_str(&output)];
+        args.extend(bad.iter());
+        let result = coif(&args);
+        assert_eq!(result.status.code(), Some(2), "{bad:?}: {}", stderr(&result));
+    }
+    assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
+}
