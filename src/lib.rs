@@ -4,6 +4,7 @@
 //!
 //! Data flows one way: `io` readers produce a [`Groom`], the simulation transforms it, `io`
 //! writers and the renderer consume it.
+pub mod analysis;
 pub mod batch;
 pub mod embree;
 pub mod error;

@@ -43,6 +43,29 @@ enum Command {
     /// Simulate a groom (gravity, Cosserat rods, side-chain bonds), optionally settle it, and
     /// write it with its rest shape and bond rates as attributes.
     Simulate(SimulateArgs),
+    /// Style a groom with a recipe (perm, water set, blow-dry, bed-head) and settle it into its
+    /// new rest shape.
+    Style(StyleArgs),
+}
+
+#[derive(Args)]
+struct StyleArgs {
+    /// Recipe file (TOML); presets are in grooms/recipes/.
+    recipe: PathBuf,
+    /// Groom to style.
+    #[arg(long)]
+    groom: PathBuf,
+    /// Styled groom (any format coif writes).
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    import: ImportArgs,
+    /// Print one JSON object (the per-stage report) on stdout.
+    #[arg(long)]
+    json: bool,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -101,7 +124,7 @@ impl ImportArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum StyleName {
+enum HairStyle {
     Straight,
     Wavy,
     Curly,
@@ -123,8 +146,8 @@ struct GenerateArgs {
     /// Vertices per strand.
     #[arg(long, default_value_t = 16)]
     vertices: usize,
-    #[arg(long, value_enum, default_value_t = StyleName::Straight)]
-    style: StyleName,
+    #[arg(long, value_enum, default_value_t = HairStyle::Straight)]
+    style: HairStyle,
     /// Curl (helix) radius for --style curly, metres.
     #[arg(long, default_value_t = 0.01)]
     curl_radius: f32,
@@ -178,7 +201,51 @@ fn run(cli: Cli) -> Result<()> {
             write_and_report(&output, &loaded.groom, json)
         }
         Command::Simulate(args) => run_simulate(args),
+        Command::Style(args) => run_style(args),
     }
+}
+
+fn run_style(args: StyleArgs) -> Result<()> {
+    use std::io::IsTerminal;
+    let recipe = coif::style::recipe::load(&args.recipe)?;
+    io::Format::from_extension(&args.output)?;
+    let loaded = io::read_groom(&args.groom, &args.import.options())?;
+    let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
+    let options = coif::style::StyleOptions { progress, ..Default::default() };
+    let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
+    let warnings = io::write_groom(&args.output, &styled.groom)?;
+    for warning in &warnings {
+        eprintln!("coif: warning: {warning}");
+    }
+    if let Some(settle) = styled.report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
+        eprintln!(
+            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
+            settle.seconds, settle.max_speed
+        );
+    }
+    if args.json {
+        print_json(json!({ "output": args.output, "report": styled.report, "warnings": warnings }));
+    } else {
+        for stage in &styled.report.stages {
+            let curl = stage.curl_radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
+            let b = &stage.bond_rates;
+            eprintln!(
+                "{:>2} {:<10} {:>6.2} s {:>6} steps {:>7.2} s wall  curl {curl:>9}  bonds H {:.2} I {:.2} S {:.2} P {:.2}  wet {:.2}",
+                stage.index + 1,
+                stage.kind,
+                stage.seconds,
+                stage.steps,
+                stage.wall_seconds,
+                b.hydrogen,
+                b.ionic,
+                b.disulfide,
+                b.peptide,
+                stage.wetness
+            );
+        }
+        eprintln!("wrote {}", args.output.display());
+    }
+    Ok(())
 }
 
 fn run_simulate(args: SimulateArgs) -> Result<()> {
@@ -228,9 +295,9 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
 
 fn run_generate(args: GenerateArgs) -> Result<()> {
     let style = match args.style {
-        StyleName::Straight => Style::Straight,
-        StyleName::Wavy => Style::Wavy { amplitude: args.wave_amplitude, wavelength: args.wavelength },
-        StyleName::Curly => Style::Curly { radius: args.curl_radius, pitch: args.curl_pitch },
+        HairStyle::Straight => Style::Straight,
+        HairStyle::Wavy => Style::Wavy { amplitude: args.wave_amplitude, wavelength: args.wavelength },
+        HairStyle::Curly => Style::Curly { radius: args.curl_radius, pitch: args.curl_pitch },
     };
     let params = GenerateParams {
         strands: args.strands,

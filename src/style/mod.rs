@@ -1,3 +1,7 @@
 //! Styling: recipes (TOML timelines of stages) and, once the simulation core lands, the
 //! driver that runs them on a groom.
 pub mod recipe;
+pub mod run;
+
+pub use recipe::Recipe;
+pub use run::{style, StyleOptions, StyleReport, Styled};

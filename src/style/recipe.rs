@@ -44,10 +44,18 @@ pub struct Settings {
     pub iterations: u32,
     /// m/s², Y up.
     pub gravity: [f32; 3],
-    /// Bending stiffness at the root, k_o ∈ (0, 1] (Table 1: 0.05).
-    pub stiffness: f32,
+    /// Young's modulus of hair, Pa (bending); coif's rods use physical moduli (XPBD), so the
+    /// look does not change with `dt` or `iterations`.
+    pub youngs_modulus: f32,
+    /// Shear modulus, Pa (twisting).
+    pub shear_modulus: f32,
+    /// kg/m³.
+    pub density: f32,
     /// Cuticle peel rate per metre from the root (Table 1: 0.33 %/cm = 0.33 /m).
     pub cuticle_peel_per_metre: f32,
+    /// Resample strands so no segment is longer than this (metres) before styling: curls on a
+    /// rod need several vertices per turn. Unset keeps the groom's vertices.
+    pub max_segment: Option<f32>,
     /// Velocity damping per second.
     pub damping: f32,
     /// Seed for every random choice the recipe makes (masks, droplet placement).
@@ -60,8 +68,11 @@ impl Default for Settings {
             dt: 1.0 / 360.0,
             iterations: 5,
             gravity: [0.0, -9.8, 0.0],
-            stiffness: 0.05,
+            youngs_modulus: 3.9e9,
+            shear_modulus: 1.3e9,
+            density: 1300.0,
             cuticle_peel_per_metre: 0.33,
+            max_segment: None,
             damping: 2.0,
             seed: 1,
         }
@@ -306,12 +317,15 @@ pub enum Stage {
         #[serde(default = "one")]
         heat: f32,
     },
-    /// Press the hair onto an obstacle (a floor, a pillow) and hold it there.
+    /// Press an obstacle (a floor, a pillow) into the hair: it moves `travel` metres along
+    /// `direction` (default: the plane's normal, or up for a box) over the duration, then holds.
     Press {
         duration: f32,
         obstacle: String,
+        #[serde(default = "default_travel")]
+        travel: f32,
         #[serde(default)]
-        mask: Mask,
+        direction: Option<[f32; 3]>,
     },
     /// Let go of rods and pressing.
     Release { duration: f32 },
@@ -326,6 +340,10 @@ pub enum Stage {
         #[serde(default)]
         gravity: Option<bool>,
     },
+}
+
+fn default_travel() -> f32 {
+    0.1
 }
 
 fn default_settle_seconds() -> f32 {
@@ -412,8 +430,11 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     if settings.iterations == 0 || settings.iterations > 1000 {
         return Err(format!("[settings] iterations = {} must be between 1 and 1000", settings.iterations));
     }
-    if !(settings.stiffness > 0.0 && settings.stiffness <= 1.0) {
-        return Err(format!("[settings] stiffness = {} must be in (0, 1]", settings.stiffness));
+    if ![settings.youngs_modulus, settings.shear_modulus, settings.density].iter().all(|&v| positive(v)) {
+        return Err("[settings] youngs_modulus, shear_modulus and density must be positive".into());
+    }
+    if settings.max_segment.is_some_and(|m| !positive(m)) {
+        return Err("[settings] max_segment must be a positive length".into());
     }
     if !(settings.cuticle_peel_per_metre >= 0.0 && settings.damping >= 0.0) {
         return Err("[settings] cuticle_peel_per_metre and damping must not be negative".into());
@@ -526,7 +547,7 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                     }
                 }
             }
-            Stage::Press { obstacle, mask, .. } => {
+            Stage::Press { obstacle, travel, direction, .. } => {
                 if let Some(holder) = held {
                     return fail(format!("the hair is still held by the earlier {holder}; release it first"));
                 }
@@ -537,8 +558,11 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                     }
                     Some(_) => {}
                 }
-                if !check_mask(mask) {
-                    return fail("mask fraction must be in [0, 1]".into());
+                if !(travel.is_finite() && *travel >= 0.0) {
+                    return fail(format!("travel {travel} must be zero or more metres"));
+                }
+                if direction.is_some_and(|d| Vec3::from(d).length() < 1e-6) {
+                    return fail("direction must not be zero".into());
                 }
                 held = Some("press");
             }

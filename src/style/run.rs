@@ -1,0 +1,778 @@
+//! Runs a recipe on a groom: the timeline of stages drives the simulation core (`crate::sim`)
+//! and the interactions (`crate::interact`) — wetness and water, rods and pressing, chemistry
+//! that breaks and re-forms bonds, the dryer — and ends with a settled groom carrying its new
+//! rest shape, bond rates and wetness, plus a report per stage.
+//!
+//! Every step is: forces from a snapshot (wind, hair–hair penalty, water) → the rod solver with
+//! obstacle contacts projected each iteration → wetness update (uptake, wicking, evaporation),
+//! whose changes re-form or break hydrogen bonds (S1-16) and change strand mass.
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::recipe::{Mask, Obstacle, Recipe, Stage};
+use crate::analysis::{curl_radius, mean_curvature, resample_groom};
+use crate::error::{Error, Result};
+use crate::groom::{Attribute, AttributeRate, Groom};
+use crate::head::Head;
+use crate::interact::hair_contacts::HairContacts;
+use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::interact::water::Droplets;
+use crate::interact::wetness::{self, WetnessParams};
+use crate::interact::wind::Dryer;
+use crate::sim::{BondInfluences, BondKind, Cuticle, Hooks, Material, SettleReport, SimParams, Simulation};
+
+/// Options of a styling run that are not part of the recipe.
+#[derive(Clone, Debug, Default)]
+pub struct StyleOptions {
+    /// Capture the groom this many times per simulated second (0: only the result).
+    pub frames_per_second: f32,
+    /// Draw a progress bar on stderr (only shown on a terminal).
+    pub progress: bool,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct BondRates {
+    pub hydrogen: f32,
+    pub ionic: f32,
+    pub disulfide: f32,
+    pub peptide: f32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StageReport {
+    pub index: usize,
+    pub kind: &'static str,
+    /// Simulated seconds.
+    pub seconds: f32,
+    pub steps: u64,
+    pub wall_seconds: f64,
+    /// Mean over strands of total turning angle per length, 1/m.
+    pub mean_curvature: f32,
+    /// Median curl radius of the strands that were wound on rods (else of all strands), metres.
+    pub curl_radius: Option<f32>,
+    /// Mean bond rates per kind at the stage's end.
+    pub bond_rates: BondRates,
+    /// Mean wetness at the stage's end.
+    pub wetness: f32,
+    pub settle: Option<SettleReport>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StyleReport {
+    pub strands: usize,
+    pub vertices: usize,
+    pub steps: u64,
+    pub stages: Vec<StageReport>,
+}
+
+/// The outcome of a styling run.
+pub struct Styled {
+    /// The settled groom with `rest`, `rest_darboux`, `bond_*` and `wetness` attributes.
+    pub groom: Groom,
+    pub report: StyleReport,
+    /// Captured positions, one array per frame (empty unless frames were asked for).
+    pub frames: Vec<Vec<Vec3>>,
+    pub frames_per_second: f32,
+}
+
+/// Styles a groom with a recipe.
+pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    let mut session = Session::new(groom, recipe, options)?;
+    let mut stages = Vec::with_capacity(recipe.stages.len());
+    let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
+    let progress = options.progress.then(|| {
+        let bar = indicatif::ProgressBar::new(total_steps);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} steps ({eta})")
+                .expect("a valid template")
+                .progress_chars("=> "),
+        );
+        bar
+    });
+    for (index, spanned) in recipe.stages.iter().enumerate() {
+        let stage = spanned.get_ref();
+        if let Some(bar) = &progress {
+            bar.set_message(stage.kind());
+        }
+        let start = Instant::now();
+        let steps_before = session.sim.steps_taken();
+        let settle = session.run_stage(index, stage, progress.as_ref())?;
+        let steps = session.sim.steps_taken() - steps_before;
+        stages.push(session.stage_report(index, stage, steps, start.elapsed().as_secs_f64(), settle));
+    }
+    if let Some(bar) = progress {
+        bar.finish_and_clear();
+    }
+    let report = StyleReport {
+        strands: session.groom.strand_count(),
+        vertices: session.groom.vertex_count(),
+        steps: session.sim.steps_taken(),
+        stages,
+    };
+    let mut out = session.groom.clone();
+    session.sim.write_to_groom(&mut out);
+    out.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, session.wetness.clone()));
+    out.validate()?;
+    Ok(Styled { groom: out, report, frames: session.frames, frames_per_second: options.frames_per_second })
+}
+
+/// Projects vertices out of the active obstacles after each solver iteration.
+struct ContactHooks<'a> {
+    shapes: &'a [Shape],
+    /// Positions at the start of the step (friction measures the slide from there).
+    previous: &'a [Vec3],
+    radii: &'a [f32],
+    friction: Friction,
+}
+
+impl Hooks for ContactHooks<'_> {
+    fn project(&self, _strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
+        for (k, p) in positions.iter_mut().enumerate() {
+            if inverse_masses[k] == 0.0 {
+                continue;
+            }
+            let i = first_vertex + k;
+            for shape in self.shapes {
+                if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
+                    *p = q;
+                }
+            }
+        }
+    }
+}
+
+/// A strand wound on a rod: where its vertices start and where the helix puts them.
+struct Winding {
+    /// First wound vertex (groom-wide index) of the strand.
+    first: usize,
+    end: usize,
+    start: Vec<Vec3>,
+    target: Vec<Vec3>,
+}
+
+struct Session<'r> {
+    recipe: &'r Recipe,
+    /// The groom being styled (resampled if the recipe asks), for topology and attributes.
+    groom: Groom,
+    sim: Simulation,
+    /// Unit direction from the head centre to each strand's root (for masks).
+    root_dirs: Vec<Vec3>,
+    radii: Vec<f32>,
+    /// The recipe's obstacles, their current offsets (pressing), and the rods.
+    obstacles: Vec<Shape>,
+    offsets: Vec<Vec3>,
+    rods: Vec<Shape>,
+    rods_active: bool,
+    active: Vec<Shape>,
+    held: Vec<usize>,
+    /// Strands wound on a rod, by their first wound vertex (for curl measurements).
+    wound: Vec<Option<usize>>,
+    wetness: Vec<f32>,
+    wetness_before: Vec<f32>,
+    wetness_params: WetnessParams,
+    droplets: Droplets,
+    contacts: Option<HairContacts>,
+    dryer: Option<Dryer>,
+    /// Evaporation multiplier while drying (0 when not drying).
+    heat: f32,
+    friction: Friction,
+    // Per-step scratch.
+    previous: Vec<Vec3>,
+    dv: Vec<Vec3>,
+    wind_dv: Vec<f32>,
+    scratch: Vec<f32>,
+    frames: Vec<Vec<Vec3>>,
+    frame_interval: Option<u64>,
+}
+
+impl<'r> Session<'r> {
+    fn new(input: &Groom, recipe: &'r Recipe, options: &StyleOptions) -> Result<Session<'r>> {
+        let settings = &recipe.settings;
+        let groom = match settings.max_segment {
+            Some(max) => resample_groom(input, max),
+            None => input.clone(),
+        };
+        groom.validate()?;
+        let b = &recipe.bonds;
+        let params = SimParams {
+            dt: settings.dt,
+            iterations: settings.iterations,
+            gravity: Vec3::from(settings.gravity),
+            damping: settings.damping,
+            material: Material {
+                density: settings.density,
+                youngs_modulus: settings.youngs_modulus,
+                shear_modulus: settings.shear_modulus,
+                cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
+                ..Material::default()
+            },
+            influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
+            ..SimParams::default()
+        };
+        let sim = Simulation::new(&groom, params)?;
+
+        let mut head = Head::default();
+        let obstacles: Vec<Shape> = recipe
+            .obstacles
+            .iter()
+            .map(|o| match o.get_ref() {
+                Obstacle::Head { center, radii, .. } => {
+                    head.center = center.map_or(head.center, Vec3::from);
+                    head.radii = radii.map_or(head.radii, Vec3::from);
+                    Shape::Ellipsoid { center: head.center, radii: head.radii }
+                }
+                Obstacle::Sphere { center, radius, .. } => {
+                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
+                }
+                Obstacle::Plane { point, normal, .. } => {
+                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
+                }
+                Obstacle::Box { center, half_extents, .. } => {
+                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
+                }
+            })
+            .collect();
+        let rods = recipe
+            .rods
+            .iter()
+            .map(|r| {
+                let r = r.get_ref();
+                Shape::Capsule { a: Vec3::from(r.a), b: Vec3::from(r.b), radius: r.radius }
+            })
+            .collect();
+        let root_dirs = (0..groom.strand_count())
+            .map(|s| (groom.points[groom.strand_range(s).start] - head.center).normalize_or_zero())
+            .collect();
+        let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+        let n = groom.vertex_count();
+        let wetness = match groom.attribute("wetness") {
+            Some(a) if a.rate == AttributeRate::Vertex && a.components == 1 => a.data.clone(),
+            _ => vec![0.0; n],
+        };
+        let contacts = recipe.contacts.hair_hair.then(|| {
+            let max_segment = sim.rods.rest_lengths.iter().copied().fold(0.0, f32::max);
+            HairContacts::new(&groom.strand_offsets, &radii, max_segment, recipe.contacts.hair_stiffness)
+        });
+        let frame_interval = (options.frames_per_second > 0.0)
+            .then(|| ((1.0 / (options.frames_per_second * settings.dt)).round() as u64).max(1));
+        let offsets = vec![Vec3::ZERO; obstacles.len()];
+        let mut session = Session {
+            recipe,
+            sim,
+            root_dirs,
+            obstacles,
+            offsets,
+            rods,
+            rods_active: false,
+            active: Vec::new(),
+            held: Vec::new(),
+            wound: vec![None; groom.strand_count()],
+            wetness_before: wetness.clone(),
+            wetness,
+            wetness_params: recipe.wetness,
+            droplets: Droplets::default(),
+            contacts,
+            dryer: None,
+            heat: 0.0,
+            friction: Friction {
+                static_friction: recipe.contacts.static_friction,
+                dynamic_friction: recipe.contacts.dynamic_friction,
+            },
+            previous: vec![Vec3::ZERO; n],
+            dv: vec![Vec3::ZERO; n],
+            wind_dv: vec![0.0; n],
+            scratch: Vec::new(),
+            frames: Vec::new(),
+            frame_interval,
+            radii,
+            groom,
+        };
+        session.refresh_obstacles();
+        if session.wetness.iter().any(|&w| w > 0.0) {
+            session.apply_mass();
+        }
+        if frame_interval.is_some() {
+            session.frames.push(session.sim.rods.positions.clone());
+        }
+        Ok(session)
+    }
+
+    fn steps_for(&self, seconds: f32) -> u64 {
+        (seconds / self.recipe.settings.dt).round().max(0.0) as u64
+    }
+
+    fn refresh_obstacles(&mut self) {
+        self.active = self.obstacles.iter().zip(&self.offsets).map(|(s, &o)| s.translated(o)).collect();
+        if self.rods_active {
+            self.active.extend(self.rods.iter().cloned());
+        }
+    }
+
+    /// Strands a mask selects, decided per strand with the recipe's seed and the stage index.
+    fn masked(&self, mask: &Mask, stage: usize) -> Vec<bool> {
+        let seed = self.recipe.settings.seed;
+        self.root_dirs
+            .iter()
+            .enumerate()
+            .map(|(s, &dir)| {
+                mask.region.contains(dir) && unit_hash(seed, stage as u64, s as u64) < mask.fraction
+            })
+            .collect()
+    }
+
+    fn vertex_mask(&self, strands: &[bool]) -> Vec<bool> {
+        let mut out = vec![false; self.groom.vertex_count()];
+        for (s, &on) in strands.iter().enumerate() {
+            if on {
+                out[self.groom.strand_range(s)].fill(true);
+            }
+        }
+        out
+    }
+
+    /// One simulation step with forces, contacts and wetness.
+    fn step(&mut self) {
+        let dt = self.sim.params().dt;
+        self.compute_forces(dt);
+        self.previous.copy_from_slice(&self.sim.rods.positions);
+        let hooks = ContactHooks {
+            shapes: &self.active,
+            previous: &self.previous,
+            radii: &self.radii,
+            friction: self.friction,
+        };
+        self.sim.step_with(&hooks);
+        self.update_wetness(dt);
+        if let Some(every) = self.frame_interval {
+            if self.sim.steps_taken() % every == 0 {
+                self.frames.push(self.sim.rods.positions.clone());
+            }
+        }
+    }
+
+    /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
+    /// the solver as per-vertex accelerations.
+    fn compute_forces(&mut self, dt: f32) {
+        let positions = &self.sim.rods.positions;
+        self.dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        self.wind_dv.iter_mut().for_each(|w| *w = 0.0);
+        if let Some(dryer) = &self.dryer {
+            let offsets = &self.groom.strand_offsets;
+            let strand_of = |i: usize| offsets.partition_point(|&o| o as usize <= i) - 1;
+            self.dv.par_iter_mut().zip(self.wind_dv.par_iter_mut()).enumerate().for_each(
+                |(i, (dv, wind))| {
+                    let s = strand_of(i);
+                    let end = offsets[s + 1] as usize;
+                    let tangent = if i + 1 < end {
+                        positions[i + 1] - positions[i]
+                    } else {
+                        positions[i] - positions[i - 1]
+                    };
+                    let push = dryer.velocity_change(positions[i], tangent, dt);
+                    *dv += push;
+                    *wind = push.length();
+                },
+            );
+        }
+        if let Some(contacts) = &mut self.contacts {
+            contacts.apply(positions, &self.radii, &mut self.dv, dt);
+        }
+        if let Some(water) = &self.recipe.water {
+            let gravity = self.sim.params().gravity;
+            self.droplets.step(positions, &mut self.dv, Some(&mut self.wetness), gravity, dt, &water.params);
+        }
+        let accel = self.sim.external_acceleration_mut();
+        accel.par_iter_mut().zip(self.dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
+    }
+
+    /// Evaporation (while drying) and wicking, then the bonds and masses that follow wetness.
+    fn update_wetness(&mut self, dt: f32) {
+        if self.heat > 0.0 || self.dryer.is_some() {
+            wetness::evaporate(&mut self.wetness, &self.wind_dv, self.heat, dt, &self.wetness_params);
+        }
+        if self.wetness_params.diffusion > 0.0 && self.wetness.iter().any(|&w| w > 0.0) {
+            for s in 0..self.groom.strand_count() {
+                let range = self.groom.strand_range(s);
+                let points = &self.sim.rods.positions;
+                wetness::diffuse(
+                    &mut self.wetness,
+                    points,
+                    range,
+                    dt,
+                    self.wetness_params.diffusion,
+                    &mut self.scratch,
+                );
+            }
+        }
+        self.apply_wetness_change();
+    }
+
+    /// Wetter hair loses hydrogen bonds, drier hair re-forms them in its current shape (S1-16);
+    /// mass follows the water.
+    fn apply_wetness_change(&mut self) {
+        if self.wetness == self.wetness_before {
+            return;
+        }
+        let (now, before) = (&self.wetness, &self.wetness_before);
+        self.sim.change_bond_rates_with(BondKind::Hydrogen, |v| before[v] - now[v]);
+        self.wetness_before.clone_from(&self.wetness);
+        self.apply_mass();
+    }
+
+    fn apply_mass(&mut self) {
+        for (v, &w) in self.wetness.iter().enumerate() {
+            self.sim.set_mass_scale(v, wetness::mass_scale(w, &self.wetness_params));
+        }
+    }
+
+    fn run_steps(
+        &mut self,
+        steps: u64,
+        progress: Option<&indicatif::ProgressBar>,
+        mut each: impl FnMut(&mut Self, u64),
+    ) {
+        for k in 0..steps {
+            each(self, k);
+            self.step();
+            if let Some(bar) = progress {
+                bar.inc(1);
+            }
+        }
+    }
+
+    fn run_stage(
+        &mut self,
+        index: usize,
+        stage: &Stage,
+        progress: Option<&indicatif::ProgressBar>,
+    ) -> Result<Option<SettleReport>> {
+        let steps = self.steps_for(stage.duration());
+        match stage {
+            Stage::Wet { amount, mask, .. } => {
+                let vertices = self.vertex_mask(&self.masked(mask, index));
+                if let Some(water) = &self.recipe.water {
+                    if self.droplets.positions.is_empty() {
+                        self.scatter_droplets(
+                            water.droplets,
+                            &vertices,
+                            water.params.r_min,
+                            water.params.r_max,
+                        );
+                    }
+                }
+                let increment = amount / steps.max(1) as f32;
+                let amount = *amount;
+                let wet = |session: &mut Self| {
+                    for (w, &on) in session.wetness.iter_mut().zip(&vertices) {
+                        if on && *w < amount {
+                            *w = (*w + increment).min(amount);
+                        }
+                    }
+                    session.apply_wetness_change();
+                };
+                if steps == 0 {
+                    for w in self.wetness.iter_mut().zip(&vertices).filter(|(_, &on)| on).map(|(w, _)| w) {
+                        *w = w.max(amount);
+                    }
+                    self.apply_wetness_change();
+                }
+                self.run_steps(steps, progress, |s, _| wet(s));
+            }
+            Stage::Wrap { rods, mask, .. } => {
+                let strands = self.masked(mask, index);
+                let chosen: Vec<usize> = if rods.is_empty() {
+                    (0..self.rods.len()).collect()
+                } else {
+                    rods.iter()
+                        .map(|name| self.recipe.rods.iter().position(|r| &r.get_ref().name == name).unwrap())
+                        .collect()
+                };
+                let windings = self.windings(&strands, &chosen)?;
+                self.rods_active = true;
+                self.refresh_obstacles();
+                let total = steps.max(1) as f32;
+                self.run_steps(steps, progress, |s, k| {
+                    s.drive(&windings, smoothstep((k + 1) as f32 / total))
+                });
+                self.drive(&windings, 1.0);
+            }
+            Stage::Lotion { breaks, mask, .. } => {
+                let vertices = self.vertex_mask(&self.masked(mask, index));
+                self.chemistry(steps, progress, breaks, -1.0, Some(&vertices));
+            }
+            Stage::Neutralise { reform, .. } => self.chemistry(steps, progress, reform, 1.0, None),
+            Stage::Rinse { reform, .. } => {
+                let amounts =
+                    reform.unwrap_or(super::recipe::BondAmounts { ionic: Some(1.0), ..Default::default() });
+                self.chemistry(steps, progress, &amounts, 1.0, None);
+            }
+            Stage::Process { .. } => self.run_steps(steps, progress, |_, _| {}),
+            Stage::Dry { dryer, heat, .. } => {
+                self.dryer = dryer.map(|d| Dryer {
+                    position: Vec3::from(d.position),
+                    target: Vec3::from(d.target),
+                    strength: d.strength,
+                    falloff: d.falloff,
+                    cone_half_angle: d.cone_degrees.map(f32::to_radians),
+                    heat: *heat,
+                });
+                self.heat = *heat;
+                self.run_steps(steps, progress, |_, _| {});
+                self.dryer = None;
+                self.heat = 0.0;
+                // Dry hair holds no droplets.
+                self.droplets = Droplets::default();
+            }
+            Stage::Press { obstacle, travel, direction, .. } => {
+                let which =
+                    self.recipe.obstacles.iter().position(|o| o.get_ref().name() == obstacle).unwrap();
+                let direction = match (direction, &self.obstacles[which]) {
+                    (Some(d), _) => Vec3::from(*d).normalize(),
+                    (None, Shape::Plane { normal, .. }) => *normal,
+                    (None, _) => Vec3::Y,
+                };
+                let total = steps.max(1) as f32;
+                let travel = *travel;
+                self.run_steps(steps, progress, |s, k| {
+                    s.offsets[which] = direction * travel * smoothstep((k + 1) as f32 / total);
+                    s.refresh_obstacles();
+                });
+                self.offsets[which] = direction * travel;
+                self.refresh_obstacles();
+            }
+            Stage::Release { .. } => {
+                for &vertex in &self.held {
+                    self.sim.detach(vertex);
+                }
+                self.held.clear();
+                self.rods_active = false;
+                self.offsets.iter_mut().for_each(|o| *o = Vec3::ZERO);
+                self.refresh_obstacles();
+                self.run_steps(steps, progress, |_, _| {});
+            }
+            Stage::Settle { max_seconds, max_speed, gravity } => {
+                if *gravity == Some(false) {
+                    let p = self.sim.params().clone();
+                    self.sim.set_step_params(p.dt, p.iterations, Vec3::ZERO, p.damping)?;
+                }
+                return Ok(Some(self.settle(*max_seconds, *max_speed, progress)));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Changes bond rates by `sign · amount` per kind, spread evenly over the stage's steps.
+    fn chemistry(
+        &mut self,
+        steps: u64,
+        progress: Option<&indicatif::ProgressBar>,
+        amounts: &super::recipe::BondAmounts,
+        sign: f32,
+        vertices: Option<&[bool]>,
+    ) {
+        let kinds = [
+            (BondKind::Hydrogen, amounts.hydrogen),
+            (BondKind::Ionic, amounts.ionic),
+            (BondKind::Disulfide, amounts.disulfide),
+            (BondKind::Peptide, amounts.peptide),
+        ];
+        let parts = steps.max(1) as f32;
+        let apply = |s: &mut Self| {
+            for (kind, amount) in kinds {
+                if let Some(amount) = amount {
+                    let delta = sign * amount / parts;
+                    s.sim.change_bond_rates_with(kind, |v| {
+                        if vertices.is_none_or(|m| m[v]) {
+                            delta
+                        } else {
+                            0.0
+                        }
+                    });
+                }
+            }
+        };
+        if steps == 0 {
+            apply(self);
+        }
+        self.run_steps(steps, progress, |s, _| apply(s));
+    }
+
+    /// Steps until every vertex stays slower than `max_speed` for 0.1 s, or `max_seconds` pass.
+    fn settle(
+        &mut self,
+        max_seconds: f32,
+        max_speed: f32,
+        progress: Option<&indicatif::ProgressBar>,
+    ) -> SettleReport {
+        let dt = self.sim.params().dt;
+        let max_steps = self.steps_for(max_seconds).max(1);
+        let quiet_steps = (0.1 / dt).ceil() as u64;
+        let (mut quiet, mut steps, mut speed) = (0, 0, self.sim.max_speed());
+        while steps < max_steps && quiet < quiet_steps {
+            self.step();
+            steps += 1;
+            speed = self.sim.max_speed();
+            quiet = if speed < max_speed { quiet + 1 } else { 0 };
+            if let Some(bar) = progress {
+                bar.inc(1);
+            }
+        }
+        if let Some(bar) = progress {
+            bar.inc(max_steps - steps);
+        }
+        SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
+    }
+
+    /// Moves wound vertices a fraction `t` of the way from where they were to the helix.
+    fn drive(&mut self, windings: &[Winding], t: f32) {
+        for w in windings {
+            for (k, vertex) in (w.first..w.end).enumerate() {
+                self.sim.attach(vertex, w.start[k].lerp(w.target[k], t));
+            }
+        }
+    }
+
+    /// Assigns each selected strand to the nearest of `rods` and lays its vertices, from the one
+    /// nearest the rod to the tip, on a tight helix around it (chords keep the rest lengths).
+    fn windings(&mut self, strands: &[bool], rods: &[usize]) -> Result<Vec<Winding>> {
+        let mut windings = Vec::new();
+        let positions = self.sim.rods.positions.clone();
+        for (s, _) in strands.iter().enumerate().filter(|(_, &on)| on) {
+            let range = self.groom.strand_range(s);
+            // Nearest rod and the strand's vertex nearest to it (never the root).
+            let mut best: Option<(f32, usize, usize)> = None;
+            for &r in rods {
+                for v in range.start + 1..range.end {
+                    let d = self.rods[r].distance(positions[v]).0;
+                    if best.is_none_or(|(bd, _, _)| d < bd) {
+                        best = Some((d, r, v));
+                    }
+                }
+            }
+            let Some((_, r, first)) = best else { continue };
+            if first + 1 >= range.end {
+                continue; // only the tip reaches the rod: nothing to wind
+            }
+            let Shape::Capsule { a, b, radius } = self.rods[r] else { unreachable!("rods are capsules") };
+            let axis = (b - a).normalize();
+            let winding_radius = radius + self.radii[first];
+            let along = (positions[first] - a).dot(axis).clamp(0.0, a.distance(b));
+            let outward = positions[first] - (a + axis * along);
+            let e1 = outward.try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector());
+            let e2 = axis.cross(e1);
+            // Wind the way the strand already heads, and advance along the rod towards its middle.
+            let heading = positions[first + 1] - positions[first];
+            let turn = if heading.dot(e2) >= 0.0 { 1.0 } else { -1.0 };
+            let advance = if along < 0.5 * a.distance(b) { 1.0 } else { -1.0 };
+            let pitch = 4.0 * self.radii[first] * 2.0;
+            let mut target = Vec::with_capacity(range.end - first);
+            let mut phi = 0.0f32;
+            for v in first..range.end {
+                if v > first {
+                    let chord = self.sim.rods.rest_lengths[v - 1];
+                    if chord >= 2.0 * winding_radius {
+                        return Err(Error::Usage(format!(
+                            "strand {s}: a {chord:.4} m segment cannot wrap a rod of radius {radius} m; \
+                             set [settings] max_segment below the rod's diameter"
+                        )));
+                    }
+                    phi += 2.0 * (chord / (2.0 * winding_radius)).asin();
+                }
+                let z = along + advance * pitch * phi / std::f32::consts::TAU;
+                target.push(a + axis * z + winding_radius * (phi.cos() * e1 + turn * phi.sin() * e2));
+            }
+            let start = positions[first..range.end].to_vec();
+            self.held.extend(first..range.end);
+            self.wound[s] = Some(first);
+            windings.push(Winding { first, end: range.end, start, target });
+        }
+        Ok(windings)
+    }
+
+    /// Droplets at random masked vertices, nudged off the strand by a seeded offset.
+    fn scatter_droplets(&mut self, count: usize, vertices: &[bool], r_min: f32, r_max: f32) {
+        let candidates: Vec<usize> = (0..vertices.len()).filter(|&v| vertices[v]).collect();
+        if candidates.is_empty() {
+            return;
+        }
+        let seed = self.recipe.settings.seed;
+        let positions = (0..count as u64)
+            .map(|k| {
+                let v = candidates
+                    [(unit_hash(seed, 0xD809, k) * candidates.len() as f32) as usize % candidates.len()];
+                let dir = Vec3::new(unit_hash(seed, 1, k), unit_hash(seed, 2, k), unit_hash(seed, 3, k))
+                    * 2.0
+                    - 1.0;
+                self.sim.rods.positions[v] + dir.normalize_or_zero() * (0.5 * (r_min + r_max))
+            })
+            .collect();
+        self.droplets = Droplets::new(positions);
+    }
+
+    fn stage_report(
+        &self,
+        index: usize,
+        stage: &Stage,
+        steps: u64,
+        wall_seconds: f64,
+        settle: Option<SettleReport>,
+    ) -> StageReport {
+        let positions = &self.sim.rods.positions;
+        let strands = self.groom.strand_count();
+        let curvature: f32 =
+            (0..strands).map(|s| mean_curvature(&positions[self.groom.strand_range(s)])).sum::<f32>()
+                / strands.max(1) as f32;
+        let any_wound = self.wound.iter().any(Option::is_some);
+        let mut radii: Vec<f32> = (0..strands)
+            .filter_map(|s| {
+                let range = self.groom.strand_range(s);
+                match self.wound[s] {
+                    Some(first) => curl_radius(&positions[first..range.end]),
+                    None if !any_wound => curl_radius(&positions[range]),
+                    None => None,
+                }
+            })
+            .collect();
+        radii.sort_by(f32::total_cmp);
+        let mean = |kind: BondKind| {
+            let rates = self.sim.bonds.rates(kind);
+            let centres: Vec<f32> =
+                (0..rates.len()).filter(|&v| self.sim.rods.is_pair_centre(v)).map(|v| rates[v]).collect();
+            centres.iter().sum::<f32>() / centres.len().max(1) as f32
+        };
+        StageReport {
+            index,
+            kind: stage.kind(),
+            seconds: steps as f32 * self.sim.params().dt,
+            steps,
+            wall_seconds,
+            mean_curvature: curvature,
+            curl_radius: radii.get(radii.len() / 2).copied(),
+            bond_rates: BondRates {
+                hydrogen: mean(BondKind::Hydrogen),
+                ionic: mean(BondKind::Ionic),
+                disulfide: mean(BondKind::Disulfide),
+                peptide: mean(BondKind::Peptide),
+            },
+            wetness: self.wetness.iter().sum::<f32>() / self.wetness.len().max(1) as f32,
+            settle,
+        }
+    }
+}
+
+fn smoothstep(t: f32) -> f32 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A number in [0, 1) from a seed and two indices (SplitMix64), the same on every machine.
+fn unit_hash(seed: u64, a: u64, b: u64) -> f32 {
+    let mut z = seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xD1B5_4A32_D192_ED03);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 40) as f32 / (1u64 << 24) as f32
+}
