@@ -20,10 +20,21 @@ const CONFIGS: [Config; 3] = [
     Config { name: "100000x32x5", strands: 100_000, vertices: 32, iterations: 5 },
 ];
 
+/// CPU time of the calling thread in ns (Linux `schedstat`), if available.
+fn thread_cpu_ns() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    text.split_whitespace().next()?.parse().ok()
+}
+
 fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    // COIF_BENCH_WALL=1 measures one thread by wall time too (on an otherwise idle machine).
+    let use_cpu_time = std::env::var_os("COIF_BENCH_WALL").is_none();
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    println!("cores available: {cores}");
+    println!(
+        "cores available: {cores}; 1 thread timed by {}",
+        if use_cpu_time { "thread CPU time" } else { "wall clock" }
+    );
     for config in CONFIGS.iter().filter(|c| filter.as_deref().is_none_or(|f| c.name.contains(f))) {
         let groom = generate(&GenerateParams {
             strands: config.strands,
@@ -45,10 +56,18 @@ fn main() {
                 (0..3)
                     .map(|_| {
                         let start = Instant::now();
+                        let cpu_start = thread_cpu_ns();
                         for _ in 0..steps {
                             sim.step();
                         }
-                        start.elapsed().as_nanos() as f64 / (work_per_step * steps as f64)
+                        let wall = start.elapsed().as_nanos() as f64;
+                        // On one thread, CPU time of the worker is robust against other load on
+                        // the machine; with more threads only wall time says anything.
+                        let time = match (threads, cpu_start, thread_cpu_ns()) {
+                            (1, Some(a), Some(b)) if use_cpu_time => (b - a) as f64,
+                            _ => wall,
+                        };
+                        time / (work_per_step * steps as f64)
                     })
                     .collect()
             });

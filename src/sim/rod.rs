@@ -6,7 +6,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::constraints::{darboux, director3, E3};
+use super::constraints::{darboux, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
 use super::cuticle::Cuticle;
 use crate::groom::Groom;
 
@@ -73,6 +73,8 @@ pub struct Rods {
     pub(crate) edge_directions: Vec<Vec3>,
     pub(crate) solve_upper: Vec<f32>,
     pub(crate) solve_values: Vec<f32>,
+    pub(crate) edge_coefficients: Vec<StretchShearCoefficients>,
+    pub(crate) pair_coefficients: Vec<BendTwistCoefficients>,
 }
 
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
@@ -108,6 +110,8 @@ impl Rods {
             edge_directions: vec![Vec3::ZERO; n],
             solve_upper: vec![0.0; n],
             solve_values: vec![0.0; n],
+            edge_coefficients: vec![StretchShearCoefficients::default(); n],
+            pair_coefficients: vec![BendTwistCoefficients::default(); n],
         };
         let radius = |i: usize| {
             let w = groom.widths.get(i).copied().unwrap_or(0.0);

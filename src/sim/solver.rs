@@ -7,7 +7,10 @@ use std::ops::Range;
 use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
-use super::constraints::{darboux, project_bend_twist, project_stretch_shear, pure};
+use super::constraints::{
+    darboux, project_bend_twist_with, project_stretch_shear_with, pure, BendTwistCoefficients,
+    StretchShearCoefficients,
+};
 use super::rod::Rods;
 use super::Hooks;
 
@@ -54,6 +57,8 @@ struct Strand<'a> {
     directions: &'a mut [Vec3],
     upper: &'a mut [f32],
     values: &'a mut [f32],
+    edge_k: &'a mut [StretchShearCoefficients],
+    pair_k: &'a mut [BendTwistCoefficients],
     w: &'a [f32],
     kinematic: &'a [bool],
     targets: &'a [Vec3],
@@ -86,6 +91,8 @@ pub(crate) fn step_all(
     let directions = SharedMut::new(&mut rods.edge_directions);
     let upper = SharedMut::new(&mut rods.solve_upper);
     let values = SharedMut::new(&mut rods.solve_values);
+    let edge_k = SharedMut::new(&mut rods.edge_coefficients);
+    let pair_k = SharedMut::new(&mut rods.pair_coefficients);
     let (w, kinematic, targets, external) =
         (&rods.inv_mass, &rods.kinematic, &rods.kinematic_targets, &rods.external_acceleration);
     let (wq, length, compliance) = (&rods.frame_inv_inertia, &rods.rest_lengths, &rods.compliance);
@@ -106,6 +113,8 @@ pub(crate) fn step_all(
                 directions: directions.slice(r.clone()),
                 upper: upper.slice(r.clone()),
                 values: values.slice(r.clone()),
+                edge_k: edge_k.slice(r.clone()),
+                pair_k: pair_k.slice(r.clone()),
                 w: &w[r.clone()],
                 kinematic: &kinematic[r.clone()],
                 targets: &targets[r.clone()],
@@ -178,7 +187,7 @@ fn solve_lengths(s: &mut Strand<'_>) {
 #[inline(always)]
 fn project_edge(s: &mut Strand<'_>, e: usize) {
     let (mut p1, mut p2, mut q) = (s.x[e], s.x[e + 1], s.q[e]);
-    project_stretch_shear(&mut p1, &mut p2, &mut q, s.w[e], s.w[e + 1], s.wq[e], s.length[e]);
+    project_stretch_shear_with(&mut p1, &mut p2, &mut q, &s.edge_k[e]);
     s.x[e] = p1;
     s.x[e + 1] = p2;
     s.q[e] = q;
@@ -186,15 +195,15 @@ fn project_edge(s: &mut Strand<'_>, e: usize) {
 
 /// Bend–twist of the pair of edges `e − 1`, `e`.
 #[inline(always)]
-fn project_pair(s: &mut Strand<'_>, e: usize, inv_dt2: f32) {
+fn project_pair(s: &mut Strand<'_>, e: usize) {
     let (mut q1, mut q2) = (s.q[e - 1], s.q[e]);
-    project_bend_twist(
+    project_bend_twist_with(
         &mut q1,
         &mut q2,
         s.wq[e - 1],
         s.wq[e],
         s.rest[e],
-        s.compliance[e] * inv_dt2,
+        &s.pair_k[e],
         &mut s.lambda[e],
     );
     s.q[e - 1] = q1;
@@ -203,15 +212,30 @@ fn project_pair(s: &mut Strand<'_>, e: usize, inv_dt2: f32) {
 
 fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
     let n = s.x.len();
+    // Equal lengths stated once let the compiler drop bounds checks in the loops below.
+    assert!(
+        n >= 2
+            && [s.v.len(), s.x_prev.len(), s.q.len(), s.q_prev.len(), s.omega.len(), s.rest.len()]
+                .iter()
+                .chain(&[s.lambda.len(), s.directions.len(), s.upper.len(), s.values.len(), s.edge_k.len()])
+                .chain(&[s.pair_k.len(), s.w.len(), s.kinematic.len(), s.targets.len(), s.external.len()])
+                .chain(&[s.wq.len(), s.length.len(), s.compliance.len(), s.bonded.len(), s.broken.len()])
+                .all(|&len| len == n)
+    );
     let edges = n - 1;
     let dt = k.dt;
     let inv_dt2 = 1.0 / (dt * dt);
 
-    // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers.
+    // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers; the
+    // projections' per-step constants.
+    for e in 0..edges {
+        s.edge_k[e] = StretchShearCoefficients::new(s.w[e], s.w[e + 1], s.wq[e], s.length[e], 2.0);
+    }
     for i in 1..edges {
         let omega = darboux(s.q[i - 1], s.q[i]);
         s.rest[i] = s.bonded[i] + s.broken[i] * omega;
         s.lambda[i] = Vec3::ZERO;
+        s.pair_k[i] = BendTwistCoefficients::new(s.wq[i - 1], s.wq[i], s.compliance[i] * inv_dt2);
     }
 
     // External forces act on velocities before prediction.
@@ -241,14 +265,14 @@ fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
             for e in 0..edges {
                 project_edge(&mut s, e);
                 if e >= 1 {
-                    project_pair(&mut s, e, inv_dt2);
+                    project_pair(&mut s, e);
                 }
             }
         } else {
             for e in (0..edges).rev() {
                 project_edge(&mut s, e);
                 if e + 1 < edges {
-                    project_pair(&mut s, e + 1, inv_dt2);
+                    project_pair(&mut s, e + 1);
                 }
             }
         }
