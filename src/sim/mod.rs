@@ -42,6 +42,7 @@ pub mod bonds;
 pub mod constraints;
 pub mod cuticle;
 pub mod driver;
+mod lanes;
 pub mod rod;
 pub mod settle;
 pub mod solver;
@@ -140,11 +141,20 @@ pub trait Hooks: Sync {
         _inverse_masses: &[f32],
     ) {
     }
+    /// Whether [`project`](Self::project) does anything. Strands are solved several at a time in
+    /// SIMD lanes only when it does not (per-iteration callbacks need one strand's positions).
+    fn projects(&self) -> bool {
+        true
+    }
 }
 
 /// No callbacks.
 pub struct NoHooks;
-impl Hooks for NoHooks {}
+impl Hooks for NoHooks {
+    fn projects(&self) -> bool {
+        false
+    }
+}
 
 /// Which edge pairs a bond-rate change applies to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::constraints::{darboux, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
 use super::cuticle::Cuticle;
+use super::lanes::LANES;
 use crate::groom::Groom;
 
 /// Physical material of hair. Moduli are SI; the rod radius comes from the groom's widths.
@@ -75,11 +76,32 @@ pub struct Rods {
     pub(crate) solve_values: Vec<f32>,
     pub(crate) edge_coefficients: Vec<StretchShearCoefficients>,
     pub(crate) pair_coefficients: Vec<BendTwistCoefficients>,
+    /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
+    pub(crate) work_units: Vec<(usize, usize, bool)>,
 }
 
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
 pub fn frame_along(t: Vec3) -> Quat {
     Quat::from_rotation_arc(E3, t.normalize())
+}
+
+/// Groups of `LANES` consecutive strands with equal vertex counts run in SIMD lanes, every other
+/// strand alone. Depends only on the groom, so results do not depend on threads.
+fn work_units(offsets: &[u32]) -> Vec<(usize, usize, bool)> {
+    let strands = offsets.len().saturating_sub(1);
+    let count = |s: usize| offsets[s + 1] - offsets[s];
+    let mut units = Vec::new();
+    let mut s = 0;
+    while s < strands {
+        if s + LANES <= strands && (s..s + LANES).all(|t| count(t) == count(s)) {
+            units.push((s, LANES, true));
+            s += LANES;
+        } else {
+            units.push((s, 1, false));
+            s += 1;
+        }
+    }
+    units
 }
 
 impl Rods {
@@ -112,6 +134,7 @@ impl Rods {
             solve_values: vec![0.0; n],
             edge_coefficients: vec![StretchShearCoefficients::default(); n],
             pair_coefficients: vec![BendTwistCoefficients::default(); n],
+            work_units: Vec::new(),
         };
         let radius = |i: usize| {
             let w = groom.widths.get(i).copied().unwrap_or(0.0);
@@ -162,6 +185,7 @@ impl Rods {
             rods.kinematic[first] = true;
         }
         rods.previous_frames.clone_from(&rods.frames);
+        rods.work_units = work_units(&groom.strand_offsets);
         rods.update_inverse_masses(frame_inertia_factor);
         rods
     }

@@ -2,6 +2,7 @@
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`) → velocity update.
 //! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
 //! results are bit-identical at any thread count and any chunking.
+use std::cell::RefCell;
 use std::ops::Range;
 
 use glam::{Quat, Vec3};
@@ -11,6 +12,7 @@ use super::constraints::{
     darboux, project_bend_twist_with, project_stretch_shear_with, pure, BendTwistCoefficients,
     StretchShearCoefficients,
 };
+use super::lanes;
 use super::rod::Rods;
 use super::Hooks;
 
@@ -70,6 +72,73 @@ struct Strand<'a> {
     broken: &'a [f32],
 }
 
+/// Raw access to the rod arrays, from which disjoint per-strand views are cut.
+struct Parts<'a> {
+    offsets: &'a [u32],
+    x: SharedMut<Vec3>,
+    v: SharedMut<Vec3>,
+    x_prev: SharedMut<Vec3>,
+    q: SharedMut<Quat>,
+    q_prev: SharedMut<Quat>,
+    omega: SharedMut<Vec3>,
+    rest: SharedMut<Vec3>,
+    lambda: SharedMut<Vec3>,
+    directions: SharedMut<Vec3>,
+    upper: SharedMut<f32>,
+    values: SharedMut<f32>,
+    edge_k: SharedMut<StretchShearCoefficients>,
+    pair_k: SharedMut<BendTwistCoefficients>,
+    w: &'a [f32],
+    kinematic: &'a [bool],
+    targets: &'a [Vec3],
+    external: &'a [Vec3],
+    wq: &'a [f32],
+    length: &'a [f32],
+    compliance: &'a [Vec3],
+    bonded: &'a [Vec3],
+    broken: &'a [f32],
+}
+
+impl<'a> Parts<'a> {
+    fn range(&self, strand: usize) -> Range<usize> {
+        self.offsets[strand] as usize..self.offsets[strand + 1] as usize
+    }
+
+    /// # Safety
+    /// Each strand's view may be alive only once at a time.
+    unsafe fn strand(&self, strand: usize) -> Strand<'a> {
+        let r = self.range(strand);
+        Strand {
+            x: self.x.slice(r.clone()),
+            v: self.v.slice(r.clone()),
+            x_prev: self.x_prev.slice(r.clone()),
+            q: self.q.slice(r.clone()),
+            q_prev: self.q_prev.slice(r.clone()),
+            omega: self.omega.slice(r.clone()),
+            rest: self.rest.slice(r.clone()),
+            lambda: self.lambda.slice(r.clone()),
+            directions: self.directions.slice(r.clone()),
+            upper: self.upper.slice(r.clone()),
+            values: self.values.slice(r.clone()),
+            edge_k: self.edge_k.slice(r.clone()),
+            pair_k: self.pair_k.slice(r.clone()),
+            w: &self.w[r.clone()],
+            kinematic: &self.kinematic[r.clone()],
+            targets: &self.targets[r.clone()],
+            external: &self.external[r.clone()],
+            wq: &self.wq[r.clone()],
+            length: &self.length[r.clone()],
+            compliance: &self.compliance[r.clone()],
+            bonded: &self.bonded[r.clone()],
+            broken: &self.broken[r],
+        }
+    }
+}
+
+thread_local! {
+    static LANE_SCRATCH: RefCell<lanes::Scratch> = RefCell::new(lanes::Scratch::default());
+}
+
 /// Advances every strand by one step.
 pub(crate) fn step_all(
     rods: &mut Rods,
@@ -78,56 +147,76 @@ pub(crate) fn step_all(
     k: &StepConstants,
     hooks: &dyn Hooks,
 ) {
-    let strands = rods.strand_count();
-    let offsets = &rods.strand_offsets;
-    let x = SharedMut::new(&mut rods.positions);
-    let v = SharedMut::new(&mut rods.velocities);
-    let x_prev = SharedMut::new(&mut rods.previous_positions);
-    let q = SharedMut::new(&mut rods.frames);
-    let q_prev = SharedMut::new(&mut rods.previous_frames);
-    let omega = SharedMut::new(&mut rods.angular_velocities);
-    let rest = SharedMut::new(&mut rods.rest_darboux);
-    let lambda = SharedMut::new(&mut rods.lambdas);
-    let directions = SharedMut::new(&mut rods.edge_directions);
-    let upper = SharedMut::new(&mut rods.solve_upper);
-    let values = SharedMut::new(&mut rods.solve_values);
-    let edge_k = SharedMut::new(&mut rods.edge_coefficients);
-    let pair_k = SharedMut::new(&mut rods.pair_coefficients);
-    let (w, kinematic, targets, external) =
-        (&rods.inv_mass, &rods.kinematic, &rods.kinematic_targets, &rods.external_acceleration);
-    let (wq, length, compliance) = (&rods.frame_inv_inertia, &rods.rest_lengths, &rods.compliance);
-    (0..strands).into_par_iter().with_min_len(16).for_each(|s| {
-        let r = offsets[s] as usize..offsets[s + 1] as usize;
-        // SAFETY: strand ranges are disjoint and within the arrays (validated groom offsets);
-        // each strand index is visited exactly once.
-        let strand = unsafe {
-            Strand {
-                x: x.slice(r.clone()),
-                v: v.slice(r.clone()),
-                x_prev: x_prev.slice(r.clone()),
-                q: q.slice(r.clone()),
-                q_prev: q_prev.slice(r.clone()),
-                omega: omega.slice(r.clone()),
-                rest: rest.slice(r.clone()),
-                lambda: lambda.slice(r.clone()),
-                directions: directions.slice(r.clone()),
-                upper: upper.slice(r.clone()),
-                values: values.slice(r.clone()),
-                edge_k: edge_k.slice(r.clone()),
-                pair_k: pair_k.slice(r.clone()),
-                w: &w[r.clone()],
-                kinematic: &kinematic[r.clone()],
-                targets: &targets[r.clone()],
-                external: &external[r.clone()],
-                wq: &wq[r.clone()],
-                length: &length[r.clone()],
-                compliance: &compliance[r.clone()],
-                bonded: &bonded[r.clone()],
-                broken: &broken[r.clone()],
+    let units = std::mem::take(&mut rods.work_units);
+    let parts = Parts {
+        offsets: &rods.strand_offsets,
+        x: SharedMut::new(&mut rods.positions),
+        v: SharedMut::new(&mut rods.velocities),
+        x_prev: SharedMut::new(&mut rods.previous_positions),
+        q: SharedMut::new(&mut rods.frames),
+        q_prev: SharedMut::new(&mut rods.previous_frames),
+        omega: SharedMut::new(&mut rods.angular_velocities),
+        rest: SharedMut::new(&mut rods.rest_darboux),
+        lambda: SharedMut::new(&mut rods.lambdas),
+        directions: SharedMut::new(&mut rods.edge_directions),
+        upper: SharedMut::new(&mut rods.solve_upper),
+        values: SharedMut::new(&mut rods.solve_values),
+        edge_k: SharedMut::new(&mut rods.edge_coefficients),
+        pair_k: SharedMut::new(&mut rods.pair_coefficients),
+        w: &rods.inv_mass,
+        kinematic: &rods.kinematic,
+        targets: &rods.kinematic_targets,
+        external: &rods.external_acceleration,
+        wq: &rods.frame_inv_inertia,
+        length: &rods.rest_lengths,
+        compliance: &rods.compliance,
+        bonded,
+        broken,
+    };
+    let lanes_allowed = !hooks.projects();
+    units.par_iter().with_min_len(4).for_each(|&(first_strand, count, in_lanes)| {
+        // SAFETY: work units cover disjoint strand ranges, each visited once; strand ranges are
+        // disjoint and within the arrays (validated groom offsets).
+        if in_lanes && lanes_allowed {
+            let mut views: [Strand<'_>; lanes::LANES] =
+                std::array::from_fn(|l| unsafe { parts.strand(first_strand + l) });
+            for (l, view) in views.iter_mut().enumerate() {
+                let strand = first_strand + l;
+                begin_step(view, k, hooks, strand, parts.range(strand).start);
             }
-        };
-        step_strand(strand, k, hooks, s, r.start);
+            let mut lane_views = views.map(|s| lanes::LaneStrand {
+                x: s.x,
+                v: s.v,
+                q: s.q,
+                omega: s.omega,
+                w: s.w,
+                wq: s.wq,
+                kinematic: s.kinematic,
+                targets: s.targets,
+                rest: s.rest,
+                length: s.length,
+                edge_k: s.edge_k,
+                pair_k: s.pair_k,
+            });
+            LANE_SCRATCH.with(|scratch| {
+                lanes::finish_step(
+                    &mut lane_views,
+                    &mut scratch.borrow_mut(),
+                    k.dt,
+                    k.iterations,
+                    k.velocity_keep,
+                )
+            });
+        } else {
+            for strand in first_strand..first_strand + count {
+                let mut view = unsafe { parts.strand(strand) };
+                let first = parts.range(strand).start;
+                begin_step(&mut view, k, hooks, strand, first);
+                finish_step_scalar(view, k, hooks, strand, first);
+            }
+        }
     });
+    rods.work_units = units;
 }
 
 /// Makes every edge its rest length at once (to first order): the length constraints of a strand
@@ -210,7 +299,8 @@ fn project_pair(s: &mut Strand<'_>, e: usize) {
     s.q[e] = q2;
 }
 
-fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+/// This step's constants, rest shapes and forces of one strand.
+fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
     let n = s.x.len();
     // Equal lengths stated once let the compiler drop bounds checks in the loops below.
     assert!(
@@ -243,7 +333,13 @@ fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
         s.v[i] += (k.gravity + s.external[i]) * dt;
     }
     hooks.accelerate(strand, first, s.x, s.v, dt);
+}
 
+/// Prediction, iterations and velocity update of one strand.
+fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+    let n = s.x.len();
+    let edges = n - 1;
+    let dt = k.dt;
     // Prediction.
     for i in 0..n {
         s.x_prev[i] = s.x[i];
