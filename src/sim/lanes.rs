@@ -217,8 +217,6 @@ pub struct Scratch {
     w: Vec<F>,
     wq: Vec<F>,
     q: Vec<Q>,
-    q_prev: Vec<Q>,
-    omega: Vec<V3>,
     rest: Vec<V3>,
     lambda: Vec<V3>,
     directions: Vec<V3>,
@@ -233,7 +231,6 @@ pub struct LaneStrand<'a> {
     pub x: &'a mut [Vec3],
     pub v: &'a mut [Vec3],
     pub q: &'a mut [Quat],
-    pub omega: &'a mut [Vec3],
     pub w: &'a [f32],
     pub wq: &'a [f32],
     pub kinematic: &'a [bool],
@@ -251,7 +248,39 @@ fn resize<T: Default + Clone>(v: &mut Vec<T>, n: usize) {
 
 /// Prediction, iterations and velocity update for `LANES` strands of `n` vertices whose
 /// velocities already include this step's forces (see the scalar `begin_step`).
+///
+/// On x86-64 CPUs with AVX the same code is compiled a second time with 256-bit registers. AVX
+/// without FMA rounds every lane operation exactly as SSE2 does, so both give identical bits.
 pub fn finish_step(
+    strands: &mut [LaneStrand<'_>; LANES],
+    scratch: &mut Scratch,
+    dt: f32,
+    iterations: u32,
+    keep: f32,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU supports AVX (checked just above).
+        unsafe { finish_step_avx(strands, scratch, dt, iterations, keep) };
+        return;
+    }
+    finish_step_impl(strands, scratch, dt, iterations, keep);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn finish_step_avx(
+    strands: &mut [LaneStrand<'_>; LANES],
+    scratch: &mut Scratch,
+    dt: f32,
+    iterations: u32,
+    keep: f32,
+) {
+    finish_step_impl(strands, scratch, dt, iterations, keep);
+}
+
+#[inline(always)]
+fn finish_step_impl(
     strands: &mut [LaneStrand<'_>; LANES],
     scratch: &mut Scratch,
     dt: f32,
@@ -261,7 +290,7 @@ pub fn finish_step(
     let n = strands[0].x.len();
     let edges = n - 1;
     let s = scratch;
-    for v in [&mut s.x, &mut s.x_prev, &mut s.v, &mut s.target, &mut s.omega, &mut s.rest, &mut s.lambda] {
+    for v in [&mut s.x, &mut s.x_prev, &mut s.v, &mut s.target, &mut s.rest, &mut s.lambda] {
         resize(v, n);
     }
     resize(&mut s.directions, n);
@@ -269,7 +298,6 @@ pub fn finish_step(
         resize(v, n);
     }
     resize(&mut s.q, n);
-    resize(&mut s.q_prev, n);
     resize(&mut s.edge_k, n);
     resize(&mut s.pair_k, n);
 
@@ -283,7 +311,6 @@ pub fn finish_step(
             s.w[i].0[l] = st.w[i];
             s.wq[i].0[l] = st.wq[i];
             s.q[i].set(l, st.q[i]);
-            s.omega[i].set(l, st.omega[i]);
             s.rest[i].set(l, st.rest[i]);
             let ek = &st.edge_k[i];
             let k = &mut s.edge_k[i];
@@ -304,18 +331,11 @@ pub fn finish_step(
 
     // Prediction.
     let dt_f = F::splat(dt);
-    let half_dt = F::splat(0.5 * dt);
     for i in 0..n {
         s.x_prev[i] = s.x[i];
         s.x[i] = V3::select(s.kinematic[i], s.target[i], s.x[i] + s.v[i].scale(dt_f));
         s.lambda[i] = V3::default();
     }
-    for e in 0..edges {
-        s.q_prev[e] = s.q[e];
-        let predicted = s.q[e].add_scaled(s.q[e].mul(Q::pure(s.omega[e])), half_dt).normalize();
-        s.q[e] = Q::select(s.wq[e], predicted, s.q[e]);
-    }
-
     for iteration in 0..iterations {
         solve_lengths(s, edges);
         if iteration % 2 == 0 {
@@ -337,14 +357,8 @@ pub fn finish_step(
 
     // Velocities, then scatter.
     let inv_dt = F::splat(keep / dt);
-    let two_inv_dt = F::splat(2.0 * keep / dt);
     for i in 0..n {
         s.v[i] = (s.x[i] - s.x_prev[i]).scale(inv_dt);
-    }
-    for e in 0..edges {
-        let r = s.q_prev[e].conjugate().mul(s.q[e]);
-        let sign = F(from_fn(|l| if r.w.0[l] < 0.0 { -1.0 } else { 1.0 }));
-        s.omega[e] = r.vector().scale(sign * two_inv_dt);
     }
     for (l, st) in strands.iter_mut().enumerate() {
         for i in 0..n {
@@ -353,7 +367,6 @@ pub fn finish_step(
         }
         for e in 0..edges {
             st.q[e] = s.q[e].get(l);
-            st.omega[e] = s.omega[e].get(l);
         }
     }
 }

@@ -58,7 +58,6 @@ pub struct Rods {
     pub external_acceleration: Vec<Vec3>,
     // Per edge.
     pub frames: Vec<Quat>,
-    pub angular_velocities: Vec<Vec3>,
     /// Inverse rotational inertia of the edge frame; 0 for a pinned (root) frame.
     pub frame_inv_inertia: Vec<f32>,
     pub rest_lengths: Vec<f32>,
@@ -69,7 +68,6 @@ pub struct Rods {
     pub compliance: Vec<Vec3>,
     // Scratch, kept here so a step allocates nothing.
     pub(crate) previous_positions: Vec<Vec3>,
-    pub(crate) previous_frames: Vec<Quat>,
     pub(crate) lambdas: Vec<Vec3>,
     pub(crate) edge_directions: Vec<Vec3>,
     pub(crate) solve_upper: Vec<f32>,
@@ -121,13 +119,11 @@ impl Rods {
             kinematic_targets: groom.points.clone(),
             external_acceleration: vec![Vec3::ZERO; n],
             frames: vec![Quat::IDENTITY; n],
-            angular_velocities: vec![Vec3::ZERO; n],
             frame_inv_inertia: vec![0.0; n],
             rest_lengths: vec![0.0; n],
             rest_darboux: vec![Vec3::ZERO; n],
             compliance: vec![Vec3::ZERO; n],
             previous_positions: groom.points.clone(),
-            previous_frames: vec![Quat::IDENTITY; n],
             lambdas: vec![Vec3::ZERO; n],
             edge_directions: vec![Vec3::ZERO; n],
             solve_upper: vec![0.0; n],
@@ -184,7 +180,6 @@ impl Rods {
             }
             rods.kinematic[first] = true;
         }
-        rods.previous_frames.clone_from(&rods.frames);
         rods.work_units = work_units(&groom.strand_offsets);
         rods.update_inverse_masses(frame_inertia_factor);
         rods

@@ -9,7 +9,7 @@ use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
 use super::constraints::{
-    darboux, project_bend_twist_with, project_stretch_shear_with, pure, BendTwistCoefficients,
+    darboux, project_bend_twist_with, project_stretch_shear_with, BendTwistCoefficients,
     StretchShearCoefficients,
 };
 use super::lanes;
@@ -52,8 +52,6 @@ struct Strand<'a> {
     v: &'a mut [Vec3],
     x_prev: &'a mut [Vec3],
     q: &'a mut [Quat],
-    q_prev: &'a mut [Quat],
-    omega: &'a mut [Vec3],
     rest: &'a mut [Vec3],
     lambda: &'a mut [Vec3],
     directions: &'a mut [Vec3],
@@ -79,8 +77,6 @@ struct Parts<'a> {
     v: SharedMut<Vec3>,
     x_prev: SharedMut<Vec3>,
     q: SharedMut<Quat>,
-    q_prev: SharedMut<Quat>,
-    omega: SharedMut<Vec3>,
     rest: SharedMut<Vec3>,
     lambda: SharedMut<Vec3>,
     directions: SharedMut<Vec3>,
@@ -113,8 +109,6 @@ impl<'a> Parts<'a> {
             v: self.v.slice(r.clone()),
             x_prev: self.x_prev.slice(r.clone()),
             q: self.q.slice(r.clone()),
-            q_prev: self.q_prev.slice(r.clone()),
-            omega: self.omega.slice(r.clone()),
             rest: self.rest.slice(r.clone()),
             lambda: self.lambda.slice(r.clone()),
             directions: self.directions.slice(r.clone()),
@@ -154,8 +148,6 @@ pub(crate) fn step_all(
         v: SharedMut::new(&mut rods.velocities),
         x_prev: SharedMut::new(&mut rods.previous_positions),
         q: SharedMut::new(&mut rods.frames),
-        q_prev: SharedMut::new(&mut rods.previous_frames),
-        omega: SharedMut::new(&mut rods.angular_velocities),
         rest: SharedMut::new(&mut rods.rest_darboux),
         lambda: SharedMut::new(&mut rods.lambdas),
         directions: SharedMut::new(&mut rods.edge_directions),
@@ -188,7 +180,6 @@ pub(crate) fn step_all(
                 x: s.x,
                 v: s.v,
                 q: s.q,
-                omega: s.omega,
                 w: s.w,
                 wq: s.wq,
                 kinematic: s.kinematic,
@@ -305,7 +296,7 @@ fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
     // Equal lengths stated once let the compiler drop bounds checks in the loops below.
     assert!(
         n >= 2
-            && [s.v.len(), s.x_prev.len(), s.q.len(), s.q_prev.len(), s.omega.len(), s.rest.len()]
+            && [s.v.len(), s.x_prev.len(), s.q.len(), s.rest.len()]
                 .iter()
                 .chain(&[s.lambda.len(), s.directions.len(), s.upper.len(), s.values.len(), s.edge_k.len()])
                 .chain(&[s.pair_k.len(), s.w.len(), s.kinematic.len(), s.targets.len(), s.external.len()])
@@ -345,13 +336,9 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
         s.x_prev[i] = s.x[i];
         s.x[i] = if s.kinematic[i] { s.targets[i] } else { s.x[i] + s.v[i] * dt };
     }
-    for e in 0..edges {
-        s.q_prev[e] = s.q[e];
-        if s.wq[e] > 0.0 {
-            s.q[e] = (s.q[e] + s.q[e] * pure(s.omega[e]) * (0.5 * dt)).normalize();
-        }
-    }
-
+    // Frames are quasi-static: they carry no angular momentum and start each step where the
+    // last ended. (Hair's rotational inertia is negligible, the frame inertia here is only a
+    // conditioning choice, and integrating frame angular velocities fed energy into resting curls.)
     // Gauss–Seidel along the strand, alternating root→tip and tip→root sweeps: a one-way sweep
     // passes a correction only one edge against its direction per iteration, and a hanging strand
     // needs tension carried from the tip up as much as positions carried from the root down.
@@ -375,16 +362,9 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
         hooks.project(strand, first, s.x, s.w);
     }
 
-    // Velocities from the positions and frames actually reached.
+    // Velocities from the positions actually reached.
     let inv_dt = 1.0 / dt;
     for i in 0..n {
         s.v[i] = (s.x[i] - s.x_prev[i]) * (inv_dt * k.velocity_keep);
-    }
-    for e in 0..edges {
-        let mut r = s.q_prev[e].conjugate() * s.q[e];
-        if r.w < 0.0 {
-            r = -r;
-        }
-        s.omega[e] = Vec3::new(r.x, r.y, r.z) * (2.0 * inv_dt * k.velocity_keep);
     }
 }
