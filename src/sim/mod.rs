@@ -187,6 +187,8 @@ pub struct Simulation {
     pub rods: Rods,
     pub bonds: Bonds,
     masses_dirty: bool,
+    /// Δt the cached projection constants were computed for.
+    coefficients_dt: f32,
     steps: u64,
 }
 
@@ -198,7 +200,7 @@ impl Simulation {
         groom.validate()?;
         let rods = Rods::from_groom(groom, &params.material, params.frame_inertia_factor);
         let bonds = Bonds::new(params.influences, &rods.rest_darboux);
-        let mut sim = Simulation { params, rods, bonds, masses_dirty: false, steps: 0 };
+        let mut sim = Simulation { params, rods, bonds, masses_dirty: true, coefficients_dt: 0.0, steps: 0 };
         for kind in BondKind::ALL {
             if let Some(attribute) = groom.attribute(kind.attribute_name()) {
                 if attribute.rate != AttributeRate::Vertex || attribute.components != 1 {
@@ -237,9 +239,11 @@ impl Simulation {
 
     /// Advances one time step with callbacks.
     pub fn step_with(&mut self, hooks: &dyn Hooks) {
-        if self.masses_dirty {
+        if self.masses_dirty || self.coefficients_dt != self.params.dt {
             self.rods.update_inverse_masses(self.params.frame_inertia_factor);
+            self.rods.update_coefficients(self.params.dt);
             self.masses_dirty = false;
+            self.coefficients_dt = self.params.dt;
         }
         let constants = solver::StepConstants {
             dt: self.params.dt,

@@ -206,6 +206,26 @@ impl Rods {
         }
     }
 
+    /// Recomputes the constraint projections' constants (they depend on masses, frame inertia,
+    /// compliance and Δt, none of which changes inside a step).
+    pub(crate) fn update_coefficients(&mut self, dt: f32) {
+        let inv_dt2 = 1.0 / (dt * dt);
+        for strand in 0..self.strand_count() {
+            let range = self.strand_range(strand);
+            let (first, last) = (range.start, range.end - 1);
+            for e in first..last {
+                let (w1, w2, wq, l) =
+                    (self.inv_mass[e], self.inv_mass[e + 1], self.frame_inv_inertia[e], self.rest_lengths[e]);
+                self.edge_coefficients[e] = StretchShearCoefficients::new(w1, w2, wq, l, 2.0);
+            }
+            for i in first + 1..last {
+                let (wq1, wq2) = (self.frame_inv_inertia[i - 1], self.frame_inv_inertia[i]);
+                self.pair_coefficients[i] =
+                    BendTwistCoefficients::new(wq1, wq2, self.compliance[i] * inv_dt2);
+            }
+        }
+    }
+
     pub fn strand_count(&self) -> usize {
         self.strand_offsets.len().saturating_sub(1)
     }

@@ -57,8 +57,8 @@ struct Strand<'a> {
     directions: &'a mut [Vec3],
     upper: &'a mut [f32],
     values: &'a mut [f32],
-    edge_k: &'a mut [StretchShearCoefficients],
-    pair_k: &'a mut [BendTwistCoefficients],
+    edge_k: &'a [StretchShearCoefficients],
+    pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
     kinematic: &'a [bool],
     targets: &'a [Vec3],
@@ -82,8 +82,8 @@ struct Parts<'a> {
     directions: SharedMut<Vec3>,
     upper: SharedMut<f32>,
     values: SharedMut<f32>,
-    edge_k: SharedMut<StretchShearCoefficients>,
-    pair_k: SharedMut<BendTwistCoefficients>,
+    edge_k: &'a [StretchShearCoefficients],
+    pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
     kinematic: &'a [bool],
     targets: &'a [Vec3],
@@ -114,8 +114,8 @@ impl<'a> Parts<'a> {
             directions: self.directions.slice(r.clone()),
             upper: self.upper.slice(r.clone()),
             values: self.values.slice(r.clone()),
-            edge_k: self.edge_k.slice(r.clone()),
-            pair_k: self.pair_k.slice(r.clone()),
+            edge_k: &self.edge_k[r.clone()],
+            pair_k: &self.pair_k[r.clone()],
             w: &self.w[r.clone()],
             kinematic: &self.kinematic[r.clone()],
             targets: &self.targets[r.clone()],
@@ -153,8 +153,8 @@ pub(crate) fn step_all(
         directions: SharedMut::new(&mut rods.edge_directions),
         upper: SharedMut::new(&mut rods.solve_upper),
         values: SharedMut::new(&mut rods.solve_values),
-        edge_k: SharedMut::new(&mut rods.edge_coefficients),
-        pair_k: SharedMut::new(&mut rods.pair_coefficients),
+        edge_k: &rods.edge_coefficients,
+        pair_k: &rods.pair_coefficients,
         w: &rods.inv_mass,
         kinematic: &rods.kinematic,
         targets: &rods.kinematic_targets,
@@ -305,18 +305,12 @@ fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
     );
     let edges = n - 1;
     let dt = k.dt;
-    let inv_dt2 = 1.0 / (dt * dt);
 
-    // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers; the
-    // projections' per-step constants.
-    for e in 0..edges {
-        s.edge_k[e] = StretchShearCoefficients::new(s.w[e], s.w[e + 1], s.wq[e], s.length[e], 2.0);
-    }
+    // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers.
     for i in 1..edges {
         let omega = darboux(s.q[i - 1], s.q[i]);
         s.rest[i] = s.bonded[i] + s.broken[i] * omega;
         s.lambda[i] = Vec3::ZERO;
-        s.pair_k[i] = BendTwistCoefficients::new(s.wq[i - 1], s.wq[i], s.compliance[i] * inv_dt2);
     }
 
     // External forces act on velocities before prediction.
