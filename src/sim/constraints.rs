@@ -83,6 +83,20 @@ impl StretchShearCoefficients {
     }
 }
 
+/// The Darboux vector of the shortest rotation from `q1` to `q2`: `Im(q̄1 ⊗ q2)` taken from the
+/// representative with non-negative real part. Stored shapes (rest, bond memories) use this, so
+/// that which of `±q` a frame happens to be does not flip the sign of what is remembered.
+#[inline(always)]
+pub fn darboux_canonical(q1: Quat, q2: Quat) -> Vec3 {
+    let r = q1.conjugate() * q2;
+    let v = Vec3::new(r.x, r.y, r.z);
+    if r.w < 0.0 {
+        -v
+    } else {
+        v
+    }
+}
+
 /// Projects the stretch–shear constraint of one edge. `w1`, `w2` are the vertices' inverse masses,
 /// `wq` the edge frame's inverse inertia, `l` its rest length.
 #[inline(always)]

@@ -6,7 +6,7 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::constraints::{darboux, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
+use super::constraints::{darboux_canonical, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
 use super::cuticle::Cuticle;
 use super::lanes::LANES;
 use crate::groom::Groom;
@@ -153,7 +153,7 @@ impl Rods {
                 // Re-align exactly with the edge so round-off does not accumulate as shear.
                 frame = (Quat::from_rotation_arc(director3(frame), t1) * frame).normalize();
                 rods.frames[i] = frame;
-                rods.rest_darboux[i] = darboux(rods.frames[i - 1], frame);
+                rods.rest_darboux[i] = darboux_canonical(rods.frames[i - 1], frame);
             }
             rods.frames[last] = rods.frames[last - 1];
             // Masses: each vertex carries half of each adjacent edge.
@@ -241,7 +241,7 @@ impl Rods {
     /// Current Darboux vector of the edge pair centred on `vertex` (zero at roots and tips).
     pub fn darboux_at(&self, vertex: usize) -> Vec3 {
         if self.is_pair_centre(vertex) {
-            darboux(self.frames[vertex - 1], self.frames[vertex])
+            darboux_canonical(self.frames[vertex - 1], self.frames[vertex])
         } else {
             Vec3::ZERO
         }

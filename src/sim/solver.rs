@@ -9,7 +9,7 @@ use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
 use super::constraints::{
-    darboux, project_bend_twist_with, project_stretch_shear_with, BendTwistCoefficients,
+    darboux_canonical, project_bend_twist_with, project_stretch_shear_with, BendTwistCoefficients,
     StretchShearCoefficients,
 };
 use super::lanes;
@@ -308,7 +308,7 @@ fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
 
     // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers.
     for i in 1..edges {
-        let omega = darboux(s.q[i - 1], s.q[i]);
+        let omega = darboux_canonical(s.q[i - 1], s.q[i]);
         s.rest[i] = s.bonded[i] + s.broken[i] * omega;
         s.lambda[i] = Vec3::ZERO;
     }
