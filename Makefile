@@ -28,6 +28,10 @@ test: setup
 	$(CARGO) clippy --locked --all-targets -- -D warnings
 	$(CARGO) test --locked
 
+# Benchmarks print figures for named configurations (never timed tests).
+bench: setup
+	$(CARGO) bench --locked --bench sim
+
 # Regenerates the sample grooms checked into grooms/ (see grooms/README.md).
 grooms: build
 	bash scripts/make_grooms.sh $(COIF)

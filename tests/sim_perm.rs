@@ -86,6 +86,17 @@ fn perm(influences: BondInfluences, broken: [f32; 4]) -> Vec<Vec3> {
     for kind in BondKind::ALL {
         sim.set_bond_rate(kind, BondTarget::All, 1.0);
     }
+    // Still on the rod, the zero-stress rest curve integrated from the root frame already has the
+    // free curl (settle part b).
+    let set_share: f64 =
+        influences.0.iter().zip(broken).map(|(f, b)| (f * b) as f64).sum::<f64>() / influences.total() as f64;
+    let rest = sim.rest_curves();
+    let rest_radius = fitted_radius(&rest);
+    let predicted = ROD_RADIUS as f64 / set_share;
+    assert!(
+        (rest_radius - predicted).abs() < 0.03 * predicted,
+        "rest curve radius {rest_radius}, predicted {predicted}"
+    );
     // Release and settle.
     for vertex in 1..VERTICES {
         sim.detach(vertex);

@@ -48,45 +48,97 @@ pub fn darboux(q1: Quat, q2: Quat) -> Vec3 {
     Vec3::new(r.x, r.y, r.z)
 }
 
+/// Per-step constants of one edge's stretch–shear projection (the masses do not change within a
+/// step, so the divisions are done once per step instead of once per iteration).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StretchShearCoefficients {
+    pub inv_length: f32,
+    /// `w·l/D` for the shear part, per vertex.
+    pub shear1: f32,
+    pub shear2: f32,
+    /// `w·l/(w1 + w2)` for the stretch part, per vertex.
+    pub stretch1: f32,
+    pub stretch2: f32,
+    /// `factor·wq·l²/D` for the frame.
+    pub frame: f32,
+}
+
+impl StretchShearCoefficients {
+    /// `factor` is the numerator factor of `Δq`: 2 from the derivation (see the module docs).
+    pub fn new(w1: f32, w2: f32, wq: f32, l: f32, factor: f32) -> Self {
+        let denominator = w1 + w2 + 4.0 * wq * l * l;
+        if denominator <= 0.0 {
+            return StretchShearCoefficients { inv_length: 1.0 / l, ..Default::default() };
+        }
+        let vertex_share = w1 + w2;
+        let stretch = if vertex_share > 0.0 { l / vertex_share } else { 0.0 };
+        StretchShearCoefficients {
+            inv_length: 1.0 / l,
+            shear1: w1 * l / denominator,
+            shear2: w2 * l / denominator,
+            stretch1: w1 * stretch,
+            stretch2: w2 * stretch,
+            frame: factor * wq * l * l / denominator,
+        }
+    }
+}
+
+/// The Darboux vector of the shortest rotation from `q1` to `q2`: `Im(q̄1 ⊗ q2)` taken from the
+/// representative with non-negative real part. Stored shapes (rest, bond memories) use this, so
+/// that which of `±q` a frame happens to be does not flip the sign of what is remembered.
+#[inline(always)]
+pub fn darboux_canonical(q1: Quat, q2: Quat) -> Vec3 {
+    let r = q1.conjugate() * q2;
+    let v = Vec3::new(r.x, r.y, r.z);
+    if r.w < 0.0 {
+        -v
+    } else {
+        v
+    }
+}
+
 /// Projects the stretch–shear constraint of one edge. `w1`, `w2` are the vertices' inverse masses,
 /// `wq` the edge frame's inverse inertia, `l` its rest length.
 #[inline(always)]
 pub fn project_stretch_shear(p1: &mut Vec3, p2: &mut Vec3, q: &mut Quat, w1: f32, w2: f32, wq: f32, l: f32) {
-    project_stretch_shear_factor(p1, p2, q, w1, w2, wq, l, 2.0);
+    project_stretch_shear_with(p1, p2, q, &StretchShearCoefficients::new(w1, w2, wq, l, 2.0));
 }
 
-/// The projection with the numerator factor of `Δq` as a parameter, so tests can compare the
-/// derived 2 against the seed's printed 1.
+/// The projection with precomputed coefficients.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn project_stretch_shear_factor(
-    p1: &mut Vec3,
-    p2: &mut Vec3,
-    q: &mut Quat,
-    w1: f32,
-    w2: f32,
-    wq: f32,
-    l: f32,
-    factor: f32,
-) {
-    let denominator = w1 + w2 + 4.0 * wq * l * l;
-    if denominator <= 0.0 {
-        return;
-    }
+pub fn project_stretch_shear_with(p1: &mut Vec3, p2: &mut Vec3, q: &mut Quat, k: &StretchShearCoefficients) {
     let d3 = director3(*q);
-    let gamma = (*p2 - *p1) / l - d3;
+    let gamma = (*p2 - *p1) * k.inv_length - d3;
     // Rotating q moves d3 only perpendicular to itself, so the stretch part of γ (along d3) can
     // only be fixed by the vertices: it gets its own denominator w1 + w2.
     let stretch = gamma.dot(d3) * d3;
     let shear = gamma - stretch;
-    let vertex_share = w1 + w2;
-    let along = if vertex_share > 0.0 { stretch / vertex_share } else { Vec3::ZERO };
-    let step = shear / denominator + along;
-    *p1 += (w1 * l) * step;
-    *p2 -= (w2 * l) * step;
-    if wq > 0.0 {
+    *p1 += k.shear1 * shear + k.stretch1 * stretch;
+    *p2 -= k.shear2 * shear + k.stretch2 * stretch;
+    if k.frame > 0.0 {
         let dq = pure(shear) * times_e_bar(*q);
-        *q = (*q + dq * (factor * wq * l * l / denominator)).normalize();
+        *q = (*q + dq * k.frame).normalize();
+    }
+}
+
+/// Per-step constants of one edge pair's bend–twist projection: `α̃ = α/Δt²` per component and
+/// `1/(wq1 + wq2 + α̃)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BendTwistCoefficients {
+    pub compliance_dt2: Vec3,
+    pub inv_denominator: Vec3,
+}
+
+impl BendTwistCoefficients {
+    pub fn new(wq1: f32, wq2: f32, compliance_dt2: Vec3) -> Self {
+        let wsum = wq1 + wq2;
+        if wsum <= 0.0 {
+            return BendTwistCoefficients::default();
+        }
+        BendTwistCoefficients {
+            compliance_dt2,
+            inv_denominator: Vec3::ONE / (Vec3::splat(wsum) + compliance_dt2),
+        }
     }
 }
 
@@ -103,15 +155,29 @@ pub fn project_bend_twist(
     compliance_dt2: Vec3,
     lambda: &mut Vec3,
 ) {
-    let wsum = wq1 + wq2;
-    if wsum <= 0.0 {
+    let k = BendTwistCoefficients::new(wq1, wq2, compliance_dt2);
+    project_bend_twist_with(q1, q2, wq1, wq2, rest, &k, lambda);
+}
+
+/// The projection with precomputed coefficients.
+#[inline(always)]
+pub fn project_bend_twist_with(
+    q1: &mut Quat,
+    q2: &mut Quat,
+    wq1: f32,
+    wq2: f32,
+    rest: Vec3,
+    k: &BendTwistCoefficients,
+    lambda: &mut Vec3,
+) {
+    if wq1 + wq2 <= 0.0 {
         return;
     }
     let omega = darboux(*q1, *q2);
-    // Quaternion double cover: compare with the nearer of ±Ω0.
-    let rest = if (omega - rest).length_squared() > (omega + rest).length_squared() { -rest } else { rest };
+    // Quaternion double cover: compare with the nearer of ±Ω0 (|Ω−Ω0|² > |Ω+Ω0|² ⇔ Ω·Ω0 < 0).
+    let rest = if omega.dot(rest) < 0.0 { -rest } else { rest };
     let c = omega - rest;
-    let dl = (-c - compliance_dt2 * *lambda) / (Vec3::splat(wsum) + compliance_dt2);
+    let dl = (-c - k.compliance_dt2 * *lambda) * k.inv_denominator;
     *lambda += dl;
     let correction = pure(dl);
     let new_q1 = *q1 - (*q2 * correction) * wq1;
@@ -144,7 +210,8 @@ mod tests {
                 let mut p2 = l * Vec3::new(0.02, -0.01, 1.0).normalize();
                 let mut q = Quat::from_rotation_x(0.01);
                 let before = ((p2 - p1) / l - director3(q)).length();
-                project_stretch_shear_factor(&mut p1, &mut p2, &mut q, w1, w2, wq, l, factor);
+                let k = StretchShearCoefficients::new(w1, w2, wq, l, factor);
+                project_stretch_shear_with(&mut p1, &mut p2, &mut q, &k);
                 (before, ((p2 - p1) / l - director3(q)).length())
             };
             let (before, derived) = project(2.0);

@@ -6,8 +6,9 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::constraints::{darboux, director3, E3};
+use super::constraints::{darboux_canonical, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
 use super::cuticle::Cuticle;
+use super::lanes::LANES;
 use crate::groom::Groom;
 
 /// Physical material of hair. Moduli are SI; the rod radius comes from the groom's widths.
@@ -57,7 +58,6 @@ pub struct Rods {
     pub external_acceleration: Vec<Vec3>,
     // Per edge.
     pub frames: Vec<Quat>,
-    pub angular_velocities: Vec<Vec3>,
     /// Inverse rotational inertia of the edge frame; 0 for a pinned (root) frame.
     pub frame_inv_inertia: Vec<f32>,
     pub rest_lengths: Vec<f32>,
@@ -68,16 +68,38 @@ pub struct Rods {
     pub compliance: Vec<Vec3>,
     // Scratch, kept here so a step allocates nothing.
     pub(crate) previous_positions: Vec<Vec3>,
-    pub(crate) previous_frames: Vec<Quat>,
     pub(crate) lambdas: Vec<Vec3>,
     pub(crate) edge_directions: Vec<Vec3>,
     pub(crate) solve_upper: Vec<f32>,
     pub(crate) solve_values: Vec<f32>,
+    pub(crate) edge_coefficients: Vec<StretchShearCoefficients>,
+    pub(crate) pair_coefficients: Vec<BendTwistCoefficients>,
+    /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
+    pub(crate) work_units: Vec<(usize, usize, bool)>,
 }
 
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
 pub fn frame_along(t: Vec3) -> Quat {
     Quat::from_rotation_arc(E3, t.normalize())
+}
+
+/// Groups of `LANES` consecutive strands with equal vertex counts run in SIMD lanes, every other
+/// strand alone. Depends only on the groom, so results do not depend on threads.
+fn work_units(offsets: &[u32]) -> Vec<(usize, usize, bool)> {
+    let strands = offsets.len().saturating_sub(1);
+    let count = |s: usize| offsets[s + 1] - offsets[s];
+    let mut units = Vec::new();
+    let mut s = 0;
+    while s < strands {
+        if s + LANES <= strands && (s..s + LANES).all(|t| count(t) == count(s)) {
+            units.push((s, LANES, true));
+            s += LANES;
+        } else {
+            units.push((s, 1, false));
+            s += 1;
+        }
+    }
+    units
 }
 
 impl Rods {
@@ -97,17 +119,18 @@ impl Rods {
             kinematic_targets: groom.points.clone(),
             external_acceleration: vec![Vec3::ZERO; n],
             frames: vec![Quat::IDENTITY; n],
-            angular_velocities: vec![Vec3::ZERO; n],
             frame_inv_inertia: vec![0.0; n],
             rest_lengths: vec![0.0; n],
             rest_darboux: vec![Vec3::ZERO; n],
             compliance: vec![Vec3::ZERO; n],
             previous_positions: groom.points.clone(),
-            previous_frames: vec![Quat::IDENTITY; n],
             lambdas: vec![Vec3::ZERO; n],
             edge_directions: vec![Vec3::ZERO; n],
             solve_upper: vec![0.0; n],
             solve_values: vec![0.0; n],
+            edge_coefficients: vec![StretchShearCoefficients::default(); n],
+            pair_coefficients: vec![BendTwistCoefficients::default(); n],
+            work_units: Vec::new(),
         };
         let radius = |i: usize| {
             let w = groom.widths.get(i).copied().unwrap_or(0.0);
@@ -130,7 +153,7 @@ impl Rods {
                 // Re-align exactly with the edge so round-off does not accumulate as shear.
                 frame = (Quat::from_rotation_arc(director3(frame), t1) * frame).normalize();
                 rods.frames[i] = frame;
-                rods.rest_darboux[i] = darboux(rods.frames[i - 1], frame);
+                rods.rest_darboux[i] = darboux_canonical(rods.frames[i - 1], frame);
             }
             rods.frames[last] = rods.frames[last - 1];
             // Masses: each vertex carries half of each adjacent edge.
@@ -157,7 +180,7 @@ impl Rods {
             }
             rods.kinematic[first] = true;
         }
-        rods.previous_frames.clone_from(&rods.frames);
+        rods.work_units = work_units(&groom.strand_offsets);
         rods.update_inverse_masses(frame_inertia_factor);
         rods
     }
@@ -183,6 +206,26 @@ impl Rods {
         }
     }
 
+    /// Recomputes the constraint projections' constants (they depend on masses, frame inertia,
+    /// compliance and Δt, none of which changes inside a step).
+    pub(crate) fn update_coefficients(&mut self, dt: f32) {
+        let inv_dt2 = 1.0 / (dt * dt);
+        for strand in 0..self.strand_count() {
+            let range = self.strand_range(strand);
+            let (first, last) = (range.start, range.end - 1);
+            for e in first..last {
+                let (w1, w2, wq, l) =
+                    (self.inv_mass[e], self.inv_mass[e + 1], self.frame_inv_inertia[e], self.rest_lengths[e]);
+                self.edge_coefficients[e] = StretchShearCoefficients::new(w1, w2, wq, l, 2.0);
+            }
+            for i in first + 1..last {
+                let (wq1, wq2) = (self.frame_inv_inertia[i - 1], self.frame_inv_inertia[i]);
+                self.pair_coefficients[i] =
+                    BendTwistCoefficients::new(wq1, wq2, self.compliance[i] * inv_dt2);
+            }
+        }
+    }
+
     pub fn strand_count(&self) -> usize {
         self.strand_offsets.len().saturating_sub(1)
     }
@@ -198,7 +241,7 @@ impl Rods {
     /// Current Darboux vector of the edge pair centred on `vertex` (zero at roots and tips).
     pub fn darboux_at(&self, vertex: usize) -> Vec3 {
         if self.is_pair_centre(vertex) {
-            darboux(self.frames[vertex - 1], self.frames[vertex])
+            darboux_canonical(self.frames[vertex - 1], self.frames[vertex])
         } else {
             Vec3::ZERO
         }

@@ -2,12 +2,17 @@
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`) → velocity update.
 //! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
 //! results are bit-identical at any thread count and any chunking.
+use std::cell::RefCell;
 use std::ops::Range;
 
 use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
-use super::constraints::{darboux, project_bend_twist, project_stretch_shear, pure};
+use super::constraints::{
+    darboux_canonical, project_bend_twist_with, project_stretch_shear_with, BendTwistCoefficients,
+    StretchShearCoefficients,
+};
+use super::lanes;
 use super::rod::Rods;
 use super::Hooks;
 
@@ -47,13 +52,13 @@ struct Strand<'a> {
     v: &'a mut [Vec3],
     x_prev: &'a mut [Vec3],
     q: &'a mut [Quat],
-    q_prev: &'a mut [Quat],
-    omega: &'a mut [Vec3],
     rest: &'a mut [Vec3],
     lambda: &'a mut [Vec3],
     directions: &'a mut [Vec3],
     upper: &'a mut [f32],
     values: &'a mut [f32],
+    edge_k: &'a [StretchShearCoefficients],
+    pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
     kinematic: &'a [bool],
     targets: &'a [Vec3],
@@ -65,6 +70,69 @@ struct Strand<'a> {
     broken: &'a [f32],
 }
 
+/// Raw access to the rod arrays, from which disjoint per-strand views are cut.
+struct Parts<'a> {
+    offsets: &'a [u32],
+    x: SharedMut<Vec3>,
+    v: SharedMut<Vec3>,
+    x_prev: SharedMut<Vec3>,
+    q: SharedMut<Quat>,
+    rest: SharedMut<Vec3>,
+    lambda: SharedMut<Vec3>,
+    directions: SharedMut<Vec3>,
+    upper: SharedMut<f32>,
+    values: SharedMut<f32>,
+    edge_k: &'a [StretchShearCoefficients],
+    pair_k: &'a [BendTwistCoefficients],
+    w: &'a [f32],
+    kinematic: &'a [bool],
+    targets: &'a [Vec3],
+    external: &'a [Vec3],
+    wq: &'a [f32],
+    length: &'a [f32],
+    compliance: &'a [Vec3],
+    bonded: &'a [Vec3],
+    broken: &'a [f32],
+}
+
+impl<'a> Parts<'a> {
+    fn range(&self, strand: usize) -> Range<usize> {
+        self.offsets[strand] as usize..self.offsets[strand + 1] as usize
+    }
+
+    /// # Safety
+    /// Each strand's view may be alive only once at a time.
+    unsafe fn strand(&self, strand: usize) -> Strand<'a> {
+        let r = self.range(strand);
+        Strand {
+            x: self.x.slice(r.clone()),
+            v: self.v.slice(r.clone()),
+            x_prev: self.x_prev.slice(r.clone()),
+            q: self.q.slice(r.clone()),
+            rest: self.rest.slice(r.clone()),
+            lambda: self.lambda.slice(r.clone()),
+            directions: self.directions.slice(r.clone()),
+            upper: self.upper.slice(r.clone()),
+            values: self.values.slice(r.clone()),
+            edge_k: &self.edge_k[r.clone()],
+            pair_k: &self.pair_k[r.clone()],
+            w: &self.w[r.clone()],
+            kinematic: &self.kinematic[r.clone()],
+            targets: &self.targets[r.clone()],
+            external: &self.external[r.clone()],
+            wq: &self.wq[r.clone()],
+            length: &self.length[r.clone()],
+            compliance: &self.compliance[r.clone()],
+            bonded: &self.bonded[r.clone()],
+            broken: &self.broken[r],
+        }
+    }
+}
+
+thread_local! {
+    static LANE_SCRATCH: RefCell<lanes::Scratch> = RefCell::new(lanes::Scratch::default());
+}
+
 /// Advances every strand by one step.
 pub(crate) fn step_all(
     rods: &mut Rods,
@@ -73,52 +141,73 @@ pub(crate) fn step_all(
     k: &StepConstants,
     hooks: &dyn Hooks,
 ) {
-    let strands = rods.strand_count();
-    let offsets = &rods.strand_offsets;
-    let x = SharedMut::new(&mut rods.positions);
-    let v = SharedMut::new(&mut rods.velocities);
-    let x_prev = SharedMut::new(&mut rods.previous_positions);
-    let q = SharedMut::new(&mut rods.frames);
-    let q_prev = SharedMut::new(&mut rods.previous_frames);
-    let omega = SharedMut::new(&mut rods.angular_velocities);
-    let rest = SharedMut::new(&mut rods.rest_darboux);
-    let lambda = SharedMut::new(&mut rods.lambdas);
-    let directions = SharedMut::new(&mut rods.edge_directions);
-    let upper = SharedMut::new(&mut rods.solve_upper);
-    let values = SharedMut::new(&mut rods.solve_values);
-    let (w, kinematic, targets, external) =
-        (&rods.inv_mass, &rods.kinematic, &rods.kinematic_targets, &rods.external_acceleration);
-    let (wq, length, compliance) = (&rods.frame_inv_inertia, &rods.rest_lengths, &rods.compliance);
-    (0..strands).into_par_iter().with_min_len(16).for_each(|s| {
-        let r = offsets[s] as usize..offsets[s + 1] as usize;
-        // SAFETY: strand ranges are disjoint and within the arrays (validated groom offsets);
-        // each strand index is visited exactly once.
-        let strand = unsafe {
-            Strand {
-                x: x.slice(r.clone()),
-                v: v.slice(r.clone()),
-                x_prev: x_prev.slice(r.clone()),
-                q: q.slice(r.clone()),
-                q_prev: q_prev.slice(r.clone()),
-                omega: omega.slice(r.clone()),
-                rest: rest.slice(r.clone()),
-                lambda: lambda.slice(r.clone()),
-                directions: directions.slice(r.clone()),
-                upper: upper.slice(r.clone()),
-                values: values.slice(r.clone()),
-                w: &w[r.clone()],
-                kinematic: &kinematic[r.clone()],
-                targets: &targets[r.clone()],
-                external: &external[r.clone()],
-                wq: &wq[r.clone()],
-                length: &length[r.clone()],
-                compliance: &compliance[r.clone()],
-                bonded: &bonded[r.clone()],
-                broken: &broken[r.clone()],
+    let units = std::mem::take(&mut rods.work_units);
+    let parts = Parts {
+        offsets: &rods.strand_offsets,
+        x: SharedMut::new(&mut rods.positions),
+        v: SharedMut::new(&mut rods.velocities),
+        x_prev: SharedMut::new(&mut rods.previous_positions),
+        q: SharedMut::new(&mut rods.frames),
+        rest: SharedMut::new(&mut rods.rest_darboux),
+        lambda: SharedMut::new(&mut rods.lambdas),
+        directions: SharedMut::new(&mut rods.edge_directions),
+        upper: SharedMut::new(&mut rods.solve_upper),
+        values: SharedMut::new(&mut rods.solve_values),
+        edge_k: &rods.edge_coefficients,
+        pair_k: &rods.pair_coefficients,
+        w: &rods.inv_mass,
+        kinematic: &rods.kinematic,
+        targets: &rods.kinematic_targets,
+        external: &rods.external_acceleration,
+        wq: &rods.frame_inv_inertia,
+        length: &rods.rest_lengths,
+        compliance: &rods.compliance,
+        bonded,
+        broken,
+    };
+    let lanes_allowed = !hooks.projects();
+    units.par_iter().with_min_len(4).for_each(|&(first_strand, count, in_lanes)| {
+        // SAFETY: work units cover disjoint strand ranges, each visited once; strand ranges are
+        // disjoint and within the arrays (validated groom offsets).
+        if in_lanes && lanes_allowed {
+            let mut views: [Strand<'_>; lanes::LANES] =
+                std::array::from_fn(|l| unsafe { parts.strand(first_strand + l) });
+            for (l, view) in views.iter_mut().enumerate() {
+                let strand = first_strand + l;
+                begin_step(view, k, hooks, strand, parts.range(strand).start);
             }
-        };
-        step_strand(strand, k, hooks, s, r.start);
+            let mut lane_views = views.map(|s| lanes::LaneStrand {
+                x: s.x,
+                v: s.v,
+                q: s.q,
+                w: s.w,
+                wq: s.wq,
+                kinematic: s.kinematic,
+                targets: s.targets,
+                rest: s.rest,
+                length: s.length,
+                edge_k: s.edge_k,
+                pair_k: s.pair_k,
+            });
+            LANE_SCRATCH.with(|scratch| {
+                lanes::finish_step(
+                    &mut lane_views,
+                    &mut scratch.borrow_mut(),
+                    k.dt,
+                    k.iterations,
+                    k.velocity_keep,
+                )
+            });
+        } else {
+            for strand in first_strand..first_strand + count {
+                let mut view = unsafe { parts.strand(strand) };
+                let first = parts.range(strand).start;
+                begin_step(&mut view, k, hooks, strand, first);
+                finish_step_scalar(view, k, hooks, strand, first);
+            }
+        }
     });
+    rods.work_units = units;
 }
 
 /// Makes every edge its rest length at once (to first order): the length constraints of a strand
@@ -178,7 +267,7 @@ fn solve_lengths(s: &mut Strand<'_>) {
 #[inline(always)]
 fn project_edge(s: &mut Strand<'_>, e: usize) {
     let (mut p1, mut p2, mut q) = (s.x[e], s.x[e + 1], s.q[e]);
-    project_stretch_shear(&mut p1, &mut p2, &mut q, s.w[e], s.w[e + 1], s.wq[e], s.length[e]);
+    project_stretch_shear_with(&mut p1, &mut p2, &mut q, &s.edge_k[e]);
     s.x[e] = p1;
     s.x[e + 1] = p2;
     s.q[e] = q;
@@ -186,30 +275,40 @@ fn project_edge(s: &mut Strand<'_>, e: usize) {
 
 /// Bend–twist of the pair of edges `e − 1`, `e`.
 #[inline(always)]
-fn project_pair(s: &mut Strand<'_>, e: usize, inv_dt2: f32) {
+fn project_pair(s: &mut Strand<'_>, e: usize) {
     let (mut q1, mut q2) = (s.q[e - 1], s.q[e]);
-    project_bend_twist(
+    project_bend_twist_with(
         &mut q1,
         &mut q2,
         s.wq[e - 1],
         s.wq[e],
         s.rest[e],
-        s.compliance[e] * inv_dt2,
+        &s.pair_k[e],
         &mut s.lambda[e],
     );
     s.q[e - 1] = q1;
     s.q[e] = q2;
 }
 
-fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+/// This step's constants, rest shapes and forces of one strand.
+fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
     let n = s.x.len();
+    // Equal lengths stated once let the compiler drop bounds checks in the loops below.
+    assert!(
+        n >= 2
+            && [s.v.len(), s.x_prev.len(), s.q.len(), s.rest.len()]
+                .iter()
+                .chain(&[s.lambda.len(), s.directions.len(), s.upper.len(), s.values.len(), s.edge_k.len()])
+                .chain(&[s.pair_k.len(), s.w.len(), s.kinematic.len(), s.targets.len(), s.external.len()])
+                .chain(&[s.wq.len(), s.length.len(), s.compliance.len(), s.bonded.len(), s.broken.len()])
+                .all(|&len| len == n)
+    );
     let edges = n - 1;
     let dt = k.dt;
-    let inv_dt2 = 1.0 / (dt * dt);
 
     // Rest shape by S1-15 from the shape at the start of the step; fresh multipliers.
     for i in 1..edges {
-        let omega = darboux(s.q[i - 1], s.q[i]);
+        let omega = darboux_canonical(s.q[i - 1], s.q[i]);
         s.rest[i] = s.bonded[i] + s.broken[i] * omega;
         s.lambda[i] = Vec3::ZERO;
     }
@@ -219,19 +318,21 @@ fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
         s.v[i] += (k.gravity + s.external[i]) * dt;
     }
     hooks.accelerate(strand, first, s.x, s.v, dt);
+}
 
+/// Prediction, iterations and velocity update of one strand.
+fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+    let n = s.x.len();
+    let edges = n - 1;
+    let dt = k.dt;
     // Prediction.
     for i in 0..n {
         s.x_prev[i] = s.x[i];
         s.x[i] = if s.kinematic[i] { s.targets[i] } else { s.x[i] + s.v[i] * dt };
     }
-    for e in 0..edges {
-        s.q_prev[e] = s.q[e];
-        if s.wq[e] > 0.0 {
-            s.q[e] = (s.q[e] + s.q[e] * pure(s.omega[e]) * (0.5 * dt)).normalize();
-        }
-    }
-
+    // Frames are quasi-static: they carry no angular momentum and start each step where the
+    // last ended. (Hair's rotational inertia is negligible, the frame inertia here is only a
+    // conditioning choice, and integrating frame angular velocities fed energy into resting curls.)
     // Gauss–Seidel along the strand, alternating root→tip and tip→root sweeps: a one-way sweep
     // passes a correction only one edge against its direction per iteration, and a hanging strand
     // needs tension carried from the tip up as much as positions carried from the root down.
@@ -241,30 +342,23 @@ fn step_strand(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
             for e in 0..edges {
                 project_edge(&mut s, e);
                 if e >= 1 {
-                    project_pair(&mut s, e, inv_dt2);
+                    project_pair(&mut s, e);
                 }
             }
         } else {
             for e in (0..edges).rev() {
                 project_edge(&mut s, e);
                 if e + 1 < edges {
-                    project_pair(&mut s, e + 1, inv_dt2);
+                    project_pair(&mut s, e + 1);
                 }
             }
         }
         hooks.project(strand, first, s.x, s.w);
     }
 
-    // Velocities from the positions and frames actually reached.
+    // Velocities from the positions actually reached.
     let inv_dt = 1.0 / dt;
     for i in 0..n {
         s.v[i] = (s.x[i] - s.x_prev[i]) * (inv_dt * k.velocity_keep);
-    }
-    for e in 0..edges {
-        let mut r = s.q_prev[e].conjugate() * s.q[e];
-        if r.w < 0.0 {
-            r = -r;
-        }
-        s.omega[e] = Vec3::new(r.x, r.y, r.z) * (2.0 * inv_dt * k.velocity_keep);
     }
 }
