@@ -173,9 +173,13 @@ pub fn project_bend_twist_with(
     if wq1 + wq2 <= 0.0 {
         return;
     }
-    let omega = darboux(*q1, *q2);
-    // Quaternion double cover: compare with the nearer of ±Ω0 (|Ω−Ω0|² > |Ω+Ω0|² ⇔ Ω·Ω0 < 0).
-    let rest = if omega.dot(rest) < 0.0 { -rest } else { rest };
+    let relative = q1.conjugate() * *q2;
+    let omega = Vec3::new(relative.x, relative.y, relative.z);
+    // Quaternion double cover: compare the whole relative rotation (w, Ω) with ±(w0, Ω0).
+    // Comparing vector parts alone (Ω·Ω0 < 0) accepts (w > 0, −Ω0) — the mirrored bend — as a
+    // second rest state, and a released curl can settle into it joint by joint.
+    let w0 = (1.0 - rest.length_squared()).max(0.0).sqrt();
+    let rest = if relative.w * w0 + omega.dot(rest) < 0.0 { -rest } else { rest };
     let c = omega - rest;
     let dl = (-c - k.compliance_dt2 * *lambda) * k.inv_denominator;
     *lambda += dl;

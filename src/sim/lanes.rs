@@ -430,9 +430,14 @@ fn project_edge(s: &mut Scratch, e: usize) {
 fn project_pair(s: &mut Scratch, e: usize) {
     let k = s.pair_k[e];
     let (q1, q2) = (s.q[e - 1], s.q[e]);
-    let omega = q1.conjugate().mul(q2).vector();
+    let relative = q1.conjugate().mul(q2);
+    let omega = relative.vector();
     let rest = s.rest[e];
-    let flip = omega.dot(rest);
+    // Double cover: compare the whole relative rotation (w, Ω) with ±(w0, Ω0). Comparing the
+    // vector parts alone accepts (w > 0, −Ω0), the mirrored bend, as a second rest state.
+    let slack = F::splat(1.0) - rest.dot(rest);
+    let w0 = slack.positive_select(slack, F::splat(0.0)).sqrt();
+    let flip = relative.w * w0 + omega.dot(rest);
     let rest = V3::select(-flip, V3::default() - rest, rest);
     let c = omega - rest;
     let lambda = s.lambda[e];

@@ -144,13 +144,64 @@ impl Hooks for ContactHooks<'_> {
     }
 }
 
-/// A strand wound on a rod: where its vertices start and where the helix puts them.
+/// The helix a strand is wound onto: around `axis` through `origin`, starting at `e1`.
+#[derive(Clone, Copy)]
+struct Helix {
+    origin: Vec3,
+    axis: Vec3,
+    e1: Vec3,
+    /// `e2` times the winding direction (±1).
+    e2: Vec3,
+    radius: f32,
+    /// Advance along the axis per radian.
+    advance: f32,
+}
+
+impl Helix {
+    fn point(&self, phi: f32) -> Vec3 {
+        self.origin
+            + self.axis * (self.advance * phi)
+            + self.radius * (phi.cos() * self.e1 + phi.sin() * self.e2)
+    }
+
+    fn tangent(&self, phi: f32) -> Vec3 {
+        (self.axis * self.advance + self.radius * (phi.cos() * self.e2 - phi.sin() * self.e1)).normalize()
+    }
+}
+
+/// A strand wound on a rod, from its vertex `first` to the tip.
 struct Winding {
-    /// First wound vertex (groom-wide index) of the strand.
     first: usize,
     end: usize,
+    /// Positions when the stage began.
     start: Vec<Vec3>,
-    target: Vec<Vec3>,
+    /// Arc length from `first` and helix angle (chords keep the rest lengths) of each vertex.
+    arc: Vec<f32>,
+    phi: Vec<f32>,
+    helix: Helix,
+}
+
+impl Winding {
+    /// Where vertex `k` of the wound part is at stage time `t ∈ [0, 1]`. The first fifth lays the
+    /// tail straight along the rod's tangent at the contact; the rest rolls it onto the rod, so
+    /// every edge only turns about the rod's axis — moving vertices straight to the helix would
+    /// sweep the edges through unrelated directions and leave a spurious twist in the frames.
+    fn pose(&self, k: usize, t: f32) -> Vec3 {
+        const LAY: f32 = 0.2;
+        let line = |s: f32| self.helix.point(0.0) + self.helix.tangent(0.0) * s;
+        if t < LAY {
+            return self.start[k].lerp(line(self.arc[k]), smoothstep(t / LAY));
+        }
+        let rolled = smoothstep((t - LAY) / (1.0 - LAY)) * self.arc[self.arc.len() - 1];
+        if self.arc[k] <= rolled {
+            return self.helix.point(self.phi[k]);
+        }
+        // The angle where rolling has reached, interpolated between vertices.
+        let j = self.arc.partition_point(|&a| a <= rolled).max(1);
+        let span = self.arc[j] - self.arc[j - 1];
+        let phi = self.phi[j - 1] + (self.phi[j] - self.phi[j - 1]) * ((rolled - self.arc[j - 1]) / span);
+        self.helix.point(phi) + self.helix.tangent(phi) * (self.arc[k] - rolled)
+    }
 }
 
 struct Session<'r> {
@@ -626,11 +677,11 @@ impl<'r> Session<'r> {
         SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
     }
 
-    /// Moves wound vertices a fraction `t` of the way from where they were to the helix.
+    /// Poses every wound strand at stage time `t ∈ [0, 1]`.
     fn drive(&mut self, windings: &[Winding], t: f32) {
         for w in windings {
             for (k, vertex) in (w.first..w.end).enumerate() {
-                self.sim.attach(vertex, w.start[k].lerp(w.target[k], t));
+                self.sim.attach(vertex, w.pose(k, t));
             }
         }
     }
@@ -645,8 +696,8 @@ impl<'r> Session<'r> {
             // Nearest rod and the strand's vertex nearest to it (never the root).
             let mut best: Option<(f32, usize, usize)> = None;
             for &r in rods {
-                for v in range.start + 1..range.end {
-                    let d = self.rods[r].distance(positions[v]).0;
+                for (v, &p) in positions.iter().enumerate().take(range.end).skip(range.start + 1) {
+                    let d = self.rods[r].distance(p).0;
                     if best.is_none_or(|(bd, _, _)| d < bd) {
                         best = Some((d, r, v));
                     }
@@ -667,27 +718,32 @@ impl<'r> Session<'r> {
             let heading = positions[first + 1] - positions[first];
             let turn = if heading.dot(e2) >= 0.0 { 1.0 } else { -1.0 };
             let advance = if along < 0.5 * a.distance(b) { 1.0 } else { -1.0 };
-            let pitch = 4.0 * self.radii[first] * 2.0;
-            let mut target = Vec::with_capacity(range.end - first);
-            let mut phi = 0.0f32;
-            for v in first..range.end {
-                if v > first {
-                    let chord = self.sim.rods.rest_lengths[v - 1];
-                    if chord >= 2.0 * winding_radius {
-                        return Err(Error::Usage(format!(
-                            "strand {s}: a {chord:.4} m segment cannot wrap a rod of radius {radius} m; \
-                             set [settings] max_segment below the rod's diameter"
-                        )));
-                    }
-                    phi += 2.0 * (chord / (2.0 * winding_radius)).asin();
+            // Turns a few hair widths apart: a tight, nearly planar curl.
+            let pitch = 8.0 * self.radii[first];
+            let helix = Helix {
+                origin: a + axis * along,
+                axis: axis * advance,
+                e1,
+                e2: e2 * turn,
+                radius: winding_radius,
+                advance: pitch / std::f32::consts::TAU,
+            };
+            let (mut arc, mut phi) = (vec![0.0f32], vec![0.0f32]);
+            for v in first + 1..range.end {
+                let chord = self.sim.rods.rest_lengths[v - 1];
+                if chord >= 2.0 * winding_radius {
+                    return Err(Error::Usage(format!(
+                        "strand {s}: a {chord:.4} m segment cannot wrap a rod of radius {radius} m; \
+                         set [settings] max_segment below the rod's diameter"
+                    )));
                 }
-                let z = along + advance * pitch * phi / std::f32::consts::TAU;
-                target.push(a + axis * z + winding_radius * (phi.cos() * e1 + turn * phi.sin() * e2));
+                arc.push(arc[arc.len() - 1] + chord);
+                phi.push(phi[phi.len() - 1] + 2.0 * (chord / (2.0 * winding_radius)).asin());
             }
             let start = positions[first..range.end].to_vec();
             self.held.extend(first..range.end);
             self.wound[s] = Some(first);
-            windings.push(Winding { first, end: range.end, start, target });
+            windings.push(Winding { first, end: range.end, start, arc, phi, helix });
         }
         Ok(windings)
     }
