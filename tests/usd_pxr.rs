@@ -62,7 +62,10 @@ fn assert_pxr_sees(dump: &Value, groom: &Groom) {
     }
     if let Some(uvs) = &groom.root_uvs {
         let st = primvar(curves, "st");
-        assert_eq!((st["type"].as_str(), st["interpolation"].as_str()), (Some("texCoord2f[]"), Some("uniform")));
+        assert_eq!(
+            (st["type"].as_str(), st["interpolation"].as_str()),
+            (Some("texCoord2f[]"), Some("uniform"))
+        );
         assert_eq!(f32s(&st["values"]), uvs.iter().flatten().copied().collect::<Vec<_>>());
     }
     for attribute in &groom.attributes {
@@ -81,7 +84,8 @@ fn assert_pxr_sees(dump: &Value, groom: &Groom) {
         assert_eq!(pv["interpolation"], interpolation, "interpolation of primvar {name}");
         assert_eq!(f32s(&pv["values"]), attribute.data, "values of primvar {name}");
     }
-    let expected_primvars = groom.attributes.len() + 1 + groom.guides.is_some() as usize + groom.root_uvs.is_some() as usize;
+    let expected_primvars =
+        groom.attributes.len() + 1 + groom.guides.is_some() as usize + groom.root_uvs.is_some() as usize;
     assert_eq!(curves["primvars"].as_object().unwrap().len(), expected_primvars);
 }
 
@@ -120,7 +124,12 @@ fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
     let path = dir.path().join("anim.usda");
     let groom = rich_groom(CurveBasis::BSpline);
     let frame = |t: f64| -> Vec<Vec3> {
-        groom.points.iter().enumerate().map(|(i, p)| *p + Vec3::new(0.01 * t as f32, -0.002 * (i as f32) * t as f32, 0.0)).collect()
+        groom
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p + Vec3::new(0.01 * t as f32, -0.002 * (i as f32) * t as f32, 0.0))
+            .collect()
     };
     let times = TimeCodes { start: 1.0, end: 3.0, per_second: 24.0 };
     coif::io::atomic::write_atomically(&path, |w| {
@@ -237,7 +246,11 @@ fn a_stage_pxr_authored_reads_in_metres_y_up_with_transforms_applied() {
         }
         let color = groom.attribute("color").unwrap();
         assert_eq!(color.rate, AttributeRate::Strand);
-        assert_eq!(color.data, vec![0.75, 0.5, 0.25, 0.5, 0.25, 0.125, 1.0, 0.0, 0.0], "indexed and constant colours");
+        assert_eq!(
+            color.data,
+            vec![0.75, 0.5, 0.25, 0.5, 0.25, 0.125, 1.0, 0.0, 0.0],
+            "indexed and constant colours"
+        );
         assert_eq!(groom.attribute("wetness").unwrap().data, vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
         assert_eq!(groom.guides, Some(vec![false, false, true]));
         assert_eq!(groom.strand_ids, vec![0, 1, 2]);
@@ -252,7 +265,13 @@ fn a_stage_pxr_authored_reads_in_metres_y_up_with_transforms_applied() {
 
 fn probe_export(input: &std::path::Path, output: &std::path::Path) {
     let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline/usd_interop.py");
-    let status = std::process::Command::new(python()).arg(script).args(["export"]).arg(input).arg(output).status().unwrap();
+    let status = std::process::Command::new(python())
+        .arg(script)
+        .args(["export"])
+        .arg(input)
+        .arg(output)
+        .status()
+        .unwrap();
     assert!(status.success());
 }
 
@@ -264,9 +283,11 @@ fn composed_stages_are_flattened_by_usd_core_with_the_chosen_variant() {
     // The native reader sees the reference and hands the stage to usd-core.
     let info = stdout_json(&coif(&["info", "--json", path_str(&stage)]));
     assert_eq!(info["groom"]["strand_length"]["max"], 1.0, "the default variant 'short'");
-    let long = coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=long".into()]).unwrap();
+    let long =
+        coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=long".into()]).unwrap();
     assert_eq!(long.points, vec![Vec3::ZERO, Vec3::new(0.0, 3.0, 0.0)]);
-    let error = coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=huge".into()]).unwrap_err();
+    let error =
+        coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=huge".into()]).unwrap_err();
     assert_eq!(error.exit_code(), 2, "{error}");
     assert!(error.to_string().contains("huge"), "{error}");
 }
@@ -276,7 +297,9 @@ fn missing_python_or_usd_core_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let hair = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/sample_wavy.hair");
     let out_path = dir.path().join("x.usdc");
-    for (python, expected) in [("/nonexistent/python", "COIF_PYTHON"), ("python3", "usd-core (pxr) is missing")] {
+    for (python, expected) in
+        [("/nonexistent/python", "COIF_PYTHON"), ("python3", "usd-core (pxr) is missing")]
+    {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
             .args(["convert", path_str(&hair), path_str(&out_path)])
             .env("COIF_PYTHON", python)

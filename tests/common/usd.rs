@@ -17,7 +17,11 @@ pub fn python() -> PathBuf {
 pub fn probe(args: &[&str]) -> String {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/usd/pxr_probe.py");
     let output = Command::new(python()).arg(script).args(args).output().expect("the project's Python runs");
-    assert!(output.status.success(), "pxr_probe {args:?} failed: {}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        output.status.success(),
+        "pxr_probe {args:?} failed: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     String::from_utf8(output.stdout).unwrap()
 }
 
@@ -70,11 +74,17 @@ pub fn rich_groom(basis: CurveBasis) -> Groom {
     groom.strand_ids = (0..s as u32).map(|i| 1000 + 7 * (s as u32 - i)).collect();
     groom.root_uvs = Some((0..s).map(|i| [i as f32 / 7.0, 1.0 - i as f32 / 11.0]).collect());
     groom.guides = Some((0..s).map(|i| i % 3 == 0).collect());
-    let ramp = |count: usize, scale: f32| (0..count).map(|i| (i as f32 * scale).fract()).collect::<Vec<f32>>();
+    let ramp =
+        |count: usize, scale: f32| (0..count).map(|i| (i as f32 * scale).fract()).collect::<Vec<f32>>();
     let vertex = AttributeRate::Vertex;
     groom.set_attribute(Attribute::new("color", vertex, 3, ramp(3 * n, 0.0371)));
     groom.set_attribute(Attribute::new("transparency", vertex, 1, ramp(n, 0.013)));
-    groom.set_attribute(Attribute::new("rest", vertex, 3, flat(&groom.points).iter().map(|x| x * 0.5).collect()));
+    groom.set_attribute(Attribute::new(
+        "rest",
+        vertex,
+        3,
+        flat(&groom.points).iter().map(|x| x * 0.5).collect(),
+    ));
     groom.set_attribute(Attribute::new("rest_darboux", vertex, 3, ramp(3 * n, 0.00917)));
     for (i, bond) in ["bond_hydrogen", "bond_ionic", "bond_disulfide", "bond_peptide"].iter().enumerate() {
         groom.set_attribute(Attribute::new(*bond, vertex, 1, ramp(n, 0.1 + i as f32 * 0.01)));

@@ -127,6 +127,8 @@ impl Prim {
 
 #[derive(Clone, Debug, Default)]
 pub struct Layer {
+    /// Lines in the file (the last line), for errors about the stage as a whole.
+    pub lines: u32,
     pub meters_per_unit: Option<f64>,
     pub up_axis: Option<String>,
     pub prims: Vec<Prim>,
@@ -202,6 +204,7 @@ impl Parser<'_> {
                 _ => return Err(self.unknown(&word, "a prim ('def', 'over' or 'class')")),
             }
         }
+        layer.lines = self.lexer.line;
         Ok(layer)
     }
 

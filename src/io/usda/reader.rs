@@ -56,11 +56,12 @@ pub fn groom_from_layer(
         stage *=
             DMat4::from_cols(DVec3::X.extend(0.0), DVec3::NEG_Z.extend(0.0), DVec3::Y.extend(0.0), DVec4::W);
     }
+    let layer_lines = layer.lines;
     let mut walker = Walker { path, time, stage, found: Vec::new() };
     for prim in layer.prims {
         walker.visit(prim, "", DMat4::IDENTITY)?;
     }
-    merge(walker.found, path)
+    merge(walker.found, path, layer_lines)
 }
 
 struct Walker<'a> {
@@ -536,9 +537,12 @@ fn xform_op(name: &str, v: &[f64]) -> std::result::Result<DMat4, String> {
 
 /// One groom from all curve prims. Attributes the prims do not all carry are dropped; guide
 /// flags default to "not a guide"; strand ids are renumbered unless every prim has them.
-fn merge(mut found: Vec<Curves>, path: &Path) -> Result<Groom> {
+fn merge(mut found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
     if found.is_empty() {
-        return Err(Error::format(path, "no BasisCurves prim with points in the stage"));
+        return Err(Error::format(
+            path,
+            format!("line {lines}: the stage ends without a BasisCurves prim with points"),
+        ));
     }
     if let Some(other) = found.iter().find(|c| c.basis != found[0].basis) {
         return Err(Error::format(
