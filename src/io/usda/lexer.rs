@@ -343,12 +343,7 @@ impl<'a> Lexer<'a> {
     /// An integer; `true`/`false` count as 1/0 (bool values).
     pub fn i64(&mut self) -> LexResult<i64> {
         let token = self.number_token()?;
-        let value = match token {
-            "true" => Some(1),
-            "false" => Some(0),
-            _ => token.parse::<i64>().ok(),
-        };
-        match value {
+        match parse_i64(token) {
             Some(value) => Ok(value),
             None => {
                 let message = format!("bad integer '{token}'");
@@ -373,6 +368,81 @@ impl<'a> Lexer<'a> {
     }
 }
 
+impl Lexer<'_> {
+    /// After an array's `[`: parses numbers with `components` per element up to and including
+    /// the closing `]`, a window at a time on all threads, handing each window's numbers to
+    /// `append` in order.
+    pub fn bulk_array<N: Copy + Send>(
+        &mut self,
+        components: usize,
+        number: fn(&str) -> Option<N>,
+        mut append: impl FnMut(Vec<N>),
+    ) -> LexResult<()> {
+        /// An element longer than this is not a number tuple.
+        const MAX_WINDOW: usize = 64 << 20;
+        let start_line = self.line;
+        let mut need_separator = false;
+        let mut want = WINDOW;
+        loop {
+            self.fill(want);
+            let window = &self.buffer[self.pos..self.end];
+            let newlines = |bytes: &[u8]| memchr::memchr_iter(b'\n', bytes).count() as u32;
+            let (len, closed) = match super::bulk::find_close(window) {
+                Some(i) => (i, true),
+                None if self.eof => {
+                    let line = self.line + newlines(window);
+                    return Err(LexError {
+                        line,
+                        message: format!(
+                            "unexpected end of file: the array opened on line {start_line} is not closed"
+                        ),
+                    });
+                }
+                None => match super::bulk::boundary_before(window, window.len(), components) {
+                    Some(cut) => (cut, false),
+                    None if window.len() < MAX_WINDOW => {
+                        want = window.len() * 2;
+                        continue;
+                    }
+                    None => return self.error("an array element is too long"),
+                },
+            };
+            let segment = &window[..len];
+            match super::bulk::parse_segment(segment, components, need_separator, number) {
+                Ok((values, need)) => {
+                    append(values);
+                    need_separator = need;
+                }
+                Err(e) => {
+                    let line = self.line + newlines(&segment[..e.offset]);
+                    return Err(LexError { line, message: e.message });
+                }
+            }
+            self.line += newlines(segment);
+            self.pos += len;
+            want = WINDOW;
+            if closed {
+                self.pos += 1;
+                return Ok(());
+            }
+        }
+    }
+}
+
+/// `f32` from a number token as USD writes it.
+pub fn parse_f32(token: &str) -> Option<f32> {
+    parse_float(token)
+}
+
+/// An integer token; `true`/`false` are 1/0.
+pub fn parse_i64(token: &str) -> Option<i64> {
+    match token {
+        "true" => Some(1),
+        "false" => Some(0),
+        _ => token.parse().ok(),
+    }
+}
+
 /// USD writes `inf`, `-inf` and `nan`; Rust's parser accepts those and plain decimal forms but
 /// also words like `infinity`, which USD does not write — accept only what USD does.
 fn parse_float<T: std::str::FromStr>(token: &str) -> Option<T> {
@@ -391,6 +461,12 @@ pub fn describe(byte: u8) -> String {
     } else {
         format!("byte 0x{byte:02x}")
     }
+}
+
+/// The read window's size, for tests that must span several windows.
+#[cfg(test)]
+pub fn tests_window() -> usize {
+    WINDOW
 }
 
 #[cfg(test)]

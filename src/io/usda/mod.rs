@@ -7,6 +7,7 @@
 //! builds one groom from all its curve prims; a layer that needs composition (references,
 //! variants…) is reported as [`ReadOutcome::NeedsComposition`] so the caller can flatten it
 //! through usd-core first.
+mod bulk;
 mod lexer;
 mod parser;
 mod reader;

@@ -7,7 +7,7 @@ use std::io::Read;
 
 use glam::Vec3;
 
-use super::lexer::{describe, LexError, LexResult, Lexer};
+use super::lexer::{describe, parse_f32, parse_i64, LexError, LexResult, Lexer};
 
 /// A value of a declared type, flattened (tuples and matrices become runs of numbers).
 #[derive(Clone, Debug, PartialEq)]
@@ -532,22 +532,31 @@ impl Parser<'_> {
             self.skip_value()?;
             return Ok(Value::Ignored);
         }
+        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int) {
+            self.lexer.expect(b'[', "'[' to open an array")?;
+            let value = match (kind, components) {
+                (Kind::F32, 3) => {
+                    let mut data = Vec::with_capacity(reserve);
+                    self.lexer
+                        .bulk_array(3, parse_f32, |v| data.extend(v.chunks_exact(3).map(Vec3::from_slice)))?;
+                    data.shrink_to_fit();
+                    Value::Vec3(data)
+                }
+                (Kind::F32, _) => {
+                    let mut data = Vec::with_capacity(reserve * components);
+                    self.lexer.bulk_array(components, parse_f32, |v| data.extend_from_slice(&v))?;
+                    data.shrink_to_fit();
+                    Value::F32(data)
+                }
+                _ => {
+                    let mut data = Vec::new();
+                    self.lexer.bulk_array(components, parse_i64, |v| data.extend_from_slice(&v))?;
+                    Value::Int(data)
+                }
+            };
+            return Ok(if keep { value } else { Value::Ignored });
+        }
         let value = match kind {
-            Kind::F32 if array && components == 3 => {
-                let mut data = Vec::with_capacity(reserve);
-                let (mut tuple, mut filled) = ([0.0f32; 3], 0);
-                self.numbers(components, array, &mut |lexer| {
-                    tuple[filled] = lexer.f32()?;
-                    filled += 1;
-                    if filled == 3 {
-                        data.push(Vec3::from_array(tuple));
-                        filled = 0;
-                    }
-                    Ok(())
-                })?;
-                data.shrink_to_fit();
-                Value::Vec3(data)
-            }
             Kind::F32 => {
                 let mut data = Vec::with_capacity(if array { reserve * components } else { components });
                 self.numbers(components, array, &mut |lexer| {
@@ -740,5 +749,71 @@ pub fn offer_sample(kept: &mut Vec<(f64, Value)>, requested: Option<f64>, time: 
             }
             kept.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stage whose points span many read windows, with comments holding `)`, `,` and `]`.
+    fn big_stage(bad_at: Option<usize>) -> (String, Vec<Vec3>, usize) {
+        let mut text = String::from("#usda 1.0\ndef BasisCurves \"C\"\n{\n    point3f[] points = [");
+        let mut points = Vec::new();
+        let mut bad_line = 0;
+        for i in 0..200_000 {
+            let p = Vec3::new(i as f32 * 0.001, -(i as f32) / 3.0, 1.0 / (i as f32 + 1.0));
+            points.push(p);
+            if i > 0 {
+                text.push_str(", ");
+            }
+            if i % 1000 == 0 {
+                text.push_str("# a comment with ), ] and , inside\n");
+            }
+            if Some(i) == bad_at {
+                bad_line = text.matches('\n').count() + 1;
+                text.push_str("(1, 2, 3x)");
+            } else {
+                text.push_str(&format!("({}, {}, {})", p.x, p.y, p.z));
+            }
+        }
+        text.push_str("]\n    float x = 1\n}\n");
+        (text, points, bad_line)
+    }
+
+    #[test]
+    fn large_arrays_parse_across_windows_and_threads_exactly() {
+        let (text, points, _) = big_stage(None);
+        assert!(text.len() > 4 * super::super::lexer::tests_window());
+        let layer = parse(text.as_bytes(), None).unwrap();
+        let attribute = layer.prims[0].attribute("points").unwrap();
+        assert_eq!(attribute.default, Some(Value::Vec3(points)));
+        assert_eq!(layer.lines, text.matches('\n').count() as u32 + 1);
+    }
+
+    #[test]
+    fn an_error_deep_in_a_large_array_names_its_line() {
+        let (text, _, line) = big_stage(Some(150_001));
+        match parse(text.as_bytes(), None) {
+            Err(ParseError::Syntax(e)) => {
+                assert_eq!(e.line as usize, line, "{}", e.message);
+                assert!(e.message.contains("3x"), "{}", e.message);
+            }
+            other => panic!("expected a syntax error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn time_samples_keep_only_what_the_requested_time_needs() {
+        let mut kept = Vec::new();
+        for t in [3.0, 1.0, 4.0, 2.0] {
+            offer_sample(&mut kept, Some(2.5), t, Value::F32(vec![t as f32]));
+        }
+        assert_eq!(kept.iter().map(|(t, _)| *t).collect::<Vec<_>>(), vec![2.0, 3.0]);
+        let mut earliest = Vec::new();
+        for t in [3.0, 1.0, 4.0] {
+            offer_sample(&mut earliest, None, t, Value::F32(vec![t as f32]));
+        }
+        assert_eq!(earliest.iter().map(|(t, _)| *t).collect::<Vec<_>>(), vec![1.0]);
     }
 }
