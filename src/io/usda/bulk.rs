@@ -102,6 +102,8 @@ fn parse_piece<N: Copy>(
     let mut values = Vec::with_capacity(text.len() / 8);
     let mut at = 0;
     let error = |offset: usize, message: String| BulkError { offset, message };
+    // Checked once per piece (pieces are cut at ASCII bytes), so tokens slice it for free.
+    let text_str = std::str::from_utf8(text).map_err(|e| error(e.valid_up_to(), "the text is not valid UTF-8".into()))?;
     let skip_blank = |at: &mut usize| {
         while *at < text.len() {
             match text[*at] {
@@ -122,7 +124,7 @@ fn parse_piece<N: Copy>(
             let found = text.get(start).map_or("the end of the array".into(), |&b| super::lexer::describe(b));
             return Err(error(start, format!("expected a number, found {found}")));
         }
-        let token = std::str::from_utf8(&text[start..*at]).unwrap_or("");
+        let token = &text_str[start..*at];
         match number(token) {
             Some(value) => {
                 values.push(value);

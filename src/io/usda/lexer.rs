@@ -446,6 +446,10 @@ pub fn parse_i64(token: &str) -> Option<i64> {
 /// USD writes `inf`, `-inf` and `nan`; Rust's parser accepts those and plain decimal forms but
 /// also words like `infinity`, which USD does not write — accept only what USD does.
 fn parse_float<T: std::str::FromStr>(token: &str) -> Option<T> {
+    // Ending in a digit or '.', only decimal forms (which both accept) remain.
+    if token.ends_with(|c: char| c.is_ascii_digit() || c == '.') {
+        return token.parse().ok();
+    }
     let body = token.strip_prefix(['-', '+']).unwrap_or(token);
     let alphabetic = body.bytes().any(|b| b.is_ascii_alphabetic() && b != b'e' && b != b'E');
     if alphabetic && body != "inf" && body != "nan" {
