@@ -161,6 +161,23 @@ fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
     for (a, b) in pxr_between.iter().zip(&coif_between) {
         assert!((a - b).abs() <= 1e-6, "pxr {a} vs coif {b} at t = 1.25");
     }
+
+    // The same animation as a crate file, through usd-core.
+    let binary = dir.path().join("anim.usdc");
+    coif::io::usd_interop::write_usd(&binary, |w| {
+        let mut writer = AnimationWriter::begin(w, &groom, times, &binary)?;
+        for t in [1.0, 2.0, 3.0] {
+            writer.frame(t, &frame(t))?;
+        }
+        writer.finish().map(|_| ())
+    })
+    .unwrap();
+    assert_eq!(
+        pxr_dump(&binary, Some(3.0))["curves"][0]["pointsTimeSamples"],
+        serde_json::json!([1.0, 2.0, 3.0])
+    );
+    let from_binary = coif::io::usd_interop::read(&binary, &options, Some(3.0), &[]).unwrap();
+    assert_eq!(from_binary.points, frame(3.0));
 }
 
 #[test]

@@ -104,6 +104,34 @@ pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &
 
 /// Writes `.usdc` or `.usdz`: coif's `.usda`, converted by usd-core, renamed into place.
 pub fn write(path: &Path, groom: &Groom) -> Result<()> {
+    write_usd(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))
+}
+
+/// Writes a USD file of any kind from the `.usda` text `fill` produces: `.usda` directly,
+/// `.usdc`/`.usdz` through usd-core. Atomic either way. For animated output:
+///
+/// ```no_run
+/// # use coif::io::{usd_interop, usda::{AnimationWriter, TimeCodes}};
+/// # let (groom, path) = (coif::Groom::default(), std::path::Path::new("out.usdc"));
+/// # let frames: Vec<(f64, Vec<glam::Vec3>)> = Vec::new();
+/// let times = TimeCodes { start: 1.0, end: frames.len() as f64, per_second: 24.0 };
+/// usd_interop::write_usd(path, |w| {
+///     let mut writer = AnimationWriter::begin(w, &groom, times, path)?;
+///     for (time, points) in &frames {
+///         writer.frame(*time, points)?;
+///     }
+///     writer.finish().map(|_| ())
+/// })?;
+/// # Ok::<(), coif::Error>(())
+/// ```
+pub fn write_usd<F>(path: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut dyn std::io::Write) -> Result<()>,
+{
+    let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if extension == "usda" {
+        return atomic::write_atomically(path, fill);
+    }
     let dir = match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
@@ -112,8 +140,7 @@ pub fn write(path: &Path, groom: &Groom) -> Result<()> {
     let folder =
         tempfile::Builder::new().prefix(".coif-usd.").tempdir_in(dir).map_err(|e| Error::io(path, e))?;
     let text = folder.path().join("groom.usda");
-    atomic::write_atomically(&text, |w| usda::write(groom, w).map_err(|e| Error::io(&text, e)))?;
-    let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    atomic::write_atomically(&text, fill)?;
     let converted = folder.path().join(format!("groom.{extension}"));
     run(&[text.as_os_str(), converted.as_os_str()], "export", &text)?;
     let file = std::fs::File::open(&converted).map_err(|e| Error::io(&converted, e))?;

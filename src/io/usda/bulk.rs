@@ -103,7 +103,8 @@ fn parse_piece<N: Copy>(
     let mut at = 0;
     let error = |offset: usize, message: String| BulkError { offset, message };
     // Checked once per piece (pieces are cut at ASCII bytes), so tokens slice it for free.
-    let text_str = std::str::from_utf8(text).map_err(|e| error(e.valid_up_to(), "the text is not valid UTF-8".into()))?;
+    let text_str = std::str::from_utf8(text)
+        .map_err(|e| error(e.valid_up_to(), "the text is not valid UTF-8".into()))?;
     let skip_blank = |at: &mut usize| {
         while *at < text.len() {
             match text[*at] {
