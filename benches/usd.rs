@@ -51,10 +51,20 @@ fn status_kb(field: &str) -> u64 {
         .unwrap_or(0)
 }
 
+/// CPU seconds (user + system, all threads) this process has used.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the command name (which is in parentheses): utime and stime are the 12th and 13th.
+    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
+    let ticks: f64 = fields.get(11..13).map_or(0.0, |f| f.iter().filter_map(|v| v.parse::<f64>().ok()).sum());
+    ticks / 100.0
+}
+
 /// One measurement in this (child) process; prints the same JSON as the pxr script.
 fn child(command: &str, path: &Path) {
     let baseline = status_kb("VmRSS");
     let mut read_back = None;
+    let cpu_start = cpu_seconds();
     let seconds = match command {
         "write" | "write-usdc" => {
             let groom = bench_groom();
@@ -76,15 +86,17 @@ fn child(command: &str, path: &Path) {
         }
         other => panic!("unknown child command {other}"),
     };
+    let cpu = cpu_seconds() - cpu_start;
     let peak = status_kb("VmHWM");
     if let Some(groom) = read_back {
         assert!(groom == bench_groom(), "read back exactly what was written");
     }
-    println!("{{\"seconds\": {seconds}, \"peak_kb\": {peak}, \"baseline_kb\": {baseline}}}");
+    println!("{{\"seconds\": {seconds}, \"cpu_seconds\": {cpu}, \"peak_kb\": {peak}, \"baseline_kb\": {baseline}}}");
 }
 
 struct Sample {
     seconds: f64,
+    cpu_seconds: f64,
     peak_kb: f64,
     baseline_kb: f64,
 }
@@ -97,6 +109,7 @@ fn run(mut command: Command) -> Sample {
         serde_json::from_str(text.trim().lines().last().unwrap()).expect("JSON figures");
     Sample {
         seconds: value["seconds"].as_f64().unwrap(),
+        cpu_seconds: value["cpu_seconds"].as_f64().unwrap(),
         peak_kb: value["peak_kb"].as_f64().unwrap(),
         baseline_kb: value["baseline_kb"].as_f64().unwrap(),
     }
@@ -162,32 +175,35 @@ fn main() {
         rayon::current_num_threads()
     );
     println!(
-        "{:<34} {:>9} {:>9} {:>10} {:>11} {:>12} {:>9}",
-        "configuration", "seconds", "MB/s", "peak MB", "data MB", "data/groom", "file MB"
+        "{:<38} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10} {:>8}",
+        "configuration", "seconds", "MB/s", "CPU s", "peak MB", "data MB", "data/groom", "file MB"
     );
     let mut medians = Vec::new();
     let only = std::env::var("COIF_BENCH_ONLY").unwrap_or_default();
     for (name, command, file) in &configs {
         if !name.contains(only.as_str()) {
-            medians.push(f64::NAN);
+            medians.push((f64::NAN, f64::NAN));
             continue;
         }
         let samples: Vec<Sample> = (0..runs).map(|_| run(command())).collect();
         let seconds = median(samples.iter().map(|s| s.seconds).collect());
+        let cpu = median(samples.iter().map(|s| s.cpu_seconds).collect());
         let peak = median(samples.iter().map(|s| s.peak_kb).collect()) / 1e3;
         // Peak above the process's resident size before any groom data (interpreter, libraries).
         let data = median(samples.iter().map(|s| s.peak_kb - s.baseline_kb).collect()) / 1e3;
         let file_mb = std::fs::metadata(file).map(|m| m.len() as f64 / 1e6).unwrap_or(0.0);
         println!(
-            "{name:<34} {seconds:>9.3} {:>9.1} {peak:>10.1} {data:>11.1} {:>12.2} {file_mb:>9.1}",
+            "{name:<38} {seconds:>8.3} {:>8.1} {cpu:>8.2} {peak:>8.1} {data:>8.1} {:>10.2} {file_mb:>8.1}",
             groom_mb / seconds,
             data / groom_mb
         );
-        medians.push(seconds);
+        medians.push((seconds, cpu));
     }
+    let ratio =
+        |pxr: usize, ours: usize| (medians[pxr].0 / medians[ours].0, medians[pxr].1 / medians[ours].1);
+    let (write, read) = (ratio(3, 0), ratio(4, 2));
     println!(
-        "speed-up of native .usda over pxr .usdc: write {:.2}x, read {:.2}x (target: 2x each)",
-        medians[3] / medians[0],
-        medians[4] / medians[2]
+        "native .usda vs pxr .usdc (pxr time / coif time, wall and CPU): write {:.2}x / {:.2}x, read {:.2}x / {:.2}x (target: 2x)",
+        write.0, write.1, read.0, read.1
     );
 }

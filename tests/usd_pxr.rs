@@ -272,12 +272,16 @@ fn a_stage_pxr_authored_reads_in_metres_y_up_with_transforms_applied() {
         assert_eq!(groom.guides, Some(vec![false, false, true]));
         assert_eq!(groom.strand_ids, vec![0, 1, 2]);
     }
-    // The same stage as a crate file, through the CLI.
+    // The same stage as a crate file, through the CLI, at the second frame.
     let binary = dir.path().join("authored.usdc");
     probe_export(&path, &binary);
-    let info = stdout_json(&coif(&["info", "--json", path_str(&binary)]));
+    let info = stdout_json(&coif(&["info", "--json", "--frame", "2", path_str(&binary)]));
     assert_eq!(info["groom"]["strands"], 3);
     assert_eq!(info["groom"]["guides"], 1);
+    let at_two = coif::io::usda::read_file(&path, &options, Some(2.0)).unwrap();
+    let (lo, hi) = at_two.bounds().unwrap();
+    let bounds = |i: usize| f32s(&info["groom"]["bounds"][i]);
+    assert_eq!((bounds(0), bounds(1)), (lo.to_array().to_vec(), hi.to_array().to_vec()));
 }
 
 fn probe_export(input: &std::path::Path, output: &std::path::Path) {

@@ -91,26 +91,46 @@ pub struct Loaded {
 
 /// Reads a groom file, converts it to metres and Y up, and validates it.
 pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
+    read_groom_selected(path, options, &usda::Selection::default())
+}
+
+/// [`read_groom`], with a time and variant selection for USD stages.
+pub fn read_groom_selected(
+    path: &Path,
+    options: &ImportOptions,
+    selection: &usda::Selection,
+) -> Result<Loaded> {
     let format = match Format::from_magic(&read_head(path)?) {
         Some(format) => format,
         None => Format::from_extension(path)?,
     };
     let groom = match format {
         Format::Hair => {
+            if selection.time.is_some() || !selection.variants.is_empty() {
+                return Err(Error::Usage(format!(
+                    "{}: a time or variant selection applies to USD input only",
+                    path.display()
+                )));
+            }
             let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
             let mut groom = hair::read(&bytes, path)?;
             apply_import_options(&mut groom, options);
             groom
         }
         // USD stages say their own units and up axis; the options only fill in what they omit.
-        Format::Usda => {
+        // Variants need usd-core to compose the stage, and so does a layer with composition arcs.
+        Format::Usda if selection.variants.is_empty() => {
             let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-            match usda::read(file, path, options, None)? {
+            match usda::read(file, path, options, selection.time)? {
                 usda::ReadOutcome::Groom(groom) => groom,
-                usda::ReadOutcome::NeedsComposition { .. } => usd_interop::read(path, options, None, &[])?,
+                usda::ReadOutcome::NeedsComposition { .. } => {
+                    usd_interop::read(path, options, selection.time, &[])?
+                }
             }
         }
-        Format::Usdc | Format::Usdz => usd_interop::read(path, options, None, &[])?,
+        Format::Usda | Format::Usdc | Format::Usdz => {
+            usd_interop::read(path, options, selection.time, &selection.variants)?
+        }
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     Ok(Loaded { groom, format })

@@ -58,6 +58,15 @@ pub mod names {
     }
 }
 
+/// Which state of a USD stage to read.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Selection {
+    /// Time code to read time samples at (`None`: default values, else the earliest sample).
+    pub time: Option<f64>,
+    /// Variant selections, `SET=NAME` (every prim with that set) or `/Prim:SET=NAME`.
+    pub variants: Vec<String>,
+}
+
 /// What reading a `.usda` layer gave.
 pub enum ReadOutcome {
     Groom(Groom),
