@@ -51,12 +51,13 @@ fn status_kb(field: &str) -> u64 {
         .unwrap_or(0)
 }
 
-/// CPU seconds (user + system, all threads) this process has used.
+/// CPU seconds (user + system, all threads) this process and its finished children have used.
 fn cpu_seconds() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // Fields after the command name (which is in parentheses): utime and stime are the 12th and 13th.
+    // Fields after the command name (which is in parentheses): utime, stime, cutime, cstime are
+    // the 12th to 15th.
     let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-    let ticks: f64 = fields.get(11..13).map_or(0.0, |f| f.iter().filter_map(|v| v.parse::<f64>().ok()).sum());
+    let ticks: f64 = fields.get(11..15).map_or(0.0, |f| f.iter().filter_map(|v| v.parse::<f64>().ok()).sum());
     ticks / 100.0
 }
 

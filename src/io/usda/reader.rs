@@ -136,7 +136,11 @@ impl Walker<'_> {
         let points = match take_value(points_attr, time) {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,
-            Some(_) => return Err(at_prim(points_line, "'points' must be a point3f[] array".into())),
+            // point3d[] and other numeric spellings of 3-vectors.
+            Some(other) => match other.to_f32() {
+                Some(flat) if flat.len() % 3 == 0 => flat.chunks_exact(3).map(Vec3::from_slice).collect(),
+                _ => return Err(at_prim(points_line, "'points' must be a point3f[] array".into())),
+            },
         };
         let counts_attr = prim.attribute("curveVertexCounts");
         let counts_line = counts_attr.map_or(prim.line, |a| a.line);
