@@ -269,6 +269,9 @@ fn a_stage_pxr_authored_reads_in_metres_y_up_with_transforms_applied() {
             "indexed and constant colours"
         );
         assert_eq!(groom.attribute("wetness").unwrap().data, vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
+        let clump = groom.attribute("clump").unwrap();
+        assert_eq!((clump.rate, clump.components), (AttributeRate::Strand, 2), "elementSize 2");
+        assert_eq!(clump.data, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(groom.guides, Some(vec![false, false, true]));
         assert_eq!(groom.strand_ids, vec![0, 1, 2]);
     }
@@ -330,4 +333,29 @@ fn missing_python_or_usd_core_is_a_clear_error() {
         assert!(stderr(&out).contains(expected), "{}", stderr(&out));
         assert!(dir_listing(dir.path()).is_empty(), "no output, no temporary: {:?}", dir_listing(dir.path()));
     }
+}
+
+#[test]
+fn validate_usd_passes_coif_stages_and_fails_on_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.usda");
+    coif::io::write_groom(&good, &rich_groom(CurveBasis::Linear)).unwrap();
+    // The same stage without the metersPerUnit and defaultPrim UsdValidation requires.
+    let bad = dir.path().join("bad.usda");
+    let text = std::fs::read_to_string(&good).unwrap();
+    std::fs::write(
+        &bad,
+        text.replace("    defaultPrim = \"Groom\"\n", "").replace("    metersPerUnit = 1\n", ""),
+    )
+    .unwrap();
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline/validate_usd.py");
+    let validate = |path: &std::path::Path| {
+        std::process::Command::new(python()).arg(&script).arg(path).output().unwrap()
+    };
+    let out = validate(&good);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let out = validate(&bad);
+    assert_eq!(out.status.code(), Some(1));
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(report.contains("metersPerUnit") && report.contains("defaultPrim"), "{report}");
 }

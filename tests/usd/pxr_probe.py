@@ -109,6 +109,10 @@ def author_transformed(out):
     color.SetIndices(Vt.IntArray([1, 0]))
     wet = UsdGeom.PrimvarsAPI(a).CreatePrimvar("wetness", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
     wet.Set([0.1, 0.2, 0.3, 0.4, 0.5])
+    clump = UsdGeom.PrimvarsAPI(a).CreatePrimvar(
+        "clump", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.uniform, elementSize=2
+    )
+    clump.Set([1, 2, 3, 4])
 
     b = UsdGeom.BasisCurves.Define(stage, "/World/Hair/Guides")
     b.CreateTypeAttr(UsdGeom.Tokens.linear)
@@ -122,6 +126,10 @@ def author_transformed(out):
     color_b.Set([(1, 0, 0)])
     wet_b = UsdGeom.PrimvarsAPI(b).CreatePrimvar("wetness", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
     wet_b.Set([0.6, 0.7])
+    clump_b = UsdGeom.PrimvarsAPI(b).CreatePrimvar(
+        "clump", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.uniform, elementSize=2
+    )
+    clump_b.Set([5, 6])
     guide = UsdGeom.PrimvarsAPI(b).CreatePrimvar("groom_guide", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform)
     guide.Set([1])
     text = stage.GetRootLayer().ExportToString()

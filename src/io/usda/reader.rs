@@ -636,3 +636,63 @@ fn merge(mut found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
     }
     Ok(groom)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::usda::{read, ReadOutcome};
+
+    fn read_text(text: &str) -> Groom {
+        match read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None).unwrap() {
+            ReadOutcome::Groom(groom) => groom,
+            ReadOutcome::NeedsComposition { .. } => panic!("no composition here"),
+        }
+    }
+
+    #[test]
+    fn varying_values_on_cubic_curves_spread_over_the_control_points() {
+        // A 4-point B-spline has 2 segment ends: 0.1 at the start, 0.4 at the end.
+        let groom = read_text(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"C\"\n{\n    uniform token type = \"cubic\"\n    uniform token basis = \"bspline\"\n    int[] curveVertexCounts = [4]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)]\n    float[] widths = [0.1, 0.4] (\n        interpolation = \"varying\"\n    )\n}\n",
+        );
+        assert_eq!(groom.basis, CurveBasis::BSpline);
+        let expected = [0.1f32, 0.2, 0.3, 0.4];
+        for (w, e) in groom.widths.iter().zip(expected) {
+            assert!((w - e).abs() < 1e-6, "{:?}", groom.widths);
+        }
+    }
+
+    #[test]
+    fn unauthored_units_follow_usd_and_curve_type_falls_back_to_cubic_bezier() {
+        // No metersPerUnit: USD's fallback is centimetres. No type: cubic Bezier, per the schema.
+        let groom = read_text(
+            "#usda 1.0\ndef BasisCurves \"C\"\n{\n    int[] curveVertexCounts = [4]\n    point3f[] points = [(0, 0, 0), (0, 100, 0), (0, 200, 0), (0, 300, 0)]\n}\n",
+        );
+        assert_eq!(groom.basis, CurveBasis::Bezier);
+        assert_eq!(groom.points[3], Vec3::new(0.0, 3.0, 0.0));
+        assert_eq!(groom.widths, vec![crate::io::usda::DEFAULT_WIDTH; 4]);
+    }
+
+    #[test]
+    fn xform_ops_compose_outermost_first() {
+        let values = |v: &[f64]| v.to_vec();
+        let translate = xform_op("xformOp:translate", &values(&[1.0, 0.0, 0.0])).unwrap();
+        let rotate = xform_op("xformOp:rotateZ", &values(&[90.0])).unwrap();
+        // ["translate", "rotateZ"]: rotate first, then translate.
+        let p = (translate * rotate).transform_point3(DVec3::X);
+        assert!((p - DVec3::new(1.0, 1.0, 0.0)).length() < 1e-12, "{p}");
+        let xyz = xform_op("xformOp:rotateXYZ", &values(&[90.0, 0.0, 90.0])).unwrap();
+        // X first: Y goes to Z; then Z about Z stays Z.
+        assert!((xyz.transform_point3(DVec3::Y) - DVec3::Z).length() < 1e-12);
+        let matrix = xform_op(
+            "xformOp:transform",
+            &values(&[1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 5., 6., 7., 1.]),
+        )
+        .unwrap();
+        assert_eq!(
+            matrix.transform_point3(DVec3::ZERO),
+            DVec3::new(5.0, 6.0, 7.0),
+            "translation in the last row"
+        );
+    }
+}
