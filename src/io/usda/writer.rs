@@ -87,7 +87,6 @@ pub struct AnimationWriter<W: Write> {
     vertices: usize,
     half_width: f32,
     extents: Vec<(f64, [Vec3; 2])>,
-    times: TimeCodes,
 }
 
 impl<W: Write> AnimationWriter<W> {
@@ -109,7 +108,6 @@ impl<W: Write> AnimationWriter<W> {
             vertices: groom.vertex_count(),
             half_width: groom.widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5,
             extents: Vec::new(),
-            times,
         })
     }
 
@@ -150,7 +148,6 @@ impl<W: Write> AnimationWriter<W> {
                 self.path.display()
             )));
         }
-        let _ = self.times;
         let path = self.path.clone();
         let io = |e| Error::io(&path, e);
         self.out.write_all(b"        }\n").map_err(io)?;
