@@ -409,17 +409,31 @@ pub fn value_at(attribute: &Attribute, time: Option<f64>) -> Option<Value> {
     (value != Value::Blocked).then_some(value)
 }
 
-/// Like [`value_at`] but moves large values out of the attribute instead of copying them.
+/// Like [`value_at`] but moves large values out of the attribute instead of copying them
+/// (only an interpolated value is computed afresh).
 fn take_value(attribute: &mut Attribute, time: Option<f64>) -> Option<Value> {
     let use_default = match time {
         Some(_) => attribute.samples.is_empty(),
         None => attribute.default.is_some(),
     };
-    if use_default {
-        let value = attribute.default.take()?;
-        return (value != Value::Blocked).then_some(value);
-    }
-    value_at(attribute, time)
+    let value = if use_default {
+        attribute.default.take()?
+    } else {
+        let between = match (attribute.samples.as_slice(), time) {
+            ([(t0, _), (t1, _)], Some(t)) => *t0 < t && t < *t1,
+            _ => false,
+        };
+        if between {
+            return value_at(attribute, time);
+        }
+        let held = match time {
+            // The latest sample at or before the time, else the first.
+            Some(t) => attribute.samples.iter().rposition(|(s, _)| *s <= t).unwrap_or(0),
+            None => 0,
+        };
+        std::mem::take(&mut attribute.samples).into_iter().nth(held)?.1
+    };
+    (value != Value::Blocked).then_some(value)
 }
 
 fn lerp(a: &Value, b: &Value, t: f64) -> Value {
