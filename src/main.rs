@@ -27,6 +27,8 @@ enum Command {
         file: PathBuf,
         #[command(flatten)]
         import: ImportArgs,
+        #[command(flatten)]
+        usd: UsdArgs,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -37,6 +39,8 @@ enum Command {
         output: PathBuf,
         #[command(flatten)]
         import: ImportArgs,
+        #[command(flatten)]
+        usd: UsdArgs,
         #[arg(long)]
         json: bool,
     },
@@ -123,6 +127,24 @@ impl ImportArgs {
     }
 }
 
+/// Which state of a USD input to read.
+#[derive(Args)]
+struct UsdArgs {
+    /// USD input: the time code to read animated points at (default: the stage's default
+    /// values, else its first time sample).
+    #[arg(long, value_name = "TIME")]
+    frame: Option<f64>,
+    /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).
+    #[arg(long, value_name = "SET=NAME")]
+    variant: Vec<String>,
+}
+
+impl UsdArgs {
+    fn selection(&self) -> io::usda::Selection {
+        io::usda::Selection { time: self.frame, variants: self.variant.clone() }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum HairStyle {
     Straight,
@@ -186,8 +208,8 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Generate(args) => run_generate(args),
-        Command::Info { file, import, json } => {
-            let loaded = io::read_groom(&file, &import.options())?;
+        Command::Info { file, import, usd, json } => {
+            let loaded = io::read_groom_selected(&file, &import.options(), &usd.selection())?;
             let info = GroomInfo::of(&loaded.groom);
             if json {
                 print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
@@ -196,8 +218,8 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Convert { input, output, import, json } => {
-            let loaded = io::read_groom(&input, &import.options())?;
+        Command::Convert { input, output, import, usd, json } => {
+            let loaded = io::read_groom_selected(&input, &import.options(), &usd.selection())?;
             write_and_report(&output, &loaded.groom, json)
         }
         Command::Simulate(args) => run_simulate(args),

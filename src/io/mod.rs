@@ -3,6 +3,8 @@
 //! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
 pub mod atomic;
 pub mod hair;
+pub mod usd_interop;
+pub mod usda;
 
 use std::path::Path;
 
@@ -18,10 +20,17 @@ use crate::groom::Groom;
 pub enum Format {
     /// Cem Yuksel's binary `.hair`.
     Hair,
+    /// USD text, read and written by coif itself.
+    Usda,
+    /// USD binary (crate), through usd-core.
+    Usdc,
+    /// USD zip package, through usd-core.
+    Usdz,
 }
 
 impl Format {
-    const ALL: &'static [(Format, &'static str)] = &[(Format::Hair, "hair")];
+    const ALL: &'static [(Format, &'static str)] =
+        &[(Format::Hair, "hair"), (Format::Usda, "usda"), (Format::Usdc, "usdc"), (Format::Usdz, "usdz")];
 
     /// The format a file name's extension names.
     pub fn from_extension(path: &Path) -> Result<Format> {
@@ -38,7 +47,17 @@ impl Format {
 
     /// The format a file's first bytes announce, if any.
     pub fn from_magic(head: &[u8]) -> Option<Format> {
-        head.starts_with(hair::SIGNATURE).then_some(Format::Hair)
+        if head.starts_with(hair::SIGNATURE) {
+            Some(Format::Hair)
+        } else if head.starts_with(usda::MAGIC) {
+            Some(Format::Usda)
+        } else if head.starts_with(b"PXR-USDC") {
+            Some(Format::Usdc)
+        } else if head.starts_with(b"PK\x03\x04") {
+            Some(Format::Usdz)
+        } else {
+            None
+        }
     }
 
     pub fn name(self) -> &'static str {
@@ -72,17 +91,58 @@ pub struct Loaded {
 
 /// Reads a groom file, converts it to metres and Y up, and validates it.
 pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let format = match Format::from_magic(&bytes) {
+    read_groom_selected(path, options, &usda::Selection::default())
+}
+
+/// [`read_groom`], with a time and variant selection for USD stages.
+pub fn read_groom_selected(
+    path: &Path,
+    options: &ImportOptions,
+    selection: &usda::Selection,
+) -> Result<Loaded> {
+    let format = match Format::from_magic(&read_head(path)?) {
         Some(format) => format,
         None => Format::from_extension(path)?,
     };
-    let mut groom = match format {
-        Format::Hair => hair::read(&bytes, path)?,
+    let groom = match format {
+        Format::Hair => {
+            if selection.time.is_some() || !selection.variants.is_empty() {
+                return Err(Error::Usage(format!(
+                    "{}: a time or variant selection applies to USD input only",
+                    path.display()
+                )));
+            }
+            let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+            let mut groom = hair::read(&bytes, path)?;
+            apply_import_options(&mut groom, options);
+            groom
+        }
+        // USD stages say their own units and up axis; the options only fill in what they omit.
+        // Variants need usd-core to compose the stage, and so does a layer with composition arcs.
+        Format::Usda if selection.variants.is_empty() => {
+            let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+            match usda::read(file, path, options, selection.time)? {
+                usda::ReadOutcome::Groom(groom) => groom,
+                usda::ReadOutcome::NeedsComposition { .. } => {
+                    usd_interop::read(path, options, selection.time, &[])?
+                }
+            }
+        }
+        Format::Usda | Format::Usdc | Format::Usdz => {
+            usd_interop::read(path, options, selection.time, &selection.variants)?
+        }
     };
-    apply_import_options(&mut groom, options);
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     Ok(Loaded { groom, format })
+}
+
+/// The first bytes of a file, enough to recognise every format's magic.
+fn read_head(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut head = Vec::with_capacity(16);
+    file.take(16).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
+    Ok(head)
 }
 
 fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
@@ -109,5 +169,19 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
                 .map(|what| format!("{}: .hair drops {what}", path.display()))
                 .collect())
         }
+        Format::Usda => {
+            usda::check_writable(groom, path)?;
+            atomic::write_atomically(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))?;
+            Ok(usd_warnings(path, groom))
+        }
+        Format::Usdc | Format::Usdz => {
+            usda::check_writable(groom, path)?;
+            usd_interop::write(path, groom)?;
+            Ok(usd_warnings(path, groom))
+        }
     }
+}
+
+fn usd_warnings(path: &Path, groom: &Groom) -> Vec<String> {
+    usda::unsupported(groom).into_iter().map(|what| format!("{}: {what}", path.display())).collect()
 }

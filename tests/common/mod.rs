@@ -29,3 +29,4 @@ pub fn dir_listing(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
+pub mod usd;

@@ -1,0 +1,149 @@
+//! Binary and packaged USD (`.usdc`, `.usdz`) and composed stages, through usd-core: coif runs
+//! `pipeline/usd_interop.py` with the project's Python to flatten any stage into a temporary
+//! `.usda` it then reads natively, or to turn the `.usda` it wrote into `.usdc`/`.usdz`.
+//!
+//! Python is found as `$COIF_PYTHON`, else `.deps/venv/bin/python` in the project folder (the
+//! nearest ancestor of the executable holding `pipeline/usd_interop.py`, or the folder coif was
+//! built from), else `python3` on the `PATH`. `$COIF_PIPELINE` may point at the scripts' folder.
+use std::ffi::{OsStr, OsString};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+use crate::io::{atomic, usda, ImportOptions};
+
+const SCRIPT: &str = "usd_interop.py";
+
+/// The project folder holding `pipeline/`, searched from the executable's location upwards,
+/// then the folder the crate was built from.
+fn project_root() -> Option<PathBuf> {
+    let from_exe = std::env::current_exe().ok().and_then(|exe| exe.canonicalize().ok());
+    let candidates = from_exe
+        .iter()
+        .flat_map(|exe| exe.ancestors().skip(1).map(Path::to_path_buf).collect::<Vec<_>>())
+        .chain(std::iter::once(PathBuf::from(env!("CARGO_MANIFEST_DIR"))));
+    candidates.into_iter().find(|dir| dir.join("pipeline").join(SCRIPT).is_file())
+}
+
+/// The interop script to run.
+pub fn script() -> Result<PathBuf> {
+    if let Some(dir) = std::env::var_os("COIF_PIPELINE") {
+        let script = PathBuf::from(dir).join(SCRIPT);
+        return if script.is_file() {
+            Ok(script)
+        } else {
+            Err(Error::External(format!("COIF_PIPELINE is set but {} does not exist", script.display())))
+        };
+    }
+    project_root().map(|root| root.join("pipeline").join(SCRIPT)).ok_or_else(|| {
+        Error::External(format!(
+            "cannot find pipeline/{SCRIPT} (needed for .usdc/.usdz and composed USD); set COIF_PIPELINE to its folder"
+        ))
+    })
+}
+
+/// The Python interpreter that has usd-core.
+pub fn python() -> PathBuf {
+    if let Some(python) = std::env::var_os("COIF_PYTHON") {
+        return PathBuf::from(python);
+    }
+    project_root()
+        .map(|root| root.join(".deps/venv/bin/python"))
+        .filter(|python| python.exists())
+        .unwrap_or_else(|| PathBuf::from("python3"))
+}
+
+/// Runs the interop script; `input` is the user's file named in "bad input" errors.
+fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
+    let script = script()?;
+    let python = python();
+    let output = Command::new(&python).arg(&script).arg(command).args(args).output().map_err(|e| {
+        Error::External(format!(
+            "cannot run Python ({}) for USD interop: {e}; run `make setup` or set COIF_PYTHON to a Python with usd-core",
+            python.display()
+        ))
+    })?;
+    if output.status.success() {
+        return Ok(());
+    }
+    let message = String::from_utf8_lossy(&output.stderr).trim().to_string();
+    Err(match output.status.code() {
+        Some(2) => Error::format(input, format!("usd-core: {message}")),
+        Some(3) => Error::External(format!(
+            "usd-core (pxr) is missing from {}: run `make setup` or set COIF_PYTHON to a Python with usd-core ({message})",
+            python.display()
+        )),
+        _ => Error::External(format!("{SCRIPT} {command} failed ({}): {message}", output.status)),
+    })
+}
+
+/// Reads any USD stage usd-core can open, flattened through a temporary `.usda`.
+pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &[String]) -> Result<Groom> {
+    let folder = tempfile::tempdir().map_err(|e| Error::io(Path::new("temporary folder"), e))?;
+    let flat = folder.path().join("flattened.usda");
+    let variant_args: Vec<OsString> = variants.iter().map(|v| format!("--variant={v}").into()).collect();
+    let mut args: Vec<&OsStr> = vec![path.as_os_str(), flat.as_os_str()];
+    args.extend(variant_args.iter().map(OsString::as_os_str));
+    run(&args, "flatten", path)?;
+    let file = std::fs::File::open(&flat).map_err(|e| Error::io(&flat, e))?;
+    // Errors name the user's file; line numbers refer to the flattened text.
+    let rename = |error: Error| match error {
+        Error::Format { message, .. } => {
+            Error::format(path, format!("{message} (in the stage usd-core flattened)"))
+        }
+        other => other,
+    };
+    match usda::read(file, path, options, time).map_err(rename)? {
+        usda::ReadOutcome::Groom(groom) => Ok(groom),
+        usda::ReadOutcome::NeedsComposition { line, what } => {
+            Err(Error::External(format!("usd-core left '{what}' (line {line}) in a flattened stage")))
+        }
+    }
+}
+
+/// Writes `.usdc` or `.usdz`: coif's `.usda`, converted by usd-core, renamed into place.
+pub fn write(path: &Path, groom: &Groom) -> Result<()> {
+    write_usd(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))
+}
+
+/// Writes a USD file of any kind from the `.usda` text `fill` produces: `.usda` directly,
+/// `.usdc`/`.usdz` through usd-core. Atomic either way. For animated output:
+///
+/// ```no_run
+/// # use coif::io::{usd_interop, usda::{AnimationWriter, TimeCodes}};
+/// # let (groom, path) = (coif::Groom::default(), std::path::Path::new("out.usdc"));
+/// # let frames: Vec<(f64, Vec<glam::Vec3>)> = Vec::new();
+/// let times = TimeCodes { start: 1.0, end: frames.len() as f64, per_second: 24.0 };
+/// usd_interop::write_usd(path, |w| {
+///     let mut writer = AnimationWriter::begin(w, &groom, times, path)?;
+///     for (time, points) in &frames {
+///         writer.frame(*time, points)?;
+///     }
+///     writer.finish().map(|_| ())
+/// })?;
+/// # Ok::<(), coif::Error>(())
+/// ```
+pub fn write_usd<F>(path: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut dyn std::io::Write) -> Result<()>,
+{
+    let extension = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if extension == "usda" {
+        return atomic::write_atomically(path, fill);
+    }
+    let dir = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    // The temporary folder sits beside the output so the final rename is atomic.
+    let folder =
+        tempfile::Builder::new().prefix(".coif-usd.").tempdir_in(dir).map_err(|e| Error::io(path, e))?;
+    let text = folder.path().join("groom.usda");
+    atomic::write_atomically(&text, fill)?;
+    let converted = folder.path().join(format!("groom.{extension}"));
+    run(&[text.as_os_str(), converted.as_os_str()], "export", &text)?;
+    let file = std::fs::File::open(&converted).map_err(|e| Error::io(&converted, e))?;
+    file.sync_all().map_err(|e| Error::io(&converted, e))?;
+    std::fs::rename(&converted, path).map_err(|e| Error::io(path, e))
+}

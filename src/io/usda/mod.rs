@@ -1,0 +1,113 @@
+//! USD text (`.usda`), read and written natively. See `/work/shared/docs/usd-curves.md` for the
+//! conventions: an `Xform` holding `BasisCurves`, widths and primvars with explicit
+//! interpolation, `extent`, stage metadata, time-sampled points for animation.
+//!
+//! Writing: [`write`] for one groom, [`AnimationWriter`] for time-sampled points with constant
+//! topology. Reading: [`read`] parses a layer (streaming, never the whole file in memory) and
+//! builds one groom from all its curve prims; a layer that needs composition (references,
+//! variants…) is reported as [`ReadOutcome::NeedsComposition`] so the caller can flatten it
+//! through usd-core first.
+mod bulk;
+mod lexer;
+mod parser;
+mod reader;
+mod writer;
+
+use std::io::Read;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+use crate::io::ImportOptions;
+
+pub use writer::{check_writable, unsupported, write, AnimationWriter, TimeCodes};
+
+/// First bytes of every `.usda` file.
+pub const MAGIC: &[u8] = b"#usda";
+
+/// Diameter given to strands of a stage that authors no `widths` (metres): a typical hair.
+pub const DEFAULT_WIDTH: f32 = 80e-6;
+
+/// How coif's groom data is named in USD.
+pub mod names {
+    /// Root UV on the scalp, `texCoord2f[]`, uniform.
+    pub const ST: &str = "st";
+    /// Strand identifier (Epic's groom convention), `int[]`, uniform.
+    pub const GROOM_ID: &str = "groom_id";
+    /// Guide flag (Epic's groom convention), `int[]`, uniform.
+    pub const GROOM_GUIDE: &str = "groom_guide";
+    /// Rest positions, `point3f[]` (Houdini's convention); transformed with the points.
+    pub const REST: &str = "rest";
+    /// The primvar coif's `color` attribute becomes.
+    pub const DISPLAY_COLOR: &str = "displayColor";
+
+    /// The groom attribute a primvar becomes.
+    pub fn attribute_for_primvar(primvar: &str) -> String {
+        match primvar {
+            DISPLAY_COLOR => crate::groom::attr::COLOR.to_string(),
+            other => other.to_string(),
+        }
+    }
+
+    /// The primvar a groom attribute becomes (before any renaming to a valid USD name).
+    pub fn primvar_for_attribute(attribute: &str) -> &str {
+        match attribute {
+            crate::groom::attr::COLOR => DISPLAY_COLOR,
+            other => other,
+        }
+    }
+}
+
+/// Which state of a USD stage to read.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Selection {
+    /// Time code to read time samples at (`None`: default values, else the earliest sample).
+    pub time: Option<f64>,
+    /// Variant selections, `SET=NAME` (every prim with that set) or `/Prim:SET=NAME`.
+    pub variants: Vec<String>,
+}
+
+/// What reading a `.usda` layer gave.
+pub enum ReadOutcome {
+    Groom(Groom),
+    /// The layer composes other layers or variants (the arc named, on that line); coif's own
+    /// reader only reads flattened stages.
+    NeedsComposition {
+        line: u32,
+        what: String,
+    },
+}
+
+/// Reads a `.usda` stage. `time` picks time samples (`None`: default values, or the earliest
+/// sample of attributes that only have samples). Units and up axis are converted to metres and
+/// Y up; `options` only apply where the stage does not say.
+pub fn read(
+    input: impl Read,
+    path: &Path,
+    options: &ImportOptions,
+    time: Option<f64>,
+) -> Result<ReadOutcome> {
+    let layer = match parser::parse(input, time) {
+        Ok(layer) => layer,
+        Err(parser::ParseError::Syntax(e)) => {
+            return Err(Error::format(path, format!("line {}: {}", e.line, e.message)))
+        }
+        Err(parser::ParseError::Io(e)) => return Err(Error::io(path, e)),
+        Err(parser::ParseError::Composition { line, what }) => {
+            return Ok(ReadOutcome::NeedsComposition { line, what })
+        }
+    };
+    reader::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom)
+}
+
+/// Reads a `.usda` file that must not need composition.
+pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<Groom> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    match read(file, path, options, time)? {
+        ReadOutcome::Groom(groom) => Ok(groom),
+        ReadOutcome::NeedsComposition { line, what } => Err(Error::format(
+            path,
+            format!("line {line}: '{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"),
+        )),
+    }
+}

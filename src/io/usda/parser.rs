@@ -1,0 +1,819 @@
+//! Recursive-descent parser for `.usda` layers: layer metadata, prims (`def`/`over`/`class`)
+//! with their metadata, attributes (default values and time samples), relationships and
+//! dictionaries. Values coif can use (numbers, tokens) are kept typed by their declared USD type;
+//! everything else is parsed for syntax and dropped. Composition arcs (references, payloads,
+//! variants, sublayers…) stop the parse: such a stage must be composed by usd-core first.
+use std::io::Read;
+
+use glam::Vec3;
+
+use super::lexer::{describe, parse_f32, parse_i64, LexError, LexResult, Lexer};
+
+/// A value of a declared type, flattened (tuples and matrices become runs of numbers).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    F32(Vec<f32>),
+    /// Arrays of 3-component float tuples (points, colours…), kept in the groom's own layout.
+    Vec3(Vec<Vec3>),
+    F64(Vec<f64>),
+    Int(Vec<i64>),
+    Text(Vec<String>),
+    /// `None`: a blocked value.
+    Blocked,
+    /// A value coif does not read (parsed for syntax only).
+    Ignored,
+}
+
+impl Value {
+    /// Numbers as f32 (integers and doubles converted).
+    pub fn to_f32(&self) -> Option<Vec<f32>> {
+        match self {
+            Value::F32(v) => Some(v.clone()),
+            Value::Vec3(v) => Some(v.iter().flat_map(|p| p.to_array()).collect()),
+            Value::F64(v) => Some(v.iter().map(|&x| x as f32).collect()),
+            Value::Int(v) => Some(v.iter().map(|&x| x as f32).collect()),
+            _ => None,
+        }
+    }
+
+    pub fn to_f64(&self) -> Option<Vec<f64>> {
+        match self {
+            Value::F32(v) => Some(v.iter().map(|&x| x as f64).collect()),
+            Value::Vec3(v) => Some(v.iter().flat_map(|p| p.to_array()).map(f64::from).collect()),
+            Value::F64(v) => Some(v.clone()),
+            Value::Int(v) => Some(v.iter().map(|&x| x as f64).collect()),
+            _ => None,
+        }
+    }
+}
+
+/// Element kind and component count of a USD value type (`point3f` → F32 × 3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    F32,
+    F64,
+    Int,
+    Text,
+    Other,
+}
+
+pub fn type_info(type_name: &str) -> (Kind, usize) {
+    let (base, components) = match type_name.as_bytes().last() {
+        Some(&d @ b'2'..=b'4') => (&type_name[..type_name.len() - 1], (d - b'0') as usize),
+        _ => (type_name, 1),
+    };
+    match (base, components) {
+        ("float" | "half", _) => (Kind::F32, components),
+        ("double" | "timecode", _) => (Kind::F64, components),
+        ("int" | "uint" | "int64" | "uint64" | "uchar" | "bool", _) => (Kind::Int, components),
+        ("string" | "token" | "asset", 1) => (Kind::Text, 1),
+        ("quatf" | "quath", 1) => (Kind::F32, 4),
+        ("quatd", 1) => (Kind::F64, 4),
+        ("matrix2d", 1) => (Kind::F64, 4),
+        ("matrix3d", 1) => (Kind::F64, 9),
+        ("matrix4d" | "frame4d", 1) => (Kind::F64, 16),
+        _ => {
+            // Roles over a float/double/half tuple: point3f, normal3d, color4h, texCoord2f…
+            let roles = ["point", "normal", "vector", "color", "texCoord"];
+            for role in roles {
+                if let Some(rest) = type_name.strip_prefix(role) {
+                    let bytes = rest.as_bytes();
+                    if bytes.len() == 2 && (b'2'..=b'4').contains(&bytes[0]) {
+                        let n = (bytes[0] - b'0') as usize;
+                        match bytes[1] {
+                            b'f' | b'h' => return (Kind::F32, n),
+                            b'd' => return (Kind::F64, n),
+                            _ => {}
+                        }
+                    }
+                }
+            }
+            (Kind::Other, 1)
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Attribute {
+    pub name: String,
+    pub type_name: String,
+    /// Line of the declaration, for error messages.
+    pub line: u32,
+    pub default: Option<Value>,
+    /// The time samples kept (see [`Parser::offer_sample`]): at most the two around the
+    /// requested time, or the earliest one when no time was requested.
+    pub samples: Vec<(f64, Value)>,
+    pub interpolation: Option<String>,
+    pub element_size: Option<i64>,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Prim {
+    pub type_name: String,
+    pub name: String,
+    pub line: u32,
+    /// `def` (false for `over` and `class`, which define nothing on a flattened stage).
+    pub defined: bool,
+    pub active: bool,
+    pub attributes: Vec<Attribute>,
+    pub children: Vec<Prim>,
+}
+
+impl Prim {
+    pub fn attribute(&self, name: &str) -> Option<&Attribute> {
+        self.attributes.iter().find(|a| a.name == name)
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Layer {
+    /// Lines in the file (the last line), for errors about the stage as a whole.
+    pub lines: u32,
+    pub meters_per_unit: Option<f64>,
+    pub up_axis: Option<String>,
+    pub prims: Vec<Prim>,
+}
+
+#[derive(Debug)]
+pub enum ParseError {
+    Syntax(LexError),
+    /// The layer uses a composition arc; the stage must be flattened by usd-core.
+    Composition {
+        line: u32,
+        what: String,
+    },
+    Io(std::io::Error),
+}
+
+impl From<LexError> for ParseError {
+    fn from(error: LexError) -> Self {
+        ParseError::Syntax(error)
+    }
+}
+
+type ParseResult<T> = Result<T, ParseError>;
+
+/// Metadata keys whose presence means the layer is not flattened.
+const COMPOSITION_KEYS: &[&str] =
+    &["references", "payload", "inherits", "specializes", "variantSets", "subLayers", "relocates"];
+
+/// A metadata value coif looks at.
+enum Meta {
+    Number(f64),
+    Text(String),
+    Other,
+}
+
+pub struct Parser<'a> {
+    lexer: Lexer<'a>,
+    time: Option<f64>,
+}
+
+/// Parses a whole layer. `time` selects which time samples are kept.
+pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer> {
+    let mut parser = Parser { lexer: Lexer::new(input), time };
+    let result = parser.layer();
+    if let Some(error) = parser.lexer.take_read_error() {
+        return Err(ParseError::Io(error));
+    }
+    result
+}
+
+impl Parser<'_> {
+    fn layer(&mut self) -> ParseResult<Layer> {
+        if !self.lexer.starts_with(b"#usda ") {
+            return Err(self.syntax("not a .usda file: the first line must be '#usda 1.0'"));
+        }
+        self.lexer.skip_line();
+        let mut layer = Layer::default();
+        if self.lexer.next_byte() == Some(b'(') {
+            self.metadata(|key, value, _| match (key, value) {
+                ("metersPerUnit", Meta::Number(v)) => layer.meters_per_unit = Some(v),
+                ("upAxis", Meta::Text(v)) => layer.up_axis = Some(v),
+                _ => {}
+            })?;
+        }
+        while !self.lexer.at_eof() {
+            self.lexer.skip_ws();
+            if self.lexer.at_eof() {
+                break;
+            }
+            let word = self.lexer.identifier()?;
+            match word.as_str() {
+                "def" | "over" | "class" => layer.prims.push(self.prim(&word)?),
+                _ => return Err(self.unknown(&word, "a prim ('def', 'over' or 'class')")),
+            }
+        }
+        layer.lines = self.lexer.line;
+        Ok(layer)
+    }
+
+    fn unknown(&self, word: &str, expected: &str) -> ParseError {
+        ParseError::Syntax(LexError {
+            line: self.lexer.line,
+            message: format!("unknown syntax '{word}': expected {expected}"),
+        })
+    }
+
+    fn syntax(&self, message: impl Into<String>) -> ParseError {
+        ParseError::Syntax(LexError { line: self.lexer.line, message: message.into() })
+    }
+
+    fn composition(&self, what: &str) -> ParseError {
+        ParseError::Composition { line: self.lexer.line, what: what.to_string() }
+    }
+
+    /// `( key = value … )`: calls `seen` with every key and the value when it is a number or text.
+    fn metadata(&mut self, mut seen: impl FnMut(&str, Meta, u32)) -> ParseResult<()> {
+        self.lexer.expect(b'(', "'('")?;
+        loop {
+            match self.lexer.next_byte() {
+                Some(b')') => {
+                    self.lexer.bump();
+                    return Ok(());
+                }
+                Some(b';') => self.lexer.bump(),
+                Some(b'"' | b'\'') => {
+                    self.lexer.string()?; // a bare string is the doc string
+                }
+                None => return Err(self.syntax("unexpected end of file in metadata ('(' not closed)")),
+                Some(_) => {
+                    let mut key = self.lexer.identifier()?;
+                    if matches!(key.as_str(), "add" | "prepend" | "append" | "delete" | "reorder") {
+                        key = self.lexer.identifier()?;
+                    }
+                    if COMPOSITION_KEYS.contains(&key.as_str()) {
+                        return Err(self.composition(&key));
+                    }
+                    let line = self.lexer.line;
+                    self.lexer.expect(b'=', &format!("'=' after '{key}'"))?;
+                    let value = self.meta_value()?;
+                    seen(&key, value, line);
+                }
+            }
+        }
+    }
+
+    /// A metadata value: numbers and text are returned, anything else is skipped.
+    fn meta_value(&mut self) -> ParseResult<Meta> {
+        match self.lexer.next_byte() {
+            Some(b'"' | b'\'') => Ok(Meta::Text(self.lexer.string()?)),
+            _ if self.lexer.at_number() => Ok(Meta::Number(self.lexer.f64()?)),
+            _ if self.lexer.at_identifier() => Ok(Meta::Text(self.lexer.identifier()?)),
+            _ => {
+                self.skip_value()?;
+                Ok(Meta::Other)
+            }
+        }
+    }
+
+    /// Skips any value: number, word, string, path, asset, list, tuple or dictionary.
+    fn skip_value(&mut self) -> ParseResult<()> {
+        match self.lexer.next_byte() {
+            Some(b'"' | b'\'') => {
+                self.lexer.string()?;
+            }
+            Some(b'<') => {
+                self.lexer.path()?;
+            }
+            Some(b'@') => {
+                self.lexer.asset()?;
+            }
+            Some(open @ (b'[' | b'(' | b'{')) => {
+                let close = match open {
+                    b'[' => b']',
+                    b'(' => b')',
+                    _ => b'}',
+                };
+                let start = self.lexer.line;
+                self.lexer.bump();
+                loop {
+                    match self.lexer.next_byte() {
+                        Some(b) if b == close => {
+                            self.lexer.bump();
+                            break;
+                        }
+                        Some(b',' | b'=' | b':' | b';') => self.lexer.bump(),
+                        Some(b'[') if open == b'{' => {
+                            // `double[] name = …` inside a dictionary.
+                            self.lexer.bump();
+                            self.lexer.expect(b']', "']'")?;
+                        }
+                        None => {
+                            return Err(self.syntax(format!(
+                                "unexpected end of file: '{}' opened on line {start} is not closed",
+                                open as char
+                            )))
+                        }
+                        Some(_) => self.skip_value()?,
+                    }
+                }
+            }
+            _ if self.lexer.at_number() => {
+                self.lexer.f64()?;
+            }
+            _ if self.lexer.at_identifier() => {
+                self.lexer.identifier()?;
+            }
+            Some(b) => return Err(self.syntax(format!("unknown syntax: unexpected {}", describe(b)))),
+            None => return Err(self.syntax("unexpected end of file: expected a value")),
+        }
+        Ok(())
+    }
+
+    /// After `def`/`over`/`class`: `[Type] "name" [( metadata )] { body }`.
+    fn prim(&mut self, specifier: &str) -> ParseResult<Prim> {
+        let line = self.lexer.line;
+        let mut prim = Prim { line, defined: specifier == "def", active: true, ..Default::default() };
+        if self.lexer.at_identifier() {
+            prim.type_name = self.lexer.identifier()?;
+        }
+        prim.name = self.lexer.string()?;
+        if self.lexer.next_byte() == Some(b'(') {
+            let mut active = true;
+            self.metadata(|key, value, _| {
+                if key == "active" {
+                    active = !matches!(value, Meta::Text(ref t) if t == "false")
+                        && !matches!(value, Meta::Number(n) if n == 0.0);
+                }
+            })?;
+            prim.active = active;
+        }
+        self.lexer.expect(b'{', &format!("'{{' to open prim \"{}\"", prim.name))?;
+        loop {
+            match self.lexer.next_byte() {
+                Some(b'}') => {
+                    self.lexer.bump();
+                    return Ok(prim);
+                }
+                Some(b';') => self.lexer.bump(),
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: prim \"{}\" opened on line {line} is not closed",
+                        prim.name
+                    )))
+                }
+                Some(_) => self.prim_statement(&mut prim)?,
+            }
+        }
+    }
+
+    fn prim_statement(&mut self, prim: &mut Prim) -> ParseResult<()> {
+        let mut word = self.lexer.identifier()?;
+        match word.as_str() {
+            "def" | "over" | "class" => {
+                let child = self.prim(&word)?;
+                prim.children.push(child);
+                return Ok(());
+            }
+            "variantSet" => return Err(self.composition("variantSet")),
+            "reorder" => {
+                self.lexer.identifier()?;
+                self.lexer.expect(b'=', "'='")?;
+                return self.skip_value();
+            }
+            _ => {}
+        }
+        while matches!(
+            word.as_str(),
+            "custom" | "uniform" | "varying" | "config" | "add" | "prepend" | "append" | "delete"
+        ) {
+            word = self.lexer.identifier()?;
+        }
+        if word == "rel" {
+            self.lexer.identifier()?;
+            if self.lexer.eat(b'.') {
+                self.lexer.identifier()?;
+            }
+            if self.lexer.eat(b'=') {
+                self.skip_value()?;
+            }
+            if self.lexer.next_byte() == Some(b'(') {
+                self.metadata(|_, _, _| {})?;
+            }
+            return Ok(());
+        }
+        self.attribute(prim, word)
+    }
+
+    /// After the type name: `[[]] name[.timeSamples|.connect|.spline] [= value] [( metadata )]`.
+    fn attribute(&mut self, prim: &mut Prim, type_name: String) -> ParseResult<()> {
+        let line = self.lexer.line;
+        let array = if self.lexer.eat(b'[') {
+            self.lexer.expect(b']', "']' after '['")?;
+            true
+        } else {
+            false
+        };
+        if !self.lexer.at_identifier() {
+            let found = self.lexer.next_byte();
+            return Err(match found {
+                Some(b) => {
+                    self.unknown(&format!("{type_name} {}", describe(b)), "an attribute name after the type")
+                }
+                None => self.syntax("unexpected end of file: expected an attribute name"),
+            });
+        }
+        let name = self.lexer.identifier()?;
+        let suffix = if self.lexer.peek() == Some(b'.') {
+            self.lexer.bump();
+            Some(self.lexer.identifier()?)
+        } else {
+            None
+        };
+        let (kind, components) = type_info(&type_name);
+        let keep = wanted(&name);
+        let index = match prim.attributes.iter().position(|a| a.name == name) {
+            Some(index) => index,
+            None => {
+                prim.attributes.push(Attribute {
+                    name: name.clone(),
+                    type_name: type_name.clone(),
+                    line,
+                    ..Default::default()
+                });
+                prim.attributes.len() - 1
+            }
+        };
+        if self.lexer.eat(b'=') {
+            match suffix.as_deref() {
+                None | Some("default") => {
+                    let reserve = if keep { vertex_hint(prim) } else { 0 };
+                    let value = self.typed_value(kind, components, array, keep, reserve)?;
+                    prim.attributes[index].default = Some(value);
+                    prim.attributes[index].line = line;
+                }
+                Some("timeSamples") => {
+                    let reserve = if keep { vertex_hint(prim) } else { 0 };
+                    self.time_samples(&mut prim.attributes[index], kind, components, array, keep, reserve)?
+                }
+                Some("connect") | Some("spline") => self.skip_value()?,
+                Some(other) => {
+                    return Err(
+                        self.unknown(&format!("{name}.{other}"), "'.timeSamples', '.connect' or '.spline'")
+                    )
+                }
+            }
+        }
+        if self.lexer.next_byte() == Some(b'(') {
+            let attribute = &mut prim.attributes[index];
+            self.metadata(|key, value, _| match (key, value) {
+                ("interpolation", Meta::Text(v)) => attribute.interpolation = Some(v),
+                ("elementSize", Meta::Number(n)) => attribute.element_size = Some(n as i64),
+                _ => {}
+            })?;
+        }
+        Ok(())
+    }
+
+    /// `{ time: value, … }`, keeping only the samples the requested time needs.
+    fn time_samples(
+        &mut self,
+        attribute: &mut Attribute,
+        kind: Kind,
+        components: usize,
+        array: bool,
+        keep: bool,
+        reserve: usize,
+    ) -> ParseResult<()> {
+        let start = self.lexer.line;
+        self.lexer.expect(b'{', "'{' to open time samples")?;
+        loop {
+            match self.lexer.next_byte() {
+                Some(b'}') => {
+                    self.lexer.bump();
+                    return Ok(());
+                }
+                Some(b',') => self.lexer.bump(),
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: time samples opened on line {start} are not closed"
+                    )))
+                }
+                Some(_) => {
+                    let time = self.lexer.f64()?;
+                    self.lexer.expect(b':', "':' after the sample time")?;
+                    let value = self.typed_value(kind, components, array, keep, reserve)?;
+                    if keep {
+                        offer_sample(&mut attribute.samples, self.time, time, value);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A value of the declared type: a scalar or tuple, or an array of them, or `None`.
+    /// `reserve`: elements the array is likely to hold (so large arrays are allocated once).
+    fn typed_value(
+        &mut self,
+        kind: Kind,
+        components: usize,
+        array: bool,
+        keep: bool,
+        reserve: usize,
+    ) -> ParseResult<Value> {
+        if self.lexer.at_identifier() && !self.lexer.at_number() {
+            let word = self.lexer.identifier()?;
+            if word == "None" {
+                return Ok(Value::Blocked);
+            }
+            if kind == Kind::Text && !array {
+                return Ok(Value::Text(vec![word]));
+            }
+            if kind == Kind::Int && !array && (word == "true" || word == "false") {
+                return Ok(Value::Int(vec![(word == "true") as i64]));
+            }
+            if kind == Kind::Other {
+                return Ok(Value::Ignored);
+            }
+            return Err(self.unknown(&word, "a value"));
+        }
+        if kind == Kind::Other || (kind == Kind::Text && !keep) {
+            self.skip_value()?;
+            return Ok(Value::Ignored);
+        }
+        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int) {
+            self.lexer.expect(b'[', "'[' to open an array")?;
+            let value = match (kind, components) {
+                (Kind::F32, 3) => {
+                    let mut data = Vec::with_capacity(reserve);
+                    self.lexer
+                        .bulk_array(3, parse_f32, |v| data.extend(v.chunks_exact(3).map(Vec3::from_slice)))?;
+                    data.shrink_to_fit();
+                    Value::Vec3(data)
+                }
+                (Kind::F32, _) => {
+                    let mut data = Vec::with_capacity(reserve * components);
+                    self.lexer.bulk_array(components, parse_f32, |v| data.extend_from_slice(&v))?;
+                    data.shrink_to_fit();
+                    Value::F32(data)
+                }
+                _ => {
+                    let mut data = Vec::new();
+                    self.lexer.bulk_array(components, parse_i64, |v| data.extend_from_slice(&v))?;
+                    Value::Int(data)
+                }
+            };
+            return Ok(if keep { value } else { Value::Ignored });
+        }
+        let value = match kind {
+            Kind::F32 => {
+                let mut data = Vec::with_capacity(if array { reserve * components } else { components });
+                self.numbers(components, array, &mut |lexer| {
+                    data.push(lexer.f32()?);
+                    Ok(())
+                })?;
+                data.shrink_to_fit();
+                Value::F32(data)
+            }
+            Kind::F64 => {
+                let mut data = Vec::new();
+                self.numbers(components, array, &mut |lexer| {
+                    data.push(lexer.f64()?);
+                    Ok(())
+                })?;
+                Value::F64(data)
+            }
+            Kind::Int => {
+                let mut data = Vec::new();
+                self.numbers(components, array, &mut |lexer| {
+                    data.push(lexer.i64()?);
+                    Ok(())
+                })?;
+                Value::Int(data)
+            }
+            Kind::Text => {
+                let mut data = Vec::new();
+                if array {
+                    self.lexer.expect(b'[', "'[' to open an array")?;
+                    loop {
+                        match self.lexer.next_byte() {
+                            Some(b']') => {
+                                self.lexer.bump();
+                                break;
+                            }
+                            Some(b',') => self.lexer.bump(),
+                            Some(b'@') => data.push(self.lexer.asset()?),
+                            _ => data.push(self.lexer.string()?),
+                        }
+                    }
+                } else if self.lexer.next_byte() == Some(b'@') {
+                    data.push(self.lexer.asset()?);
+                } else {
+                    data.push(self.lexer.string()?);
+                }
+                Value::Text(data)
+            }
+            Kind::Other => unreachable!("handled above"),
+        };
+        Ok(if keep { value } else { Value::Ignored })
+    }
+
+    /// Numbers of a value with `components` per element, as a scalar/tuple or an array of them.
+    fn numbers(
+        &mut self,
+        components: usize,
+        array: bool,
+        read: &mut impl FnMut(&mut Lexer) -> LexResult<()>,
+    ) -> ParseResult<()> {
+        if !array {
+            return self.element(components, read);
+        }
+        let start = self.lexer.line;
+        self.lexer.expect(b'[', "'[' to open an array")?;
+        if self.lexer.eat(b']') {
+            return Ok(());
+        }
+        loop {
+            self.element(components, read)?;
+            self.lexer.skip_ws();
+            match self.lexer.peek() {
+                Some(b',') => {
+                    self.lexer.bump();
+                    if self.lexer.eat(b']') {
+                        return Ok(());
+                    }
+                }
+                Some(b']') => {
+                    self.lexer.bump();
+                    return Ok(());
+                }
+                Some(b) => {
+                    return Err(self.syntax(format!(
+                        "expected ',' or ']' in the array opened on line {start}, found {}",
+                        describe(b)
+                    )))
+                }
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: the array opened on line {start} is not closed"
+                    )))
+                }
+            }
+        }
+    }
+
+    /// One element: a number, or a tuple of exactly `components` numbers (nested for matrices).
+    fn element(
+        &mut self,
+        components: usize,
+        read: &mut impl FnMut(&mut Lexer) -> LexResult<()>,
+    ) -> ParseResult<()> {
+        if components == 1 {
+            read(&mut self.lexer)?;
+            return Ok(());
+        }
+        let line = self.lexer.line;
+        let count = self.tuple(read)?;
+        if count != components {
+            return Err(ParseError::Syntax(LexError {
+                line,
+                message: format!("expected {components} numbers in a tuple, found {count}"),
+            }));
+        }
+        Ok(())
+    }
+
+    /// `( n, n, … )` or nested tuples; returns how many numbers it held.
+    fn tuple(&mut self, read: &mut impl FnMut(&mut Lexer) -> LexResult<()>) -> ParseResult<usize> {
+        self.lexer.expect(b'(', "'(' to open a tuple")?;
+        let mut count = 0;
+        loop {
+            if self.lexer.next_byte() == Some(b'(') {
+                count += self.tuple(read)?;
+            } else {
+                read(&mut self.lexer)?;
+                count += 1;
+            }
+            self.lexer.skip_ws();
+            match self.lexer.peek() {
+                Some(b',') => {
+                    self.lexer.bump();
+                    if self.lexer.eat(b')') {
+                        return Ok(count);
+                    }
+                }
+                Some(b')') => {
+                    self.lexer.bump();
+                    return Ok(count);
+                }
+                Some(b) => {
+                    return Err(self.syntax(format!("expected ',' or ')' in a tuple, found {}", describe(b))))
+                }
+                None => return Err(self.syntax("unexpected end of file inside a tuple")),
+            }
+        }
+    }
+}
+
+/// Vertices the prim's `curveVertexCounts` announce (0 if not read yet), capped so a hostile
+/// count cannot make the parser reserve more than a plausible array.
+fn vertex_hint(prim: &Prim) -> usize {
+    const CAP: usize = 1 << 25;
+    match prim.attribute("curveVertexCounts").and_then(|a| a.default.as_ref()) {
+        Some(Value::Int(counts)) => {
+            counts.iter().map(|&c| c.clamp(0, CAP as i64) as usize).sum::<usize>().min(CAP)
+        }
+        _ => 0,
+    }
+}
+
+/// Attributes whose values the groom reader uses; others are checked for syntax and dropped.
+fn wanted(name: &str) -> bool {
+    matches!(name, "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "xformOpOrder")
+        || name.starts_with("primvars:")
+        || name.starts_with("xformOp:")
+}
+
+/// Keeps, among all samples offered, the ones value resolution at `requested` needs: with no
+/// requested time the earliest sample; otherwise the latest at or before it and the earliest after.
+pub fn offer_sample(kept: &mut Vec<(f64, Value)>, requested: Option<f64>, time: f64, value: Value) {
+    match requested {
+        None => {
+            if kept.first().is_none_or(|(t, _)| time < *t) {
+                kept.clear();
+                kept.push((time, value));
+            }
+        }
+        Some(at) => {
+            let before = |t: f64| t <= at;
+            let slot = kept.iter().position(|(t, _)| before(*t) == before(time));
+            match slot {
+                None => kept.push((time, value)),
+                Some(i) => {
+                    let better = if before(time) { time > kept[i].0 } else { time < kept[i].0 };
+                    if better {
+                        kept[i] = (time, value);
+                    }
+                }
+            }
+            kept.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stage whose points span many read windows, with comments holding `)`, `,` and `]`.
+    fn big_stage(bad_at: Option<usize>) -> (String, Vec<Vec3>, usize) {
+        let mut text = String::from("#usda 1.0\ndef BasisCurves \"C\"\n{\n    point3f[] points = [");
+        let mut points = Vec::new();
+        let mut bad_line = 0;
+        for i in 0..200_000 {
+            let p = Vec3::new(i as f32 * 0.001, -(i as f32) / 3.0, 1.0 / (i as f32 + 1.0));
+            points.push(p);
+            if i > 0 {
+                text.push_str(", ");
+            }
+            if i % 1000 == 0 {
+                text.push_str("# a comment with ), ] and , inside\n");
+            }
+            if Some(i) == bad_at {
+                bad_line = text.matches('\n').count() + 1;
+                text.push_str("(1, 2, 3x)");
+            } else {
+                text.push_str(&format!("({}, {}, {})", p.x, p.y, p.z));
+            }
+        }
+        text.push_str("]\n    float x = 1\n}\n");
+        (text, points, bad_line)
+    }
+
+    #[test]
+    fn large_arrays_parse_across_windows_and_threads_exactly() {
+        let (text, points, _) = big_stage(None);
+        assert!(text.len() > 4 * super::super::lexer::tests_window());
+        let layer = parse(text.as_bytes(), None).unwrap();
+        let attribute = layer.prims[0].attribute("points").unwrap();
+        assert_eq!(attribute.default, Some(Value::Vec3(points)));
+        assert_eq!(layer.lines, text.matches('\n').count() as u32 + 1);
+    }
+
+    #[test]
+    fn an_error_deep_in_a_large_array_names_its_line() {
+        let (text, _, line) = big_stage(Some(150_001));
+        match parse(text.as_bytes(), None) {
+            Err(ParseError::Syntax(e)) => {
+                assert_eq!(e.line as usize, line, "{}", e.message);
+                assert!(e.message.contains("3x"), "{}", e.message);
+            }
+            other => panic!("expected a syntax error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn time_samples_keep_only_what_the_requested_time_needs() {
+        let mut kept = Vec::new();
+        for t in [3.0, 1.0, 4.0, 2.0] {
+            offer_sample(&mut kept, Some(2.5), t, Value::F32(vec![t as f32]));
+        }
+        assert_eq!(kept.iter().map(|(t, _)| *t).collect::<Vec<_>>(), vec![2.0, 3.0]);
+        let mut earliest = Vec::new();
+        for t in [3.0, 1.0, 4.0] {
+            offer_sample(&mut earliest, None, t, Value::F32(vec![t as f32]));
+        }
+        assert_eq!(earliest.iter().map(|(t, _)| *t).collect::<Vec<_>>(), vec![1.0]);
+    }
+}

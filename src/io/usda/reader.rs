@@ -1,0 +1,712 @@
+//! From a parsed `.usda` layer to a [`Groom`]: walks the prim tree, composes `xformOp`
+//! transforms, gathers every `BasisCurves` prim (merging several into one groom), resolves
+//! primvar interpolation and indices, and converts to metres and Y up.
+use std::path::Path;
+
+use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
+
+use super::parser::{Attribute, Layer, Prim, Value};
+use super::{names, DEFAULT_WIDTH};
+use crate::error::{Error, Result};
+use crate::groom::{Attribute as GroomAttribute, AttributeRate, CurveBasis, Groom};
+use crate::io::{ImportOptions, UpAxis};
+
+/// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
+const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
+
+/// One `BasisCurves` prim's curves, transformed to coif's space (metres, Y up).
+struct Curves {
+    path: String,
+    line: u32,
+    basis: CurveBasis,
+    counts: Vec<u32>,
+    points: Vec<Vec3>,
+    widths: Vec<f32>,
+    strand_ids: Option<Vec<u32>>,
+    root_uvs: Option<Vec<[f32; 2]>>,
+    guides: Option<Vec<bool>>,
+    attributes: Vec<GroomAttribute>,
+}
+
+/// Builds the groom a layer describes, at `time` (see [`value_at`]).
+pub fn groom_from_layer(
+    layer: Layer,
+    path: &Path,
+    options: &ImportOptions,
+    time: Option<f64>,
+) -> Result<Groom> {
+    let meters_per_unit = match layer.meters_per_unit {
+        Some(m) if m.is_finite() && m > 0.0 => m,
+        Some(m) => {
+            return Err(Error::format(path, format!("metersPerUnit is {m}; it must be a positive number")))
+        }
+        None => options.meters_per_unit.map(f64::from).unwrap_or(FALLBACK_METERS_PER_UNIT),
+    };
+    let up_axis = match layer.up_axis.as_deref() {
+        Some("Y") => UpAxis::Y,
+        Some("Z") => UpAxis::Z,
+        Some(other) => {
+            return Err(Error::format(path, format!("upAxis is \"{other}\"; USD allows \"Y\" or \"Z\"")))
+        }
+        None => options.up_axis.unwrap_or_default(),
+    };
+    // Applied after each prim's world transform: rotate Z up to Y up, then scale to metres.
+    let mut stage = DMat4::from_scale(DVec3::splat(meters_per_unit));
+    if up_axis == UpAxis::Z {
+        stage *=
+            DMat4::from_cols(DVec3::X.extend(0.0), DVec3::NEG_Z.extend(0.0), DVec3::Y.extend(0.0), DVec4::W);
+    }
+    let layer_lines = layer.lines;
+    let mut walker = Walker { path, time, stage, found: Vec::new() };
+    for prim in layer.prims {
+        walker.visit(prim, "", DMat4::IDENTITY)?;
+    }
+    merge(walker.found, path, layer_lines)
+}
+
+struct Walker<'a> {
+    path: &'a Path,
+    time: Option<f64>,
+    stage: DMat4,
+    found: Vec<Curves>,
+}
+
+impl Walker<'_> {
+    fn visit(&mut self, mut prim: Prim, parent_path: &str, parent: DMat4) -> Result<()> {
+        if !prim.defined || !prim.active {
+            return Ok(());
+        }
+        let prim_path = format!("{parent_path}/{}", prim.name);
+        let (local, reset) =
+            local_transform(&prim, self.time).map_err(|m| self.error(&prim_path, prim.line, m))?;
+        // `!resetXformStack!`: the ancestors' transforms do not apply to this prim.
+        let world = if reset { local } else { parent * local };
+        let children = std::mem::take(&mut prim.children);
+        if prim.type_name == "BasisCurves" {
+            if let Some(curves) = self.curves(&mut prim, &prim_path, world)? {
+                self.found.push(curves);
+            }
+        }
+        for child in children {
+            self.visit(child, &prim_path, world)?;
+        }
+        Ok(())
+    }
+
+    fn error(&self, prim_path: &str, line: u32, message: impl std::fmt::Display) -> Error {
+        Error::format(self.path, format!("line {line}: prim <{prim_path}>: {message}"))
+    }
+
+    /// Reads one `BasisCurves` prim; `None` when it has no points (an empty placeholder).
+    fn curves(&self, prim: &mut Prim, prim_path: &str, world: DMat4) -> Result<Option<Curves>> {
+        let time = self.time;
+        let at_prim = |line: u32, message: String| self.error(prim_path, line, message);
+        let token = |prim: &Prim, name: &str, fallback: &str| -> Result<String> {
+            match prim.attribute(name).and_then(|a| value_at(a, time).map(|v| (a.line, v))) {
+                None => Ok(fallback.to_string()),
+                Some((_, Value::Text(t))) if t.len() == 1 => Ok(t[0].clone()),
+                Some((line, _)) => Err(at_prim(line, format!("'{name}' must be a token"))),
+            }
+        };
+        let curve_type = token(prim, "type", "cubic")?;
+        let basis_name = token(prim, "basis", "bezier")?;
+        let wrap = token(prim, "wrap", "nonperiodic")?;
+        let basis = match (curve_type.as_str(), basis_name.as_str()) {
+            ("linear", _) => CurveBasis::Linear,
+            ("cubic", "bezier") => CurveBasis::Bezier,
+            ("cubic", "bspline") => CurveBasis::BSpline,
+            ("cubic", "catmullRom") => CurveBasis::CatmullRom,
+            ("cubic", other) => {
+                return Err(at_prim(prim.line, format!("unsupported cubic basis \"{other}\"")))
+            }
+            (other, _) => return Err(at_prim(prim.line, format!("unknown curve type \"{other}\""))),
+        };
+        if wrap == "periodic" {
+            return Err(at_prim(
+                prim.line,
+                "periodic (closed) curves are not hair strands; coif reads nonperiodic curves".into(),
+            ));
+        }
+        let pinned = wrap == "pinned";
+
+        let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
+            return Ok(None);
+        };
+        let points_line = points_attr.line;
+        let points = match take_value(points_attr, time) {
+            None => return Ok(None),
+            Some(Value::Vec3(points)) => points,
+            // point3d[] and other numeric spellings of 3-vectors.
+            Some(other) => match other.to_f32() {
+                Some(flat) if flat.len() % 3 == 0 => flat.chunks_exact(3).map(Vec3::from_slice).collect(),
+                _ => return Err(at_prim(points_line, "'points' must be a point3f[] array".into())),
+            },
+        };
+        let counts_attr = prim.attribute("curveVertexCounts");
+        let counts_line = counts_attr.map_or(prim.line, |a| a.line);
+        let counts: Vec<u32> = match counts_attr.and_then(|a| value_at(a, time)) {
+            Some(Value::Int(counts)) => counts
+                .iter()
+                .map(|&c| u32::try_from(c).ok().filter(|&c| c > 0))
+                .collect::<Option<_>>()
+                .ok_or_else(|| {
+                    at_prim(counts_line, "curveVertexCounts holds a count that is not positive".into())
+                })?,
+            Some(_) => return Err(at_prim(counts_line, "'curveVertexCounts' must be an int[] array".into())),
+            None => return Err(at_prim(points_line, "points without curveVertexCounts".into())),
+        };
+        let total: u64 = counts.iter().map(|&c| c as u64).sum();
+        if total != points.len() as u64 {
+            return Err(at_prim(
+                points_line,
+                format!("curveVertexCounts add up to {total} points but 'points' has {}", points.len()),
+            ));
+        }
+        let layout = Layout { counts: &counts, points: points.len(), basis, pinned };
+
+        let widths = match prim.attributes.iter_mut().find(|a| a.name == "widths") {
+            None => None,
+            Some(attr) => {
+                let line = attr.line;
+                let interpolation = attr.interpolation.clone().unwrap_or_else(|| "vertex".into());
+                match take_value(attr, time) {
+                    None => None,
+                    Some(value) => {
+                        let values = value
+                            .to_f32()
+                            .ok_or_else(|| at_prim(line, "'widths' must be a float[] array".into()))?;
+                        let (rate, data) = layout
+                            .resolve(values, 1, &interpolation)
+                            .map_err(|m| at_prim(line, format!("widths: {m}")))?;
+                        Some(layout.to_vertex(rate, 1, data))
+                    }
+                }
+            }
+        };
+
+        let mut curves = Curves {
+            path: prim_path.to_string(),
+            line: prim.line,
+            basis,
+            counts: counts.clone(),
+            points,
+            widths: Vec::new(),
+            strand_ids: None,
+            root_uvs: None,
+            guides: None,
+            attributes: Vec::new(),
+        };
+        let primvar_names: Vec<String> = prim
+            .attributes
+            .iter()
+            .filter_map(|a| a.name.strip_prefix("primvars:"))
+            .filter(|n| !n.ends_with(":indices"))
+            .map(str::to_string)
+            .collect();
+        for name in primvar_names {
+            let indices = prim
+                .attribute(&format!("primvars:{name}:indices"))
+                .and_then(|a| value_at(a, time))
+                .map(|v| v.to_f64());
+            let attr = prim.attributes.iter_mut().find(|a| a.name == format!("primvars:{name}")).unwrap();
+            let line = attr.line;
+            let interpolation = attr.interpolation.clone().unwrap_or_else(|| "constant".into());
+            let (kind_components, element_size) =
+                (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
+            let Some(value) = take_value(attr, time) else { continue };
+            let Some(mut values) = value.to_f32() else { continue }; // strings, tokens: not groom data
+            let components = kind_components * element_size.max(1) as usize;
+            if components > 4 {
+                continue; // the groom model carries at most 4 components per element
+            }
+            if let Some(indices) = indices {
+                let indices =
+                    indices.ok_or_else(|| at_prim(line, format!("primvars:{name}:indices must be int[]")))?;
+                values = expand_indices(&values, &indices, components)
+                    .map_err(|m| at_prim(line, format!("primvars:{name}:indices: {m}")))?;
+            }
+            let (rate, data) = layout
+                .resolve(values, components, &interpolation)
+                .map_err(|m| at_prim(line, format!("primvars:{name}: {m}")))?;
+            match (name.as_str(), rate, components) {
+                (names::ST, AttributeRate::Strand, 2) => {
+                    curves.root_uvs = Some(data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+                }
+                (names::GROOM_ID, AttributeRate::Strand, 1) => {
+                    let ids = data
+                        .iter()
+                        .map(|&v| (v >= 0.0 && v.fract() == 0.0).then_some(v as u32))
+                        .collect::<Option<_>>();
+                    curves.strand_ids = Some(ids.ok_or_else(|| {
+                        at_prim(line, "groom_id values must be non-negative integers".into())
+                    })?);
+                }
+                (names::GROOM_GUIDE, AttributeRate::Strand, 1) => {
+                    curves.guides = Some(data.iter().map(|&v| v != 0.0).collect());
+                }
+                _ => {
+                    let groom_name = names::attribute_for_primvar(&name);
+                    curves.attributes.push(GroomAttribute::new(groom_name, rate, components, data));
+                }
+            }
+        }
+
+        // World transform composed with the stage's units and up axis.
+        let to_coif = self.stage * world;
+        if to_coif != DMat4::IDENTITY {
+            let width_scale = to_coif.determinant().abs().cbrt() as f32;
+            let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
+            curves.points.iter_mut().for_each(|p| *p = transform(*p));
+            for attribute in
+                curves.attributes.iter_mut().filter(|a| a.name == names::REST && a.components == 3)
+            {
+                for c in attribute.data.chunks_exact_mut(3) {
+                    let p = transform(Vec3::from_slice(c));
+                    c.copy_from_slice(&p.to_array());
+                }
+            }
+            curves.widths = match widths {
+                Some(mut w) => {
+                    w.iter_mut().for_each(|w| *w *= width_scale);
+                    w
+                }
+                None => vec![DEFAULT_WIDTH; curves.points.len()],
+            };
+        } else {
+            curves.widths = widths.unwrap_or_else(|| vec![DEFAULT_WIDTH; curves.points.len()]);
+        }
+        Ok(Some(curves))
+    }
+}
+
+/// How many values each interpolation needs, and how to turn them into per-vertex values.
+struct Layout<'a> {
+    counts: &'a [u32],
+    points: usize,
+    basis: CurveBasis,
+    pinned: bool,
+}
+
+impl Layout<'_> {
+    /// Values per curve for `varying` interpolation (one per segment end).
+    fn varying_count(&self, vertices: u32) -> u32 {
+        match (self.basis, self.pinned) {
+            (CurveBasis::Linear, _) => vertices,
+            (CurveBasis::Bezier, _) => (vertices.saturating_sub(1)) / 3 + 1,
+            (_, true) => vertices,
+            (_, false) => vertices.saturating_sub(2).max(1),
+        }
+    }
+
+    /// Checks the value count against the interpolation and returns per-strand or per-vertex data.
+    fn resolve(
+        &self,
+        values: Vec<f32>,
+        components: usize,
+        interpolation: &str,
+    ) -> std::result::Result<(AttributeRate, Vec<f32>), String> {
+        let strands = self.counts.len();
+        let found = values.len() / components;
+        let expect = |n: usize| {
+            if found == n {
+                Ok(())
+            } else {
+                Err(format!("{interpolation} interpolation needs {n} values, found {found}"))
+            }
+        };
+        match interpolation {
+            "constant" => {
+                expect(1)?;
+                Ok((AttributeRate::Strand, values.repeat(strands)))
+            }
+            "uniform" => {
+                expect(strands)?;
+                Ok((AttributeRate::Strand, values))
+            }
+            "vertex" => {
+                expect(self.points)?;
+                Ok((AttributeRate::Vertex, values))
+            }
+            "varying" | "faceVarying" => {
+                let needed: usize = self.counts.iter().map(|&c| self.varying_count(c) as usize).sum();
+                expect(needed)?;
+                if needed == self.points {
+                    return Ok((AttributeRate::Vertex, values));
+                }
+                let mut out = Vec::with_capacity(self.points * components);
+                let mut start = 0;
+                for &count in self.counts {
+                    let m = self.varying_count(count) as usize;
+                    let curve = &values[start * components..(start + m) * components];
+                    for i in 0..count as usize {
+                        // Spread the segment-end values evenly over the control points.
+                        let u = if count > 1 { i as f32 * (m - 1) as f32 / (count - 1) as f32 } else { 0.0 };
+                        let (k, t) = ((u.floor() as usize).min(m - 1), u - u.floor());
+                        let next = (k + 1).min(m - 1);
+                        for c in 0..components {
+                            let (a, b) = (curve[k * components + c], curve[next * components + c]);
+                            out.push(if t == 0.0 { a } else { a + (b - a) * t });
+                        }
+                    }
+                    start += m;
+                }
+                Ok((AttributeRate::Vertex, out))
+            }
+            other => Err(format!("unknown interpolation \"{other}\"")),
+        }
+    }
+
+    /// Per-vertex values from per-strand or per-vertex ones.
+    fn to_vertex(&self, rate: AttributeRate, components: usize, data: Vec<f32>) -> Vec<f32> {
+        match rate {
+            AttributeRate::Vertex => data,
+            AttributeRate::Strand => {
+                let mut out = Vec::with_capacity(self.points * components);
+                for (s, &count) in self.counts.iter().enumerate() {
+                    for _ in 0..count {
+                        out.extend_from_slice(&data[s * components..(s + 1) * components]);
+                    }
+                }
+                out
+            }
+        }
+    }
+}
+
+fn expand_indices(
+    values: &[f32],
+    indices: &[f64],
+    components: usize,
+) -> std::result::Result<Vec<f32>, String> {
+    let available = values.len() / components;
+    let mut out = Vec::with_capacity(indices.len() * components);
+    for &index in indices {
+        if !(index >= 0.0 && (index as usize) < available) {
+            return Err(format!("index {index} is outside the {available} values"));
+        }
+        let i = index as usize;
+        out.extend_from_slice(&values[i * components..(i + 1) * components]);
+    }
+    Ok(out)
+}
+
+/// The value an attribute has at `time`: with a time, the time samples around it (linearly
+/// interpolated between two, held before the first and after the last) or else the default;
+/// without a time, the default or else the earliest sample. `None` when blocked or unauthored.
+pub fn value_at(attribute: &Attribute, time: Option<f64>) -> Option<Value> {
+    let from_samples = |samples: &[(f64, Value)]| -> Option<Value> {
+        match (samples, time) {
+            ([], _) => None,
+            ([(t0, a), (t1, b)], Some(t)) if *t0 <= t && t < *t1 => Some(lerp(a, b, (t - t0) / (t1 - t0))),
+            ([(t0, a), ..], Some(t)) if *t0 <= t => Some(a.clone()),
+            ([(_, first), ..], _) => Some(first.clone()),
+        }
+    };
+    let value = match time {
+        Some(_) if !attribute.samples.is_empty() => from_samples(&attribute.samples),
+        _ => attribute.default.clone().or_else(|| from_samples(&attribute.samples)),
+    }?;
+    (value != Value::Blocked).then_some(value)
+}
+
+/// Like [`value_at`] but moves large values out of the attribute instead of copying them
+/// (only an interpolated value is computed afresh).
+fn take_value(attribute: &mut Attribute, time: Option<f64>) -> Option<Value> {
+    let use_default = match time {
+        Some(_) => attribute.samples.is_empty(),
+        None => attribute.default.is_some(),
+    };
+    let value = if use_default {
+        attribute.default.take()?
+    } else {
+        let between = match (attribute.samples.as_slice(), time) {
+            ([(t0, _), (t1, _)], Some(t)) => *t0 < t && t < *t1,
+            _ => false,
+        };
+        if between {
+            return value_at(attribute, time);
+        }
+        let held = match time {
+            // The latest sample at or before the time, else the first.
+            Some(t) => attribute.samples.iter().rposition(|(s, _)| *s <= t).unwrap_or(0),
+            None => 0,
+        };
+        std::mem::take(&mut attribute.samples).into_iter().nth(held)?.1
+    };
+    (value != Value::Blocked).then_some(value)
+}
+
+fn lerp(a: &Value, b: &Value, t: f64) -> Value {
+    if t == 0.0 {
+        return a.clone();
+    }
+    match (a, b) {
+        (Value::Vec3(a), Value::Vec3(b)) if a.len() == b.len() => {
+            Value::Vec3(a.iter().zip(b).map(|(a, b)| a.as_dvec3().lerp(b.as_dvec3(), t).as_vec3()).collect())
+        }
+        (Value::F32(a), Value::F32(b)) if a.len() == b.len() => Value::F32(
+            a.iter().zip(b).map(|(&a, &b)| (a as f64 + (b as f64 - a as f64) * t) as f32).collect(),
+        ),
+        (Value::F64(a), Value::F64(b)) if a.len() == b.len() => {
+            Value::F64(a.iter().zip(b).map(|(&a, &b)| a + (b - a) * t).collect())
+        }
+        _ => a.clone(),
+    }
+}
+
+/// A prim's local transform from its `xformOpOrder`, and whether it resets the parent stack.
+fn local_transform(prim: &Prim, time: Option<f64>) -> std::result::Result<(DMat4, bool), String> {
+    let Some(order) = prim.attribute("xformOpOrder").and_then(|a| value_at(a, time)) else {
+        return Ok((DMat4::IDENTITY, false));
+    };
+    let Value::Text(order) = order else { return Err("xformOpOrder must be a token[] array".into()) };
+    let mut matrix = DMat4::IDENTITY;
+    let mut reset = false;
+    for op in &order {
+        if op == "!resetXformStack!" {
+            reset = true;
+            matrix = DMat4::IDENTITY;
+            continue;
+        }
+        let (name, invert) = match op.strip_prefix("!invert!") {
+            Some(name) => (name, true),
+            None => (op.as_str(), false),
+        };
+        let attribute = prim
+            .attribute(name)
+            .ok_or_else(|| format!("xformOpOrder names '{name}' but the prim has no such attribute"))?;
+        let values = value_at(attribute, time)
+            .and_then(|v| v.to_f64())
+            .ok_or_else(|| format!("'{name}' (line {}) has no numeric value", attribute.line))?;
+        let mut op_matrix =
+            xform_op(name, &values).map_err(|m| format!("'{name}' (line {}): {m}", attribute.line))?;
+        if invert {
+            op_matrix = op_matrix.inverse();
+        }
+        // The first op in the order is the outermost (applied last to points).
+        matrix *= op_matrix;
+    }
+    if !matrix.is_finite() {
+        return Err("the transform is not finite".into());
+    }
+    Ok((matrix, reset))
+}
+
+fn xform_op(name: &str, v: &[f64]) -> std::result::Result<DMat4, String> {
+    let kind =
+        name.strip_prefix("xformOp:").and_then(|rest| rest.split(':').next()).ok_or("not an xformOp")?;
+    let need = |n: usize| {
+        if v.len() == n {
+            Ok(())
+        } else {
+            Err(format!("expected {n} numbers, found {}", v.len()))
+        }
+    };
+    let axis_rotation = |axis: u8, degrees: f64| {
+        let radians = degrees.to_radians();
+        match axis {
+            b'X' => DMat4::from_rotation_x(radians),
+            b'Y' => DMat4::from_rotation_y(radians),
+            _ => DMat4::from_rotation_z(radians),
+        }
+    };
+    Ok(match kind {
+        "translate" => {
+            need(3)?;
+            DMat4::from_translation(DVec3::from_slice(v))
+        }
+        "scale" => {
+            need(3)?;
+            DMat4::from_scale(DVec3::from_slice(v))
+        }
+        "rotateX" | "rotateY" | "rotateZ" => {
+            need(1)?;
+            axis_rotation(kind.as_bytes()[6], v[0])
+        }
+        "orient" => {
+            need(4)?;
+            // USD writes quaternions real part first.
+            DMat4::from_quat(DQuat::from_xyzw(v[1], v[2], v[3], v[0]).normalize())
+        }
+        "transform" => {
+            need(16)?;
+            // USD matrices are row-major for row vectors; read as columns they are the
+            // column-vector matrix glam uses.
+            DMat4::from_cols_slice(v)
+        }
+        _ if kind.len() == 9 && kind.starts_with("rotate") => {
+            need(3)?;
+            // rotateABC: about A first, then B, then C; angles given as (x, y, z).
+            let mut m = DMat4::IDENTITY;
+            for &axis in &kind.as_bytes()[6..] {
+                let angle = match axis {
+                    b'X' => v[0],
+                    b'Y' => v[1],
+                    b'Z' => v[2],
+                    _ => return Err(format!("unknown rotation order '{kind}'")),
+                };
+                m = axis_rotation(axis, angle) * m;
+            }
+            m
+        }
+        other => return Err(format!("unknown transform operation '{other}'")),
+    })
+}
+
+/// One groom from all curve prims. Attributes the prims do not all carry are dropped; guide
+/// flags default to "not a guide"; strand ids are renumbered unless every prim has them.
+fn merge(mut found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
+    if found.is_empty() {
+        return Err(Error::format(
+            path,
+            format!("line {lines}: the stage ends without a BasisCurves prim with points"),
+        ));
+    }
+    if let Some(other) = found.iter().find(|c| c.basis != found[0].basis) {
+        return Err(Error::format(
+            path,
+            format!(
+                "line {}: prim <{}> has {:?} curves but <{}> (line {}) has {:?}; coif needs one curve basis per groom",
+                other.line, other.path, other.basis, found[0].path, found[0].line, found[0].basis
+            ),
+        ));
+    }
+    let basis = found[0].basis;
+    let mut groom = Groom { basis, strand_offsets: vec![0], ..Default::default() };
+    if found.len() == 1 {
+        let curves = found.pop().unwrap();
+        let mut offset = 0u32;
+        groom.strand_offsets.extend(curves.counts.iter().map(|&c| {
+            offset += c;
+            offset
+        }));
+        groom.strand_ids = curves.strand_ids.unwrap_or_else(|| (0..curves.counts.len() as u32).collect());
+        groom.points = curves.points;
+        groom.widths = curves.widths;
+        groom.root_uvs = curves.root_uvs;
+        groom.guides = curves.guides;
+        for attribute in curves.attributes {
+            groom.set_attribute(attribute);
+        }
+        return Ok(groom);
+    }
+    let all_ids = found.iter().all(|c| c.strand_ids.is_some());
+    let all_uvs = found.iter().all(|c| c.root_uvs.is_some());
+    let any_guides = found.iter().any(|c| c.guides.is_some());
+    let mut root_uvs = Vec::new();
+    let mut guides = Vec::new();
+    for curves in &found {
+        let base = groom.points.len() as u32;
+        groom.strand_offsets.extend(curves.counts.iter().scan(base, |offset, &c| {
+            *offset += c;
+            Some(*offset)
+        }));
+        groom.points.extend_from_slice(&curves.points);
+        groom.widths.extend_from_slice(&curves.widths);
+        if all_ids {
+            groom.strand_ids.extend_from_slice(curves.strand_ids.as_ref().unwrap());
+        }
+        if all_uvs {
+            root_uvs.extend_from_slice(curves.root_uvs.as_ref().unwrap());
+        }
+        if any_guides {
+            match &curves.guides {
+                Some(g) => guides.extend_from_slice(g),
+                None => guides.extend(std::iter::repeat_n(false, curves.counts.len())),
+            }
+        }
+    }
+    if !all_ids {
+        groom.strand_ids = (0..groom.strand_count() as u32).collect();
+    }
+    groom.root_uvs = all_uvs.then_some(root_uvs);
+    groom.guides = any_guides.then_some(guides);
+    // Attributes every prim carries with the same component count; per-strand ones become
+    // per-vertex where the prims disagree on the rate.
+    for first in &found[0].attributes {
+        let parts: Option<Vec<(&Curves, &GroomAttribute)>> = found
+            .iter()
+            .map(|c| {
+                c.attributes
+                    .iter()
+                    .find(|a| a.name == first.name && a.components == first.components)
+                    .map(|a| (c, a))
+            })
+            .collect();
+        let Some(parts) = parts else { continue };
+        let rate =
+            if parts.iter().all(|(_, a)| a.rate == first.rate) { first.rate } else { AttributeRate::Vertex };
+        let mut data = Vec::new();
+        for (curves, attribute) in parts {
+            if attribute.rate == rate {
+                data.extend_from_slice(&attribute.data);
+            } else {
+                let layout =
+                    Layout { counts: &curves.counts, points: curves.points.len(), basis, pinned: false };
+                data.extend(layout.to_vertex(attribute.rate, attribute.components, attribute.data.clone()));
+            }
+        }
+        groom.set_attribute(GroomAttribute::new(first.name.clone(), rate, first.components, data));
+    }
+    Ok(groom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::usda::{read, ReadOutcome};
+
+    fn read_text(text: &str) -> Groom {
+        match read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None).unwrap() {
+            ReadOutcome::Groom(groom) => groom,
+            ReadOutcome::NeedsComposition { .. } => panic!("no composition here"),
+        }
+    }
+
+    #[test]
+    fn varying_values_on_cubic_curves_spread_over_the_control_points() {
+        // A 4-point B-spline has 2 segment ends: 0.1 at the start, 0.4 at the end.
+        let groom = read_text(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"C\"\n{\n    uniform token type = \"cubic\"\n    uniform token basis = \"bspline\"\n    int[] curveVertexCounts = [4]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)]\n    float[] widths = [0.1, 0.4] (\n        interpolation = \"varying\"\n    )\n}\n",
+        );
+        assert_eq!(groom.basis, CurveBasis::BSpline);
+        let expected = [0.1f32, 0.2, 0.3, 0.4];
+        for (w, e) in groom.widths.iter().zip(expected) {
+            assert!((w - e).abs() < 1e-6, "{:?}", groom.widths);
+        }
+    }
+
+    #[test]
+    fn unauthored_units_follow_usd_and_curve_type_falls_back_to_cubic_bezier() {
+        // No metersPerUnit: USD's fallback is centimetres. No type: cubic Bezier, per the schema.
+        let groom = read_text(
+            "#usda 1.0\ndef BasisCurves \"C\"\n{\n    int[] curveVertexCounts = [4]\n    point3f[] points = [(0, 0, 0), (0, 100, 0), (0, 200, 0), (0, 300, 0)]\n}\n",
+        );
+        assert_eq!(groom.basis, CurveBasis::Bezier);
+        assert_eq!(groom.points[3], Vec3::new(0.0, 3.0, 0.0));
+        assert_eq!(groom.widths, vec![crate::io::usda::DEFAULT_WIDTH; 4]);
+    }
+
+    #[test]
+    fn xform_ops_compose_outermost_first() {
+        let values = |v: &[f64]| v.to_vec();
+        let translate = xform_op("xformOp:translate", &values(&[1.0, 0.0, 0.0])).unwrap();
+        let rotate = xform_op("xformOp:rotateZ", &values(&[90.0])).unwrap();
+        // ["translate", "rotateZ"]: rotate first, then translate.
+        let p = (translate * rotate).transform_point3(DVec3::X);
+        assert!((p - DVec3::new(1.0, 1.0, 0.0)).length() < 1e-12, "{p}");
+        let xyz = xform_op("xformOp:rotateXYZ", &values(&[90.0, 0.0, 90.0])).unwrap();
+        // X first: Y goes to Z; then Z about Z stays Z.
+        assert!((xyz.transform_point3(DVec3::Y) - DVec3::Z).length() < 1e-12);
+        let matrix = xform_op(
+            "xformOp:transform",
+            &values(&[1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 5., 6., 7., 1.]),
+        )
+        .unwrap();
+        assert_eq!(
+            matrix.transform_point3(DVec3::ZERO),
+            DVec3::new(5.0, 6.0, 7.0),
+            "translation in the last row"
+        );
+    }
+}

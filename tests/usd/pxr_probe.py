@@ -1,0 +1,177 @@
+"""Test helper: what usd-core (pxr) itself sees in a stage, as JSON, and stages authored by pxr.
+
+  pxr_probe.py dump STAGE [--time T]     curves, primvars, metadata, extents, validation findings
+  pxr_probe.py author-transformed OUT    nested Xforms, cm units, Z up, two curve prims, samples
+  pxr_probe.py author-composed DIR       a stage that references a layer with a variant set
+"""
+import json
+import sys
+
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdValidation, Vt
+
+
+def floats(values):
+    out = []
+    for v in values:
+        if isinstance(v, (int, float)):
+            out.append(float(v))
+        else:
+            out.extend(float(x) for x in v)
+    return out
+
+
+def dump(path, time=None):
+    stage = Usd.Stage.Open(path)
+    code = Usd.TimeCode.Default() if time is None else Usd.TimeCode(time)
+    result = {
+        "defaultPrim": stage.GetRootLayer().defaultPrim,
+        "upAxis": UsdGeom.GetStageUpAxis(stage),
+        "metersPerUnit": UsdGeom.GetStageMetersPerUnit(stage),
+        "hasAuthoredMetersPerUnit": UsdGeom.StageHasAuthoredMetersPerUnit(stage),
+        "startTimeCode": stage.GetStartTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
+        "endTimeCode": stage.GetEndTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
+        "timeCodesPerSecond": stage.GetTimeCodesPerSecond(),
+        "curves": [],
+    }
+    cache = UsdGeom.XformCache(code)
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdGeom.BasisCurves):
+            continue
+        curves = UsdGeom.BasisCurves(prim)
+        points = curves.GetPointsAttr().Get(code)
+        world = cache.GetLocalToWorldTransform(prim)
+        entry = {
+            "path": str(prim.GetPath()),
+            "parent": str(prim.GetParent().GetTypeName()),
+            "type": curves.GetTypeAttr().Get(),
+            "basis": curves.GetBasisAttr().Get(),
+            "wrap": curves.GetWrapAttr().Get(),
+            "counts": list(curves.GetCurveVertexCountsAttr().Get(code)),
+            "points": floats(points),
+            "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points),
+            "widths": floats(curves.GetWidthsAttr().Get(code) or []),
+            "widthsInterpolation": curves.GetWidthsInterpolation(),
+            "pointsTimeSamples": curves.GetPointsAttr().GetTimeSamples(),
+            "extent": floats(curves.GetExtentAttr().Get(code) or []),
+            "computedExtent": floats(UsdGeom.Boundable.ComputeExtentFromPlugins(curves, code) or []),
+            "primvars": {},
+        }
+        for primvar in UsdGeom.PrimvarsAPI(prim).GetAuthoredPrimvars():
+            value = primvar.ComputeFlattened(code)
+            entry["primvars"][primvar.GetPrimvarName()] = {
+                "type": str(primvar.GetTypeName()),
+                "interpolation": primvar.GetInterpolation(),
+                "elementSize": primvar.GetElementSize(),
+                "values": floats(value) if value is not None else None,
+            }
+        result["curves"].append(entry)
+    validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
+    findings = UsdValidation.ValidationContext(validators).Validate(stage)
+    result["validationErrors"] = [
+        e.GetMessage() for e in findings if e.GetType() == UsdValidation.ValidationErrorType.Error
+    ]
+    return result
+
+
+def author_transformed(out):
+    """Centimetres, Z up, /World/Hair (translate, rotateXYZ, scale) holding two curve prims, one
+    time-sampled, plus a mesh to skip; written by pxr's own text exporter."""
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(stage, 0.01)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    stage.SetStartTimeCode(1)
+    stage.SetEndTimeCode(2)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    world.AddTranslateOp().Set(Gf.Vec3d(0, 0, 5))
+    hair = UsdGeom.Xform.Define(stage, "/World/Hair")
+    hair.AddTranslateOp().Set(Gf.Vec3d(1, 2, 3))
+    hair.AddRotateXYZOp().Set(Gf.Vec3f(10, 20, 30))
+    hair.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
+    hair.GetPrim().SetCustomDataByKey("coif:note", "dictionary metadata the reader must skip")
+    UsdGeom.Mesh.Define(stage, "/World/Head").CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+
+    a = UsdGeom.BasisCurves.Define(stage, "/World/Hair/Strands")
+    a.CreateTypeAttr(UsdGeom.Tokens.linear)
+    a.CreateCurveVertexCountsAttr([3, 2])
+    frames = {
+        1: [(0, 0, 0), (0, 0, 1), (0, 0.5, 2), (1, 0, 0), (1, 0, 1.5)],
+        2: [(0, 0, 0), (0.25, 0, 1), (0.5, 0.5, 2), (1, 0, 0), (1.25, 0, 1.5)],
+    }
+    for t, pts in frames.items():
+        a.GetPointsAttr().Set(Vt.Vec3fArray(pts), t)
+    a.CreateWidthsAttr([0.01])
+    a.SetWidthsInterpolation(UsdGeom.Tokens.constant)
+    color = UsdGeom.PrimvarsAPI(a).CreatePrimvar(
+        "displayColor", Sdf.ValueTypeNames.Color3fArray, UsdGeom.Tokens.uniform
+    )
+    color.Set([(0.5, 0.25, 0.125), (0.75, 0.5, 0.25)])
+    color.SetIndices(Vt.IntArray([1, 0]))
+    wet = UsdGeom.PrimvarsAPI(a).CreatePrimvar("wetness", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
+    wet.Set([0.1, 0.2, 0.3, 0.4, 0.5])
+    clump = UsdGeom.PrimvarsAPI(a).CreatePrimvar(
+        "clump", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.uniform, elementSize=2
+    )
+    clump.Set([1, 2, 3, 4])
+
+    b = UsdGeom.BasisCurves.Define(stage, "/World/Hair/Guides")
+    b.CreateTypeAttr(UsdGeom.Tokens.linear)
+    b.CreateCurveVertexCountsAttr([2])
+    b.CreatePointsAttr([(2, 0, 0), (2, 1, 1)])
+    b.CreateWidthsAttr([0.02, 0.03])
+    b.SetWidthsInterpolation(UsdGeom.Tokens.vertex)
+    color_b = UsdGeom.PrimvarsAPI(b).CreatePrimvar(
+        "displayColor", Sdf.ValueTypeNames.Color3fArray, UsdGeom.Tokens.constant
+    )
+    color_b.Set([(1, 0, 0)])
+    wet_b = UsdGeom.PrimvarsAPI(b).CreatePrimvar("wetness", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
+    wet_b.Set([0.6, 0.7])
+    clump_b = UsdGeom.PrimvarsAPI(b).CreatePrimvar(
+        "clump", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.uniform, elementSize=2
+    )
+    clump_b.Set([5, 6])
+    guide = UsdGeom.PrimvarsAPI(b).CreatePrimvar("groom_guide", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform)
+    guide.Set([1])
+    text = stage.GetRootLayer().ExportToString()
+    header, body = text.split("\n", 1)
+    with open(out, "w") as f:
+        f.write(f"{header}\n# authored by usd-core for coif's tests\n{body}")
+
+
+def author_composed(folder):
+    """payload.usda holds two variants of a curve; stage.usda references it and selects one."""
+    payload = Usd.Stage.CreateNew(f"{folder}/payload.usda")
+    UsdGeom.SetStageMetersPerUnit(payload, 1.0)
+    root = UsdGeom.Xform.Define(payload, "/Asset")
+    payload.SetDefaultPrim(root.GetPrim())
+    variants = root.GetPrim().GetVariantSets().AddVariantSet("length")
+    for name, tip in (("short", 1.0), ("long", 3.0)):
+        variants.AddVariant(name)
+        variants.SetVariantSelection(name)
+        with variants.GetVariantEditContext():
+            c = UsdGeom.BasisCurves.Define(payload, "/Asset/Strands")
+            c.CreateTypeAttr(UsdGeom.Tokens.linear)
+            c.CreateCurveVertexCountsAttr([2])
+            c.CreatePointsAttr([(0, 0, 0), (0, tip, 0)])
+            c.CreateWidthsAttr([0.001, 0.001])
+    variants.SetVariantSelection("short")
+    payload.GetRootLayer().Save()
+    stage = Usd.Stage.CreateNew(f"{folder}/stage.usda")
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    groom = stage.DefinePrim("/Groom")
+    groom.GetReferences().AddReference("./payload.usda")
+    stage.SetDefaultPrim(groom)
+    stage.GetRootLayer().Save()
+
+
+if __name__ == "__main__":
+    command, target = sys.argv[1], sys.argv[2]
+    if command == "dump":
+        time = float(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == "--time" else None
+        json.dump(dump(target, time), sys.stdout)
+    elif command == "author-transformed":
+        author_transformed(target)
+    elif command == "author-composed":
+        author_composed(target)
+    else:
+        sys.exit(f"unknown command {command}")

@@ -1,0 +1,361 @@
+//! USD written by coif, checked by usd-core (pxr) itself: every value, the schema's
+//! interpolation rules, extents, stage metadata and UsdValidation; and USD written by pxr (a
+//! transformed, centimetre, Z-up stage with two curve prims and time samples; a composed stage
+//! with variants) read by coif. Also `.usda → .usdc → .usda` and `.hair ↔ .usdc` conversions.
+mod common;
+use common::usd::*;
+use common::*;
+
+use coif::groom::{AttributeRate, CurveBasis, Groom};
+use coif::io::usda::{AnimationWriter, TimeCodes};
+use glam::Vec3;
+use serde_json::Value;
+
+fn primvar<'a>(curves: &'a Value, name: &str) -> &'a Value {
+    let primvar = &curves["primvars"][name];
+    assert!(primvar.is_object(), "pxr finds no primvar '{name}' in {}", curves["primvars"]);
+    primvar
+}
+
+/// Checks, through pxr, that a stage coif wrote holds exactly `groom`.
+fn assert_pxr_sees(dump: &Value, groom: &Groom) {
+    assert_eq!(dump["defaultPrim"], "Groom");
+    assert_eq!(dump["upAxis"], "Y");
+    assert_eq!(dump["metersPerUnit"], 1.0);
+    assert_eq!(dump["hasAuthoredMetersPerUnit"], true);
+    assert_eq!(dump["validationErrors"], serde_json::json!([]), "UsdValidation reports errors");
+    let curves_list = dump["curves"].as_array().unwrap();
+    assert_eq!(curves_list.len(), 1);
+    let curves = &curves_list[0];
+    assert_eq!(curves["parent"], "Xform");
+    let (curve_type, basis) = match groom.basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::BSpline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+    };
+    assert_eq!(curves["type"], curve_type);
+    if let Some(basis) = basis {
+        assert_eq!(curves["basis"], basis);
+    }
+    assert_eq!(curves["wrap"], "nonperiodic");
+    let counts: Vec<u64> = curves["counts"].as_array().unwrap().iter().map(|c| c.as_u64().unwrap()).collect();
+    assert_eq!(counts, groom.vertex_counts().map(|c| c as u64).collect::<Vec<_>>());
+    assert_eq!(f32s(&curves["points"]), flat(&groom.points), "points differ bit for bit");
+    assert_eq!(f32s(&curves["widths"]), groom.widths);
+    assert_eq!(curves["widthsInterpolation"], "vertex");
+
+    // The extent pxr computes from points and widths is the one written.
+    let (written, computed) = (f32s(&curves["extent"]), f32s(&curves["computedExtent"]));
+    assert_eq!(written.len(), 6);
+    for (w, c) in written.iter().zip(&computed) {
+        assert!((w - c).abs() <= 1e-6 * c.abs().max(1e-3), "extent {written:?} vs pxr's {computed:?}");
+    }
+
+    let ids = primvar(curves, "groom_id");
+    assert_eq!((ids["type"].as_str(), ids["interpolation"].as_str()), (Some("int[]"), Some("uniform")));
+    assert_eq!(f32s(&ids["values"]), groom.strand_ids.iter().map(|&i| i as f32).collect::<Vec<_>>());
+    if let Some(guides) = &groom.guides {
+        let pv = primvar(curves, "groom_guide");
+        assert_eq!(pv["interpolation"], "uniform");
+        assert_eq!(f32s(&pv["values"]), guides.iter().map(|&g| g as u8 as f32).collect::<Vec<_>>());
+    }
+    if let Some(uvs) = &groom.root_uvs {
+        let st = primvar(curves, "st");
+        assert_eq!(
+            (st["type"].as_str(), st["interpolation"].as_str()),
+            (Some("texCoord2f[]"), Some("uniform"))
+        );
+        assert_eq!(f32s(&st["values"]), uvs.iter().flatten().copied().collect::<Vec<_>>());
+    }
+    for attribute in &groom.attributes {
+        let name = if attribute.name == "color" { "displayColor" } else { attribute.name.as_str() };
+        let pv = primvar(curves, name);
+        let expected_type = match (attribute.name.as_str(), attribute.components) {
+            ("color", 3) => "color3f[]",
+            ("rest", 3) => "point3f[]",
+            (_, 1) => "float[]",
+            (_, 2) => "float2[]",
+            (_, 3) => "float3[]",
+            _ => "float4[]",
+        };
+        assert_eq!(pv["type"], expected_type, "type of primvar {name}");
+        let interpolation = if attribute.rate == AttributeRate::Vertex { "vertex" } else { "uniform" };
+        assert_eq!(pv["interpolation"], interpolation, "interpolation of primvar {name}");
+        assert_eq!(f32s(&pv["values"]), attribute.data, "values of primvar {name}");
+    }
+    let expected_primvars =
+        groom.attributes.len() + 1 + groom.guides.is_some() as usize + groom.root_uvs.is_some() as usize;
+    assert_eq!(curves["primvars"].as_object().unwrap().len(), expected_primvars);
+}
+
+#[test]
+fn every_groom_coif_writes_opens_in_pxr_with_the_same_data_and_validates() {
+    let dir = tempfile::tempdir().unwrap();
+    for basis in [CurveBasis::Linear, CurveBasis::BSpline, CurveBasis::CatmullRom, CurveBasis::Bezier] {
+        let groom = rich_groom(basis);
+        let path = dir.path().join(format!("{basis:?}.usda"));
+        let warnings = coif::io::write_groom(&path, &groom).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert_pxr_sees(&pxr_dump(&path, None), &groom);
+        let read = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
+        assert_eq!(read, groom, "coif reads back what it wrote ({basis:?})");
+    }
+}
+
+#[test]
+fn attribute_names_usd_cannot_hold_are_renamed_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut groom = rich_groom(CurveBasis::Linear);
+    let n = groom.vertex_count();
+    groom.set_attribute(coif::groom::Attribute::new("2nd pass!", AttributeRate::Vertex, 1, vec![0.5; n]));
+    let path = dir.path().join("renamed.usda");
+    let warnings = coif::io::write_groom(&path, &groom).unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("_2nd_pass_"), "{warnings:?}");
+    let dump = pxr_dump(&path, None);
+    assert_eq!(f32s(&primvar(&dump["curves"][0], "_2nd_pass_")["values"]), vec![0.5; n]);
+    assert_eq!(dump["validationErrors"], serde_json::json!([]));
+}
+
+#[test]
+fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("anim.usda");
+    let groom = rich_groom(CurveBasis::BSpline);
+    let frame = |t: f64| -> Vec<Vec3> {
+        groom
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p + Vec3::new(0.01 * t as f32, -0.002 * (i as f32) * t as f32, 0.0))
+            .collect()
+    };
+    let times = TimeCodes { start: 1.0, end: 3.0, per_second: 24.0 };
+    coif::io::atomic::write_atomically(&path, |w| {
+        let mut writer = AnimationWriter::begin(w, &groom, times, &path)?;
+        for t in [1.0, 2.0, 3.0] {
+            writer.frame(t, &frame(t))?;
+        }
+        writer.finish().map(|_| ())
+    })
+    .unwrap();
+
+    let at_two = pxr_dump(&path, Some(2.0));
+    assert_eq!((at_two["startTimeCode"].as_f64(), at_two["endTimeCode"].as_f64()), (Some(1.0), Some(3.0)));
+    assert_eq!(at_two["timeCodesPerSecond"], 24.0);
+    let curves = &at_two["curves"][0];
+    assert_eq!(curves["pointsTimeSamples"], serde_json::json!([1.0, 2.0, 3.0]));
+    let mut frame_two = groom.clone();
+    frame_two.points = frame(2.0);
+    assert_pxr_sees(&at_two, &frame_two);
+
+    let options = Default::default();
+    let read = |time| coif::io::usda::read_file(&path, &options, time).unwrap();
+    assert_eq!(read(Some(2.0)).points, frame(2.0));
+    assert_eq!(read(None).points, frame(1.0), "without a time, the earliest sample");
+    assert_eq!(read(Some(7.0)).points, frame(3.0), "after the last sample, the last one holds");
+    // Between samples both interpolate linearly.
+    let pxr_between = f32s(&pxr_dump(&path, Some(1.25))["curves"][0]["points"]);
+    let coif_between = flat(&read(Some(1.25)).points);
+    for (a, b) in pxr_between.iter().zip(&coif_between) {
+        assert!((a - b).abs() <= 1e-6, "pxr {a} vs coif {b} at t = 1.25");
+    }
+
+    // The same animation as a crate file, through usd-core.
+    let binary = dir.path().join("anim.usdc");
+    coif::io::usd_interop::write_usd(&binary, |w| {
+        let mut writer = AnimationWriter::begin(w, &groom, times, &binary)?;
+        for t in [1.0, 2.0, 3.0] {
+            writer.frame(t, &frame(t))?;
+        }
+        writer.finish().map(|_| ())
+    })
+    .unwrap();
+    assert_eq!(
+        pxr_dump(&binary, Some(3.0))["curves"][0]["pointsTimeSamples"],
+        serde_json::json!([1.0, 2.0, 3.0])
+    );
+    let from_binary = coif::io::usd_interop::read(&binary, &options, Some(3.0), &[]).unwrap();
+    assert_eq!(from_binary.points, frame(3.0));
+}
+
+#[test]
+fn animation_writer_rejects_changed_topology_and_backwards_time() {
+    let groom = rich_groom(CurveBasis::Linear);
+    let times = TimeCodes { start: 1.0, end: 2.0, per_second: 24.0 };
+    let path = std::path::Path::new("unused.usda");
+    let mut writer = AnimationWriter::begin(Vec::new(), &groom, times, path).unwrap();
+    assert!(matches!(writer.frame(1.0, &groom.points[1..]), Err(coif::Error::Usage(_))));
+    writer.frame(1.0, &groom.points).unwrap();
+    assert!(matches!(writer.frame(1.0, &groom.points), Err(coif::Error::Usage(_))));
+}
+
+#[test]
+fn usda_to_usdc_to_usda_keeps_every_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = rich_groom(CurveBasis::CatmullRom);
+    let text = dir.path().join("a.usda");
+    coif::io::write_groom(&text, &groom).unwrap();
+    let binary = dir.path().join("b.usdc");
+    let out = coif(&["convert", path_str(&text), path_str(&binary)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(std::fs::read(&binary).unwrap().starts_with(b"PXR-USDC"), "a real crate file");
+    // pxr sees the same stage in both files.
+    let (dump_text, dump_binary) = (pxr_dump(&text, None), pxr_dump(&binary, None));
+    assert_eq!(dump_text["curves"], dump_binary["curves"]);
+    assert_pxr_sees(&dump_binary, &groom);
+
+    let back = dir.path().join("c.usda");
+    let out = coif(&["convert", path_str(&binary), path_str(&back)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(coif::io::read_groom(&back, &Default::default()).unwrap().groom, groom);
+    assert_eq!(std::fs::read(&back).unwrap(), std::fs::read(&text).unwrap(), "same bytes as the first .usda");
+    assert_eq!(dir_listing(dir.path()), ["a.usda", "b.usdc", "c.usda"], "no temporary left behind");
+}
+
+#[test]
+fn convert_between_hair_usda_usdc_and_usdz() {
+    let dir = tempfile::tempdir().unwrap();
+    let hair = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/sample_wavy.hair");
+    let chain = ["a.usda", "b.usdc", "c.usdz", "d.usdc", "e.hair"];
+    let mut from = hair.clone();
+    for name in chain {
+        let to = dir.path().join(name);
+        let out = coif(&["convert", path_str(&from), path_str(&to)]);
+        assert!(out.status.success(), "{} -> {name}: {}", from.display(), stderr(&out));
+        from = to;
+    }
+    assert_eq!(std::fs::read(dir.path().join("e.hair")).unwrap(), std::fs::read(&hair).unwrap());
+    let info = stdout_json(&coif(&["info", "--json", path_str(&dir.path().join("c.usdz"))]));
+    assert_eq!(info["format"], "usdz");
+}
+
+#[test]
+fn a_stage_pxr_authored_reads_in_metres_y_up_with_transforms_applied() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("authored.usda");
+    probe(&["author-transformed", path_str(&path)]);
+    let options = Default::default();
+    for time in [Some(2.0), Some(1.0), None] {
+        let groom = coif::io::usda::read_file(&path, &options, time).unwrap();
+        let dump = pxr_dump(&path, Some(time.unwrap_or(1.0)));
+        // pxr's world-space points, converted here from centimetres and Z up to metres and Y up.
+        let expected: Vec<Vec3> = dump["curves"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|c| f32s(&c["world_points"]))
+            .collect::<Vec<f32>>()
+            .chunks(3)
+            .map(|p| Vec3::new(p[0], p[2], -p[1]) * 0.01)
+            .collect();
+        assert_eq!(groom.points.len(), expected.len());
+        for (got, want) in groom.points.iter().zip(&expected) {
+            assert!(got.distance(*want) < 1e-6, "time {time:?}: {got} vs pxr's {want}");
+        }
+        assert_eq!(groom.vertex_counts().collect::<Vec<_>>(), vec![3, 2, 2]);
+        // Constant width 0.01 cm and vertex widths, scaled by the Xform's 2 and the units.
+        let widths = [0.01f32, 0.01, 0.01, 0.01, 0.01, 0.02, 0.03].map(|w| w * 2.0 * 0.01);
+        assert_eq!(groom.widths.len(), widths.len());
+        for (got, want) in groom.widths.iter().zip(widths) {
+            assert!((got - want).abs() < 1e-9, "widths {:?}", groom.widths);
+        }
+        let color = groom.attribute("color").unwrap();
+        assert_eq!(color.rate, AttributeRate::Strand);
+        assert_eq!(
+            color.data,
+            vec![0.75, 0.5, 0.25, 0.5, 0.25, 0.125, 1.0, 0.0, 0.0],
+            "indexed and constant colours"
+        );
+        assert_eq!(groom.attribute("wetness").unwrap().data, vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
+        let clump = groom.attribute("clump").unwrap();
+        assert_eq!((clump.rate, clump.components), (AttributeRate::Strand, 2), "elementSize 2");
+        assert_eq!(clump.data, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(groom.guides, Some(vec![false, false, true]));
+        assert_eq!(groom.strand_ids, vec![0, 1, 2]);
+    }
+    // The same stage as a crate file, through the CLI, at the second frame.
+    let binary = dir.path().join("authored.usdc");
+    probe_export(&path, &binary);
+    let info = stdout_json(&coif(&["info", "--json", "--frame", "2", path_str(&binary)]));
+    assert_eq!(info["groom"]["strands"], 3);
+    assert_eq!(info["groom"]["guides"], 1);
+    let at_two = coif::io::usda::read_file(&path, &options, Some(2.0)).unwrap();
+    let (lo, hi) = at_two.bounds().unwrap();
+    let bounds = |i: usize| f32s(&info["groom"]["bounds"][i]);
+    assert_eq!((bounds(0), bounds(1)), (lo.to_array().to_vec(), hi.to_array().to_vec()));
+}
+
+fn probe_export(input: &std::path::Path, output: &std::path::Path) {
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline/usd_interop.py");
+    let status = std::process::Command::new(python())
+        .arg(script)
+        .args(["export"])
+        .arg(input)
+        .arg(output)
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+#[test]
+fn composed_stages_are_flattened_by_usd_core_with_the_chosen_variant() {
+    let dir = tempfile::tempdir().unwrap();
+    probe(&["author-composed", path_str(dir.path())]);
+    let stage = dir.path().join("stage.usda");
+    // The native reader sees the reference and hands the stage to usd-core.
+    let info = stdout_json(&coif(&["info", "--json", path_str(&stage)]));
+    assert_eq!(info["groom"]["strand_length"]["max"], 1.0, "the default variant 'short'");
+    let long =
+        coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=long".into()]).unwrap();
+    assert_eq!(long.points, vec![Vec3::ZERO, Vec3::new(0.0, 3.0, 0.0)]);
+    let error =
+        coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=huge".into()]).unwrap_err();
+    assert_eq!(error.exit_code(), 2, "{error}");
+    assert!(error.to_string().contains("huge"), "{error}");
+}
+
+#[test]
+fn missing_python_or_usd_core_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let hair = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/sample_wavy.hair");
+    let out_path = dir.path().join("x.usdc");
+    for (python, expected) in
+        [("/nonexistent/python", "COIF_PYTHON"), ("python3", "usd-core (pxr) is missing")]
+    {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(["convert", path_str(&hair), path_str(&out_path)])
+            .env("COIF_PYTHON", python)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        assert!(stderr(&out).contains(expected), "{}", stderr(&out));
+        assert!(dir_listing(dir.path()).is_empty(), "no output, no temporary: {:?}", dir_listing(dir.path()));
+    }
+}
+
+#[test]
+fn validate_usd_passes_coif_stages_and_fails_on_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.usda");
+    coif::io::write_groom(&good, &rich_groom(CurveBasis::Linear)).unwrap();
+    // The same stage without the metersPerUnit and defaultPrim UsdValidation requires.
+    let bad = dir.path().join("bad.usda");
+    let text = std::fs::read_to_string(&good).unwrap();
+    std::fs::write(
+        &bad,
+        text.replace("    defaultPrim = \"Groom\"\n", "").replace("    metersPerUnit = 1\n", ""),
+    )
+    .unwrap();
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pipeline/validate_usd.py");
+    let validate = |path: &std::path::Path| {
+        std::process::Command::new(python()).arg(&script).arg(path).output().unwrap()
+    };
+    let out = validate(&good);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stdout));
+    let out = validate(&bad);
+    assert_eq!(out.status.code(), Some(1));
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(report.contains("metersPerUnit") && report.contains("defaultPrim"), "{report}");
+}
