@@ -166,7 +166,7 @@ pub(crate) fn step_all(
         broken,
     };
     let lanes_allowed = !hooks.projects();
-    units.par_iter().with_min_len(4).for_each(|&(first_strand, count, in_lanes)| {
+    units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
         // SAFETY: work units cover disjoint strand ranges, each visited once; strand ranges are
         // disjoint and within the arrays (validated groom offsets).
         if in_lanes && lanes_allowed {
