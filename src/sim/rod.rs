@@ -213,6 +213,23 @@ impl Rods {
         for strand in 0..self.strand_count() {
             let range = self.strand_range(strand);
             let (first, last) = (range.start, range.end - 1);
+            // Stiff pairs (small α/Δt², fine segments) would leave light frames that swallow the
+            // shear corrections and pass bending to the vertices only after very many iterations:
+            // cap each frame's inverse inertia at the bending compliance α/Δt² of its pairs.
+            for e in first + 1..last {
+                let mut sum = 0.0;
+                let mut count = 0.0;
+                for pair in [e, e + 1] {
+                    if pair > first && pair < last {
+                        sum += self.compliance[pair].x;
+                        count += 1.0;
+                    }
+                }
+                if count > 0.0 {
+                    let cap = sum / count * inv_dt2;
+                    self.frame_inv_inertia[e] = self.frame_inv_inertia[e].min(cap);
+                }
+            }
             for e in first..last {
                 let (w1, w2, wq, l) =
                     (self.inv_mass[e], self.inv_mass[e + 1], self.frame_inv_inertia[e], self.rest_lengths[e]);
