@@ -14,7 +14,10 @@ fn hanging_shape(dt: f32, iterations: u32) -> Vec<Vec3> {
     let groom = Groom::from_strands(&[points], 80e-6);
     let params = SimParams { dt, iterations, damping: 4.0, ..SimParams::default() };
     let mut sim = Simulation::new(&groom, params).unwrap();
-    let report = sim.settle(&SettleOptions { max_speed: 2e-4, quiet_time: 0.2, max_seconds: 40.0 }, &NoHooks);
+    let report = sim.settle(
+        &SettleOptions { max_speed: 2e-4, quiet_time: 0.2, max_seconds: 40.0, iterations: None },
+        &NoHooks,
+    );
     assert!(report.converged, "dt {dt}, {iterations} iterations: {report:?}");
     sim.rods.positions.clone()
 }
@@ -55,9 +58,12 @@ fn short_cantilever_matches_beam_theory() {
     let groom = Groom::from_strands(&[points], width);
     // No cuticle gradient, so EI is uniform.
     let material = Material { cuticle: Cuticle { share: 0.0, ..Cuticle::default() }, ..Material::default() };
-    let params = SimParams { material, damping: 20.0, iterations: 1000, ..SimParams::default() };
+    let params = SimParams { material, damping: 20.0, ..SimParams::default() };
     let mut sim = Simulation::new(&groom, params).unwrap();
-    let report = sim.settle(&SettleOptions { max_speed: 1e-6, quiet_time: 0.2, max_seconds: 40.0 }, &NoHooks);
+    let settle =
+        SettleOptions { max_speed: 1e-6, quiet_time: 0.2, max_seconds: 40.0, iterations: Some(1000) };
+    let report = sim.settle(&settle, &NoHooks);
+    assert_eq!(sim.params().iterations, 5, "settling must restore the simulation's iterations");
     assert!(report.converged, "{report:?}");
     let r = 0.5 * width as f64;
     let ei = material.youngs_modulus as f64 * std::f64::consts::PI * r.powi(4) / 4.0;

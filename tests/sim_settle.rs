@@ -34,12 +34,18 @@ fn rest_curve_of_an_untouched_groom_is_the_groom() {
 fn settling_reports_non_convergence() {
     let mut sim = Simulation::new(&curly(), SimParams::default()).unwrap();
     // A groom released under gravity cannot be still after 0.05 s.
-    let report = sim.settle(&SettleOptions { max_speed: 1e-4, quiet_time: 0.1, max_seconds: 0.05 }, &NoHooks);
+    let report = sim.settle(
+        &SettleOptions { max_speed: 1e-4, quiet_time: 0.1, max_seconds: 0.05, iterations: None },
+        &NoHooks,
+    );
     assert!(!report.converged, "{report:?}");
     assert_eq!(report.steps, 18);
     assert!(report.max_speed >= 1e-4);
     // Given time, it does converge, and every vertex is then slow.
-    let report = sim.settle(&SettleOptions { max_speed: 1e-3, quiet_time: 0.1, max_seconds: 60.0 }, &NoHooks);
+    let report = sim.settle(
+        &SettleOptions { max_speed: 1e-3, quiet_time: 0.1, max_seconds: 60.0, iterations: None },
+        &NoHooks,
+    );
     assert!(report.converged, "{report:?}");
     assert!(sim.max_speed() < 1e-3);
 }
