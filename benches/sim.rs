@@ -1,6 +1,7 @@
 //! Solver speed: ns per vertex-iteration (one stretch–shear, one bend–twist and one length-solve
 //! row per vertex and iteration, plus the per-step prediction and velocity update amortised) for
-//! the configurations, on 1 thread and on 2 threads. Prints the median of 3 runs.
+//! the configurations, on 1 thread and on 2 threads. Prints the median of 3 runs, by wall
+//! clock and by CPU time of the workers (robust when other processes share the cores).
 //! `cargo bench --bench sim [-- FILTER]`, FILTER matching a configuration name.
 use std::time::Instant;
 
@@ -26,15 +27,20 @@ fn thread_cpu_ns() -> Option<u64> {
     text.split_whitespace().next()?.parse().ok()
 }
 
+/// CPU time of all the pool's workers in ns.
+fn pool_cpu_ns(pool: &rayon::ThreadPool) -> Option<u64> {
+    pool.broadcast(|_| thread_cpu_ns()).into_iter().sum()
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
 fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
-    // COIF_BENCH_WALL=1 measures one thread by wall time too (on an otherwise idle machine).
-    let use_cpu_time = std::env::var_os("COIF_BENCH_WALL").is_none();
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    println!(
-        "cores available: {cores}; 1 thread timed by {}",
-        if use_cpu_time { "thread CPU time" } else { "wall clock" }
-    );
+    println!("cores available: {cores}; medians of 3 runs; CPU time from /proc/thread-self/schedstat");
     for config in CONFIGS.iter().filter(|c| filter.as_deref().is_none_or(|f| c.name.contains(f))) {
         let groom = generate(&GenerateParams {
             strands: config.strands,
@@ -47,43 +53,46 @@ fn main() {
         let work_per_step = (config.strands * config.vertices) as f64 * config.iterations as f64;
         // About 0.3 s of work per run at 20 ns per vertex-iteration, at least 2 steps.
         let steps = ((1.5e7 / work_per_step).ceil() as usize).max(2);
-        let mut single = 0.0;
+        let mut single_cpu = 0.0;
+        let mut single_wall = 0.0;
         for threads in [1usize, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let mut runs: Vec<f64> = pool.install(|| {
-                let mut sim = Simulation::new(&groom, params.clone()).expect("bench simulation");
-                sim.step(); // warm caches and pages
-                (0..3)
-                    .map(|_| {
-                        let start = Instant::now();
-                        let cpu_start = thread_cpu_ns();
-                        for _ in 0..steps {
-                            sim.step();
-                        }
-                        let wall = start.elapsed().as_nanos() as f64;
-                        // On one thread, CPU time of the worker is robust against other load on
-                        // the machine; with more threads only wall time says anything.
-                        let time = match (threads, cpu_start, thread_cpu_ns()) {
-                            (1, Some(a), Some(b)) if use_cpu_time => (b - a) as f64,
-                            _ => wall,
-                        };
-                        time / (work_per_step * steps as f64)
-                    })
-                    .collect()
-            });
-            runs.sort_by(f64::total_cmp);
-            let median = runs[1];
-            if threads == 1 {
-                single = median;
+            let mut sim = Simulation::new(&groom, params.clone()).expect("bench simulation");
+            pool.install(|| sim.step()); // warm caches and pages
+            let mut wall = Vec::new();
+            let mut cpu = Vec::new();
+            for _ in 0..3 {
+                let cpu_start = pool_cpu_ns(&pool);
+                let start = Instant::now();
+                pool.install(|| (0..steps).for_each(|_| sim.step()));
+                let elapsed = start.elapsed().as_nanos() as f64;
+                let work = work_per_step * steps as f64;
+                wall.push(elapsed / work);
+                if let (Some(a), Some(b)) = (cpu_start, pool_cpu_ns(&pool)) {
+                    cpu.push((b - a) as f64 / work);
+                }
             }
-            println!(
-                "{:<12} threads {threads}: {median:6.1} ns/vertex-iteration (runs {:.1} {:.1} {:.1}; {steps} steps){}",
-                config.name,
-                runs[0],
-                runs[1],
-                runs[2],
-                if threads > 1 { format!("  speed-up {:.2}x", single / median) } else { String::new() }
-            );
+            let wall = median(wall);
+            let cpu = if cpu.len() == 3 { median(cpu) } else { f64::NAN };
+            if threads == 1 {
+                (single_cpu, single_wall) = (cpu, wall);
+                println!(
+                    "{:<12} threads 1: {cpu:6.1} ns/vertex-iteration CPU time, {wall:6.1} wall ({steps} steps)",
+                    config.name
+                );
+            } else {
+                // Wall-clock speed-up is only meaningful on otherwise idle cores; the CPU-time
+                // figure shows the parallel overhead (CPU per vertex-iteration summed over workers),
+                // and `threads · single CPU / total CPU` is the speed-up idle cores would give.
+                println!(
+                    "{:<12} threads {threads}: {:6.1} ns/vertex-iteration wall (speed-up {:.2}x), CPU {cpu:6.1} summed over workers (parallel efficiency {:.2}, idle-core speed-up {:.2}x)",
+                    config.name,
+                    wall,
+                    single_wall / wall,
+                    single_cpu / cpu,
+                    threads as f64 * single_cpu / cpu,
+                );
+            }
         }
     }
 }

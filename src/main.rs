@@ -107,6 +107,9 @@ struct SimulateArgs {
     settle_speed: f32,
     #[arg(long, default_value_t = 30.0)]
     settle_seconds: f32,
+    /// Solver iterations while settling (default: --iterations).
+    #[arg(long)]
+    settle_iterations: Option<u32>,
     #[arg(long)]
     json: bool,
 }
@@ -293,6 +296,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     let settle = args.settle.then(|| SettleOptions {
         max_speed: args.settle_speed,
         max_seconds: args.settle_seconds,
+        iterations: args.settle_iterations,
         ..SettleOptions::default()
     });
     let (groom, summary) =

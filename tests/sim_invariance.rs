@@ -14,7 +14,10 @@ fn hanging_shape(dt: f32, iterations: u32) -> Vec<Vec3> {
     let groom = Groom::from_strands(&[points], 80e-6);
     let params = SimParams { dt, iterations, damping: 4.0, ..SimParams::default() };
     let mut sim = Simulation::new(&groom, params).unwrap();
-    let report = sim.settle(&SettleOptions { max_speed: 2e-4, quiet_time: 0.2, max_seconds: 40.0 }, &NoHooks);
+    let report = sim.settle(
+        &SettleOptions { max_speed: 2e-4, quiet_time: 0.2, max_seconds: 40.0, iterations: None },
+        &NoHooks,
+    );
     assert!(report.converged, "dt {dt}, {iterations} iterations: {report:?}");
     sim.rods.positions.clone()
 }
@@ -39,4 +42,36 @@ fn hanging_strand_shape_does_not_depend_on_iterations_or_time_step() {
     eprintln!("5 vs 20 iterations: {d_iter} m; dt 1/360 vs 1/720: {d_dt} m");
     assert!(d_iter < 0.01 * LENGTH, "5 vs 20 iterations differ by {d_iter} m");
     assert!(d_dt < 0.01 * LENGTH, "dt 1/360 vs 1/720 differ by {d_dt} m");
+}
+
+/// The bending stiffness is physical: a short clamped hair sags under its own weight by the
+/// beam-theory deflection `δ = q·L⁴/(8·E·I)` (`q = ρ·A·g`, small deflections). The pinned root
+/// frame clamps the whole first edge, so the discrete rod's clamp lies between vertex 0 and 1:
+/// its sag must fall between beam theory for lengths `L − l` and `L`. Hair this short is stiff
+/// against gravity, which Gauss–Seidel resolves only with many iterations (see the module docs).
+#[test]
+fn short_cantilever_matches_beam_theory() {
+    use coif::sim::{Cuticle, Material};
+    let (length, vertices, width) = (0.02f32, 21usize, 80e-6f32);
+    let points: Vec<Vec3> =
+        (0..vertices).map(|i| Vec3::new(length * i as f32 / (vertices - 1) as f32, 0.0, 0.0)).collect();
+    let groom = Groom::from_strands(&[points], width);
+    // No cuticle gradient, so EI is uniform.
+    let material = Material { cuticle: Cuticle { share: 0.0, ..Cuticle::default() }, ..Material::default() };
+    let params = SimParams { material, damping: 20.0, ..SimParams::default() };
+    let mut sim = Simulation::new(&groom, params).unwrap();
+    let settle =
+        SettleOptions { max_speed: 1e-6, quiet_time: 0.2, max_seconds: 40.0, iterations: Some(1000) };
+    let report = sim.settle(&settle, &NoHooks);
+    assert_eq!(sim.params().iterations, 5, "settling must restore the simulation's iterations");
+    assert!(report.converged, "{report:?}");
+    let r = 0.5 * width as f64;
+    let ei = material.youngs_modulus as f64 * std::f64::consts::PI * r.powi(4) / 4.0;
+    let q = material.density as f64 * std::f64::consts::PI * r * r * 9.8;
+    let beam = |l: f64| q * l.powi(4) / (8.0 * ei);
+    let edge = length as f64 / (vertices - 1) as f64;
+    let (low, high) = (beam(length as f64 - edge), beam(length as f64));
+    let sag = -sim.rods.positions.last().unwrap().y as f64;
+    assert!(high < 0.02 * length as f64, "not a small deflection");
+    assert!(low <= sag && sag <= high, "tip sag {sag:.4e} m outside beam theory [{low:.4e}, {high:.4e}] m");
 }

@@ -101,7 +101,10 @@ fn perm(influences: BondInfluences, broken: [f32; 4]) -> Vec<Vec3> {
     for vertex in 1..VERTICES {
         sim.detach(vertex);
     }
-    let report = sim.settle(&SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0 }, &NoHooks);
+    let report = sim.settle(
+        &SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0, iterations: None },
+        &NoHooks,
+    );
     assert!(report.converged, "{report:?}");
     sim.rods.positions.clone()
 }
@@ -157,7 +160,10 @@ fn broken_bonds_that_do_not_re_form_spring_back() {
     for vertex in 1..VERTICES {
         sim.detach(vertex);
     }
-    let report = sim.settle(&SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0 }, &NoHooks);
+    let report = sim.settle(
+        &SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0, iterations: None },
+        &NoHooks,
+    );
     assert!(report.converged, "{report:?}");
     let drift = sim.rods.positions.iter().zip(&straight).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
     assert!(drift < 1e-3 * EDGE * VERTICES as f32, "strand ended {drift} m from straight");

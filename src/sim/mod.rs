@@ -29,8 +29,16 @@
 //! are solved directly (tridiagonal, exact to first order) once per iteration, because
 //! Gauss–Seidel alone leaves a hanging strand stretched by ~1.5 % at 5 iterations; and the frame
 //! inertia is a conditioning parameter ([`SimParams::frame_inertia_factor`]), since hair's true
-//! rotational inertia would make frames absorb every shear correction. Frames are quasi-static
+//! rotational inertia would make frames absorb every shear correction (it is also capped at the
+//! bending compliance `α/Δt²`, which helps stiff, finely cut strands). Frames are quasi-static
 //! (no angular velocity): integrating frame angular velocities made resting curls creep.
+//!
+//! **Limit.** Gauss–Seidel resolves bending well only while a pair is soft per step
+//! (`α/Δt² ≳ wq`): for 80 µm hair at Δt = 1/360 that holds for segments of about 7 mm and longer
+//! (the seed uses 3 cm). Finer or stiffer strands look softer than their modulus at 5 iterations
+//! and their shape then depends on the iteration count; with enough iterations they converge to
+//! beam theory (`tests/sim_invariance.rs`). A direct solve along the strand for bend–twist (as
+//! is done here for the lengths) is the known cure.
 //!
 //! # Speed
 //! Groups of 8 consecutive strands with equal vertex counts are solved together, one strand per

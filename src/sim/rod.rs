@@ -213,6 +213,23 @@ impl Rods {
         for strand in 0..self.strand_count() {
             let range = self.strand_range(strand);
             let (first, last) = (range.start, range.end - 1);
+            // Stiff pairs (small α/Δt², fine segments) would leave light frames that swallow the
+            // shear corrections and pass bending to the vertices only after very many iterations:
+            // cap each frame's inverse inertia at the bending compliance α/Δt² of its pairs.
+            for e in first + 1..last {
+                let mut sum = 0.0;
+                let mut count = 0.0;
+                for pair in [e, e + 1] {
+                    if pair > first && pair < last {
+                        sum += self.compliance[pair].x;
+                        count += 1.0;
+                    }
+                }
+                if count > 0.0 {
+                    let cap = sum / count * inv_dt2;
+                    self.frame_inv_inertia[e] = self.frame_inv_inertia[e].min(cap);
+                }
+            }
             for e in first..last {
                 let (w1, w2, wq, l) =
                     (self.inv_mass[e], self.inv_mass[e + 1], self.frame_inv_inertia[e], self.rest_lengths[e]);
@@ -296,6 +313,25 @@ mod tests {
             assert!((omega.length() - half_angle.sin()).abs() < 1e-5, "pair {i}");
         }
         assert!(rods.kinematic[0] && !rods.kinematic[1]);
+
+        // Constant width: bending compliance grows towards the tip exactly as the cuticle factor
+        // (S1-14) falls, and matches α = l̄/(4·E·π r⁴/4) at the first pair.
+        let material = Material::default();
+        let l = rods.rest_lengths[0];
+        let r = 40e-6f32;
+        let at_root = l
+            / (4.0
+                * material.cuticle.stiffness_factor(l)
+                * material.youngs_modulus
+                * 0.25
+                * std::f32::consts::PI
+                * r.powi(4));
+        assert!((rods.compliance[1].x / at_root - 1.0).abs() < 1e-4);
+        let last = points.len() - 2;
+        let distance: f32 = rods.rest_lengths[..last].iter().sum();
+        let ratio = rods.compliance[last].x / rods.compliance[1].x;
+        let expected = material.cuticle.stiffness_factor(l) / material.cuticle.stiffness_factor(distance);
+        assert!((ratio - expected).abs() < 1e-4, "tip/root compliance {ratio}, expected {expected}");
         assert_eq!(rods.frame_inv_inertia[0], 0.0);
     }
 }

@@ -19,11 +19,14 @@ pub struct SettleOptions {
     pub quiet_time: f32,
     /// Give up after this many seconds of simulated time.
     pub max_seconds: f32,
+    /// Solver iterations while settling (`None`: the simulation's own). Static shapes of stiff,
+    /// finely cut strands need more than a dynamic step does.
+    pub iterations: Option<u32>,
 }
 
 impl Default for SettleOptions {
     fn default() -> Self {
-        SettleOptions { max_speed: 1e-4, quiet_time: 0.1, max_seconds: 30.0 }
+        SettleOptions { max_speed: 1e-4, quiet_time: 0.1, max_seconds: 30.0, iterations: None }
     }
 }
 
@@ -42,6 +45,10 @@ impl Simulation {
     /// or until `options.max_seconds`; the report says which.
     pub fn settle(&mut self, options: &SettleOptions, hooks: &dyn Hooks) -> SettleReport {
         let dt = self.params().dt;
+        let own_iterations = self.params().iterations;
+        if let Some(iterations) = options.iterations.filter(|&n| n >= 1) {
+            self.params.iterations = iterations;
+        }
         let max_steps = (options.max_seconds / dt).ceil().max(1.0) as u64;
         let quiet_steps = (options.quiet_time / dt).ceil().max(1.0) as u64;
         let mut quiet = 0;
@@ -56,6 +63,7 @@ impl Simulation {
                 break;
             }
         }
+        self.params.iterations = own_iterations;
         SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
     }
 

@@ -1,5 +1,7 @@
-//! The time stepper: per strand, prediction → Gauss–Seidel iterations along the strand
-//! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`) → velocity update.
+//! The time stepper: per strand, rest shapes and forces (`begin_step`) → prediction → per
+//! iteration a direct solve of the edge lengths and a Gauss–Seidel sweep along the strand
+//! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`; sweeps alternate
+//! direction) → velocity update. Lane groups of 8 strands run the same sequence in `lanes`.
 //! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
 //! results are bit-identical at any thread count and any chunking.
 use std::cell::RefCell;
@@ -166,7 +168,7 @@ pub(crate) fn step_all(
         broken,
     };
     let lanes_allowed = !hooks.projects();
-    units.par_iter().with_min_len(4).for_each(|&(first_strand, count, in_lanes)| {
+    units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
         // SAFETY: work units cover disjoint strand ranges, each visited once; strand ranges are
         // disjoint and within the arrays (validated groom offsets).
         if in_lanes && lanes_allowed {
