@@ -129,6 +129,10 @@ struct ContactHooks<'a> {
 }
 
 impl Hooks for ContactHooks<'_> {
+    fn projects(&self) -> bool {
+        !self.shapes.is_empty()
+    }
+
     fn project(&self, _strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
         for (k, p) in positions.iter_mut().enumerate() {
             if inverse_masses[k] == 0.0 {

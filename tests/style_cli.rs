@@ -1,0 +1,193 @@
+//! `coif style` end to end: the seed papers' scenes through the CLI, checked against the model's
+//! analytic predictions and against control runs; determinism; malformed recipes.
+mod common;
+use common::*;
+
+use std::path::{Path, PathBuf};
+
+use coif::analysis::curl_radius;
+use coif::Groom;
+use glam::Vec3;
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+fn read(path: &Path) -> Groom {
+    coif::io::read_groom(path, &Default::default()).expect("coif reads its own output").groom
+}
+
+/// Runs `coif style` and returns the JSON report.
+fn style(recipe: &Path, groom: &Path, output: &Path) -> serde_json::Value {
+    let out =
+        coif(&["style", path_str(recipe), "--groom", path_str(groom), "-o", path_str(output), "--json"]);
+    stdout_json(&out)
+}
+
+/// Median curl radius of the last third of every strand (wound on a rod in the perm scene).
+fn median_tip_curl(groom: &Groom) -> f32 {
+    let mut radii: Vec<f32> = (0..groom.strand_count())
+        .filter_map(|s| {
+            let points = groom.strand_points(s);
+            curl_radius(&points[points.len() * 2 / 3..])
+        })
+        .collect();
+    radii.sort_by(f32::total_cmp);
+    radii[radii.len() / 2]
+}
+
+#[test]
+fn perm_scene_3_curls_to_the_predicted_radius_and_keeps_a_curl_under_gravity() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = repo("grooms/recipes/perm_scene3.toml");
+    let groom = repo("grooms/seed_100x48cm.hair");
+    // Rod radius 12 mm; 0.63 + 0.20 × 0.20 = 0.67 of the bonds re-formed on the rod.
+    let predicted = 0.012 / 0.67;
+
+    let free = dir.path().join("perm.usda");
+    let report = style(&recipe, &groom, &free);
+    let settled = read(&free);
+    let measured = median_tip_curl(&settled);
+    eprintln!("perm without gravity: median curl radius {measured:.5} m, predicted {predicted:.5} m");
+    assert!((measured - predicted).abs() < 0.03 * predicted, "curl {measured} m vs {predicted} m");
+    let stages = report["report"]["stages"].as_array().unwrap();
+    let settle = stages.last().unwrap();
+    assert_eq!(settle["kind"], "settle");
+    let reported = settle["curl_radius"].as_f64().unwrap() as f32;
+    assert!((reported - predicted).abs() < 0.03 * predicted, "reported curl {reported}");
+    // The bond rates the chemistry left: all re-formed.
+    for kind in ["hydrogen", "ionic", "disulfide", "peptide"] {
+        assert!((settle["bond_rates"][kind].as_f64().unwrap() - 1.0).abs() < 1e-4, "{kind}");
+    }
+    for attribute in ["rest", "rest_darboux", "bond_hydrogen", "wetness"] {
+        assert!(settled.attribute(attribute).is_some(), "{attribute} missing from the output");
+    }
+
+    // With gravity the curls hang: they open up, but remain curls.
+    let text = std::fs::read_to_string(&recipe).unwrap().replace("gravity = false", "gravity = true");
+    let hanging_recipe = dir.path().join("perm_gravity.toml");
+    std::fs::write(&hanging_recipe, text).unwrap();
+    let hanging = dir.path().join("perm_gravity.usda");
+    style(&hanging_recipe, &groom, &hanging);
+    let hanging_curl = median_tip_curl(&read(&hanging));
+    eprintln!("perm under gravity: median curl radius {hanging_curl:.5} m");
+    assert!(hanging_curl >= measured * 0.97 && hanging_curl < 3.0 * predicted, "hanging curl {hanging_curl}");
+}
+
+/// Mean distance between the tips of two runs of one groom, over the strands rooted at x > 2 cm
+/// (the side the pillow presses): of the settled positions, and of the zero-stress rest curves
+/// (the shape the bonds now hold, free of gravity's sag).
+fn pressed_side_tip_distances(a: &Groom, b: &Groom) -> (f32, f32) {
+    let pressed: Vec<usize> = (0..a.strand_count()).filter(|&s| a.strand_points(s)[0].x > 0.02).collect();
+    let rest = |g: &Groom| -> Vec<Vec3> {
+        g.attribute("rest").unwrap().data.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+    };
+    let mean = |p: &[Vec3], q: &[Vec3]| {
+        pressed
+            .iter()
+            .map(|&s| p[a.strand_range(s).end - 1].distance(q[a.strand_range(s).end - 1]))
+            .sum::<f32>()
+            / pressed.len() as f32
+    };
+    (mean(&a.points, &b.points), mean(&rest(a), &rest(b)))
+}
+
+#[test]
+fn bed_head_keeps_the_pressed_shape_only_when_it_dries_pressed() {
+    // Scene 1 against controls with the same wetness history: what pressing leaves behind is
+    // the tip distance between a pressed run and an unpressed one (travel 0), on the pressed side.
+    let dir = tempfile::tempdir().unwrap();
+    let groom = repo("grooms/seed_200x24cm.hair");
+    let base = std::fs::read_to_string(repo("grooms/recipes/bedhead_scene1.toml")).unwrap();
+    let run = |name: &str, text: String| {
+        let recipe = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&recipe, text).unwrap();
+        let out = dir.path().join(format!("{name}.usda"));
+        style(&recipe, &groom, &out);
+        read(&out)
+    };
+    let unpressed = |t: &str| t.replace("travel = 0.21", "travel = 0.0");
+    let kept_wet = |t: &str| t.replace("kind = \"dry\"", "kind = \"process\"");
+    let (dried, dried_rest) =
+        pressed_side_tip_distances(&run("pressed", base.clone()), &run("unpressed", unpressed(&base)));
+    let (wet, wet_rest) = pressed_side_tip_distances(
+        &run("pressed_wet", kept_wet(&base)),
+        &run("unpressed_wet", kept_wet(&unpressed(&base))),
+    );
+    eprintln!(
+        "bed-head: pressing moved the tips of the rest curves {dried_rest:.4} m when dried pressed, \
+         {wet_rest:.4} m when kept wet; of the strands hanging under gravity {dried:.4} m and {wet:.4} m"
+    );
+    assert!(
+        dried_rest > 3.0 * wet_rest && dried_rest > 0.01,
+        "pressed shape not kept: {dried_rest} vs {wet_rest}"
+    );
+    assert!(
+        dried > 2.0 * wet,
+        "under gravity the pressed shape shows less than twice the control: {dried} vs {wet}"
+    );
+}
+
+#[test]
+fn same_recipe_same_bytes_on_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = repo("grooms/recipes/bedhead_scene1.toml");
+    let groom = repo("grooms/seed_200x24cm.hair");
+    let run = |name: &str, threads: &str| {
+        let out = dir.path().join(name);
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&out), "--quiet"])
+            .env("RAYON_NUM_THREADS", threads)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        std::fs::read(out).unwrap()
+    };
+    let once = run("a.usda", "2");
+    assert_eq!(once, run("b.usda", "2"), "two runs differ");
+    assert_eq!(once, run("c.usda", "1"), "1 and 2 threads differ");
+}
+
+#[test]
+fn malformed_recipes_exit_2_with_the_line_and_write_nothing() {
+    let base = std::fs::read_to_string(repo("grooms/recipes/perm_scene3.toml")).unwrap();
+    let line_of = |needle: &str, text: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+    let cases: Vec<(&str, String, String)> = vec![
+        {
+            let t = base.replace("iterations = 5", "iterations = 5\nsubstep = 2");
+            ("unknown key", format!("line {}", line_of("substep", &t)), t)
+        },
+        {
+            let t = base.replace("iterations = 5", "iterations = \"five\"");
+            ("wrong type", format!("line {}", line_of("\"five\"", &t)), t)
+        },
+        {
+            let t = base.replacen("duration = 1.0", "duration = -1.0", 1);
+            ("negative duration", format!("line {}", line_of("kind = \"wrap\"", &t) - 1), t)
+        },
+        {
+            let t = base.replace("kind = \"wrap\"", "kind = \"wrap\"\nrods = [\"rod9\"]");
+            ("missing rod", format!("line {}", line_of("kind = \"wrap\"", &t) - 1), t)
+        },
+        {
+            let t = base.replace("kind = \"release\"", "kind = \"process\"");
+            ("settle while wound", format!("line {}", line_of("kind = \"settle\"", &t) - 1), t)
+        },
+    ];
+    for (what, expected, text) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let recipe = dir.path().join("bad.toml");
+        std::fs::write(&recipe, text).unwrap();
+        let output = dir.path().join("out.usda");
+        let groom = repo("grooms/seed_100x48cm.hair");
+        let result =
+            coif(&["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&output)]);
+        let message = stderr(&result);
+        assert_eq!(result.status.code(), Some(2), "{what}: {message}");
+        assert!(
+            message.contains(&expected) && message.contains("bad.toml"),
+            "{what}: {message:?} lacks {expected}"
+        );
+        assert_eq!(dir_listing(dir.path()), vec!["bad.toml"], "{what}: output written");
+    }
+}
