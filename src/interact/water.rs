@@ -32,7 +32,7 @@ impl Default for WaterParams {
             r_min: 0.001,
             r_max: 0.006,
             hair_pull: 30.0,
-            droplet_pull: 5.0,
+            droplet_pull: 200.0,
             droplet_damping: 20.0,
             uptake: 2.0,
         }
