@@ -1,0 +1,112 @@
+//! Interactions speed: ms per styling step with hair–hair contacts and water droplets, through
+//! the same driver `coif style` uses (forces from a snapshot, solver with obstacle contacts,
+//! wetness update). Configurations from issue 4: seed 2's groom (10,000 strands × 6 vertices,
+//! 4 iterations) with 0, 100 and 1,000 droplets and contacts on; a production groom
+//! (100,000 × 32, 5 iterations) with contacts on and off. Medians of 3 runs, 1 and 2 threads.
+//! `cargo bench --bench interactions [-- FILTER]`.
+use std::path::Path;
+
+use coif::generate::{generate, GenerateParams};
+use coif::style::{recipe, style, StyleOptions};
+
+struct Config {
+    name: &'static str,
+    strands: usize,
+    vertices: usize,
+    iterations: u32,
+    droplets: usize,
+    contacts: bool,
+    steps: u32,
+}
+
+const CONFIGS: [Config; 5] = [
+    Config {
+        name: "seed2-10000x6x4-water0",
+        strands: 10_000,
+        vertices: 6,
+        iterations: 4,
+        droplets: 0,
+        contacts: true,
+        steps: 60,
+    },
+    Config {
+        name: "seed2-10000x6x4-water100",
+        strands: 10_000,
+        vertices: 6,
+        iterations: 4,
+        droplets: 100,
+        contacts: true,
+        steps: 60,
+    },
+    Config {
+        name: "seed2-10000x6x4-water1000",
+        strands: 10_000,
+        vertices: 6,
+        iterations: 4,
+        droplets: 1000,
+        contacts: true,
+        steps: 60,
+    },
+    Config {
+        name: "production-100000x32-contacts",
+        strands: 100_000,
+        vertices: 32,
+        iterations: 5,
+        droplets: 0,
+        contacts: true,
+        steps: 6,
+    },
+    Config {
+        name: "production-100000x32-no-contacts",
+        strands: 100_000,
+        vertices: 32,
+        iterations: 5,
+        droplets: 0,
+        contacts: false,
+        steps: 6,
+    },
+];
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+fn main() {
+    let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    println!("cores available: {cores}; ms per step of the `process` stage, median of 3 runs");
+    for config in CONFIGS.iter().filter(|c| filter.as_deref().is_none_or(|f| c.name.contains(f))) {
+        let groom = generate(&GenerateParams {
+            strands: config.strands,
+            vertices_per_strand: config.vertices,
+            length: 0.24,
+            ..GenerateParams::default()
+        })
+        .expect("benchmark grooms generate");
+        let water = if config.droplets > 0 {
+            format!("[water]\ndroplets = {}\n", config.droplets)
+        } else {
+            String::new()
+        };
+        let seconds = config.steps as f32 / 360.0;
+        let text = format!(
+            "[settings]\niterations = {}\n[contacts]\nhair_hair = {}\n{water}\
+             [[obstacles]]\nname = \"head\"\nshape = \"head\"\n\
+             [[stages]]\nkind = \"wet\"\nduration = 0.0\n[[stages]]\nkind = \"process\"\nduration = {seconds}\n",
+            config.iterations, config.contacts
+        );
+        let recipe = recipe::parse(&text, Path::new("bench.toml")).expect("benchmark recipe parses");
+        for threads in [1, cores.min(2)] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let runs: Vec<f64> = (0..3)
+                .map(|_| {
+                    let styled = pool.install(|| style(&groom, &recipe, &StyleOptions::default())).unwrap();
+                    let process = &styled.report.stages[1];
+                    1e3 * process.wall_seconds / process.steps as f64
+                })
+                .collect();
+            println!("{:<36} {threads} thread(s): {:8.2} ms/step", config.name, median(runs));
+        }
+    }
+}
