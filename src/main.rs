@@ -39,6 +39,9 @@ enum Command {
         import: ImportArgs,
         #[arg(long)]
         json: bool,
+        /// Alembic output for Unreal: centimetres, groom_* attribute names, groom spec version.
+        #[arg(long)]
+        unreal: bool,
     },
 }
 
@@ -50,11 +53,14 @@ struct ImportArgs {
     /// Up axis of the input file, for formats that do not say.
     #[arg(long, value_enum)]
     up: Option<UpAxis>,
+    /// Sample of an animated file to read (0 = first).
+    #[arg(long, value_name = "N")]
+    frame: Option<u32>,
 }
 
 impl ImportArgs {
     fn options(&self) -> ImportOptions {
-        ImportOptions { meters_per_unit: self.units, up_axis: self.up }
+        ImportOptions { meters_per_unit: self.units, up_axis: self.up, frame: self.frame }
     }
 }
 
@@ -131,9 +137,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Convert { input, output, import, json } => {
+        Command::Convert { input, output, import, json, unreal } => {
             let loaded = io::read_groom(&input, &import.options())?;
-            write_and_report(&output, &loaded.groom, json)
+            write_and_report(&output, &loaded.groom, json, &io::ExportOptions { unreal })
         }
     }
 }
@@ -158,11 +164,11 @@ fn run_generate(args: GenerateArgs) -> Result<()> {
     // Fail on an unwritable extension before spending time generating.
     io::Format::from_extension(&args.output)?;
     let groom = generate(&params)?;
-    write_and_report(&args.output, &groom, args.json)
+    write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
 }
 
-fn write_and_report(output: &Path, groom: &coif::Groom, json: bool) -> Result<()> {
-    let warnings = io::write_groom(output, groom)?;
+fn write_and_report(output: &Path, groom: &coif::Groom, json: bool, options: &io::ExportOptions) -> Result<()> {
+    let warnings = io::write_groom_with(output, groom, options)?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }

@@ -1,6 +1,7 @@
 //! Reading and writing grooms. One module per format, each a reader and a writer of [`Groom`];
 //! the format is chosen by magic bytes when reading and by extension when writing. Units and
 //! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
+pub mod alembic;
 pub mod atomic;
 pub mod hair;
 
@@ -18,10 +19,12 @@ use crate::groom::Groom;
 pub enum Format {
     /// Cem Yuksel's binary `.hair`.
     Hair,
+    /// Alembic (Ogawa) curves.
+    Alembic,
 }
 
 impl Format {
-    const ALL: &'static [(Format, &'static str)] = &[(Format::Hair, "hair")];
+    const ALL: &'static [(Format, &'static str)] = &[(Format::Hair, "hair"), (Format::Alembic, "abc")];
 
     /// The format a file name's extension names.
     pub fn from_extension(path: &Path) -> Result<Format> {
@@ -38,6 +41,9 @@ impl Format {
 
     /// The format a file's first bytes announce, if any.
     pub fn from_magic(head: &[u8]) -> Option<Format> {
+        if head.starts_with(alembic::MAGIC) {
+            return Some(Format::Alembic);
+        }
         head.starts_with(hair::SIGNATURE).then_some(Format::Hair)
     }
 
@@ -62,6 +68,16 @@ pub struct ImportOptions {
     pub meters_per_unit: Option<f32>,
     /// The file's up axis; `None` keeps the file's own or Y.
     pub up_axis: Option<UpAxis>,
+    /// Sample to read from an animated file (0 = first); `None` reads the first.
+    pub frame: Option<u32>,
+}
+
+/// Choices for writing a groom that only some formats use.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ExportOptions {
+    /// Alembic: follow Epic's groom conventions for Unreal (centimetres, `groom_*` names,
+    /// groom spec version on a top Xform).
+    pub unreal: bool,
 }
 
 /// A groom read from disk, with the format it came in.
@@ -79,6 +95,7 @@ pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
     };
     let mut groom = match format {
         Format::Hair => hair::read(&bytes, path)?,
+        Format::Alembic => alembic::read(&bytes, path, options.frame.unwrap_or(0), options.meters_per_unit.is_some())?,
     };
     apply_import_options(&mut groom, options);
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
@@ -98,6 +115,11 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
 /// Writes a groom in the format its extension names, atomically. Returns warnings about data
 /// the format cannot carry.
 pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
+    write_groom_with(path, groom, &ExportOptions::default())
+}
+
+/// [`write_groom`] with format-specific choices.
+pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
     match format {
@@ -108,6 +130,11 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
                 .into_iter()
                 .map(|what| format!("{}: .hair drops {what}", path.display()))
                 .collect())
+        }
+        Format::Alembic => {
+            let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
+            alembic::write(path, groom, &abc_options)?;
+            Ok(Vec::new())
         }
     }
 }
