@@ -167,7 +167,12 @@ fn run_generate(args: GenerateArgs) -> Result<()> {
     write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
 }
 
-fn write_and_report(output: &Path, groom: &coif::Groom, json: bool, options: &io::ExportOptions) -> Result<()> {
+fn write_and_report(
+    output: &Path,
+    groom: &coif::Groom,
+    json: bool,
+    options: &io::ExportOptions,
+) -> Result<()> {
     let warnings = io::write_groom_with(output, groom, options)?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");

@@ -29,7 +29,8 @@ fn example_options() -> AlembicWriteOptions {
 fn writes_the_worked_example_byte_for_byte() {
     let expected = golden();
     assert_eq!(expected.len(), 1158);
-    let written = write_static(Cursor::new(Vec::new()), &example_groom(), &example_options()).unwrap().into_inner();
+    let written =
+        write_static(Cursor::new(Vec::new()), &example_groom(), &example_options()).unwrap().into_inner();
     assert_eq!(written.len(), expected.len(), "file size");
     // Name the first differing offset, so a failure says which block is wrong.
     if let Some(at) = written.iter().zip(&expected).position(|(a, b)| a != b) {

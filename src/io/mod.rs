@@ -95,7 +95,9 @@ pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
     };
     let mut groom = match format {
         Format::Hair => hair::read(&bytes, path)?,
-        Format::Alembic => alembic::read(&bytes, path, options.frame.unwrap_or(0), options.meters_per_unit.is_some())?,
+        Format::Alembic => {
+            alembic::read(&bytes, path, options.frame.unwrap_or(0), options.meters_per_unit.is_some())?
+        }
     };
     apply_import_options(&mut groom, options);
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;

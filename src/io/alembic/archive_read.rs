@@ -122,7 +122,10 @@ impl<'a> Builder<'a> {
     ) -> OgawaResult<Object<'a>> {
         self.visit(&group, depth)?;
         if group.len() < 2 {
-            return fail(format!("object {full_name}: its group has {} children, at least 2 expected", group.len()));
+            return fail(format!(
+                "object {full_name}: its group has {} children, at least 2 expected",
+                group.len()
+            ));
         }
         let headers = self.ogawa.child_data(&group, group.len() - 1, &full_name)?.bytes;
         let headers = if headers.len() > 32 { &headers[..headers.len() - 32] } else { &[][..] };
@@ -135,10 +138,12 @@ impl<'a> Builder<'a> {
             ));
         }
         let properties_group = self.ogawa.child_group(&group, 0, &full_name)?;
-        let properties = self.compound(properties_group, String::new(), MetaData::new(), &full_name, depth + 1)?;
+        let properties =
+            self.compound(properties_group, String::new(), MetaData::new(), &full_name, depth + 1)?;
         let mut children = Vec::with_capacity(child_headers.len());
         for (i, (child_name, child_metadata)) in child_headers.into_iter().enumerate() {
-            let child_full = if full_name == "/" { format!("/{child_name}") } else { format!("{full_name}/{child_name}") };
+            let child_full =
+                if full_name == "/" { format!("/{child_name}") } else { format!("{full_name}/{child_name}") };
             let child_group = self.ogawa.child_group(&group, i + 1, &child_full)?;
             children.push(self.object(child_group, child_name, child_full, child_metadata, depth + 1)?);
         }
@@ -213,11 +218,24 @@ impl<'a> Builder<'a> {
                     let len = cursor.sized(hint)? as usize;
                     let member_name = cursor.string(len)?;
                     let member_metadata = self.metadata(metadata_index, &mut cursor, hint)?;
-                    Property::Compound(self.compound(child_group, member_name, member_metadata, &path, depth + 1)?)
+                    Property::Compound(self.compound(
+                        child_group,
+                        member_name,
+                        member_metadata,
+                        &path,
+                        depth + 1,
+                    )?)
                 }
                 kind => {
                     self.visit(&child_group, depth + 1)?;
-                    Property::Sampled(self.sampled(word, kind, hint, metadata_index, &mut cursor, child_group)?)
+                    Property::Sampled(self.sampled(
+                        word,
+                        kind,
+                        hint,
+                        metadata_index,
+                        &mut cursor,
+                        child_group,
+                    )?)
                 }
             };
             bytes = cursor.bytes;
@@ -241,7 +259,8 @@ impl<'a> Builder<'a> {
     ) -> OgawaResult<Sampled<'a>> {
         let owner = cursor.owner.to_string();
         let pod_code = (word >> info::POD_SHIFT) & 0xF;
-        let pod = Pod::from_code(pod_code).ok_or_else(|| OgawaError(format!("{owner}: unknown POD code {pod_code}")))?;
+        let pod = Pod::from_code(pod_code)
+            .ok_or_else(|| OgawaError(format!("{owner}: unknown POD code {pod_code}")))?;
         let extent = (word >> info::EXTENT_SHIFT) as u8;
         let num_samples = cursor.sized(hint)?;
         let (mut first_changed, mut last_changed) = (1, num_samples.saturating_sub(1));
@@ -268,7 +287,18 @@ impl<'a> Builder<'a> {
             return fail(format!("{path}: changed samples {first_changed}..{last_changed} of {num_samples}"));
         }
         let kind = if kind == 1 { PropertyKind::Scalar } else { PropertyKind::Array };
-        Ok(Sampled { name: path, metadata, kind, pod, extent, num_samples, first_changed, last_changed, time_sampling, group })
+        Ok(Sampled {
+            name: path,
+            metadata,
+            kind,
+            pod,
+            extent,
+            num_samples,
+            first_changed,
+            last_changed,
+            time_sampling,
+            group,
+        })
     }
 }
 
@@ -298,7 +328,11 @@ impl<'a> Sampled<'a> {
         let slot = self.slot(index) as usize;
         let child = if self.kind == PropertyKind::Array { slot * 2 } else { slot };
         if child >= self.group.len() {
-            return fail(format!("{}: sample {index} needs slot {slot}, the property stores {}", self.name, self.group.len()));
+            return fail(format!(
+                "{}: sample {index} needs slot {slot}, the property stores {}",
+                self.name,
+                self.group.len()
+            ));
         }
         let bytes = match ogawa.child(&self.group, child)? {
             Child::Data(data) => data.bytes,
@@ -330,7 +364,13 @@ impl<'a> Sampled<'a> {
         }
         let stride = size * self.extent as usize;
         if bytes.len() % stride != 0 {
-            return fail(format!("{}: {} bytes are not a whole number of {}×{} elements", self.name, bytes.len(), self.pod.name(), self.extent));
+            return fail(format!(
+                "{}: {} bytes are not a whole number of {}×{} elements",
+                self.name,
+                bytes.len(),
+                self.pod.name(),
+                self.extent
+            ));
         }
         Ok(bytes.chunks_exact(size).map(|b| pod_to_f64(self.pod, b)).collect())
     }
@@ -343,7 +383,12 @@ impl<'a> Sampled<'a> {
         }
         let stride = 4 * self.extent as usize;
         if bytes.len() % stride != 0 {
-            return fail(format!("{}: {} bytes are not a whole number of float32×{} elements", self.name, bytes.len(), self.extent));
+            return fail(format!(
+                "{}: {} bytes are not a whole number of float32×{} elements",
+                self.name,
+                bytes.len(),
+                self.extent
+            ));
         }
         Ok(match bytemuck::try_cast_slice::<u8, f32>(bytes) {
             Ok(aligned) => aligned.to_vec(),
@@ -402,7 +447,11 @@ struct Cursor<'b, 'o> {
 impl<'b> Cursor<'b, '_> {
     fn take(&mut self, n: usize) -> OgawaResult<&'b [u8]> {
         if n > self.bytes.len() {
-            return fail(format!("{}: header block ends early (needs {n} more bytes, has {})", self.owner, self.bytes.len()));
+            return fail(format!(
+                "{}: header block ends early (needs {n} more bytes, has {})",
+                self.owner,
+                self.bytes.len()
+            ));
         }
         let (head, rest) = self.bytes.split_at(n);
         self.bytes = rest;
@@ -438,7 +487,8 @@ fn parse_time_samplings(mut bytes: &[u8]) -> OgawaResult<(Vec<TimeSampling>, Vec
         let time_per_cycle = f64::from_le_bytes(cursor.take(8)?.try_into().unwrap());
         let count = u32::from_le_bytes(cursor.take(4)?.try_into().unwrap()) as usize;
         let times = cursor.take(count.checked_mul(8).unwrap_or(usize::MAX))?;
-        let stored_times: Vec<f64> = times.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect();
+        let stored_times: Vec<f64> =
+            times.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect();
         if stored_times.is_empty() || !(time_per_cycle > 0.0) {
             return fail(format!("time sampling {} has no times or a non-positive cycle", samplings.len()));
         }

@@ -205,7 +205,10 @@ impl<W: Write + Seek> ArchiveWriter<W> {
         let index = node.num_samples;
         node.num_samples += 1;
         node.every_sample_single &= elements == 1;
-        let key_hash = (u64::from_le_bytes(key[..8].try_into().unwrap()), u64::from_le_bytes(key[8..].try_into().unwrap()));
+        let key_hash = (
+            u64::from_le_bytes(key[..8].try_into().unwrap()),
+            u64::from_le_bytes(key[8..].try_into().unwrap()),
+        );
         let digest = if node.is_array {
             let mut dims = Vec::with_capacity(24);
             dims.extend_from_slice(&elements.to_le_bytes());
@@ -309,7 +312,8 @@ impl<W: Write + Seek> ArchiveWriter<W> {
 
         let mut headers = Vec::new();
         for &child in &children {
-            let (name, metadata) = (self.objects[child.0].name.clone(), self.objects[child.0].metadata.serialize());
+            let (name, metadata) =
+                (self.objects[child.0].name.clone(), self.objects[child.0].metadata.serialize());
             headers.extend_from_slice(&(name.len() as u32).to_le_bytes());
             headers.extend_from_slice(name.as_bytes());
             let index = self.metadata_index(&metadata);

@@ -48,7 +48,13 @@ impl<'a> CurvesArchive<'a> {
         if found.is_empty() {
             return fail("the archive holds no curves (no AbcGeom_Curve_v2 object)");
         }
-        let mut result = CurvesArchive { archive, curves: found, frames: 1, frame_sampling: TimeSampling::identity(), epic_groom };
+        let mut result = CurvesArchive {
+            archive,
+            curves: found,
+            frames: 1,
+            frame_sampling: TimeSampling::identity(),
+            epic_groom,
+        };
         let first = result.resolve(0)?;
         let positions = required(&first, "P")?;
         let (frames, sampling) = (positions.num_samples.max(1), positions.time_sampling as usize);
@@ -62,7 +68,10 @@ impl<'a> CurvesArchive<'a> {
         let (path, xform_paths) = &self.curves[index];
         let top = &self.archive.top;
         let object = find(top, path).expect("collected from this tree");
-        let geom = object.properties.compound(".geom").ok_or_else(|| OgawaError(format!("{path}: no .geom compound")))?;
+        let geom = object
+            .properties
+            .compound(".geom")
+            .ok_or_else(|| OgawaError(format!("{path}: no .geom compound")))?;
         let xforms = xform_paths
             .iter()
             .filter_map(|p| find(top, p).and_then(|o| o.properties.compound(".xform")))
@@ -83,7 +92,11 @@ impl<'a> CurvesArchive<'a> {
     /// Every curves object merged into one groom, at frame `frame` (in file units).
     pub fn read_frame(&self, frame: u32) -> OgawaResult<Groom> {
         if frame >= self.frames {
-            return fail(format!("frame {frame} does not exist; the file has {} (0 to {})", self.frames, self.frames - 1));
+            return fail(format!(
+                "frame {frame} does not exist; the file has {} (0 to {})",
+                self.frames,
+                self.frames - 1
+            ));
         }
         let time = self.frame_time(frame);
         let mut merged: Option<Groom> = None;
@@ -149,7 +162,10 @@ impl<'a> CurvesArchive<'a> {
             }
             total += count as u64;
             if total > points.len() as u64 {
-                return fail(format!("{path}: nVertices add up to more than the {} points of P", points.len()));
+                return fail(format!(
+                    "{path}: nVertices add up to more than the {} points of P",
+                    points.len()
+                ));
             }
             offsets.push(total as u32);
         }
@@ -171,14 +187,18 @@ impl<'a> CurvesArchive<'a> {
         };
         groom.widths = match width {
             Some(param) => param.to_vertices(&groom),
-            None => vec![DEFAULT_WIDTH * if self.epic_groom { epic::UNITS_PER_METRE } else { 1.0 }; groom.vertex_count()],
+            None => vec![
+                DEFAULT_WIDTH * if self.epic_groom { epic::UNITS_PER_METRE } else { 1.0 };
+                groom.vertex_count()
+            ],
         };
         groom.strand_ids = (0..strands as u32).collect();
 
         let uv = arb.and_then(|c| c.get(epic::ROOT_UV)).or_else(|| object.geom.get("uv"));
         if let Some(p) = uv {
             let param = self.expand(p, time, &groom, 2, path)?;
-            groom.root_uvs = Some(param.to_strand_roots(&groom).chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+            groom.root_uvs =
+                Some(param.to_strand_roots(&groom).chunks_exact(2).map(|c| [c[0], c[1]]).collect());
         }
         for member in arb.map(|c| c.members.as_slice()).unwrap_or(&[]) {
             let name = member.name();
@@ -192,7 +212,9 @@ impl<'a> CurvesArchive<'a> {
             let param = self.expand(member, time, &groom, extent, path)?;
             match name {
                 epic::ID => groom.strand_ids = param.to_strands(&groom).iter().map(|&v| v as u32).collect(),
-                epic::GUIDE => groom.guides = Some(param.to_strands(&groom).iter().map(|&v| v != 0.0).collect()),
+                epic::GUIDE => {
+                    groom.guides = Some(param.to_strands(&groom).iter().map(|&v| v != 0.0).collect())
+                }
                 _ => {
                     let canonical = match name {
                         epic::COLOR => attr::COLOR.to_string(),
@@ -205,7 +227,8 @@ impl<'a> CurvesArchive<'a> {
                     let mut attribute = Attribute::new(canonical, rate, extent as usize, data);
                     if attribute.name == "rest" && attribute.components == 3 && matrix != DMat4::IDENTITY {
                         for c in attribute.data.chunks_exact_mut(3) {
-                            let p = matrix.transform_point3(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
+                            let p =
+                                matrix.transform_point3(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
                             c.copy_from_slice(&p.as_vec3().to_array());
                         }
                     }
@@ -222,7 +245,10 @@ impl<'a> CurvesArchive<'a> {
         for xform in &object.xforms {
             let local = self.local_matrix(xform, time)?;
             let inherits = match xform.sampled(".inherits") {
-                Some(p) => p.read_f64(&self.archive.ogawa, self.index_at(p, time))?.first().copied().unwrap_or(1.0) != 0.0,
+                Some(p) => {
+                    p.read_f64(&self.archive.ogawa, self.index_at(p, time))?.first().copied().unwrap_or(1.0)
+                        != 0.0
+                }
                 None => true,
             };
             world = if inherits { world * local } else { local };
@@ -257,7 +283,11 @@ impl<'a> CurvesArchive<'a> {
                 1 => DMat4::from_translation(DVec3::new(v[0], v[1], v[2])),
                 2 => {
                     let axis = DVec3::new(v[0], v[1], v[2]);
-                    if axis.length_squared() == 0.0 { DMat4::IDENTITY } else { DMat4::from_axis_angle(axis.normalize(), v[3].to_radians()) }
+                    if axis.length_squared() == 0.0 {
+                        DMat4::IDENTITY
+                    } else {
+                        DMat4::from_axis_angle(axis.normalize(), v[3].to_radians())
+                    }
                 }
                 3 => DMat4::from_cols_array(v.try_into().unwrap()),
                 4 => DMat4::from_rotation_x(v[0].to_radians()),
@@ -272,15 +302,28 @@ impl<'a> CurvesArchive<'a> {
 
     /// A geometry parameter (plain array or indexed `.vals`/`.indices` compound) at `time`,
     /// expanded through its indices, with its rate from `geoScope` or, failing that, its count.
-    fn expand(&self, property: &Property<'a>, time: f64, groom: &Groom, extent: u8, path: &str) -> OgawaResult<Param> {
+    fn expand(
+        &self,
+        property: &Property<'a>,
+        time: f64,
+        groom: &Groom,
+        extent: u8,
+        path: &str,
+    ) -> OgawaResult<Param> {
         let ogawa = &self.archive.ogawa;
         let (values, metadata_scope, name) = match property {
             Property::Sampled(s) => {
                 s.expect(NUMERIC, extent)?;
-                (s.read_f32(ogawa, self.index_at(s, time))?, s.metadata.get("geoScope").map(str::to_string), s.name.clone())
+                (
+                    s.read_f32(ogawa, self.index_at(s, time))?,
+                    s.metadata.get("geoScope").map(str::to_string),
+                    s.name.clone(),
+                )
             }
             Property::Compound(c) => {
-                let vals = c.sampled(".vals").ok_or_else(|| OgawaError(format!("{path}: {} has no .vals", c.name)))?;
+                let vals = c
+                    .sampled(".vals")
+                    .ok_or_else(|| OgawaError(format!("{path}: {} has no .vals", c.name)))?;
                 vals.expect(NUMERIC, extent)?;
                 let raw = vals.read_f32(ogawa, self.index_at(vals, time))?;
                 let values = match c.sampled(".indices") {
@@ -299,7 +342,8 @@ impl<'a> CurvesArchive<'a> {
                     }
                     None => raw,
                 };
-                let scope = c.metadata.get("geoScope").or_else(|| vals.metadata.get("geoScope")).map(str::to_string);
+                let scope =
+                    c.metadata.get("geoScope").or_else(|| vals.metadata.get("geoScope")).map(str::to_string);
                 (values, scope, format!("{path}/{}", c.name))
             }
         };
@@ -325,8 +369,20 @@ impl<'a> CurvesArchive<'a> {
     }
 }
 
-const NUMERIC: &[Pod] =
-    &[Pod::F32, Pod::F64, Pod::F16, Pod::I32, Pod::U32, Pod::I16, Pod::U16, Pod::I8, Pod::U8, Pod::Bool, Pod::I64, Pod::U64];
+const NUMERIC: &[Pod] = &[
+    Pod::F32,
+    Pod::F64,
+    Pod::F16,
+    Pod::I32,
+    Pod::U32,
+    Pod::I16,
+    Pod::U16,
+    Pod::I8,
+    Pod::U8,
+    Pod::Bool,
+    Pod::I64,
+    Pod::U64,
+];
 
 #[derive(Clone, Copy, PartialEq)]
 enum Rate {
@@ -385,12 +441,16 @@ fn param_extent(property: &Property<'_>) -> Option<u8> {
 }
 
 fn required<'o, 'a>(object: &CurvesObject<'o, 'a>, name: &str) -> OgawaResult<&'o Sampled<'a>> {
-    object.geom.sampled(name).ok_or_else(|| OgawaError(format!("{}: curves without the required '{name}' property", object.path)))
+    object
+        .geom
+        .sampled(name)
+        .ok_or_else(|| OgawaError(format!("{}: curves without the required '{name}' property", object.path)))
 }
 
 /// The curve kind from `curveBasisAndType`: the basis byte decides, as in Blender and Houdini.
 fn curve_basis(bytes: &[u8], path: &str) -> OgawaResult<CurveBasis> {
-    let [_, wrap, basis, _] = bytes.try_into().map_err(|_| OgawaError(format!("{path}: curveBasisAndType is empty")))?;
+    let [_, wrap, basis, _] =
+        bytes.try_into().map_err(|_| OgawaError(format!("{path}: curveBasisAndType is empty")))?;
     if wrap != 0 {
         return fail(format!("{path}: periodic (closed) curves are not hair"));
     }
@@ -404,7 +464,8 @@ fn curve_basis(bytes: &[u8], path: &str) -> OgawaResult<CurveBasis> {
 }
 
 fn has_schema(object: &Object<'_>, schema: &str, title: &str) -> bool {
-    object.metadata.get("schema") == Some(schema) || object.metadata.get("schemaObjTitle") == Some(&format!("{schema}:{title}"))
+    object.metadata.get("schema") == Some(schema)
+        || object.metadata.get("schemaObjTitle") == Some(&format!("{schema}:{title}"))
 }
 
 /// Finds curves objects (paths) and the Xform paths above each; notes Epic's groom version.
@@ -417,7 +478,8 @@ fn collect(
     if let Some(user) = object.properties.compound(".userProperties") {
         *epic_groom |= user.get(epic::VERSION_MAJOR).is_some();
     }
-    let is_xform = has_schema(object, XFORM_SCHEMA, ".xform") && object.properties.compound(".xform").is_some();
+    let is_xform =
+        has_schema(object, XFORM_SCHEMA, ".xform") && object.properties.compound(".xform").is_some();
     if is_xform {
         xforms.push(object.full_name.clone());
     }
@@ -456,7 +518,9 @@ fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
     a.strand_ids.extend(b.strand_ids.iter().map(|id| id + next_id));
     a.root_uvs = match (a.root_uvs.take(), b.root_uvs.take()) {
         (None, None) => None,
-        (x, y) => Some([x.unwrap_or(vec![[0.0; 2]; a_strands]), y.unwrap_or(vec![[0.0; 2]; b_strands])].concat()),
+        (x, y) => {
+            Some([x.unwrap_or(vec![[0.0; 2]; a_strands]), y.unwrap_or(vec![[0.0; 2]; b_strands])].concat())
+        }
     };
     a.guides = match (a.guides.take(), b.guides.take()) {
         (None, None) => None,
@@ -469,15 +533,20 @@ fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
         let (x, y) = (a.attribute(&name).cloned(), b.attribute(&name).cloned());
         let (rate, components) = match (&x, &y) {
             (Some(x), Some(y)) if (x.rate, x.components) != (y.rate, y.components) => {
-                return fail(format!("{path}: attribute '{name}' differs in rate or size from other curves objects"))
+                return fail(format!(
+                    "{path}: attribute '{name}' differs in rate or size from other curves objects"
+                ))
             }
             (Some(x), _) => (x.rate, x.components),
             (None, Some(y)) => (y.rate, y.components),
             (None, None) => unreachable!("name came from one of them"),
         };
         let count = |strands, vertices| if rate == AttributeRate::Vertex { vertices } else { strands };
-        let mut data = x.map(|x| x.data).unwrap_or_else(|| vec![0.0; count(a_strands, a_vertices) * components]);
-        data.extend(y.map(|y| y.data).unwrap_or_else(|| vec![0.0; count(b_strands, b_vertices) * components]));
+        let mut data =
+            x.map(|x| x.data).unwrap_or_else(|| vec![0.0; count(a_strands, a_vertices) * components]);
+        data.extend(
+            y.map(|y| y.data).unwrap_or_else(|| vec![0.0; count(b_strands, b_vertices) * components]),
+        );
         a.set_attribute(Attribute::new(name, rate, components, data));
     }
     Ok(a)

@@ -123,7 +123,15 @@ impl<W: Write + Seek> CurvesWriter<W> {
         if let Some(matrix) = options.xform {
             parent = add_xform(&mut archive, parent, "xform", Some(matrix))?;
         }
-        let properties = add_curves(&mut archive, parent, &options.object_name, first, options.unreal, animated, time_sampling);
+        let properties = add_curves(
+            &mut archive,
+            parent,
+            &options.object_name,
+            first,
+            options.unreal,
+            animated,
+            time_sampling,
+        );
         Ok(CurvesWriter {
             archive,
             properties,
@@ -142,7 +150,10 @@ impl<W: Write + Seek> CurvesWriter<W> {
     /// Adds the next frame. Its topology, basis and attribute layout must match the first.
     pub fn write_frame(&mut self, groom: &Groom) -> Result<(), String> {
         if groom.strand_offsets != self.strand_offsets || groom.basis != self.basis {
-            return Err(format!("frame {} changes the strand layout; Alembic frames share one topology", self.frames));
+            return Err(format!(
+                "frame {} changes the strand layout; Alembic frames share one topology",
+                self.frames
+            ));
         }
         if layout(groom) != self.attribute_layout {
             return Err(format!("frame {} has different attributes from the first frame", self.frames));
@@ -151,7 +162,12 @@ impl<W: Write + Seek> CurvesWriter<W> {
             return Err("a static Alembic file holds one frame".into());
         }
         if let Some(pending) = self.pending.take() {
-            let velocities = velocities(self.previous_points.as_deref(), &pending.points, Some(&groom.points), self.frames_per_second);
+            let velocities = velocities(
+                self.previous_points.as_deref(),
+                &pending.points,
+                Some(&groom.points),
+                self.frames_per_second,
+            );
             self.write_sample(&pending, velocities.as_deref()).map_err(|e| e.to_string())?;
             self.previous_points = Some(pending.points);
         }
@@ -163,7 +179,8 @@ impl<W: Write + Seek> CurvesWriter<W> {
     /// Writes the last frame and closes the archive; returns the stream.
     pub fn finish(mut self) -> io::Result<W> {
         if let Some(pending) = self.pending.take() {
-            let velocities = velocities(self.previous_points.as_deref(), &pending.points, None, self.frames_per_second);
+            let velocities =
+                velocities(self.previous_points.as_deref(), &pending.points, None, self.frames_per_second);
             self.write_sample(&pending, velocities.as_deref())?;
         }
         self.archive.finish()
@@ -179,7 +196,8 @@ impl<W: Write + Seek> CurvesWriter<W> {
             &scaled_points
         };
         let p = &self.properties;
-        let (bounds, positions, vertex_counts, basis, width) = (p.bounds, p.positions, p.vertex_counts, p.basis, p.width);
+        let (bounds, positions, vertex_counts, basis, width) =
+            (p.bounds, p.positions, p.vertex_counts, p.basis, p.width);
         let (velocity_property, uv, params) = (p.velocities, p.uv, p.params.clone());
         let a = &mut self.archive;
         a.set_sample(bounds, &bounds_bytes(points), 1)?;
@@ -213,7 +231,8 @@ pub fn write_static<W: Write + Seek>(out: W, groom: &Groom, options: &AlembicWri
 }
 
 fn layout(groom: &Groom) -> Vec<(String, AttributeRate, usize)> {
-    let mut layout: Vec<_> = groom.attributes.iter().map(|a| (a.name.clone(), a.rate, a.components)).collect();
+    let mut layout: Vec<_> =
+        groom.attributes.iter().map(|a| (a.name.clone(), a.rate, a.components)).collect();
     layout.push(("(root uvs)".into(), AttributeRate::Strand, groom.root_uvs.is_some() as usize));
     layout.push(("(guides)".into(), AttributeRate::Strand, groom.guides.is_some() as usize));
     layout.push(("(ids)".into(), AttributeRate::Strand, has_custom_ids(groom) as usize));
@@ -225,7 +244,12 @@ fn has_custom_ids(groom: &Groom) -> bool {
     groom.strand_ids.iter().enumerate().any(|(i, &id)| id != i as u32)
 }
 
-fn velocities(previous: Option<&[Vec3]>, current: &[Vec3], next: Option<&[Vec3]>, fps: f64) -> Option<Vec<Vec3>> {
+fn velocities(
+    previous: Option<&[Vec3]>,
+    current: &[Vec3],
+    next: Option<&[Vec3]>,
+    fps: f64,
+) -> Option<Vec<Vec3>> {
     let fps = fps as f32;
     Some(match (previous, next) {
         (Some(prev), Some(next)) => prev.iter().zip(next).map(|(a, b)| (*b - *a) * (0.5 * fps)).collect(),
@@ -278,7 +302,8 @@ fn add_curves<W: Write + Seek>(
     let top = archive.properties(object);
     let geom_metadata = MetaData::new().with("schema", CURVE_SCHEMA).with("schemaBaseType", GEOM_BASE);
     let geom = archive.add_compound(top, ".geom", geom_metadata);
-    let bounds = archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
+    let bounds =
+        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
     let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
     let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
     let vertex_counts = archive.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, ts);
@@ -324,13 +349,21 @@ fn add_curves<W: Write + Seek>(
         }
     }
     let velocities = animated.then(|| {
-        archive.add_array(geom, ".velocities", MetaData::new().with("interpretation", "vector"), Pod::F32, 3, ts)
+        archive.add_array(
+            geom,
+            ".velocities",
+            MetaData::new().with("interpretation", "vector"),
+            Pod::F32,
+            3,
+            ts,
+        )
     });
     let uv = groom.root_uvs.is_some().then(|| {
         let metadata = geom_param_metadata("uni", Pod::F32, 2, "vector");
         archive.add_array(geom, "uv", metadata, Pod::F32, 2, ts)
     });
-    let width = archive.add_array(geom, "width", geom_param_metadata("vtx", Pod::F32, 1, ""), Pod::F32, 1, ts);
+    let width =
+        archive.add_array(geom, "width", geom_param_metadata("vtx", Pod::F32, 1, ""), Pod::F32, 1, ts);
     CurveProperties { bounds, positions, vertex_counts, basis, velocities, uv, width, params }
 }
 
@@ -341,7 +374,9 @@ fn add_xform<W: Write + Seek>(
     name: &str,
     matrix: Option<DMat4>,
 ) -> io::Result<ObjectId> {
-    let metadata = MetaData::new().with("schema", XFORM_SCHEMA).with("schemaObjTitle", &format!("{XFORM_SCHEMA}:.xform"));
+    let metadata = MetaData::new()
+        .with("schema", XFORM_SCHEMA)
+        .with("schemaObjTitle", &format!("{XFORM_SCHEMA}:.xform"));
     let object = archive.add_object(parent, name, metadata);
     let top = archive.properties(object);
     let xform = archive.add_compound(top, ".xform", MetaData::new().with("schema", XFORM_SCHEMA));
@@ -354,7 +389,8 @@ fn add_xform<W: Write + Seek>(
         // Imath stores the row-vector matrix row by row: glam's columns, in order.
         let values = matrix.to_cols_array();
         archive.set_sample(vals, bytemuck::cast_slice(&values), 1)?;
-        let not_identity = archive.add_scalar(xform, "isNotConstantIdentity", MetaData::new(), Pod::Bool, 1, 0);
+        let not_identity =
+            archive.add_scalar(xform, "isNotConstantIdentity", MetaData::new(), Pod::Bool, 1, 0);
         archive.set_sample(not_identity, &[1], 1)?;
     }
     Ok(object)
@@ -402,9 +438,10 @@ fn param_bytes(groom: &Groom, source: &ParamSource, scale: f32) -> (Vec<u8>, u64
     }
     match source {
         ParamSource::Widths => (floats(groom.widths.iter().map(|w| w * scale)), groom.widths.len() as u64),
-        ParamSource::StrandIds => {
-            (groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect(), groom.strand_ids.len() as u64)
-        }
+        ParamSource::StrandIds => (
+            groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect(),
+            groom.strand_ids.len() as u64,
+        ),
         ParamSource::Guides => {
             let guides = groom.guides.as_deref().unwrap_or(&[]);
             (guides.iter().flat_map(|&g| (g as i32).to_le_bytes()).collect(), guides.len() as u64)

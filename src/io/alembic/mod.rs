@@ -97,7 +97,9 @@ impl AnimationWriter {
 
     pub fn write_frame(&mut self, groom: &Groom) -> Result<()> {
         groom.validate()?;
-        self.writer.write_frame(groom).map_err(|message| Error::Usage(format!("{}: {message}", self.path.display())))
+        self.writer
+            .write_frame(groom)
+            .map_err(|message| Error::Usage(format!("{}: {message}", self.path.display())))
     }
 
     pub fn finish(self) -> Result<()> {

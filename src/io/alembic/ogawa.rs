@@ -167,7 +167,9 @@ impl<'a> OgawaReader<'a> {
         let count = self.u64_at(offset, "group")?;
         let room = (self.len() - offset - 8) / 8;
         if count == 0 || count > room {
-            return fail(format!("group at offset {offset} claims {count} children; the file has room for {room}"));
+            return fail(format!(
+                "group at offset {offset} claims {count} children; the file has room for {room}"
+            ));
         }
         let start = (offset + 8) as usize;
         Ok(Group { offset, entries: &self.bytes[start..start + 8 * count as usize] })
@@ -189,9 +191,9 @@ impl<'a> OgawaReader<'a> {
 
     /// Resolves a child reference; a child pointing at the header or at its own group is refused.
     pub fn child(&self, parent: &Group<'a>, index: usize) -> OgawaResult<Child<'a>> {
-        let reference = parent.reference(index).ok_or_else(|| {
-            OgawaError(format!("group at offset {} has no child {index}", parent.offset))
-        })?;
+        let reference = parent
+            .reference(index)
+            .ok_or_else(|| OgawaError(format!("group at offset {} has no child {index}", parent.offset)))?;
         let offset = reference.offset();
         if offset != 0 && (offset < HEADER_LEN || offset == parent.offset) {
             return fail(format!("group at offset {} has a child at invalid offset {offset}", parent.offset));
@@ -206,14 +208,18 @@ impl<'a> OgawaReader<'a> {
     pub fn child_group(&self, parent: &Group<'a>, index: usize, what: &str) -> OgawaResult<Group<'a>> {
         match self.child(parent, index)? {
             Child::Group(group) => Ok(group),
-            Child::Data(_) => fail(format!("{what}: expected a group at child {index} of group {}", parent.offset)),
+            Child::Data(_) => {
+                fail(format!("{what}: expected a group at child {index} of group {}", parent.offset))
+            }
         }
     }
 
     pub fn child_data(&self, parent: &Group<'a>, index: usize, what: &str) -> OgawaResult<Data<'a>> {
         match self.child(parent, index)? {
             Child::Data(data) => Ok(data),
-            Child::Group(_) => fail(format!("{what}: expected data at child {index} of group {}", parent.offset)),
+            Child::Group(_) => {
+                fail(format!("{what}: expected data at child {index} of group {}", parent.offset))
+            }
         }
     }
 

@@ -224,7 +224,10 @@ mod tests {
     fn metadata_sorts_keys_and_drops_empty_values() {
         let md = MetaData::new().with("interpretation", "point").with("geoScope", "vtx").with("notUV", "");
         assert_eq!(md.serialize(), "geoScope=vtx;interpretation=point");
-        assert_eq!(MetaData::parse(&md.serialize()), MetaData::new().with("geoScope", "vtx").with("interpretation", "point"));
+        assert_eq!(
+            MetaData::parse(&md.serialize()),
+            MetaData::new().with("geoScope", "vtx").with("interpretation", "point")
+        );
         assert_eq!(MetaData::parse("a=1;a=2").get("a"), Some("1"));
     }
 
