@@ -486,10 +486,10 @@ fn parse_time_samplings(mut bytes: &[u8]) -> OgawaResult<(Vec<TimeSampling>, Vec
         let max = u32::from_le_bytes(cursor.take(4)?.try_into().unwrap());
         let time_per_cycle = f64::from_le_bytes(cursor.take(8)?.try_into().unwrap());
         let count = u32::from_le_bytes(cursor.take(4)?.try_into().unwrap()) as usize;
-        let times = cursor.take(count.checked_mul(8).unwrap_or(usize::MAX))?;
+        let times = cursor.take(count.saturating_mul(8))?;
         let stored_times: Vec<f64> =
             times.chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect();
-        if stored_times.is_empty() || !(time_per_cycle > 0.0) {
+        if stored_times.is_empty() || time_per_cycle.is_nan() || time_per_cycle <= 0.0 {
             return fail(format!("time sampling {} has no times or a non-positive cycle", samplings.len()));
         }
         samplings.push(TimeSampling { time_per_cycle, stored_times });

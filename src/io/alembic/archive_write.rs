@@ -423,7 +423,8 @@ impl<W: Write + Seek> ArchiveWriter<W> {
         let index = self.metadata_index(&metadata);
         let p = &self.properties[id.0];
         let constant = p.first_changed == 0 && p.last_changed == 0;
-        let explicit = !constant && !(p.first_changed == 1 && p.last_changed + 1 == p.num_samples);
+        let common_animated = p.first_changed == 1 && p.last_changed + 1 == p.num_samples;
+        let explicit = !(constant || common_animated);
         let inline_len = if index == info::INLINE_METADATA { metadata.len() } else { 0 };
         let hint = size_hint(
             (p.name.len().max(inline_len) as u64).max(p.num_samples as u64).max(p.time_sampling as u64),

@@ -253,6 +253,26 @@ mod tests {
     }
 
     #[test]
+    fn matches_the_reference_implementation_on_short_and_long_inputs() {
+        // Bob Jenkins' SpookyV2.cpp (from the `spooky` 2.0.0 sdist, compiled as an oracle),
+        // Hash128 with seeds (0, 0) over byte i = (i · 2654435761 mod 2³²) >> 13.
+        let data: Vec<u8> = (0..1000u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+        let vectors: [(usize, u64, u64); 8] = [
+            (0, 0x232706fc6bf50919, 0x8b72ee65b4e851c7),
+            (5, 0xefa9bc3cae899590, 0xa5e8e1db3252147f),
+            (31, 0xded4a87eb6f2a081, 0x4b5e41136c2d89e8),
+            (191, 0x198ef0301af3c6df, 0xf5c090f4975f236a),
+            (192, 0x7eff6199f98a6197, 0x8edfb4a97aea8983),
+            (254, 0x128ca0368c09835d, 0x9ffc4420fa1967e9),
+            (300, 0xe22b706d55d8ec43, 0x3b360dc0c60a71d5),
+            (1000, 0x011b9d3d431e7839, 0x42f5df0dbfe5f241),
+        ];
+        for (len, h1, h2) in vectors {
+            assert_eq!(spooky128(&data[..len]), (h1, h2), "length {len}");
+        }
+    }
+
+    #[test]
     fn long_inputs_differ_from_short_prefixes() {
         let data = vec![7u8; 400];
         assert_ne!(spooky128(&data[..191]), spooky128(&data[..192]));
