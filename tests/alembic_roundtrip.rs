@@ -230,3 +230,23 @@ fn cli_converts_hair_to_alembic_and_back() {
     assert_eq!(info["format"], "alembic");
     assert_eq!(info["groom"]["strands"], 50);
 }
+
+#[test]
+fn velocities_can_be_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("novel.abc");
+    let base = full_groom();
+    let options = AlembicWriteOptions { velocities: false, ..Default::default() };
+    let mut writer = AnimationWriter::create(&path, &base, &options, true).unwrap();
+    let frames: Vec<Groom> = (0..6).map(|f| frame(&base, f).0).collect();
+    for f in &frames {
+        writer.write_frame(f).unwrap();
+    }
+    writer.finish().unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let archive = Archive::open(&bytes).unwrap();
+    let geom = archive.top.children[0].properties.compound(".geom").unwrap();
+    assert!(geom.get(".velocities").is_none());
+    assert_eq!(alembic::read_all_frames(&bytes, &path, false).unwrap(), frames);
+    assert_eq!(geom.sampled("P").unwrap().num_samples, 6);
+}

@@ -4,6 +4,7 @@
 pub mod alembic;
 pub mod atomic;
 pub mod hair;
+pub mod input;
 
 use std::path::Path;
 
@@ -88,7 +89,7 @@ pub struct Loaded {
 
 /// Reads a groom file, converts it to metres and Y up, and validates it.
 pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = input::map_file(path)?;
     let format = match Format::from_magic(&bytes) {
         Some(format) => format,
         None => Format::from_extension(path)?,

@@ -375,13 +375,29 @@ impl<'a> Sampled<'a> {
         Ok(bytes.chunks_exact(size).map(|b| pod_to_f64(self.pod, b)).collect())
     }
 
-    /// Sample `index` of an f32 property, without conversion.
+    /// Sample `index` as f32 values (other numeric PODs are converted).
     pub fn read_f32(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<f32>> {
-        let bytes = self.sample_bytes(ogawa, index)?;
         if self.pod != Pod::F32 {
             return Ok(self.read_f64(ogawa, index)?.into_iter().map(|v| v as f32).collect());
         }
+        self.read_f32_as(ogawa, index)
+    }
+
+    /// Sample `index` of a float32 property as `T` (`f32`, `Vec3`, …) by one plain copy: the
+    /// file is little-endian like the host, and the copy does not care that Ogawa blocks are
+    /// packed without alignment.
+    pub fn read_f32_as<T: bytemuck::Pod>(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<T>> {
+        let bytes = self.sample_bytes(ogawa, index)?;
         let stride = 4 * self.extent as usize;
+        if self.pod != Pod::F32 || std::mem::size_of::<T>() % 4 != 0 || stride % std::mem::size_of::<T>() != 0
+        {
+            return fail(format!(
+                "{} is {}×{}, not float32 values of this size",
+                self.name,
+                self.pod.name(),
+                self.extent
+            ));
+        }
         if bytes.len() % stride != 0 {
             return fail(format!(
                 "{}: {} bytes are not a whole number of float32×{} elements",
@@ -390,11 +406,9 @@ impl<'a> Sampled<'a> {
                 self.extent
             ));
         }
-        Ok(match bytemuck::try_cast_slice::<u8, f32>(bytes) {
-            Ok(aligned) => aligned.to_vec(),
-            // Ogawa blocks are packed without padding, so samples are often unaligned.
-            Err(_) => bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect(),
-        })
+        let mut out = vec![T::zeroed(); bytes.len() / std::mem::size_of::<T>()];
+        bytemuck::cast_slice_mut::<T, u8>(&mut out).copy_from_slice(bytes);
+        Ok(out)
     }
 
     /// A string sample: NUL-terminated strings, concatenated.

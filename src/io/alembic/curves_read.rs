@@ -148,8 +148,12 @@ impl<'a> CurvesArchive<'a> {
 
         let positions = required(object, "P")?;
         positions.expect(&[Pod::F32, Pod::F64], 3)?;
-        let raw = positions.read_f32(ogawa, self.index_at(positions, time))?;
-        let mut points: Vec<Vec3> = raw.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let index = self.index_at(positions, time);
+        let mut points: Vec<Vec3> = if positions.pod == Pod::F32 {
+            positions.read_f32_as(ogawa, index)?
+        } else {
+            positions.read_f32(ogawa, index)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+        };
         let counts_property = required(object, "nVertices")?;
         counts_property.expect(&[Pod::I32, Pod::U32, Pod::I16, Pod::U16], 1)?;
         let counts = counts_property.read_f64(ogawa, self.index_at(counts_property, time))?;

@@ -46,6 +46,9 @@ pub struct AlembicWriteOptions {
     pub application: String,
     /// Name of the curves object.
     pub object_name: String,
+    /// Animated output carries `.velocities` (central differences of the frames, units per
+    /// second) for motion blur.
+    pub velocities: bool,
 }
 
 impl Default for AlembicWriteOptions {
@@ -56,6 +59,7 @@ impl Default for AlembicWriteOptions {
             frames_per_second: 24.0,
             application: format!("coif {}", env!("CARGO_PKG_VERSION")),
             object_name: "curves".into(),
+            velocities: true,
         }
     }
 }
@@ -129,7 +133,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
             &options.object_name,
             first,
             options.unreal,
-            animated,
+            animated && options.velocities,
             time_sampling,
         );
         Ok(CurvesWriter {
@@ -160,6 +164,11 @@ impl<W: Write + Seek> CurvesWriter<W> {
         }
         if !self.animated && self.frames > 0 {
             return Err("a static Alembic file holds one frame".into());
+        }
+        if self.properties.velocities.is_none() {
+            // Nothing needs the next frame: write this one now, without keeping a copy.
+            self.frames += 1;
+            return self.write_sample(groom, None).map_err(|e| e.to_string());
         }
         if let Some(pending) = self.pending.take() {
             let velocities = velocities(
@@ -291,7 +300,7 @@ fn add_curves<W: Write + Seek>(
     name: &str,
     groom: &Groom,
     unreal: bool,
-    animated: bool,
+    with_velocities: bool,
     ts: u32,
 ) -> CurveProperties {
     let object_metadata = MetaData::new()
@@ -348,7 +357,7 @@ fn add_curves<W: Write + Seek>(
             params.push((archive.add_array(arb, &name, metadata, pod, extent, ts), source));
         }
     }
-    let velocities = animated.then(|| {
+    let velocities = with_velocities.then(|| {
         archive.add_array(
             geom,
             ".velocities",
