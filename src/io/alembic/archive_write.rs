@@ -200,7 +200,19 @@ impl<W: Write + Seek> ArchiveWriter<W> {
     /// sample is only counted; bytes already written anywhere in the archive are referenced, not
     /// written again.
     pub fn set_sample(&mut self, id: PropertyId, bytes: &[u8], elements: u64) -> io::Result<()> {
-        let key = if bytes.is_empty() { [0u8; 16] } else { sample_key(bytes) };
+        self.set_sample_keyed(id, bytes, elements, sample_key(bytes))
+    }
+
+    /// [`ArchiveWriter::set_sample`] with the key already computed (`sample_key(bytes)`), so
+    /// callers can hash several samples in parallel.
+    pub fn set_sample_keyed(
+        &mut self,
+        id: PropertyId,
+        bytes: &[u8],
+        elements: u64,
+        key: [u8; 16],
+    ) -> io::Result<()> {
+        let key = if bytes.is_empty() { [0u8; 16] } else { key };
         let node = &mut self.properties[id.0];
         let index = node.num_samples;
         node.num_samples += 1;

@@ -190,7 +190,7 @@ impl<'a> CurvesArchive<'a> {
             None => None,
         };
         groom.widths = match width {
-            Some(param) => param.to_vertices(&groom),
+            Some(param) => param.into_vertices(&groom),
             None => vec![
                 DEFAULT_WIDTH * if self.epic_groom { epic::UNITS_PER_METRE } else { 1.0 };
                 groom.vertex_count()
@@ -402,9 +402,9 @@ struct Param {
 }
 
 impl Param {
-    fn to_vertices(&self, groom: &Groom) -> Vec<f32> {
+    fn into_vertices(self, groom: &Groom) -> Vec<f32> {
         match self.rate {
-            Rate::Vertex => self.values.clone(),
+            Rate::Vertex => self.values,
             Rate::Constant => self.values.repeat(groom.vertex_count()),
             Rate::Strand => groom
                 .vertex_counts()

@@ -3,11 +3,14 @@
 //! attribute in `.arbGeomParams`; optionally under an Xform parent, optionally following Epic's
 //! Alembic-for-grooms conventions. Static files hold one sample; animated files one sample per
 //! frame on a uniform time sampling, with constant topology.
+use std::borrow::Cow;
 use std::io::{self, Seek, Write};
 
 use glam::{DMat4, Vec3};
+use rayon::prelude::*;
 
 use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
+use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
 use crate::groom::{attr, AttributeRate, CurveBasis, Groom};
 
@@ -197,38 +200,41 @@ impl<W: Write + Seek> CurvesWriter<W> {
 
     fn write_sample(&mut self, groom: &Groom, velocities: Option<&[Vec3]>) -> io::Result<()> {
         let scale = self.scale;
-        let scaled_points;
-        let points: &[Vec3] = if scale == 1.0 {
-            &groom.points
+        let points: Cow<[Vec3]> = if scale == 1.0 {
+            Cow::Borrowed(&groom.points)
         } else {
-            scaled_points = groom.points.iter().map(|p| *p * scale).collect::<Vec<_>>();
-            &scaled_points
+            Cow::Owned(groom.points.iter().map(|p| *p * scale).collect())
         };
         let p = &self.properties;
-        let (bounds, positions, vertex_counts, basis, width) =
-            (p.bounds, p.positions, p.vertex_counts, p.basis, p.width);
-        let (velocity_property, uv, params) = (p.velocities, p.uv, p.params.clone());
-        let a = &mut self.archive;
-        a.set_sample(bounds, &bounds_bytes(points), 1)?;
-        a.set_sample(positions, bytemuck::cast_slice(points), points.len() as u64)?;
         let counts: Vec<i32> = groom.vertex_counts().map(|c| c as i32).collect();
-        a.set_sample(vertex_counts, bytemuck::cast_slice(&counts), counts.len() as u64)?;
-        a.set_sample(basis, &basis_bytes(groom.basis), 1)?;
-        // The C++ writer sets .arbGeomParams members before the optional schema properties.
-        for (id, source) in &params {
+        let velocities: Vec<Vec3> = velocities.unwrap_or(&[]).iter().map(|v| *v * scale).collect();
+        // Samples in the order the C++ writer sets them (.arbGeomParams members before the
+        // optional schema properties), so files match it byte for byte.
+        let mut samples: Vec<(PropertyId, Cow<[u8]>, u64)> = vec![
+            (p.bounds, Cow::Owned(bounds_bytes(&points)), 1),
+            (p.positions, Cow::Borrowed(bytemuck::cast_slice(&points)), points.len() as u64),
+            (p.vertex_counts, Cow::Borrowed(bytemuck::cast_slice(&counts)), counts.len() as u64),
+            (p.basis, Cow::Owned(basis_bytes(groom.basis).to_vec()), 1),
+        ];
+        for (id, source) in &p.params {
             let (bytes, elements) = param_bytes(groom, source, scale);
-            a.set_sample(*id, &bytes, elements)?;
+            samples.push((*id, bytes, elements));
         }
-        if let Some(id) = velocity_property {
-            let v: Vec<Vec3> = velocities.unwrap_or(&[]).iter().map(|v| *v * scale).collect();
-            a.set_sample(id, bytemuck::cast_slice(&v), v.len() as u64)?;
+        if let Some(id) = p.velocities {
+            samples.push((id, Cow::Borrowed(bytemuck::cast_slice(&velocities)), velocities.len() as u64));
         }
-        if let Some(id) = uv {
+        if let Some(id) = p.uv {
             let (bytes, elements) = param_bytes(groom, &ParamSource::RootUvs, scale);
-            a.set_sample(id, &bytes, elements)?;
+            samples.push((id, bytes, elements));
         }
         let (bytes, elements) = param_bytes(groom, &ParamSource::Widths, scale);
-        a.set_sample(width, &bytes, elements)
+        samples.push((p.width, bytes, elements));
+        // Keys are pure functions of the bytes: hash on every core, then write in order.
+        let keys: Vec<[u8; 16]> = samples.par_iter().map(|(_, bytes, _)| sample_key(bytes)).collect();
+        for ((id, bytes, elements), key) in samples.iter().zip(keys) {
+            self.archive.set_sample_keyed(*id, bytes, *elements, key)?;
+        }
+        Ok(())
     }
 }
 
@@ -441,29 +447,33 @@ pub fn basis_bytes(basis: CurveBasis) -> [u8; 4] {
     }
 }
 
-fn param_bytes(groom: &Groom, source: &ParamSource, scale: f32) -> (Vec<u8>, u64) {
-    fn floats(values: impl Iterator<Item = f32>) -> Vec<u8> {
-        values.flat_map(f32::to_le_bytes).collect()
+fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'g, [u8]>, u64) {
+    fn floats<'g>(values: &'g [f32], factor: f32) -> Cow<'g, [u8]> {
+        if factor == 1.0 {
+            Cow::Borrowed(bytemuck::cast_slice(values))
+        } else {
+            Cow::Owned(values.iter().flat_map(|v| (v * factor).to_le_bytes()).collect())
+        }
     }
     match source {
-        ParamSource::Widths => (floats(groom.widths.iter().map(|w| w * scale)), groom.widths.len() as u64),
+        ParamSource::Widths => (floats(&groom.widths, scale), groom.widths.len() as u64),
         ParamSource::StrandIds => (
-            groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect(),
+            Cow::Owned(groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect()),
             groom.strand_ids.len() as u64,
         ),
         ParamSource::Guides => {
             let guides = groom.guides.as_deref().unwrap_or(&[]);
-            (guides.iter().flat_map(|&g| (g as i32).to_le_bytes()).collect(), guides.len() as u64)
+            (Cow::Owned(guides.iter().flat_map(|&g| (g as i32).to_le_bytes()).collect()), guides.len() as u64)
         }
         ParamSource::RootUvs => {
             let uvs = groom.root_uvs.as_deref().unwrap_or(&[]);
-            (floats(uvs.iter().flatten().copied()), uvs.len() as u64)
+            (floats(bytemuck::cast_slice(uvs), 1.0), uvs.len() as u64)
         }
         ParamSource::Attribute(name) => {
             let a = groom.attribute(name).expect("layout is fixed by the first frame");
             // Rest positions are positions: they follow the unit change.
             let factor = if name == "rest" { scale } else { 1.0 };
-            (floats(a.data.iter().map(|v| v * factor)), a.len() as u64)
+            (floats(&a.data, factor), a.len() as u64)
         }
     }
 }
