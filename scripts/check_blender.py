@@ -59,8 +59,7 @@ def main():
     worst_radius = max(abs(r - w / 2) for r, w in zip(radii, expected["widths"]))
     if worst_radius > 1e-9:
         sys.exit(f"static: radii differ from width/2 by up to {worst_radius:.3g}")
-    print(f"static.abc: {len(curves.curves)} curves, {len(curves.points)} points, "
-          f"curve type {curves.curves[0].type if hasattr(curves.curves[0], 'type') else 'n/a'}; "
+    print(f"static.abc: {obj.type} object, {len(curves.curves)} curves, {len(curves.points)} points; "
           f"positions within {worst:.2g} m, radius = width/2 within {worst_radius:.2g}")
 
     obj = import_curves(os.path.join(folder, "animated.abc"))
