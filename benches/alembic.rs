@@ -7,6 +7,7 @@
 //! as usd-core's `Save` does (no fsync); `write+vel` adds `.velocities` (coif's default for
 //! animation); `write API` is `coif::io`'s atomic path (velocities, fsync, rename), which waits for
 //! the disk. `read` maps the file and builds owned grooms (every frame for the animation).
+//! Every write starts after `sync`, into a new file, for coif and usd-core alike.
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -43,6 +44,14 @@ fn groom(strands: usize) -> Groom {
         .map(|i| 80e-6 * (1.0 - 0.5 * (i % VERTICES) as f32 / VERTICES as f32))
         .collect();
     g
+}
+
+/// Removes the given files and waits until the kernel has written all dirty pages back.
+fn settle(files: &[&Path]) {
+    for file in files {
+        let _ = std::fs::remove_file(file);
+    }
+    Command::new("sync").status().unwrap();
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -101,9 +110,13 @@ fn main() {
         let path = dir.path().join("bench.abc");
         let (mut coif, mut usd) = (Figures::default(), Figures::default());
         let mut usd_bytes = 0;
+        let usd_path = dir.path().join("baseline.usdc");
+        let mut abc_bytes = 0;
         for _ in 0..runs {
             let mut g = base.clone();
-            coif.write_velocities.push(write_plain(&path, &mut g, &mut frame_points, true));
+            // Every timed write starts from a clean page cache and a new file, for coif and
+            // usd-core alike, so one write's dirty pages do not slow down the next.
+            settle(&[&path, &usd_path]);
             coif.write.push(write_plain(&path, &mut g, &mut frame_points, false));
 
             let start = Instant::now();
@@ -115,14 +128,18 @@ fn main() {
             };
             coif.read.push(start.elapsed().as_secs_f64());
             assert_eq!(vertices, base.vertex_count() * frames);
+            abc_bytes = std::fs::metadata(&path).unwrap().len();
 
-            let api_path = dir.path().join("api.abc");
+            settle(&[&path]);
+            coif.write_velocities.push(write_plain(&path, &mut g, &mut frame_points, true));
+
+            settle(&[&path]);
             let start = Instant::now();
             if frames == 1 {
-                write_groom(&api_path, &g).unwrap();
+                write_groom(&path, &g).unwrap();
             } else {
                 let mut writer =
-                    AnimationWriter::create(&api_path, &g, &AlembicWriteOptions::default(), true).unwrap();
+                    AnimationWriter::create(&path, &g, &AlembicWriteOptions::default(), true).unwrap();
                 for points in frame_points.iter_mut() {
                     std::mem::swap(&mut g.points, points);
                     writer.write_frame(&g).unwrap();
@@ -131,7 +148,7 @@ fn main() {
                 writer.finish().unwrap();
             }
             coif.write_api.push(start.elapsed().as_secs_f64());
-            std::fs::remove_file(&api_path).unwrap();
+            settle(&[&path]);
 
             let out =
                 Command::new(&python).arg(&script).arg(dir.path()).arg(frames.to_string()).output().unwrap();
@@ -150,7 +167,6 @@ fn main() {
             usd.read.push(field("read_s"));
             usd_bytes = field("bytes") as u64;
         }
-        let abc_bytes = std::fs::metadata(&path).unwrap().len();
         let (cw, cr, uw, ur) = (median(coif.write), median(coif.read), median(usd.write), median(usd.read));
         let (cv, ca) = (median(coif.write_velocities), median(coif.write_api));
         println!(

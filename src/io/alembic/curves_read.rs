@@ -3,6 +3,7 @@
 //! Accepts what coif writes and what other tools write: cubic bases, widths per file / curve /
 //! vertex, plain or indexed geometry parameters, Epic's `groom_*` attributes.
 use glam::{DMat4, DVec3, Vec3};
+use rayon::prelude::*;
 
 use super::archive_read::{Archive, Compound, Object, Property, Sampled};
 use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
@@ -124,10 +125,12 @@ impl<'a> CurvesArchive<'a> {
                 self.archive.ogawa.len()
             ));
         }
-        let mut frames = vec![first];
-        for frame in 1..self.frames {
-            frames.push(self.read_frame(frame)?);
-        }
+        // Frames are independent: read them on every core (the order of the result is fixed).
+        let rest: Vec<Groom> =
+            (1..self.frames).into_par_iter().map(|f| self.read_frame(f)).collect::<OgawaResult<_>>()?;
+        let mut frames = Vec::with_capacity(self.frames as usize);
+        frames.push(first);
+        frames.extend(rest);
         Ok(frames)
     }
 
