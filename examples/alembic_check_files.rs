@@ -1,7 +1,7 @@
 //! Writes a static and an animated Alembic groom plus the expected strand counts and positions
 //! as JSON, for an outside importer to check (`make check-blender` runs Blender's on them).
 //!
-//! Usage: cargo run --release --example alembic_check_files -- OUT_DIR
+//! Usage: cargo run --release --example alembic_check_files -- OUT_DIR [STRANDS]
 use std::path::PathBuf;
 
 use coif::generate::{generate, GenerateParams, Style};
@@ -15,8 +15,9 @@ const FRAMES: usize = 24;
 fn main() -> coif::Result<()> {
     let out = PathBuf::from(std::env::args().nth(1).expect("usage: alembic_check_files OUT_DIR"));
     std::fs::create_dir_all(&out).map_err(|e| coif::Error::io(&out, e))?;
+    let strands = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(300);
     let params = GenerateParams {
-        strands: 300,
+        strands,
         vertices_per_strand: 12,
         style: Style::Wavy { amplitude: 0.008, wavelength: 0.06 },
         seed: 3,
