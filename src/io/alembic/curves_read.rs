@@ -521,8 +521,9 @@ fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
     a.points.extend_from_slice(&b.points);
     a.strand_offsets.extend(b.strand_offsets[1..].iter().map(|o| o + base));
     a.widths.extend_from_slice(&b.widths);
-    let next_id = a.strand_ids.iter().max().map_or(0, |m| m + 1);
-    a.strand_ids.extend(b.strand_ids.iter().map(|id| id + next_id));
+    // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
+    let next_id = a.strand_ids.iter().max().map_or(0, |m| m.wrapping_add(1));
+    a.strand_ids.extend(b.strand_ids.iter().map(|id| id.wrapping_add(next_id)));
     a.root_uvs = match (a.root_uvs.take(), b.root_uvs.take()) {
         (None, None) => None,
         (x, y) => {
