@@ -6,8 +6,6 @@
 use std::cell::RefCell;
 use std::collections::HashSet;
 
-use rayon::prelude::*;
-
 use super::ogawa::{Child, Group, OgawaError, OgawaReader, OgawaResult};
 use super::types::{info, MetaData, Pod, PropertyKind, TimeSampling};
 
@@ -409,12 +407,7 @@ impl<'a> Sampled<'a> {
             ));
         }
         let mut out = vec![T::zeroed(); bytes.len() / std::mem::size_of::<T>()];
-        // Large samples are copied on every core: the copy (and its page faults) is the cost.
-        const PIECE: usize = 1 << 20;
-        bytemuck::cast_slice_mut::<T, u8>(&mut out)
-            .par_chunks_mut(PIECE)
-            .zip(bytes.par_chunks(PIECE))
-            .for_each(|(to, from)| to.copy_from_slice(from));
+        bytemuck::cast_slice_mut::<T, u8>(&mut out).copy_from_slice(bytes);
         Ok(out)
     }
 
