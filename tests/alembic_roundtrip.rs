@@ -250,3 +250,24 @@ fn velocities_can_be_left_out() {
     assert_eq!(alembic::read_all_frames(&bytes, &path, false).unwrap(), frames);
     assert_eq!(geom.sampled("P").unwrap().num_samples, 6);
 }
+
+#[test]
+fn an_xform_parent_is_written_and_applied_on_reading() {
+    use glam::{DMat4, DVec3};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("xform.abc");
+    let groom = full_groom();
+    let matrix = DMat4::from_translation(DVec3::new(0.5, 1.0, -2.0)) * DMat4::from_rotation_x(0.3);
+    let options = AlembicWriteOptions { xform: Some(matrix), ..Default::default() };
+    alembic::write(&path, &groom, &options).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let archive = Archive::open(&bytes).unwrap();
+    assert_eq!(archive.top.children[0].full_name, "/xform");
+    assert_eq!(archive.top.children[0].children[0].full_name, "/xform/curves");
+    let back = alembic::read(&bytes, &path, 0, false).unwrap();
+    for (got, p) in back.points.iter().zip(&groom.points) {
+        let expected = matrix.transform_point3(p.as_dvec3()).as_vec3();
+        assert!((*got - expected).length() < 1e-6, "{got} vs {expected}");
+    }
+    assert_eq!(back.widths, groom.widths);
+}
