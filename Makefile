@@ -9,7 +9,7 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms clean
+.PHONY: setup build demo test bench grooms clean check-blender fuzz-alembic
 
 setup: .deps/.setup-done
 
@@ -35,6 +35,22 @@ bench: setup
 # Regenerates the sample grooms checked into grooms/ (see grooms/README.md).
 grooms: build
 	bash scripts/make_grooms.sh $(COIF)
+
+# Optional, not in CI: Blender's own Alembic importer (bpy, ~370 MB in .deps/bpy-venv) opens a
+# static and an animated file written by coif; counts, positions and radii must match.
+check-blender: setup
+	bash scripts/check_blender_setup.sh
+	$(CARGO) run --release --locked --example alembic_check_files -- out/check-blender
+	.deps/bpy-venv/bin/python scripts/check_blender.py out/check-blender
+
+# Optional: fuzz the Alembic reader for FUZZ_RUNS executions (cargo-fuzz, installed if missing;
+# libFuzzer needs nightly flags, which RUSTC_BOOTSTRAP=1 unlocks on the stable toolchain).
+FUZZ_RUNS ?= 1000000
+fuzz-alembic:
+	command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz --locked
+	mkdir -p fuzz/corpus/alembic_reader
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run alembic_reader corpus/alembic_reader seeds -- \
+		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
 
 clean:
 	$(CARGO) clean

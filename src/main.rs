@@ -27,8 +27,6 @@ enum Command {
         file: PathBuf,
         #[command(flatten)]
         import: ImportArgs,
-        #[command(flatten)]
-        usd: UsdArgs,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -39,10 +37,11 @@ enum Command {
         output: PathBuf,
         #[command(flatten)]
         import: ImportArgs,
-        #[command(flatten)]
-        usd: UsdArgs,
         #[arg(long)]
         json: bool,
+        /// Alembic output for Unreal: centimetres, groom_* attribute names, groom spec version.
+        #[arg(long)]
+        unreal: bool,
     },
     /// Simulate a groom (gravity, Cosserat rods, side-chain bonds), optionally settle it, and
     /// write it with its rest shape and bond rates as attributes.
@@ -122,19 +121,8 @@ struct ImportArgs {
     /// Up axis of the input file, for formats that do not say.
     #[arg(long, value_enum)]
     up: Option<UpAxis>,
-}
-
-impl ImportArgs {
-    fn options(&self) -> ImportOptions {
-        ImportOptions { meters_per_unit: self.units, up_axis: self.up }
-    }
-}
-
-/// Which state of a USD input to read.
-#[derive(Args)]
-struct UsdArgs {
-    /// USD input: the time code to read animated points at (default: the stage's default
-    /// values, else its first time sample).
+    /// Animated input: the USD time code to read, or the Alembic sample (0 = first). Default:
+    /// USD's default values (else its first sample), Alembic's first sample.
     #[arg(long, value_name = "TIME")]
     frame: Option<f64>,
     /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).
@@ -142,7 +130,12 @@ struct UsdArgs {
     variant: Vec<String>,
 }
 
-impl UsdArgs {
+impl ImportArgs {
+    fn options(&self) -> ImportOptions {
+        let frame = self.frame.map(|f| f.max(0.0) as u32);
+        ImportOptions { meters_per_unit: self.units, up_axis: self.up, frame }
+    }
+
     fn selection(&self) -> io::usda::Selection {
         io::usda::Selection { time: self.frame, variants: self.variant.clone() }
     }
@@ -211,8 +204,8 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Generate(args) => run_generate(args),
-        Command::Info { file, import, usd, json } => {
-            let loaded = io::read_groom_selected(&file, &import.options(), &usd.selection())?;
+        Command::Info { file, import, json } => {
+            let loaded = io::read_groom_selected(&file, &import.options(), &import.selection())?;
             let info = GroomInfo::of(&loaded.groom);
             if json {
                 print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
@@ -221,9 +214,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Convert { input, output, import, usd, json } => {
-            let loaded = io::read_groom_selected(&input, &import.options(), &usd.selection())?;
-            write_and_report(&output, &loaded.groom, json)
+        Command::Convert { input, output, import, json, unreal } => {
+            let loaded = io::read_groom_selected(&input, &import.options(), &import.selection())?;
+            write_and_report(&output, &loaded.groom, json, &io::ExportOptions { unreal })
         }
         Command::Simulate(args) => run_simulate(args),
         Command::Style(args) => run_style(args),
@@ -315,7 +308,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         Ok(())
     } else {
         eprintln!("simulated {} steps ({} s)", summary.steps, summary.seconds);
-        write_and_report(&args.output, &groom, false)
+        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())
     }
 }
 
@@ -339,11 +332,16 @@ fn run_generate(args: GenerateArgs) -> Result<()> {
     // Fail on an unwritable extension before spending time generating.
     io::Format::from_extension(&args.output)?;
     let groom = generate(&params)?;
-    write_and_report(&args.output, &groom, args.json)
+    write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
 }
 
-fn write_and_report(output: &Path, groom: &coif::Groom, json: bool) -> Result<()> {
-    let warnings = io::write_groom(output, groom)?;
+fn write_and_report(
+    output: &Path,
+    groom: &coif::Groom,
+    json: bool,
+    options: &io::ExportOptions,
+) -> Result<()> {
+    let warnings = io::write_groom_with(output, groom, options)?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }

@@ -69,7 +69,11 @@ fn units_and_up_axis_are_converted_on_import() {
     let path = dir.path().join("cm.hair");
     let groom = Groom::from_strands(&[vec![Vec3::ZERO, Vec3::new(1.0, 2.0, 30.0)]], 0.008);
     coif::io::write_groom(&path, &groom).unwrap();
-    let options = coif::io::ImportOptions { meters_per_unit: Some(0.01), up_axis: Some(coif::io::UpAxis::Z) };
+    let options = coif::io::ImportOptions {
+        meters_per_unit: Some(0.01),
+        up_axis: Some(coif::io::UpAxis::Z),
+        ..Default::default()
+    };
     let read = coif::io::read_groom(&path, &options).unwrap().groom;
     assert!(read.points[1].distance(Vec3::new(0.01, 0.30, -0.02)) < 1e-6, "{:?}", read.points[1]);
     assert!((read.widths[0] - 0.00008).abs() < 1e-9);

@@ -4,6 +4,8 @@
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
+use tempfile::NamedTempFile;
+
 use crate::error::{Error, Result};
 
 /// Writes `path` atomically with the bytes `fill` produces.
@@ -11,6 +13,14 @@ pub fn write_atomically<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
+    let mut writer = create_beside(path)?;
+    fill(&mut writer)?;
+    commit(path, writer)
+}
+
+/// A buffered temporary file beside `path`, for writers that stream or seek (Ogawa patches its
+/// header at the end). Hand it to [`commit`] when complete; dropping it removes it.
+pub fn create_beside(path: &Path) -> Result<BufWriter<NamedTempFile>> {
     let dir = match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
@@ -23,8 +33,11 @@ where
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     let temp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
-    let mut writer = BufWriter::with_capacity(1 << 20, temp);
-    fill(&mut writer)?;
+    Ok(BufWriter::with_capacity(1 << 20, temp))
+}
+
+/// Flushes and fsyncs a file from [`create_beside`], then renames it over `path`.
+pub fn commit(path: &Path, mut writer: BufWriter<NamedTempFile>) -> Result<()> {
     writer.flush().map_err(|e| Error::io(path, e))?;
     let temp = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
     temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;

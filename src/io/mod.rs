@@ -1,8 +1,10 @@
 //! Reading and writing grooms. One module per format, each a reader and a writer of [`Groom`];
 //! the format is chosen by magic bytes when reading and by extension when writing. Units and
 //! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
+pub mod alembic;
 pub mod atomic;
 pub mod hair;
+pub mod input;
 pub mod usd_interop;
 pub mod usda;
 
@@ -26,11 +28,18 @@ pub enum Format {
     Usdc,
     /// USD zip package, through usd-core.
     Usdz,
+    /// Alembic (Ogawa) curves.
+    Alembic,
 }
 
 impl Format {
-    const ALL: &'static [(Format, &'static str)] =
-        &[(Format::Hair, "hair"), (Format::Usda, "usda"), (Format::Usdc, "usdc"), (Format::Usdz, "usdz")];
+    const ALL: &'static [(Format, &'static str)] = &[
+        (Format::Hair, "hair"),
+        (Format::Usda, "usda"),
+        (Format::Usdc, "usdc"),
+        (Format::Usdz, "usdz"),
+        (Format::Alembic, "abc"),
+    ];
 
     /// The format a file name's extension names.
     pub fn from_extension(path: &Path) -> Result<Format> {
@@ -55,6 +64,8 @@ impl Format {
             Some(Format::Usdc)
         } else if head.starts_with(b"PK\x03\x04") {
             Some(Format::Usdz)
+        } else if head.starts_with(alembic::MAGIC) {
+            Some(Format::Alembic)
         } else {
             None
         }
@@ -81,6 +92,16 @@ pub struct ImportOptions {
     pub meters_per_unit: Option<f32>,
     /// The file's up axis; `None` keeps the file's own or Y.
     pub up_axis: Option<UpAxis>,
+    /// Alembic: the sample to read from an animated file (0 = first); `None` reads the first.
+    pub frame: Option<u32>,
+}
+
+/// Choices for writing a groom that only some formats use.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ExportOptions {
+    /// Alembic: follow Epic's groom conventions for Unreal (centimetres, `groom_*` names,
+    /// groom spec version on a top Xform).
+    pub unreal: bool,
 }
 
 /// A groom read from disk, with the format it came in.
@@ -105,15 +126,23 @@ pub fn read_groom_selected(
         None => Format::from_extension(path)?,
     };
     let groom = match format {
-        Format::Hair => {
-            if selection.time.is_some() || !selection.variants.is_empty() {
+        Format::Hair | Format::Alembic => {
+            if !selection.variants.is_empty() || (format == Format::Hair && selection.time.is_some()) {
                 return Err(Error::Usage(format!(
-                    "{}: a time or variant selection applies to USD input only",
+                    "{}: a time or variant selection applies to USD input only (Alembic takes --frame)",
                     path.display()
                 )));
             }
-            let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-            let mut groom = hair::read(&bytes, path)?;
+            let bytes = input::map_file(path)?;
+            let mut groom = match format {
+                Format::Hair => hair::read(&bytes, path)?,
+                _ => alembic::read(
+                    &bytes,
+                    path,
+                    options.frame.unwrap_or(0),
+                    options.meters_per_unit.is_some(),
+                )?,
+            };
             apply_import_options(&mut groom, options);
             groom
         }
@@ -158,6 +187,11 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
 /// Writes a groom in the format its extension names, atomically. Returns warnings about data
 /// the format cannot carry.
 pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
+    write_groom_with(path, groom, &ExportOptions::default())
+}
+
+/// [`write_groom`] with format-specific choices.
+pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
     match format {
@@ -178,6 +212,11 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
             usda::check_writable(groom, path)?;
             usd_interop::write(path, groom)?;
             Ok(usd_warnings(path, groom))
+        }
+        Format::Alembic => {
+            let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
+            alembic::write(path, groom, &abc_options)?;
+            Ok(Vec::new())
         }
     }
 }

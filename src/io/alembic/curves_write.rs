@@ -1,0 +1,479 @@
+//! Writing grooms as AbcGeom Curves (`AbcGeom_Curve_v2`): `P`, `nVertices`,
+//! `curveBasisAndType`, `.selfBnds`, `width`, `uv`, `.velocities` when animated, and every groom
+//! attribute in `.arbGeomParams`; optionally under an Xform parent, optionally following Epic's
+//! Alembic-for-grooms conventions. Static files hold one sample; animated files one sample per
+//! frame on a uniform time sampling, with constant topology.
+use std::borrow::Cow;
+use std::io::{self, Seek, Write};
+
+use glam::{DMat4, Vec3};
+use rayon::prelude::*;
+
+use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
+use super::murmur3::sample_key;
+use super::types::{MetaData, Pod, TimeSampling};
+use crate::groom::{attr, AttributeRate, CurveBasis, Groom};
+
+pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
+pub const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
+const GEOM_BASE: &str = "AbcGeom_GeomBase_v1";
+
+/// Epic's groom attribute names, and the spec version coif follows in Unreal mode.
+pub mod epic {
+    pub const WIDTH: &str = "groom_width";
+    pub const GUIDE: &str = "groom_guide";
+    pub const GROUP_ID: &str = "groom_group_id";
+    pub const ROOT_UV: &str = "groom_root_uv";
+    pub const COLOR: &str = "groom_color";
+    pub const ID: &str = "groom_id";
+    pub const PREFIX: &str = "groom_";
+    pub const VERSION_MAJOR: &str = "groom_version_major";
+    pub const VERSION_MINOR: &str = "groom_version_minor";
+    pub const TOOL: &str = "groom_tool";
+    pub const SPEC_VERSION: (i16, i16) = (1, 5);
+    /// Epic's exporters and importer work in centimetres.
+    pub const UNITS_PER_METRE: f32 = 100.0;
+}
+
+/// How to write a groom as Alembic.
+#[derive(Clone, Debug)]
+pub struct AlembicWriteOptions {
+    /// Follow Epic's groom conventions: centimetres, `groom_*` attribute names, a `groom` Xform
+    /// parent whose `.userProperties` carry the groom spec version.
+    pub unreal: bool,
+    /// A parent Xform with this matrix (column-vector convention; translation in column 3).
+    pub xform: Option<DMat4>,
+    /// Frame rate of animated output; sample `i` is at time `(i + 1) / fps` (frame 1 first).
+    pub frames_per_second: f64,
+    /// Written as the archive's `_ai_Application`.
+    pub application: String,
+    /// Name of the curves object.
+    pub object_name: String,
+    /// Animated output carries `.velocities` (central differences of the frames, units per
+    /// second) for motion blur.
+    pub velocities: bool,
+}
+
+impl Default for AlembicWriteOptions {
+    fn default() -> Self {
+        AlembicWriteOptions {
+            unreal: false,
+            xform: None,
+            frames_per_second: 24.0,
+            application: format!("coif {}", env!("CARGO_PKG_VERSION")),
+            object_name: "curves".into(),
+            velocities: true,
+        }
+    }
+}
+
+/// The property handles of one curves object.
+struct CurveProperties {
+    bounds: PropertyId,
+    positions: PropertyId,
+    vertex_counts: PropertyId,
+    basis: PropertyId,
+    velocities: Option<PropertyId>,
+    uv: Option<PropertyId>,
+    width: PropertyId,
+    /// `.arbGeomParams` members and what fills them.
+    params: Vec<(PropertyId, ParamSource)>,
+}
+
+#[derive(Clone)]
+enum ParamSource {
+    Widths,
+    StrandIds,
+    Guides,
+    RootUvs,
+    Attribute(String),
+}
+
+/// Writes curves samples into an Alembic stream: one sample for a static groom, or one per
+/// frame with [`CurvesWriter::write_frame`]. Velocities of a frame are central differences of
+/// its neighbours, so each frame is written when the next one arrives (or at `finish`).
+pub struct CurvesWriter<W: Write + Seek> {
+    archive: ArchiveWriter<W>,
+    properties: CurveProperties,
+    animated: bool,
+    scale: f32,
+    frames_per_second: f64,
+    /// Topology every frame must share.
+    strand_offsets: Vec<u32>,
+    basis: CurveBasis,
+    attribute_layout: Vec<(String, AttributeRate, usize)>,
+    previous_points: Option<Vec<Vec3>>,
+    pending: Option<Groom>,
+    frames: usize,
+}
+
+impl<W: Write + Seek> CurvesWriter<W> {
+    /// Starts an archive whose layout (attributes, optional data) follows `first`; topology is
+    /// fixed by it too. `animated` adds the uniform time sampling and `.velocities`.
+    pub fn new(out: W, first: &Groom, options: &AlembicWriteOptions, animated: bool) -> io::Result<Self> {
+        let mut archive_metadata = MetaData::new().with("_ai_Application", &options.application);
+        if animated {
+            archive_metadata.set("_ai_DCC_FPS", &format!("{:.6}", options.frames_per_second));
+        }
+        let mut archive = ArchiveWriter::new(out, archive_metadata)?;
+        let time_sampling = if animated {
+            let fps = options.frames_per_second;
+            archive.add_time_sampling(TimeSampling::uniform(fps, 1.0 / fps))
+        } else {
+            0
+        };
+        let mut parent = archive.top();
+        if options.unreal {
+            parent = add_xform(&mut archive, parent, "groom", None)?;
+            add_groom_version(&mut archive, parent)?;
+        }
+        if let Some(matrix) = options.xform {
+            parent = add_xform(&mut archive, parent, "xform", Some(matrix))?;
+        }
+        let properties = add_curves(
+            &mut archive,
+            parent,
+            &options.object_name,
+            first,
+            options.unreal,
+            animated && options.velocities,
+            time_sampling,
+        );
+        Ok(CurvesWriter {
+            archive,
+            properties,
+            animated,
+            scale: if options.unreal { epic::UNITS_PER_METRE } else { 1.0 },
+            frames_per_second: options.frames_per_second,
+            strand_offsets: first.strand_offsets.clone(),
+            basis: first.basis,
+            attribute_layout: layout(first),
+            previous_points: None,
+            pending: None,
+            frames: 0,
+        })
+    }
+
+    /// Adds the next frame. Its topology, basis and attribute layout must match the first.
+    pub fn write_frame(&mut self, groom: &Groom) -> Result<(), String> {
+        if groom.strand_offsets != self.strand_offsets || groom.basis != self.basis {
+            return Err(format!(
+                "frame {} changes the strand layout; Alembic frames share one topology",
+                self.frames
+            ));
+        }
+        if layout(groom) != self.attribute_layout {
+            return Err(format!("frame {} has different attributes from the first frame", self.frames));
+        }
+        if !self.animated && self.frames > 0 {
+            return Err("a static Alembic file holds one frame".into());
+        }
+        if self.properties.velocities.is_none() {
+            // Nothing needs the next frame: write this one now, without keeping a copy.
+            self.frames += 1;
+            return self.write_sample(groom, None).map_err(|e| e.to_string());
+        }
+        if let Some(pending) = self.pending.take() {
+            let velocities = velocities(
+                self.previous_points.as_deref(),
+                &pending.points,
+                Some(&groom.points),
+                self.frames_per_second,
+            );
+            self.write_sample(&pending, velocities.as_deref()).map_err(|e| e.to_string())?;
+            self.previous_points = Some(pending.points);
+        }
+        self.pending = Some(groom.clone());
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Writes the last frame and closes the archive; returns the stream.
+    pub fn finish(mut self) -> io::Result<W> {
+        if let Some(pending) = self.pending.take() {
+            let velocities =
+                velocities(self.previous_points.as_deref(), &pending.points, None, self.frames_per_second);
+            self.write_sample(&pending, velocities.as_deref())?;
+        }
+        self.archive.finish()
+    }
+
+    fn write_sample(&mut self, groom: &Groom, velocities: Option<&[Vec3]>) -> io::Result<()> {
+        let scale = self.scale;
+        let points: Cow<[Vec3]> = if scale == 1.0 {
+            Cow::Borrowed(&groom.points)
+        } else {
+            Cow::Owned(groom.points.iter().map(|p| *p * scale).collect())
+        };
+        let p = &self.properties;
+        let counts: Vec<i32> = groom.vertex_counts().map(|c| c as i32).collect();
+        let velocities: Vec<Vec3> = velocities.unwrap_or(&[]).iter().map(|v| *v * scale).collect();
+        // Samples in the order the C++ writer sets them (.arbGeomParams members before the
+        // optional schema properties), so files match it byte for byte.
+        let mut samples: Vec<(PropertyId, Cow<[u8]>, u64)> = vec![
+            (p.bounds, Cow::Owned(bounds_bytes(&points)), 1),
+            (p.positions, Cow::Borrowed(bytemuck::cast_slice(&points)), points.len() as u64),
+            (p.vertex_counts, Cow::Borrowed(bytemuck::cast_slice(&counts)), counts.len() as u64),
+            (p.basis, Cow::Owned(basis_bytes(groom.basis).to_vec()), 1),
+        ];
+        for (id, source) in &p.params {
+            let (bytes, elements) = param_bytes(groom, source, scale);
+            samples.push((*id, bytes, elements));
+        }
+        if let Some(id) = p.velocities {
+            samples.push((id, Cow::Borrowed(bytemuck::cast_slice(&velocities)), velocities.len() as u64));
+        }
+        if let Some(id) = p.uv {
+            let (bytes, elements) = param_bytes(groom, &ParamSource::RootUvs, scale);
+            samples.push((id, bytes, elements));
+        }
+        let (bytes, elements) = param_bytes(groom, &ParamSource::Widths, scale);
+        samples.push((p.width, bytes, elements));
+        // Keys are pure functions of the bytes: hash on every core, then write in order.
+        let keys: Vec<[u8; 16]> = samples.par_iter().map(|(_, bytes, _)| sample_key(bytes)).collect();
+        for ((id, bytes, elements), key) in samples.iter().zip(keys) {
+            self.archive.set_sample_keyed(*id, bytes, *elements, key)?;
+        }
+        Ok(())
+    }
+}
+
+/// Writes a static groom (one sample).
+pub fn write_static<W: Write + Seek>(out: W, groom: &Groom, options: &AlembicWriteOptions) -> io::Result<W> {
+    let mut writer = CurvesWriter::new(out, groom, options, false)?;
+    writer.write_frame(groom).map_err(io::Error::other)?;
+    writer.finish()
+}
+
+fn layout(groom: &Groom) -> Vec<(String, AttributeRate, usize)> {
+    let mut layout: Vec<_> =
+        groom.attributes.iter().map(|a| (a.name.clone(), a.rate, a.components)).collect();
+    layout.push(("(root uvs)".into(), AttributeRate::Strand, groom.root_uvs.is_some() as usize));
+    layout.push(("(guides)".into(), AttributeRate::Strand, groom.guides.is_some() as usize));
+    layout.push(("(ids)".into(), AttributeRate::Strand, has_custom_ids(groom) as usize));
+    layout
+}
+
+/// Strand ids are only worth writing when they are not simply 0, 1, 2, …
+fn has_custom_ids(groom: &Groom) -> bool {
+    groom.strand_ids.iter().enumerate().any(|(i, &id)| id != i as u32)
+}
+
+fn velocities(
+    previous: Option<&[Vec3]>,
+    current: &[Vec3],
+    next: Option<&[Vec3]>,
+    fps: f64,
+) -> Option<Vec<Vec3>> {
+    let fps = fps as f32;
+    Some(match (previous, next) {
+        (Some(prev), Some(next)) => prev.iter().zip(next).map(|(a, b)| (*b - *a) * (0.5 * fps)).collect(),
+        (None, Some(next)) => current.iter().zip(next).map(|(a, b)| (*b - *a) * fps).collect(),
+        (Some(prev), None) => prev.iter().zip(current).map(|(a, b)| (*b - *a) * fps).collect(),
+        (None, None) => vec![Vec3::ZERO; current.len()],
+    })
+}
+
+fn geom_param_metadata(scope: &str, pod: Pod, extent: u8, interpretation: &str) -> MetaData {
+    MetaData::new()
+        .with("arrayExtent", "1")
+        .with("geoScope", scope)
+        .with("isGeomParam", "true")
+        .with("podExtent", &extent.to_string())
+        .with("podName", pod.name())
+        .with("interpretation", interpretation)
+}
+
+fn scope(rate: AttributeRate) -> &'static str {
+    match rate {
+        AttributeRate::Vertex => "vtx",
+        AttributeRate::Strand => "uni",
+    }
+}
+
+fn interpretation(name: &str, components: usize) -> &'static str {
+    match (name, components) {
+        (attr::COLOR, 3) => "rgb",
+        (attr::COLOR, 4) => "rgba",
+        (_, 2) => "vector",
+        _ => "",
+    }
+}
+
+fn add_curves<W: Write + Seek>(
+    archive: &mut ArchiveWriter<W>,
+    parent: ObjectId,
+    name: &str,
+    groom: &Groom,
+    unreal: bool,
+    with_velocities: bool,
+    ts: u32,
+) -> CurveProperties {
+    let object_metadata = MetaData::new()
+        .with("schema", CURVE_SCHEMA)
+        .with("schemaBaseType", GEOM_BASE)
+        .with("schemaObjTitle", &format!("{CURVE_SCHEMA}:.geom"));
+    let object = archive.add_object(parent, name, object_metadata);
+    let top = archive.properties(object);
+    let geom_metadata = MetaData::new().with("schema", CURVE_SCHEMA).with("schemaBaseType", GEOM_BASE);
+    let geom = archive.add_compound(top, ".geom", geom_metadata);
+    let bounds =
+        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
+    let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
+    let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
+    let vertex_counts = archive.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, ts);
+    let basis = archive.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, ts);
+
+    let mut sources = Vec::new();
+    if unreal {
+        sources.push((epic::WIDTH.to_string(), ParamSource::Widths));
+    }
+    if unreal || has_custom_ids(groom) {
+        sources.push((epic::ID.to_string(), ParamSource::StrandIds));
+    }
+    if groom.guides.is_some() {
+        sources.push((epic::GUIDE.to_string(), ParamSource::Guides));
+    }
+    if unreal && groom.root_uvs.is_some() {
+        sources.push((epic::ROOT_UV.to_string(), ParamSource::RootUvs));
+    }
+    for attribute in &groom.attributes {
+        let name = match (unreal, attribute.name.as_str()) {
+            (false, name) => name.to_string(),
+            (true, attr::COLOR) => epic::COLOR.to_string(),
+            (true, name) if name.starts_with(epic::PREFIX) => name.to_string(),
+            (true, name) => format!("{}{name}", epic::PREFIX),
+        };
+        sources.push((name, ParamSource::Attribute(attribute.name.clone())));
+    }
+    let mut params = Vec::new();
+    if !sources.is_empty() {
+        let arb = archive.add_compound(geom, ".arbGeomParams", MetaData::new());
+        for (name, source) in sources {
+            let (pod, extent, rate, interp) = match &source {
+                ParamSource::Widths => (Pod::F32, 1, AttributeRate::Vertex, ""),
+                ParamSource::StrandIds | ParamSource::Guides => (Pod::I32, 1, AttributeRate::Strand, ""),
+                ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
+                ParamSource::Attribute(a) => {
+                    let a = groom.attribute(a).expect("listed from the groom");
+                    (Pod::F32, a.components as u8, a.rate, interpretation(&a.name, a.components))
+                }
+            };
+            let metadata = geom_param_metadata(scope(rate), pod, extent, interp);
+            params.push((archive.add_array(arb, &name, metadata, pod, extent, ts), source));
+        }
+    }
+    let velocities = with_velocities.then(|| {
+        archive.add_array(
+            geom,
+            ".velocities",
+            MetaData::new().with("interpretation", "vector"),
+            Pod::F32,
+            3,
+            ts,
+        )
+    });
+    let uv = groom.root_uvs.is_some().then(|| {
+        let metadata = geom_param_metadata("uni", Pod::F32, 2, "vector");
+        archive.add_array(geom, "uv", metadata, Pod::F32, 2, ts)
+    });
+    let width =
+        archive.add_array(geom, "width", geom_param_metadata("vtx", Pod::F32, 1, ""), Pod::F32, 1, ts);
+    CurveProperties { bounds, positions, vertex_counts, basis, velocities, uv, width, params }
+}
+
+/// An Xform object; `matrix` `None` is the identity (an empty `.xform`).
+fn add_xform<W: Write + Seek>(
+    archive: &mut ArchiveWriter<W>,
+    parent: ObjectId,
+    name: &str,
+    matrix: Option<DMat4>,
+) -> io::Result<ObjectId> {
+    let metadata = MetaData::new()
+        .with("schema", XFORM_SCHEMA)
+        .with("schemaObjTitle", &format!("{XFORM_SCHEMA}:.xform"));
+    let object = archive.add_object(parent, name, metadata);
+    let top = archive.properties(object);
+    let xform = archive.add_compound(top, ".xform", MetaData::new().with("schema", XFORM_SCHEMA));
+    if let Some(matrix) = matrix.filter(|m| *m != DMat4::IDENTITY) {
+        let inherits = archive.add_scalar(xform, ".inherits", MetaData::new(), Pod::Bool, 1, 0);
+        archive.set_sample(inherits, &[1], 1)?;
+        let ops = archive.add_scalar(xform, ".ops", MetaData::new(), Pod::U8, 1, 0);
+        archive.set_sample(ops, &[0x30], 1)?; // one 4×4 matrix op
+        let vals = archive.add_scalar(xform, ".vals", MetaData::new(), Pod::F64, 16, 0);
+        // Imath stores the row-vector matrix row by row: glam's columns, in order.
+        let values = matrix.to_cols_array();
+        archive.set_sample(vals, bytemuck::cast_slice(&values), 1)?;
+        let not_identity =
+            archive.add_scalar(xform, "isNotConstantIdentity", MetaData::new(), Pod::Bool, 1, 0);
+        archive.set_sample(not_identity, &[1], 1)?;
+    }
+    Ok(object)
+}
+
+/// Epic's groom-wide properties on the top Xform's `.userProperties`.
+fn add_groom_version<W: Write + Seek>(archive: &mut ArchiveWriter<W>, object: ObjectId) -> io::Result<()> {
+    let top = archive.properties(object);
+    let user: CompoundId = archive.add_compound(top, ".userProperties", MetaData::new());
+    let major = archive.add_scalar(user, epic::VERSION_MAJOR, MetaData::new(), Pod::I16, 1, 0);
+    archive.set_sample(major, &epic::SPEC_VERSION.0.to_le_bytes(), 1)?;
+    let minor = archive.add_scalar(user, epic::VERSION_MINOR, MetaData::new(), Pod::I16, 1, 0);
+    archive.set_sample(minor, &epic::SPEC_VERSION.1.to_le_bytes(), 1)?;
+    let tool = archive.add_scalar(user, epic::TOOL, MetaData::new(), Pod::String, 1, 0);
+    let mut text = format!("coif {}", env!("CARGO_PKG_VERSION")).into_bytes();
+    text.push(0);
+    archive.set_sample(tool, &text, 1)
+}
+
+fn bounds_bytes(points: &[Vec3]) -> Vec<u8> {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [-f64::MAX; 3]);
+    for p in points {
+        for axis in 0..3 {
+            lo[axis] = lo[axis].min(p[axis] as f64);
+            hi[axis] = hi[axis].max(p[axis] as f64);
+        }
+    }
+    lo.iter().chain(&hi).flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// Curve type, wrap, basis, basis. Blender and Houdini take the kind from the basis byte, so
+/// linear curves say "no basis" (0), not the library's default Bézier.
+pub fn basis_bytes(basis: CurveBasis) -> [u8; 4] {
+    match basis {
+        CurveBasis::Linear => [1, 0, 0, 0],
+        CurveBasis::Bezier => [0, 0, 1, 1],
+        CurveBasis::BSpline => [0, 0, 2, 2],
+        CurveBasis::CatmullRom => [0, 0, 3, 3],
+    }
+}
+
+fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'g, [u8]>, u64) {
+    fn floats<'g>(values: &'g [f32], factor: f32) -> Cow<'g, [u8]> {
+        if factor == 1.0 {
+            Cow::Borrowed(bytemuck::cast_slice(values))
+        } else {
+            Cow::Owned(values.iter().flat_map(|v| (v * factor).to_le_bytes()).collect())
+        }
+    }
+    match source {
+        ParamSource::Widths => (floats(&groom.widths, scale), groom.widths.len() as u64),
+        ParamSource::StrandIds => (
+            Cow::Owned(groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect()),
+            groom.strand_ids.len() as u64,
+        ),
+        ParamSource::Guides => {
+            let guides = groom.guides.as_deref().unwrap_or(&[]);
+            (Cow::Owned(guides.iter().flat_map(|&g| (g as i32).to_le_bytes()).collect()), guides.len() as u64)
+        }
+        ParamSource::RootUvs => {
+            let uvs = groom.root_uvs.as_deref().unwrap_or(&[]);
+            (floats(bytemuck::cast_slice(uvs), 1.0), uvs.len() as u64)
+        }
+        ParamSource::Attribute(name) => {
+            let a = groom.attribute(name).expect("layout is fixed by the first frame");
+            // Rest positions are positions: they follow the unit change.
+            let factor = if name == "rest" { scale } else { 1.0 };
+            (floats(&a.data, factor), a.len() as u64)
+        }
+    }
+}

@@ -1,0 +1,109 @@
+//! Alembic (Ogawa) curves: coif's own reader and writer, layered like the reference library.
+//!
+//! - [`ogawa`]: the container (header, groups, data blocks), streaming writer, checked reader;
+//! - [`murmur3`], [`spooky`]: the sample keys and the informational object/property hashes;
+//! - [`archive_write`], [`archive_read`]: AbcCoreOgawa objects, properties, samples, metadata;
+//! - [`curves_write`], [`curves_read`]: the AbcGeom Curves schema and Xforms ⇄ [`Groom`].
+//!
+//! Facts come from `docs/alembic-ogawa.md` (the team's format note); files are byte-identical to
+//! the C++ library's for the same calls.
+#[cfg(target_endian = "big")]
+compile_error!("the Alembic writer stores samples in host byte order, which must be little-endian");
+
+pub mod archive_read;
+pub mod archive_write;
+pub mod curves_read;
+pub mod curves_write;
+pub mod murmur3;
+pub mod ogawa;
+pub mod spooky;
+pub mod types;
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use tempfile::NamedTempFile;
+
+pub use curves_read::CurvesArchive;
+pub use curves_write::{AlembicWriteOptions, CurvesWriter};
+
+use super::atomic;
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+
+/// The first bytes of every Alembic (Ogawa) file.
+pub const MAGIC: &[u8] = ogawa::MAGIC;
+
+fn format_error(path: &Path) -> impl Fn(ogawa::OgawaError) -> Error + '_ {
+    move |e| Error::format(path, e.0)
+}
+
+/// Converts a groom read from a file in Epic's centimetres to metres.
+fn centimetres_to_metres(groom: &mut Groom) {
+    let factor = 1.0 / curves_write::epic::UNITS_PER_METRE;
+    groom.scale(factor);
+    if let Some(rest) = groom.attribute_mut("rest") {
+        rest.data.iter_mut().for_each(|v| *v *= factor);
+    }
+}
+
+/// Reads frame `frame` (sample index, 0 = first) of an Alembic file's curves, all curves
+/// objects merged, transforms applied. Files that declare Epic's groom spec are in centimetres
+/// and are converted to metres unless `keep_file_units` (the caller converts them itself).
+pub fn read(bytes: &[u8], path: &Path, frame: u32, keep_file_units: bool) -> Result<Groom> {
+    let archive = CurvesArchive::open(bytes).map_err(format_error(path))?;
+    let mut groom = archive.read_frame(frame).map_err(format_error(path))?;
+    if archive.epic_groom && !keep_file_units {
+        centimetres_to_metres(&mut groom);
+    }
+    Ok(groom)
+}
+
+/// Reads every frame of an Alembic file (see [`read`]).
+pub fn read_all_frames(bytes: &[u8], path: &Path, keep_file_units: bool) -> Result<Vec<Groom>> {
+    let archive = CurvesArchive::open(bytes).map_err(format_error(path))?;
+    let mut frames = archive.read_all_frames().map_err(format_error(path))?;
+    if archive.epic_groom && !keep_file_units {
+        frames.iter_mut().for_each(centimetres_to_metres);
+    }
+    Ok(frames)
+}
+
+/// Writes a static groom (one sample) atomically.
+pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Result<()> {
+    let mut writer = AnimationWriter::create(path, groom, options, false)?;
+    writer.write_frame(groom)?;
+    writer.finish()
+}
+
+/// Writes an animated groom frame by frame (uniform time sampling at the options' frame rate,
+/// one sample per frame, constant topology), streaming each frame to disk. The file appears
+/// under its name only when [`AnimationWriter::finish`] succeeds.
+pub struct AnimationWriter {
+    path: PathBuf,
+    writer: CurvesWriter<BufWriter<NamedTempFile<File>>>,
+}
+
+impl AnimationWriter {
+    /// Starts the file; `first` fixes the topology and attribute layout (it is not written:
+    /// pass it to [`AnimationWriter::write_frame`] too). `animated` false makes a static file.
+    pub fn create(path: &Path, first: &Groom, options: &AlembicWriteOptions, animated: bool) -> Result<Self> {
+        first.validate()?;
+        let out = atomic::create_beside(path)?;
+        let writer = CurvesWriter::new(out, first, options, animated).map_err(|e| Error::io(path, e))?;
+        Ok(AnimationWriter { path: path.to_path_buf(), writer })
+    }
+
+    pub fn write_frame(&mut self, groom: &Groom) -> Result<()> {
+        groom.validate()?;
+        self.writer
+            .write_frame(groom)
+            .map_err(|message| Error::Usage(format!("{}: {message}", self.path.display())))
+    }
+
+    pub fn finish(self) -> Result<()> {
+        let out = self.writer.finish().map_err(|e| Error::io(&self.path, e))?;
+        atomic::commit(&self.path, out)
+    }
+}

@@ -1,0 +1,301 @@
+//! Files as other tools write them, built with coif's low-level archive writer in their layouts:
+//! Xform hierarchies, several curves objects, cubic bases, widths in every scope, indexed
+//! parameters and Epic's `groom_*` attributes. Expected grooms are computed by hand.
+mod common;
+use common::*;
+
+use std::f64::consts::FRAC_PI_2;
+use std::io::Cursor;
+
+use coif::groom::{attr, AttributeRate, CurveBasis};
+use coif::io::alembic::archive_write::{ArchiveWriter, CompoundId, ObjectId};
+use coif::io::alembic::types::{MetaData, Pod, TimeSampling};
+use coif::io::alembic::{self, CurvesArchive};
+use glam::{DMat4, DVec3, Vec3};
+
+type Writer = ArchiveWriter<Cursor<Vec<u8>>>;
+
+fn f32s(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+fn param_md(scope: &str, pod: Pod, extent: u8) -> MetaData {
+    MetaData::new()
+        .with("geoScope", scope)
+        .with("isGeomParam", "true")
+        .with("podName", pod.name())
+        .with("podExtent", &extent.to_string())
+        .with("arrayExtent", "1")
+}
+
+fn xform(
+    w: &mut Writer,
+    parent: ObjectId,
+    name: &str,
+    ops: &[u8],
+    vals: &[f64],
+    inherits: Option<bool>,
+) -> ObjectId {
+    let md =
+        MetaData::new().with("schema", "AbcGeom_Xform_v3").with("schemaObjTitle", "AbcGeom_Xform_v3:.xform");
+    let object = w.add_object(parent, name, md);
+    let top = w.properties(object);
+    let x = w.add_compound(top, ".xform", MetaData::new().with("schema", "AbcGeom_Xform_v3"));
+    if let Some(inherits) = inherits {
+        let p = w.add_scalar(x, ".inherits", MetaData::new(), Pod::Bool, 1, 0);
+        w.set_sample(p, &[inherits as u8], 1).unwrap();
+    }
+    if !ops.is_empty() {
+        let p = w.add_scalar(x, ".ops", MetaData::new(), Pod::U8, ops.len() as u8, 0);
+        w.set_sample(p, ops, 1).unwrap();
+        let p = w.add_scalar(x, ".vals", MetaData::new(), Pod::F64, vals.len() as u8, 0);
+        w.set_sample(p, &vals.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<_>>(), 1).unwrap();
+    }
+    object
+}
+
+/// A curves object with the mandatory properties; returns `.geom` for optional ones.
+fn curves(
+    w: &mut Writer,
+    parent: ObjectId,
+    name: &str,
+    counts: &[i32],
+    points: &[Vec3],
+    basis: [u8; 4],
+) -> CompoundId {
+    let md = MetaData::new()
+        .with("schema", "AbcGeom_Curve_v2")
+        .with("schemaBaseType", "AbcGeom_GeomBase_v1")
+        .with("schemaObjTitle", "AbcGeom_Curve_v2:.geom");
+    let object = w.add_object(parent, name, md);
+    let top = w.properties(object);
+    let geom = w.add_compound(
+        top,
+        ".geom",
+        MetaData::new().with("schema", "AbcGeom_Curve_v2").with("schemaBaseType", "AbcGeom_GeomBase_v1"),
+    );
+    let b = w.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, 0);
+    w.set_sample(b, &[0u8; 48], 1).unwrap();
+    let p = w.add_array(
+        geom,
+        "P",
+        MetaData::new().with("geoScope", "vtx").with("interpretation", "point"),
+        Pod::F32,
+        3,
+        0,
+    );
+    w.set_sample(p, bytemuck::cast_slice(points), points.len() as u64).unwrap();
+    let n = w.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, 0);
+    w.set_sample(n, bytemuck::cast_slice(counts), counts.len() as u64).unwrap();
+    let t = w.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, 0);
+    w.set_sample(t, &basis, 1).unwrap();
+    geom
+}
+
+fn line(x: f32, n: usize) -> Vec<Vec3> {
+    (0..n).map(|k| Vec3::new(x, -(k as f32) * 0.1, 0.0)).collect()
+}
+
+#[test]
+fn xform_hierarchies_are_applied_and_curves_objects_merged() {
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let top = w.top();
+    // /rig: translate (0, 0, 5); /rig/head: rotate 90° about Y, then scale 2 (ops outermost first).
+    let rig = xform(&mut w, top, "rig", &[0x10], &[0.0, 0.0, 5.0], None);
+    let head = xform(&mut w, rig, "head", &[0x50, 0x00], &[90.0, 2.0, 2.0, 2.0], Some(true));
+    let a_points = [line(1.0, 3), line(2.0, 4)].concat();
+    let a = curves(&mut w, head, "hairA", &[3, 4], &a_points, [1, 0, 0, 0]);
+    let width = w.add_array(a, "width", param_md("con", Pod::F32, 1), Pod::F32, 1, 0);
+    w.set_sample(width, &f32s(&[0.01]), 1).unwrap();
+    // /loose: a matrix op that does not inherit from above (here: nothing above anyway).
+    let matrix = DMat4::from_translation(DVec3::new(10.0, 0.0, 0.0));
+    let loose = xform(&mut w, rig, "loose", &[0x30], &matrix.to_cols_array(), Some(false));
+    let b_points = [line(0.0, 2), line(0.5, 5)].concat();
+    let b = curves(&mut w, loose, "hairB", &[2, 5], &b_points, [1, 0, 0, 0]);
+    let width = w.add_array(b, "width", param_md("uni", Pod::F32, 1), Pod::F32, 1, 0);
+    w.set_sample(width, &f32s(&[0.02, 0.03]), 2).unwrap();
+    let bytes = w.finish().unwrap().into_inner();
+
+    let groom = alembic::read(&bytes, std::path::Path::new("rig.abc"), 0, false).unwrap();
+    assert_eq!(groom.strand_offsets, vec![0, 3, 7, 9, 14]);
+    let head_world = DMat4::from_translation(DVec3::new(0.0, 0.0, 5.0))
+        * DMat4::from_rotation_y(FRAC_PI_2)
+        * DMat4::from_scale(DVec3::splat(2.0));
+    // By hand: (1, 0, 0) → scale (2, 0, 0) → rotate about Y (0, 0, −2) → translate (0, 0, 3).
+    assert!((groom.points[0] - Vec3::new(0.0, 0.0, 3.0)).length() < 1e-6);
+    for (got, p) in groom.points[..7].iter().zip(&a_points) {
+        assert!((*got - head_world.transform_point3(p.as_dvec3()).as_vec3()).length() < 1e-5);
+    }
+    // `.inherits = false`: only its own matrix applies, not /rig's translation.
+    for (got, p) in groom.points[7..].iter().zip(&b_points) {
+        assert!((*got - (*p + Vec3::new(10.0, 0.0, 0.0))).length() < 1e-6);
+    }
+    let expected_widths = [vec![0.01; 7], vec![0.02; 2], vec![0.03; 5]].concat();
+    assert_eq!(groom.widths, expected_widths);
+    assert_eq!(groom.strand_ids, vec![0, 1, 2, 3]);
+}
+
+#[test]
+fn epic_groom_attributes_and_indexed_params() {
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let top = w.top();
+    let points = [line(0.0, 3), line(1.0, 3), line(2.0, 2)].concat();
+    let geom = curves(&mut w, top, "groom", &[3, 3, 2], &points, [1, 0, 0, 0]);
+    let arb = w.add_compound(geom, ".arbGeomParams", MetaData::new());
+    let p = w.add_array(arb, "groom_width", param_md("uni", Pod::F32, 1), Pod::F32, 1, 0);
+    w.set_sample(p, &f32s(&[0.5, 0.25, 0.125]), 3).unwrap();
+    let p = w.add_array(arb, "groom_guide", param_md("uni", Pod::I8, 1), Pod::I8, 1, 0);
+    w.set_sample(p, &[1, 0, 1], 3).unwrap();
+    let p = w.add_array(arb, "groom_group_id", param_md("uni", Pod::I32, 1), Pod::I32, 1, 0);
+    w.set_sample(p, bytemuck::cast_slice(&[0i32, 0, 1]), 3).unwrap();
+    let p = w.add_array(arb, "groom_id", param_md("uni", Pod::I32, 1), Pod::I32, 1, 0);
+    w.set_sample(p, bytemuck::cast_slice(&[7i32, 8, 9]), 3).unwrap();
+    let p = w.add_array(arb, "groom_root_uv", param_md("uni", Pod::F64, 2), Pod::F64, 2, 0);
+    let uvs = [0.1f64, 0.2, 0.3, 0.4, 0.5, 0.75];
+    w.set_sample(p, bytemuck::cast_slice(&uvs), 3).unwrap();
+    let p = w.add_array(arb, "groom_color", param_md("vtx", Pod::F32, 3), Pod::F32, 3, 0);
+    let colors: Vec<f32> = (0..24).map(|i| i as f32 / 32.0).collect();
+    w.set_sample(p, &f32s(&colors), 8).unwrap();
+    // An indexed parameter: two values, chosen per curve by `.indices`.
+    let clump = w.add_compound(arb, "clump", param_md("uni", Pod::F32, 1));
+    let vals = w.add_array(clump, ".vals", param_md("uni", Pod::F32, 1), Pod::F32, 1, 0);
+    w.set_sample(vals, &f32s(&[10.0, 20.0]), 2).unwrap();
+    let indices = w.add_array(clump, ".indices", MetaData::new(), Pod::U32, 1, 0);
+    w.set_sample(indices, bytemuck::cast_slice(&[1u32, 0, 1]), 3).unwrap();
+    // Epic's groom spec version on the curves' .userProperties: the file is in centimetres.
+    let user = w.add_compound(geom, ".userProperties", MetaData::new());
+    let v = w.add_scalar(user, "groom_version_major", MetaData::new(), Pod::I16, 1, 0);
+    w.set_sample(v, &1i16.to_le_bytes(), 1).unwrap();
+    let bytes = w.finish().unwrap().into_inner();
+
+    let path = std::path::Path::new("epic.abc");
+    let groom = alembic::read(&bytes, path, 0, true).unwrap();
+    assert_eq!(groom.widths, vec![0.5, 0.5, 0.5, 0.25, 0.25, 0.25, 0.125, 0.125], "groom_width per curve");
+    assert_eq!(groom.guides, Some(vec![true, false, true]));
+    assert_eq!(groom.strand_ids, vec![7, 8, 9]);
+    assert_eq!(groom.root_uvs, Some(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.75]]));
+    let color = groom.attribute(attr::COLOR).unwrap();
+    assert_eq!((color.rate, color.components, &color.data), (AttributeRate::Vertex, 3, &colors));
+    let group = groom.attribute("group_id").unwrap();
+    assert_eq!((group.rate, &group.data), (AttributeRate::Strand, &vec![0.0, 0.0, 1.0]));
+    assert_eq!(groom.attribute("clump").unwrap().data, vec![20.0, 10.0, 20.0]);
+    groom.validate().unwrap();
+}
+
+#[test]
+fn epic_spec_on_an_xform_means_centimetres() {
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let top = w.top();
+    let root = xform(&mut w, top, "groom", &[], &[], None);
+    let props = w.properties(root);
+    let user = w.add_compound(props, ".userProperties", MetaData::new());
+    let v = w.add_scalar(user, "groom_version_major", MetaData::new(), Pod::I16, 1, 0);
+    w.set_sample(v, &1i16.to_le_bytes(), 1).unwrap();
+    let points = line(0.0, 3).iter().map(|p| *p * 100.0).collect::<Vec<_>>();
+    let geom = curves(&mut w, root, "hair", &[3], &points, [1, 0, 0, 0]);
+    let width = w.add_array(geom, "width", param_md("vtx", Pod::F32, 1), Pod::F32, 1, 0);
+    w.set_sample(width, &f32s(&[0.008, 0.006, 0.004]), 3).unwrap();
+    let bytes = w.finish().unwrap().into_inner();
+    let groom = alembic::read(&bytes, std::path::Path::new("cm.abc"), 0, false).unwrap();
+    for (got, expected) in groom.points.iter().zip(line(0.0, 3)) {
+        assert!((*got - expected).length() < 1e-6);
+    }
+    assert!((groom.widths[0] - 80e-6).abs() < 1e-10);
+}
+
+#[test]
+fn the_basis_byte_decides_the_curve_kind() {
+    // Blender's hair says [1, 0, 3, 3] (linear type, Catmull-Rom basis); the C++ library's
+    // default for linear curves is [1, 0, 1, 1] (Bézier basis).
+    for (bytes, expected) in [
+        ([1u8, 0, 3, 3], CurveBasis::CatmullRom),
+        ([1, 0, 1, 1], CurveBasis::Bezier),
+        ([0, 0, 2, 2], CurveBasis::BSpline),
+        ([1, 0, 0, 0], CurveBasis::Linear),
+    ] {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        curves(&mut w, top, "c", &[4], &line(0.0, 4), bytes);
+        let file = w.finish().unwrap().into_inner();
+        let groom = alembic::read(&file, std::path::Path::new("b.abc"), 0, false).unwrap();
+        assert_eq!(groom.basis, expected, "{bytes:?}");
+    }
+}
+
+#[test]
+fn animated_foreign_file_picks_frames_by_time() {
+    // Positions on 24 fps from frame 1; an Xform sampled at 7 fps moving +1 in x per sample.
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let fast = w.add_time_sampling(TimeSampling::uniform(24.0, 1.0 / 24.0));
+    let slow = w.add_time_sampling(TimeSampling::uniform(7.0, 1.0 / 7.0));
+    let top = w.top();
+    let md = MetaData::new().with("schema", "AbcGeom_Xform_v3");
+    let object = w.add_object(top, "mover", md);
+    let props = w.properties(object);
+    let x = w.add_compound(props, ".xform", MetaData::new().with("schema", "AbcGeom_Xform_v3"));
+    let ops = w.add_scalar(x, ".ops", MetaData::new(), Pod::U8, 1, 0);
+    w.set_sample(ops, &[0x10], 1).unwrap();
+    let vals = w.add_scalar(x, ".vals", MetaData::new(), Pod::F64, 3, slow);
+    for s in 0..3 {
+        w.set_sample(vals, &[s as f64, 0.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<_>>(), 1)
+            .unwrap();
+    }
+    let md =
+        MetaData::new().with("schema", "AbcGeom_Curve_v2").with("schemaObjTitle", "AbcGeom_Curve_v2:.geom");
+    let curve = w.add_object(object, "c", md);
+    let props = w.properties(curve);
+    let geom = w.add_compound(props, ".geom", MetaData::new().with("schema", "AbcGeom_Curve_v2"));
+    let b = w.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, fast);
+    let p = w.add_array(geom, "P", MetaData::new(), Pod::F32, 3, fast);
+    let n = w.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, fast);
+    let t = w.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, fast);
+    for f in 0..6 {
+        let points: Vec<Vec3> = line(0.0, 2).iter().map(|q| *q + Vec3::new(0.0, 0.0, f as f32)).collect();
+        w.set_sample(b, &[0u8; 48], 1).unwrap();
+        w.set_sample(p, bytemuck::cast_slice(&points), 2).unwrap();
+        w.set_sample(n, &2i32.to_le_bytes(), 1).unwrap();
+        w.set_sample(t, &[1, 0, 0, 0], 1).unwrap();
+    }
+    let bytes = w.finish().unwrap().into_inner();
+    let archive = CurvesArchive::open(&bytes).unwrap();
+    assert_eq!(archive.frame_count(), 6);
+    // Frame f is at (f + 1)/24 s; xform samples at 1/7, 2/7, 3/7 s. Nearest, by hand:
+    // 1/24…5/24 are all closer to 1/7 than to 2/7; 6/24 = 0.25 is closer to 2/7 (0.286).
+    for (f, xform_sample) in [0.0f32, 0.0, 0.0, 0.0, 0.0, 1.0].into_iter().enumerate() {
+        let f = f as u32;
+        let groom = archive.read_frame(f).unwrap();
+        let expected = Vec3::new(xform_sample, 0.0, f as f32);
+        assert!((groom.points[0] - expected).length() < 1e-6, "frame {f}: {} vs {expected}", groom.points[0]);
+    }
+}
+
+#[test]
+fn curves_missing_mandatory_properties_are_rejected() {
+    for missing in [".selfBnds", "curveBasisAndType"] {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        let md = MetaData::new().with("schema", "AbcGeom_Curve_v2");
+        let object = w.add_object(top, "c", md);
+        let props = w.properties(object);
+        let geom = w.add_compound(props, ".geom", MetaData::new().with("schema", "AbcGeom_Curve_v2"));
+        if missing != ".selfBnds" {
+            let b = w.add_scalar(geom, ".selfBnds", MetaData::new(), Pod::F64, 6, 0);
+            w.set_sample(b, &[0u8; 48], 1).unwrap();
+        }
+        let p = w.add_array(geom, "P", MetaData::new(), Pod::F32, 3, 0);
+        w.set_sample(p, bytemuck::cast_slice(&line(0.0, 2)), 2).unwrap();
+        let n = w.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, 0);
+        w.set_sample(n, &2i32.to_le_bytes(), 1).unwrap();
+        if missing != "curveBasisAndType" {
+            let t = w.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, 0);
+            w.set_sample(t, &[1, 0, 0, 0], 1).unwrap();
+        }
+        let bytes = w.finish().unwrap().into_inner();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing.abc");
+        std::fs::write(&path, bytes).unwrap();
+        let out = coif(&["info", path_str(&path)]);
+        assert_eq!(out.status.code(), Some(2));
+        assert!(stderr(&out).contains(missing), "{}", stderr(&out));
+    }
+}
