@@ -11,6 +11,7 @@ pub mod groom;
 pub mod head;
 pub mod info;
 pub mod io;
+pub mod render;
 
 pub use error::{Error, Result};
 pub use groom::Groom;
