@@ -9,7 +9,7 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms clean
+.PHONY: setup build demo test bench grooms golden clean
 
 setup: .deps/.setup-done
 
@@ -31,6 +31,10 @@ test: setup
 # Regenerates the sample grooms checked into grooms/ (see grooms/README.md).
 grooms: build
 	bash scripts/make_grooms.sh $(COIF)
+
+# Re-renders the renderer's golden images in tests/golden/ (view them before committing).
+golden: setup
+	COIF_UPDATE_GOLDEN=1 $(CARGO) test --locked --test render_golden canonical_scenes
 
 clean:
 	$(CARGO) clean

@@ -151,6 +151,32 @@ pub fn rmse(a: &[u8], b: &[u8]) -> f64 {
     (sum / a.len().max(1) as f64).sqrt() / 255.0
 }
 
+/// RMSE of two equally sized 8-bit RGB images after averaging `factor`×`factor` blocks: sampling
+/// noise averages out, differences in the picture (colour, lighting, shape) stay.
+pub fn rmse_downsampled(a: &[u8], b: &[u8], width: u32, height: u32, factor: u32) -> f64 {
+    assert_eq!(a.len(), b.len(), "images differ in size");
+    assert_eq!(a.len(), (width * height * 3) as usize, "image size does not match {width}x{height}");
+    let (w, h) = (width / factor, height / factor);
+    let block = |img: &[u8], bx: u32, by: u32, c: usize| -> f64 {
+        let mut sum = 0.0;
+        for y in by * factor..(by + 1) * factor {
+            for x in bx * factor..(bx + 1) * factor {
+                sum += img[((y * width + x) * 3) as usize + c] as f64;
+            }
+        }
+        sum / (factor * factor) as f64
+    };
+    let mut total = 0.0;
+    for by in 0..h {
+        for bx in 0..w {
+            for c in 0..3 {
+                total += (block(a, bx, by, c) - block(b, bx, by, c)).powi(2);
+            }
+        }
+    }
+    (total / (w * h * 3).max(1) as f64).sqrt() / 255.0
+}
+
 /// Root-mean-square difference of two linear images' RGB, for noise measurement.
 pub fn rmse_linear(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
     assert_eq!(a.len(), b.len(), "images differ in size");

@@ -12,7 +12,7 @@ use super::scene::{AttributeView, RenderScene, Surface};
 use crate::embree::{Hit, Ray};
 
 /// Bounces after which Russian roulette may end a path.
-const ROULETTE_AFTER: u32 = 3;
+const ROULETTE_AFTER: u32 = 1;
 
 /// What a pixel shows.
 #[derive(Clone, Debug, PartialEq)]
