@@ -21,8 +21,8 @@ fn small_groom(strands: usize) -> coif::Groom {
     .unwrap()
 }
 
-/// A white furnace for the whole integrator: white hair (colour 1, so every lobe's weight sums to
-/// 1) alone in a uniform environment of radiance 1, no key light. Light is neither created nor
+/// A white furnace for the whole integrator: white hair (colour one, so the lobe weights sum to
+/// one) alone in a uniform environment of radiance one, no key light. Light is neither created nor
 /// lost, so every pixel — hair or not — must come out 1, apart from the little energy the
 /// specular lobes lose past the poles.
 #[test]
