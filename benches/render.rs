@@ -80,9 +80,9 @@ fn main() {
     }
 
     // Noise: a 128×128 window over the hair, against a 1024-spp render of it.
-    let window = Some((192, 128, 128, 128));
+    let (x0, y0, w, h) = (192, 128, 128, 128);
+    let window = Some((x0, y0, w, h));
     let crop = |image: &coif::render::image::Image| -> Vec<[f32; 4]> {
-        let (x0, y0, w, h) = window.unwrap();
         (y0..y0 + h)
             .flat_map(|y| (x0..x0 + w).map(move |x| (x, y)))
             .map(|(x, y)| image.rgba[(y * 512 + x) as usize])
