@@ -235,8 +235,9 @@ impl Integrator<'_> {
                 (false_colour(x) * shade, tangent)
             }
             (_, Surface::Hair { tangent, .. }) => (Vec3::splat(0.5), tangent),
+            // Head and floor stay dark so the false colours stand out.
             (_, Surface::Diffuse { normal, .. }) => {
-                (Vec3::splat(0.08 + 0.25 * normal.dot(light).max(0.0)), Vec3::ZERO)
+                (Vec3::splat(0.01 + 0.04 * normal.dot(light).max(0.0)), Vec3::ZERO)
             }
         };
         SampleResult { radiance: colour, first_hit: Some((h.t, tangent)) }
