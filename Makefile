@@ -9,7 +9,7 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms clean check-blender fuzz-alembic
+.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic
 
 setup: .deps/.setup-done
 
@@ -51,6 +51,9 @@ fuzz-alembic:
 	mkdir -p fuzz/corpus/alembic_reader
 	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run alembic_reader corpus/alembic_reader seeds -- \
 		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
+# Re-renders the renderer's golden images in tests/golden/ (view them before committing).
+golden: setup
+	COIF_UPDATE_GOLDEN=1 $(CARGO) test --locked --test render_golden canonical_scenes
 
 clean:
 	$(CARGO) clean

@@ -1,6 +1,7 @@
 //! A small safe layer over `embree4-sys` (Embree 4 from the `embreex` wheel). `embree4-rs` has no
 //! curve geometry and hides its device handle, so coif talks to the C API directly and keeps the
-//! unsafe code here.
+//! unsafe code here: a device, a scene of round curves and triangle meshes, and closest-hit and
+//! occlusion queries one ray at a time or in packets of eight (coherent camera rays).
 use std::ptr;
 
 use embree4_sys as sys;
@@ -19,7 +20,13 @@ unsafe impl Sync for Device {}
 
 impl Device {
     pub fn new() -> Result<Device> {
-        let config = c"verbose=0";
+        Device::with_config("verbose=0")
+    }
+
+    /// A device with an Embree configuration string (e.g. `threads=1` for the BVH builder).
+    pub fn with_config(config: &str) -> Result<Device> {
+        let config = std::ffi::CString::new(config)
+            .map_err(|_| Error::Usage("Embree configuration contains a NUL byte".into()))?;
         // SAFETY: a valid NUL-terminated config string; a null result is checked.
         let raw = unsafe { sys::rtcNewDevice(config.as_ptr()) };
         if raw.is_null() {
@@ -49,21 +56,99 @@ impl Drop for Device {
     }
 }
 
-/// A ray hit: distance along the ray, geometry and primitive ids, curve parameter, and the
-/// geometric normal Embree reports (for curves, a vector towards the ray origin across the tube).
+/// How a round curve's control points are interpolated (Embree's round curve types).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CurveType {
+    /// Segments between consecutive vertices: 2 points per segment.
+    Linear,
+    /// Cubic Bézier: 4 control points per segment, consecutive segments share one point.
+    Bezier,
+    /// Uniform cubic B-spline: 4 control points per segment, segments advance by one point.
+    BSpline,
+    /// Catmull–Rom: 4 points per segment (passes through the middle two).
+    CatmullRom,
+}
+
+impl CurveType {
+    fn geometry_type(self) -> sys::RTCGeometryType {
+        match self {
+            CurveType::Linear => sys::RTCGeometryType::ROUND_LINEAR_CURVE,
+            CurveType::Bezier => sys::RTCGeometryType::ROUND_BEZIER_CURVE,
+            CurveType::BSpline => sys::RTCGeometryType::ROUND_BSPLINE_CURVE,
+            CurveType::CatmullRom => sys::RTCGeometryType::ROUND_CATMULL_ROM_CURVE,
+        }
+    }
+
+    /// Control points one segment reads, starting at its index-buffer entry.
+    pub fn points_per_segment(self) -> usize {
+        match self {
+            CurveType::Linear => 2,
+            _ => 4,
+        }
+    }
+}
+
+/// A ray hit: distance along the ray, geometry and primitive ids, surface parameters, and the
+/// geometric normal Embree reports (for curves, a vector towards the ray origin across the tube;
+/// not normalised).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
     pub geometry: u32,
     pub primitive: u32,
     pub u: f32,
+    pub v: f32,
     pub normal: Vec3,
 }
+
+/// A ray for a packet query: origin, direction, the `[t_near, t_far]` interval and an id that
+/// hit filters see.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    pub t_near: f32,
+    pub t_far: f32,
+    pub id: u32,
+}
+
+/// Decides during traversal whether a candidate hit on a primitive counts for the ray with the
+/// given id (`false` lets the ray pass, as through a transparent strand).
+pub type HitFilter = Box<dyn Fn(u32, u32) -> bool + Send + Sync>;
+
+/// Embree's filter callback: asks the geometry's [`HitFilter`] about every valid lane.
+unsafe extern "C" fn filter_trampoline(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments; the user pointer is the `HitFilter` the scene owns;
+    // RTCRayN / RTCHitN are structs of arrays of N 4-byte fields in the documented order
+    // (ray: ..., tfar, mask, id = field 10; hit: Ng xyz, u, v, primID = field 5).
+    let args = &*args;
+    let filter = &*(args.geometryUserPtr as *const HitFilter);
+    let n = args.N as usize;
+    let ray = args.ray as *const u32;
+    let hit = args.hit as *const u32;
+    for lane in 0..n {
+        let valid = args.valid.add(lane);
+        if *valid == 0 {
+            continue;
+        }
+        let id = *ray.add(10 * n + lane);
+        let primitive = *hit.add(5 * n + lane);
+        if !filter(primitive, id) {
+            *valid = 0;
+        }
+    }
+}
+
+/// Lanes in a ray packet.
+pub const PACKET: usize = 8;
 
 /// A committed Embree scene.
 pub struct Scene<'d> {
     raw: sys::RTCScene,
     device: &'d Device,
+    /// Hit filters Embree calls back into; boxed twice so Embree holds a thin pointer.
+    #[allow(clippy::vec_box)]
+    filters: Vec<Box<HitFilter>>,
 }
 
 unsafe impl Send for Scene<'_> {}
@@ -74,16 +159,40 @@ impl<'d> Scene<'d> {
         // SAFETY: valid device; result checked.
         let raw = unsafe { sys::rtcNewScene(device.raw) };
         device.check("creating a scene")?;
-        Ok(Scene { raw, device })
+        Ok(Scene { raw, device, filters: Vec::new() })
+    }
+
+    /// Asks for a higher-quality BVH (slower to build, faster to trace): worth it for many rays.
+    pub fn set_high_quality(&mut self) {
+        // SAFETY: valid scene.
+        unsafe { sys::rtcSetSceneBuildQuality(self.raw, sys::RTCBuildQuality::HIGH) }
     }
 
     /// Adds round linear curves: `points` carries (x, y, z, radius) per vertex, each segment
     /// starts at the vertex index in `segment_starts`. Returns the geometry id.
     pub fn add_round_linear_curves(&mut self, points: &[[f32; 4]], segment_starts: &[u32]) -> Result<u32> {
+        self.add_round_curves(CurveType::Linear, points, segment_starts, None)
+    }
+
+    /// Adds round curves of any basis: `points` carries (x, y, z, radius) per control point and
+    /// segment `i` reads [`CurveType::points_per_segment`] points from `segment_starts[i]`.
+    /// `filter`, if given, is asked about every candidate hit (primitive = segment index).
+    pub fn add_round_curves(
+        &mut self,
+        kind: CurveType,
+        points: &[[f32; 4]],
+        segment_starts: &[u32],
+        filter: Option<HitFilter>,
+    ) -> Result<u32> {
+        let per_segment = kind.points_per_segment();
+        if let Some(bad) = segment_starts.iter().position(|&s| s as usize + per_segment > points.len()) {
+            return Err(Error::Usage(format!("curve segment {bad} reads past the last control point")));
+        }
         let device = self.device;
-        // SAFETY: buffers are allocated by Embree with the sizes we pass and filled in bounds.
+        // SAFETY: buffers are allocated by Embree with the sizes we pass and filled in bounds;
+        // every index was checked to address whole segments inside the vertex buffer.
         unsafe {
-            let geometry = sys::rtcNewGeometry(device.raw, sys::RTCGeometryType::ROUND_LINEAR_CURVE);
+            let geometry = sys::rtcNewGeometry(device.raw, kind.geometry_type());
             device.check("creating curve geometry")?;
             let vertex = sys::rtcSetNewGeometryBuffer(
                 geometry,
@@ -105,12 +214,60 @@ impl<'d> Scene<'d> {
             ) as *mut u32;
             device.check("allocating curve segments")?;
             ptr::copy_nonoverlapping(segment_starts.as_ptr(), index, segment_starts.len());
-            sys::rtcCommitGeometry(geometry);
-            let id = sys::rtcAttachGeometry(self.raw, geometry);
-            sys::rtcReleaseGeometry(geometry);
-            device.check("adding curves")?;
-            Ok(id)
+            if let Some(filter) = filter {
+                let boxed = Box::new(filter);
+                sys::rtcSetGeometryUserData(geometry, &*boxed as *const HitFilter as *mut std::ffi::c_void);
+                sys::rtcSetGeometryIntersectFilterFunction(geometry, Some(filter_trampoline));
+                sys::rtcSetGeometryOccludedFilterFunction(geometry, Some(filter_trampoline));
+                self.filters.push(boxed);
+            }
+            self.attach(geometry, "adding curves")
         }
+    }
+
+    /// Adds a triangle mesh. Returns the geometry id.
+    pub fn add_triangle_mesh(&mut self, vertices: &[Vec3], triangles: &[[u32; 3]]) -> Result<u32> {
+        if let Some(bad) = triangles.iter().position(|t| t.iter().any(|&i| i as usize >= vertices.len())) {
+            return Err(Error::Usage(format!("triangle {bad} names a vertex past the last one")));
+        }
+        let device = self.device;
+        // SAFETY: as for curves; indices were checked against the vertex count.
+        unsafe {
+            let geometry = sys::rtcNewGeometry(device.raw, sys::RTCGeometryType::TRIANGLE);
+            device.check("creating a triangle mesh")?;
+            let vertex = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTCBufferType::VERTEX,
+                0,
+                sys::RTCFormat::FLOAT3,
+                12,
+                vertices.len(),
+            ) as *mut [f32; 3];
+            device.check("allocating mesh vertices")?;
+            for (i, v) in vertices.iter().enumerate() {
+                *vertex.add(i) = v.to_array();
+            }
+            let index = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTCBufferType::INDEX,
+                0,
+                sys::RTCFormat::UINT3,
+                12,
+                triangles.len(),
+            ) as *mut [u32; 3];
+            device.check("allocating mesh triangles")?;
+            ptr::copy_nonoverlapping(triangles.as_ptr(), index, triangles.len());
+            self.attach(geometry, "adding a triangle mesh")
+        }
+    }
+
+    /// Commits a filled geometry, attaches it and drops our reference.
+    unsafe fn attach(&mut self, geometry: sys::RTCGeometry, what: &str) -> Result<u32> {
+        sys::rtcCommitGeometry(geometry);
+        let id = sys::rtcAttachGeometry(self.raw, geometry);
+        sys::rtcReleaseGeometry(geometry);
+        self.device.check(what)?;
+        Ok(id)
     }
 
     /// Builds the acceleration structure; call before any query.
@@ -122,21 +279,13 @@ impl<'d> Scene<'d> {
 
     /// The closest hit along a ray in `[t_near, t_far]`.
     pub fn intersect(&self, origin: Vec3, direction: Vec3, t_near: f32, t_far: f32) -> Option<Hit> {
+        self.intersect_ray(&Ray { origin, direction, t_near, t_far, id: 0 })
+    }
+
+    /// The closest hit along a ray (its id goes to hit filters).
+    pub fn intersect_ray(&self, ray: &Ray) -> Option<Hit> {
         let mut rayhit = sys::RTCRayHit {
-            ray: sys::RTCRay {
-                org_x: origin.x,
-                org_y: origin.y,
-                org_z: origin.z,
-                tnear: t_near,
-                dir_x: direction.x,
-                dir_y: direction.y,
-                dir_z: direction.z,
-                time: 0.0,
-                tfar: t_far,
-                mask: u32::MAX,
-                id: 0,
-                flags: 0,
-            },
+            ray: raw_ray(ray),
             hit: sys::RTCHit {
                 Ng_x: 0.0,
                 Ng_y: 0.0,
@@ -156,8 +305,102 @@ impl<'d> Scene<'d> {
             geometry: hit.geomID,
             primitive: hit.primID,
             u: hit.u,
+            v: hit.v,
             normal: Vec3::new(hit.Ng_x, hit.Ng_y, hit.Ng_z),
         })
+    }
+
+    /// Whether anything lies along the ray in `[t_near, t_far]` (shadow rays).
+    pub fn occluded(&self, origin: Vec3, direction: Vec3, t_near: f32, t_far: f32) -> bool {
+        self.occluded_ray(&Ray { origin, direction, t_near, t_far, id: 0 })
+    }
+
+    /// Whether anything lies along the ray (its id goes to hit filters).
+    pub fn occluded_ray(&self, ray: &Ray) -> bool {
+        let mut ray = raw_ray(ray);
+        // SAFETY: committed scene; valid ray struct; null args use defaults.
+        unsafe { sys::rtcOccluded1(self.raw, &mut ray, ptr::null_mut()) };
+        // Embree marks an occluded ray by setting tfar to -inf.
+        ray.tfar < 0.0
+    }
+
+    /// Closest hits of up to [`PACKET`] rays traced together (`None` lanes are inactive). Pays
+    /// for coherent rays such as neighbouring camera rays.
+    pub fn intersect_packet(&self, rays: &[Option<Ray>; PACKET]) -> [Option<Hit>; PACKET] {
+        // Embree reads the valid mask with vector loads: it must be 32-byte aligned.
+        #[repr(C, align(32))]
+        struct Valid([i32; PACKET]);
+        let mut valid = Valid([0; PACKET]);
+        let mut rh = sys::RTCRayHit8 {
+            ray: sys::RTCRay8 {
+                org_x: [0.0; PACKET],
+                org_y: [0.0; PACKET],
+                org_z: [0.0; PACKET],
+                tnear: [0.0; PACKET],
+                dir_x: [0.0; PACKET],
+                dir_y: [0.0; PACKET],
+                dir_z: [1.0; PACKET],
+                time: [0.0; PACKET],
+                tfar: [0.0; PACKET],
+                mask: [u32::MAX; PACKET],
+                id: [0; PACKET],
+                flags: [0; PACKET],
+            },
+            hit: sys::RTCHit8 {
+                Ng_x: [0.0; PACKET],
+                Ng_y: [0.0; PACKET],
+                Ng_z: [0.0; PACKET],
+                u: [0.0; PACKET],
+                v: [0.0; PACKET],
+                primID: [sys::RTC_INVALID_GEOMETRY_ID; PACKET],
+                geomID: [sys::RTC_INVALID_GEOMETRY_ID; PACKET],
+                instID: [[sys::RTC_INVALID_GEOMETRY_ID; PACKET]],
+            },
+        };
+        for (lane, ray) in rays.iter().enumerate() {
+            let Some(ray) = ray else { continue };
+            valid.0[lane] = -1;
+            rh.ray.org_x[lane] = ray.origin.x;
+            rh.ray.org_y[lane] = ray.origin.y;
+            rh.ray.org_z[lane] = ray.origin.z;
+            rh.ray.dir_x[lane] = ray.direction.x;
+            rh.ray.dir_y[lane] = ray.direction.y;
+            rh.ray.dir_z[lane] = ray.direction.z;
+            rh.ray.tnear[lane] = ray.t_near;
+            rh.ray.tfar[lane] = ray.t_far;
+            rh.ray.id[lane] = ray.id;
+        }
+        // SAFETY: committed scene; `valid` and the 32-byte aligned packet live across the call.
+        // Default (null) query arguments: the bundled headers' `RTCIntersectArguments` layout
+        // does not match the 4.4 library's, and passing one crashes.
+        unsafe { sys::rtcIntersect8(valid.0.as_ptr(), self.raw, &mut rh, ptr::null_mut()) };
+        std::array::from_fn(|lane| {
+            (valid.0[lane] != 0 && rh.hit.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| Hit {
+                t: rh.ray.tfar[lane],
+                geometry: rh.hit.geomID[lane],
+                primitive: rh.hit.primID[lane],
+                u: rh.hit.u[lane],
+                v: rh.hit.v[lane],
+                normal: Vec3::new(rh.hit.Ng_x[lane], rh.hit.Ng_y[lane], rh.hit.Ng_z[lane]),
+            })
+        })
+    }
+}
+
+fn raw_ray(ray: &Ray) -> sys::RTCRay {
+    sys::RTCRay {
+        org_x: ray.origin.x,
+        org_y: ray.origin.y,
+        org_z: ray.origin.z,
+        tnear: ray.t_near,
+        dir_x: ray.direction.x,
+        dir_y: ray.direction.y,
+        dir_z: ray.direction.z,
+        time: 0.0,
+        tfar: ray.t_far,
+        mask: u32::MAX,
+        id: ray.id,
+        flags: 0,
     }
 }
 

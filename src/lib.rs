@@ -14,6 +14,7 @@ pub mod head;
 pub mod info;
 pub mod interact;
 pub mod io;
+pub mod render;
 pub mod sim;
 pub mod style;
 

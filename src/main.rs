@@ -49,6 +49,104 @@ enum Command {
     /// Style a groom with a recipe (perm, water set, blow-dry, bed-head) and settle it into its
     /// new rest shape.
     Style(StyleArgs),
+    /// Path-trace a preview image of a groom (Embree, Kajiya–Kay hair) to PNG or EXR.
+    Render(Box<RenderArgs>),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum RenderMode {
+    /// The path-traced image.
+    Beauty,
+    /// False colour (blue → red) of the attribute named by --attribute.
+    Attribute,
+    /// Hair tangents as colour.
+    Tangent,
+    /// Distance from the camera.
+    Depth,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SamplerName {
+    Sobol,
+    Independent,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    input: PathBuf,
+    /// Output image: .png (8-bit sRGB) or .exr (linear float, with --aov channels).
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    import: ImportArgs,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 32)]
+    spp: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480")]
+    res: String,
+    /// Named viewpoint, framed automatically around the groom (and head).
+    #[arg(long, value_enum, default_value_t = coif::render::camera::View::ThreeQuarter)]
+    view: coif::render::camera::View,
+    /// Explicit camera instead of --view: px,py,pz,tx,ty,tz[,fov] (metres, degrees).
+    #[arg(long, allow_hyphen_values = true)]
+    camera: Option<String>,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = coif::render::camera::DEFAULT_FOV)]
+    fov: f32,
+    /// Stop after the sample pass during which this many seconds have passed.
+    #[arg(long, value_name = "SECONDS")]
+    time_budget: Option<f64>,
+    /// Worker threads (default: all cores). The image is the same for any count.
+    #[arg(long)]
+    threads: Option<usize>,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    #[arg(long, value_enum, default_value_t = RenderMode::Beauty)]
+    mode: RenderMode,
+    /// Attribute to show in false colour (implies --mode attribute), e.g. wetness, bond_hydrogen.
+    #[arg(long)]
+    attribute: Option<String>,
+    /// Value range mapped to blue..red, lo,hi (default: 0,1 for values in [0, 1], else min,max).
+    #[arg(long, allow_hyphen_values = true)]
+    range: Option<String>,
+    /// Hair colour as linear RGB r,g,b in [0, 1] (default: the groom's `color`, else brown).
+    #[arg(long)]
+    color: Option<String>,
+    /// Multiply strand widths (draws hair thicker than it is; 1 = true width).
+    #[arg(long, default_value_t = 1.0)]
+    width_scale: f32,
+    /// Widen strands to at least this many pixels, fading them so average coverage is unchanged.
+    #[arg(long, default_value_t = 0.0, value_name = "PIXELS")]
+    min_pixel_width: f32,
+    /// Show coif's analytic head under the hair.
+    #[arg(long, value_enum, default_value_t = coif::render::scene::HeadMode::Auto)]
+    head: coif::render::scene::HeadMode,
+    /// Leave out the floor.
+    #[arg(long)]
+    no_floor: bool,
+    /// Bounce limit of a path.
+    #[arg(long, default_value_t = 8)]
+    max_depth: u32,
+    /// Exposure, stops.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Direction towards the key light, x,y,z in world space (default: above-left of the camera).
+    #[arg(long, allow_hyphen_values = true)]
+    light_dir: Option<String>,
+    /// Key light irradiance multiplier.
+    #[arg(long, default_value_t = 1.0)]
+    light_intensity: f32,
+    /// Uniform environment radiance instead of the sky (1 = white furnace).
+    #[arg(long)]
+    environment: Option<f32>,
+    #[arg(long, value_enum, default_value_t = SamplerName::Sobol)]
+    sampler: SamplerName,
+    /// Extra EXR channels: depth, tangent (comma-separated).
+    #[arg(long, default_value = "")]
+    aov: String,
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -220,6 +318,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Simulate(args) => run_simulate(args),
         Command::Style(args) => run_style(args),
+        Command::Render(args) => run_render(*args),
     }
 }
 
@@ -310,6 +409,104 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         eprintln!("simulated {} steps ({} s)", summary.steps, summary.seconds);
         write_and_report(&args.output, &groom, false, &io::ExportOptions::default())
     }
+}
+
+fn run_render(args: RenderArgs) -> Result<()> {
+    use coif::render::{self, integrator::Mode, light::Environment, sampler::SamplerKind};
+    // Fail on a bad output name before reading or rendering anything.
+    render::image::ImageFormat::from_path(&args.output)?;
+    let (width, height) = render::parse_resolution(&args.res)?;
+    let mode = match (args.mode, &args.attribute) {
+        (RenderMode::Beauty | RenderMode::Attribute, Some(name)) => {
+            let range = args.range.as_deref().map(render::parse_range).transpose()?;
+            Mode::Attribute { name: name.clone(), range }
+        }
+        (RenderMode::Attribute, None) => {
+            return Err(Error::Usage("--mode attribute needs --attribute NAME".into()))
+        }
+        (RenderMode::Beauty, None) => Mode::Beauty,
+        (RenderMode::Tangent, _) => Mode::Tangent,
+        (RenderMode::Depth, _) => Mode::Depth,
+    };
+    let time_budget = match args.time_budget {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            return Err(Error::Usage("--time-budget must be positive seconds".into()))
+        }
+        s => s.map(std::time::Duration::from_secs_f64),
+    };
+    let mut settings = render::RenderSettings {
+        width,
+        height,
+        spp: args.spp,
+        view: args.view,
+        camera: args.camera.as_deref().map(str::parse).transpose()?,
+        fov_degrees: args.fov,
+        mode,
+        max_depth: args.max_depth,
+        sampler: match args.sampler {
+            SamplerName::Sobol => SamplerKind::Sobol,
+            SamplerName::Independent => SamplerKind::Independent,
+        },
+        seed: args.seed,
+        exposure: args.exposure,
+        time_budget,
+        aovs: render::parse_aovs(&args.aov)?,
+        ..Default::default()
+    };
+    settings.scene.head = args.head;
+    settings.scene.floor = !args.no_floor;
+    settings.scene.width_scale = args.width_scale;
+    settings.scene.min_pixel_width = args.min_pixel_width;
+    settings.scene.color = args.color.as_deref().map(|c| render::parse_vec3(c, "--color")).transpose()?;
+    settings.key.direction =
+        args.light_dir.as_deref().map(|d| render::parse_vec3(d, "--light-dir")).transpose()?;
+    settings.key.irradiance *= args.light_intensity;
+    if let Some(radiance) = args.environment {
+        settings.environment = Environment::Constant(glam::Vec3::splat(radiance));
+    }
+
+    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let bar = progress_bar();
+    let progress = |done: u64, total: u64| {
+        if let Some(bar) = &bar {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
+    };
+    let rendered =
+        render::with_threads(args.threads, || render::render(&loaded.groom, &settings, &progress))??;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    rendered.image.write(&args.output)?;
+    let stats = rendered.stats;
+    if args.json {
+        print_json(json!({ "output": args.output, "width": width, "height": height, "stats": stats }));
+    } else {
+        eprintln!(
+            "wrote {} ({width}x{height}, {} spp, {:.1} s, {:.2} Mrays/s)",
+            args.output.display(),
+            stats.spp,
+            stats.seconds,
+            stats.rays as f64 / stats.seconds.max(1e-9) / 1e6
+        );
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr, only when stderr is a terminal (never in logs or pipes).
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(1);
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("rendering {bar:40} {percent:>3}% {elapsed}<{eta}")
+    {
+        bar.set_style(style);
+    }
+    Some(bar)
 }
 
 fn run_generate(args: GenerateArgs) -> Result<()> {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use font8x8::UnicodeFonts;
 
 use crate::error::{Error, Result};
-use crate::io::atomic::write_atomically;
+use crate::render::image::{read_png, Rgb8};
 
 const PAD: usize = 8;
 const GLYPH: usize = 8;
@@ -13,31 +13,33 @@ const LINE: usize = GLYPH + 3;
 const BACKGROUND: [u8; 3] = [24, 24, 28];
 const INK: [u8; 3] = [230, 230, 230];
 
-/// An RGB8 image.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Rgb {
-    pub width: usize,
-    pub height: usize,
-    pub pixels: Vec<u8>,
+/// Drawing on an RGB8 canvas.
+trait Canvas {
+    fn filled(width: usize, height: usize, color: [u8; 3]) -> Self;
+    fn put(&mut self, x: usize, y: usize, color: [u8; 3]);
+    fn blit(&mut self, tile: &Rgb8, x0: usize, y0: usize);
+    fn text(&mut self, text: &str, x0: usize, y0: usize, max_width: usize);
 }
 
-impl Rgb {
-    fn filled(width: usize, height: usize, color: [u8; 3]) -> Rgb {
-        Rgb { width, height, pixels: color.repeat(width * height) }
+impl Canvas for Rgb8 {
+    fn filled(width: usize, height: usize, color: [u8; 3]) -> Rgb8 {
+        Rgb8 { width: width as u32, height: height as u32, data: color.repeat(width * height) }
     }
 
     fn put(&mut self, x: usize, y: usize, color: [u8; 3]) {
-        if x < self.width && y < self.height {
-            let i = 3 * (y * self.width + x);
-            self.pixels[i..i + 3].copy_from_slice(&color);
+        let (w, h) = (self.width as usize, self.height as usize);
+        if x < w && y < h {
+            let i = 3 * (y * w + x);
+            self.data[i..i + 3].copy_from_slice(&color);
         }
     }
 
-    fn blit(&mut self, tile: &Rgb, x0: usize, y0: usize) {
-        for y in 0..tile.height {
-            for x in 0..tile.width {
-                let i = 3 * (y * tile.width + x);
-                self.put(x0 + x, y0 + y, [tile.pixels[i], tile.pixels[i + 1], tile.pixels[i + 2]]);
+    fn blit(&mut self, tile: &Rgb8, x0: usize, y0: usize) {
+        let tw = tile.width as usize;
+        for y in 0..tile.height as usize {
+            for x in 0..tw {
+                let i = 3 * (y * tw + x);
+                self.put(x0 + x, y0 + y, [tile.data[i], tile.data[i + 1], tile.data[i + 2]]);
             }
         }
     }
@@ -58,53 +60,20 @@ impl Rgb {
     }
 }
 
-/// Reads an 8-bit RGB or RGBA (or grey) PNG into RGB8.
-pub fn read_png(path: &Path) -> Result<Rgb> {
-    let bad = |e: String| Error::format(path, e);
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
-    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-    let mut reader = decoder.read_info().map_err(|e| bad(e.to_string()))?;
-    let mut buffer = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buffer).map_err(|e| bad(e.to_string()))?;
-    let (width, height) = (info.width as usize, info.height as usize);
-    let channels = info.color_type.samples();
-    let pixels = buffer[..width * height * channels]
-        .chunks(channels)
-        .flat_map(|p| match channels {
-            1 | 2 => [p[0], p[0], p[0]],
-            _ => [p[0], p[1], p[2]],
-        })
-        .collect();
-    Ok(Rgb { width, height, pixels })
-}
-
-/// Writes RGB8 as a PNG, atomically.
-pub fn write_png(path: &Path, image: &Rgb) -> Result<()> {
-    write_atomically(path, |w| {
-        let mut encoder = png::Encoder::new(w, image.width as u32, image.height as u32);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(|e| Error::External(format!("PNG: {e}")))?;
-        writer.write_image_data(&image.pixels).map_err(|e| Error::External(format!("PNG: {e}")))?;
-        writer.finish().map_err(|e| Error::External(format!("PNG: {e}")))
-    })
-}
-
 /// Tiles `(preview, labels)` pairs into a grid, labels under each tile, and writes `out`.
-pub fn assemble(tiles: &[(PathBuf, Vec<String>)], out: &Path) -> Result<Rgb> {
+pub fn assemble(tiles: &[(PathBuf, Vec<String>)], out: &Path) -> Result<Rgb8> {
     if tiles.is_empty() {
         return Err(Error::Usage("a contact sheet needs at least one preview".into()));
     }
-    let images: Vec<Rgb> = tiles.iter().map(|(path, _)| read_png(path)).collect::<Result<_>>()?;
-    let tile_w = images.iter().map(|i| i.width).max().unwrap().max(16 * GLYPH);
-    let tile_h = images.iter().map(|i| i.height).max().unwrap();
+    let images: Vec<Rgb8> = tiles.iter().map(|(path, _)| read_png(path)).collect::<Result<_>>()?;
+    let tile_w = images.iter().map(|i| i.width as usize).max().unwrap().max(16 * GLYPH);
+    let tile_h = images.iter().map(|i| i.height as usize).max().unwrap();
     let label_lines = tiles.iter().map(|(_, l)| l.len()).max().unwrap_or(0);
     let cell_w = tile_w + PAD;
     let cell_h = tile_h + PAD + label_lines * LINE;
     let columns = (tiles.len() as f64).sqrt().ceil() as usize;
     let rows = tiles.len().div_ceil(columns);
-    let mut sheet = Rgb::filled(PAD + columns * cell_w, PAD + rows * cell_h, BACKGROUND);
+    let mut sheet = Rgb8::filled(PAD + columns * cell_w, PAD + rows * cell_h, BACKGROUND);
     for (k, (image, (_, labels))) in images.iter().zip(tiles).enumerate() {
         let (x0, y0) = (PAD + (k % columns) * cell_w, PAD + (k / columns) * cell_h);
         sheet.blit(image, x0, y0);
@@ -112,7 +81,7 @@ pub fn assemble(tiles: &[(PathBuf, Vec<String>)], out: &Path) -> Result<Rgb> {
             sheet.text(label, x0, y0 + tile_h + 2 + line * LINE, tile_w);
         }
     }
-    write_png(out, &sheet)?;
+    sheet.write_png(out)?;
     Ok(sheet)
 }
 
@@ -129,7 +98,7 @@ mod tests {
             .enumerate()
             .map(|(k, &c)| {
                 let path = dir.path().join(format!("{k}.png"));
-                write_png(&path, &Rgb::filled(160, 120, c)).unwrap();
+                Rgb8::filled(160, 120, c).write_png(&path).unwrap();
                 (path, vec![format!("radius = {k}")])
             })
             .collect();
@@ -139,8 +108,9 @@ mod tests {
         // Three tiles: a 2 × 2 grid.
         let cell_w = 160 + PAD;
         let cell_h = 120 + PAD + LINE;
-        assert_eq!((sheet.width, sheet.height), (PAD + 2 * cell_w, PAD + 2 * cell_h));
-        let at = |x: usize, y: usize| &sheet.pixels[3 * (y * sheet.width + x)..3 * (y * sheet.width + x) + 3];
+        assert_eq!((sheet.width as usize, sheet.height as usize), (PAD + 2 * cell_w, PAD + 2 * cell_h));
+        let w = sheet.width as usize;
+        let at = |x: usize, y: usize| &sheet.data[3 * (y * w + x)..3 * (y * w + x) + 3];
         assert_eq!(at(PAD + 80, PAD + 60), [255, 0, 0]);
         assert_eq!(at(PAD + cell_w + 80, PAD + 60), [0, 255, 0]);
         assert_eq!(at(PAD + 80, PAD + cell_h + 60), [0, 0, 255]);

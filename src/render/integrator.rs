@@ -1,0 +1,258 @@
+//! The path tracer and the debug views. Each pixel sample follows one path: the camera ray
+//! (traced in packets of eight neighbouring pixels), then at every hit an explicit shadow ray to
+//! the key light and a BSDF-sampled continuation, up to a bounce limit, with Russian roulette
+//! once the path has lost most of its throughput. Escaping rays pick up the environment.
+use glam::Vec3;
+
+use super::bsdf::{Bsdf, HairLobes, KajiyaKay, Lambert};
+use super::camera::Camera;
+use super::light::{Environment, KeyLight};
+use super::sampler::{mix64, Sampler};
+use super::scene::{AttributeView, RenderScene, Surface};
+use crate::embree::{Hit, Ray};
+
+/// Bounces after which Russian roulette may end a path.
+const ROULETTE_AFTER: u32 = 1;
+
+/// What a pixel shows.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Mode {
+    /// The path-traced image.
+    Beauty,
+    /// False colour of a scalar attribute on the hair, blue (low) to red (high).
+    Attribute { name: String, range: Option<(f32, f32)> },
+    /// Hair tangents as colour (0.5 + 0.5·t).
+    Tangent,
+    /// Distance to the first hit, white near to black far.
+    Depth,
+}
+
+/// Everything a path needs that does not change between pixels.
+pub struct Integrator<'a> {
+    pub scene: &'a RenderScene<'a>,
+    pub camera: Camera,
+    pub key: KeyLight,
+    pub environment: Environment,
+    pub lobes: &'a HairLobes,
+    pub max_depth: u32,
+    pub mode: &'a Mode,
+    pub attribute: Option<&'a AttributeView>,
+    pub attribute_range: (f32, f32),
+    pub depth_range: (f32, f32),
+    /// Distance offset for rays leaving a diffuse surface.
+    pub epsilon: f32,
+}
+
+/// One sample's contribution to a pixel.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SampleResult {
+    pub radiance: Vec3,
+    /// Distance and hair tangent at the first hit, if any.
+    pub first_hit: Option<(f32, Vec3)>,
+}
+
+/// Rays traced, for statistics.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RayCount(pub u64);
+
+/// The id of a path's ray at `depth` (hit filters hash it to decide transparency).
+pub fn ray_id(path_seed: u64, depth: u32) -> u32 {
+    mix64(path_seed ^ ((depth as u64) << 56)) as u32
+}
+
+/// Blue → cyan → green → yellow → red for `x` in [0, 1].
+pub fn false_colour(x: f32) -> Vec3 {
+    let stops = [
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    ];
+    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 } * 4.0;
+    let i = (x as usize).min(3);
+    stops[i].lerp(stops[i + 1], x - i as f32)
+}
+
+impl Integrator<'_> {
+    /// The closest hit; partly transparent hair is resolved by the scene's hit filter using
+    /// `ray_id`.
+    pub fn closest(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_near: f32,
+        ray_id: u32,
+        rays: &mut RayCount,
+    ) -> Option<Hit> {
+        rays.0 += 1;
+        self.scene.embree().intersect_ray(&Ray {
+            origin,
+            direction,
+            t_near,
+            t_far: f32::INFINITY,
+            id: ray_id,
+        })
+    }
+
+    /// Whether the direction from `origin` reaches the sky unblocked.
+    fn unoccluded(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_near: f32,
+        ray_id: u32,
+        rays: &mut RayCount,
+    ) -> bool {
+        rays.0 += 1;
+        !self.scene.embree().occluded_ray(&Ray {
+            origin,
+            direction,
+            t_near,
+            t_far: f32::INFINITY,
+            id: ray_id,
+        })
+    }
+
+    /// A sample through pixel `(px, py)`: the camera ray's direction and its first hit (given
+    /// when traced in a packet).
+    pub fn sample(
+        &self,
+        direction: Vec3,
+        first: Option<Hit>,
+        sampler: &mut Sampler,
+        coin_seed: u64,
+        rays: &mut RayCount,
+    ) -> SampleResult {
+        match self.mode {
+            Mode::Beauty => self.path(direction, first, sampler, coin_seed, rays),
+            _ => self.debug(direction, first),
+        }
+    }
+
+    fn path(
+        &self,
+        camera_direction: Vec3,
+        first: Option<Hit>,
+        sampler: &mut Sampler,
+        coin_seed: u64,
+        rays: &mut RayCount,
+    ) -> SampleResult {
+        let mut result = SampleResult::default();
+        let mut throughput = Vec3::ONE;
+        let mut origin = self.camera.position;
+        let mut direction = camera_direction;
+        let mut t_near = 0.0;
+        let mut hit = first;
+        for depth in 0..self.max_depth {
+            let seed = ray_id(coin_seed, depth);
+            if depth > 0 {
+                hit = self.closest(origin, direction, t_near, seed, rays);
+            }
+            let Some(h) = hit else {
+                result.radiance += throughput * self.environment.radiance(direction);
+                break;
+            };
+            let position = origin + direction * h.t;
+            let surface = self.scene.surface(&h, position, direction);
+            if depth == 0 {
+                let tangent = match surface {
+                    Surface::Hair { tangent, .. } => tangent,
+                    Surface::Diffuse { .. } => Vec3::ZERO,
+                };
+                result.first_hit = Some((h.t, tangent));
+            }
+            let wo = -direction;
+            let (bsdf, spawn, spawn_near) = match surface {
+                Surface::Hair { tangent, color, .. } => {
+                    // Embree ignores a curve's own surface near a ray's origin, so hair rays
+                    // start on the hit point itself.
+                    (Bsdf::Hair(KajiyaKay::new(tangent, color, self.lobes)), position, 0.0)
+                }
+                Surface::Diffuse { normal, albedo } => {
+                    (Bsdf::Diffuse(Lambert { normal, albedo }), position, self.epsilon)
+                }
+            };
+            let offset = |w: Vec3| match surface {
+                Surface::Diffuse { normal, .. } => spawn + normal * (self.epsilon * normal.dot(w).signum()),
+                Surface::Hair { .. } => spawn,
+            };
+
+            // Direct light from the key.
+            let (wi, irradiance) = self.key.sample(sampler.get_2d());
+            let (value, _) = bsdf.eval(wo, wi);
+            if value.max_element() > 0.0
+                && self.unoccluded(offset(wi), wi, spawn_near, seed ^ 0x5bd1_e995, rays)
+            {
+                result.radiance += throughput * value * irradiance;
+            }
+
+            // Continue the path.
+            let (u_lobe, u) = (sampler.get_2d(), sampler.get_2d());
+            let u_roulette = sampler.get_1d();
+            let Some(sample) = bsdf.sample(wo, u_lobe, u) else { break };
+            throughput *= sample.weight;
+            if depth + 1 >= ROULETTE_AFTER {
+                let survive = throughput.max_element().min(1.0);
+                if u_roulette >= survive {
+                    break;
+                }
+                throughput /= survive;
+            }
+            origin = offset(sample.direction);
+            direction = sample.direction;
+            t_near = spawn_near;
+        }
+        result
+    }
+
+    fn debug(&self, direction: Vec3, first: Option<Hit>) -> SampleResult {
+        let background = Vec3::splat(0.02);
+        let Some(h) = first else {
+            return SampleResult {
+                radiance: if *self.mode == Mode::Depth { Vec3::ZERO } else { background },
+                first_hit: None,
+            };
+        };
+        let position = self.camera.position + direction * h.t;
+        let surface = self.scene.surface(&h, position, direction);
+        let light = self.key.direction;
+        let (colour, tangent) = match (self.mode, surface) {
+            (Mode::Depth, s) => {
+                let (near, far) = self.depth_range;
+                let g = 1.0 - ((h.t - near) / (far - near).max(1e-6)).clamp(0.0, 1.0);
+                let t = if let Surface::Hair { tangent, .. } = s { tangent } else { Vec3::ZERO };
+                (Vec3::splat(0.05 + 0.95 * g), t)
+            }
+            (Mode::Tangent, Surface::Hair { tangent, .. }) => (Vec3::splat(0.5) + 0.5 * tangent, tangent),
+            (Mode::Attribute { .. }, Surface::Hair { tangent, vertex, fraction, strand, .. }) => {
+                let value =
+                    self.attribute.map_or(0.0, |a| RenderScene::attribute_value(a, vertex, fraction, strand));
+                let (lo, hi) = self.attribute_range;
+                let x = if hi > lo { (value - lo) / (hi - lo) } else { 0.5 };
+                // A little Kajiya–Kay diffuse shading keeps the strands' form readable.
+                let shade = 0.55 + 0.45 * (1.0 - tangent.dot(light).powi(2)).max(0.0).sqrt();
+                (false_colour(x) * shade, tangent)
+            }
+            (_, Surface::Hair { tangent, .. }) => (Vec3::splat(0.5), tangent),
+            // Head and floor stay dark so the false colours stand out.
+            (_, Surface::Diffuse { normal, .. }) => {
+                (Vec3::splat(0.01 + 0.04 * normal.dot(light).max(0.0)), Vec3::ZERO)
+            }
+        };
+        SampleResult { radiance: colour, first_hit: Some((h.t, tangent)) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn false_colour_runs_blue_to_red() {
+        assert_eq!(false_colour(0.0), Vec3::new(0.0, 0.0, 1.0));
+        assert_eq!(false_colour(0.5), Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!(false_colour(1.0), Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(false_colour(7.0), Vec3::new(1.0, 0.0, 0.0));
+    }
+}

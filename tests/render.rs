@@ -1,0 +1,171 @@
+//! The renderer end to end: energy conservation of the whole path tracer (white furnace),
+//! bit-identical images at any thread count, and the `coif render` command line.
+mod common;
+
+use coif::generate::{generate, GenerateParams, Style};
+use coif::render::integrator::Mode;
+use coif::render::light::Environment;
+use coif::render::scene::HeadMode;
+use coif::render::{render, with_threads, AovSet, RenderSettings};
+use common::{coif, dir_listing, path_str, stderr};
+use glam::Vec3;
+
+fn small_groom(strands: usize) -> coif::Groom {
+    generate(&GenerateParams {
+        strands,
+        vertices_per_strand: 12,
+        style: Style::Curly { radius: 0.008, pitch: 0.03 },
+        seed: 3,
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// A white furnace for the whole integrator: white hair (colour one, so the lobe weights sum to
+/// one) alone in a uniform environment of radiance one, no key light. Light is neither created nor
+/// lost, so every pixel — hair or not — must come out 1, apart from the little energy the
+/// specular lobes lose past the poles.
+#[test]
+fn white_furnace_image_is_uniformly_one() {
+    let groom = small_groom(400);
+    let mut settings =
+        RenderSettings { width: 40, height: 30, spp: 64, max_depth: 256, ..Default::default() };
+    settings.scene.head = HeadMode::Off;
+    settings.scene.floor = false;
+    settings.scene.width_scale = 20.0; // thick hair: many paths scatter many times
+    settings.scene.color = Some(Vec3::ONE);
+    settings.key.irradiance = Vec3::ZERO;
+    settings.environment = Environment::Constant(Vec3::ONE);
+    let image = render(&groom, &settings, &|_, _| {}).unwrap().image;
+    let hair: Vec<f32> =
+        image.rgba.iter().filter(|p| p[3] > 0.5).map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
+    assert!(hair.len() > 100, "the hair should cover much of the frame ({} pixels)", hair.len());
+    let mean = hair.iter().sum::<f32>() / hair.len() as f32;
+    assert!((0.97..=1.005).contains(&mean), "mean radiance over hair {mean}, expected 1");
+    let worst = hair.iter().fold(0.0f32, |w, &v| w.max((v - 1.0).abs()));
+    assert!(worst < 0.1, "a hair pixel is {worst} away from 1");
+
+    // The same fibres absorbing half the light per bounce come out darker: the test can fail.
+    settings.scene.color = Some(Vec3::splat(0.5));
+    let grey = render(&groom, &settings, &|_, _| {}).unwrap().image;
+    let grey_mean = grey.rgba.iter().filter(|p| p[3] > 0.5).map(|p| (p[0] + p[1] + p[2]) / 3.0).sum::<f32>()
+        / hair.len() as f32;
+    assert!(grey_mean < 0.9, "grey hair in a furnace should darken: {grey_mean}");
+}
+
+#[test]
+fn image_is_bit_identical_on_one_and_two_threads() {
+    let groom = small_groom(1500);
+    let mut settings = RenderSettings { width: 64, height: 48, spp: 8, ..Default::default() };
+    settings.scene.min_pixel_width = 0.5; // exercise the transparency filter too
+    settings.aovs = AovSet { depth: true, tangent: true };
+    let one = with_threads(Some(1), || render(&groom, &settings, &|_, _| {})).unwrap().unwrap();
+    let two = with_threads(Some(2), || render(&groom, &settings, &|_, _| {})).unwrap().unwrap();
+    let bits = |i: &coif::render::image::Image| -> Vec<u32> {
+        i.rgba
+            .iter()
+            .flatten()
+            .chain(i.aovs.iter().flat_map(|a| a.data.iter()))
+            .map(|v| v.to_bits())
+            .collect()
+    };
+    assert_eq!(bits(&one.image), bits(&two.image));
+    assert_eq!(one.image.encode_png().unwrap(), two.image.encode_png().unwrap());
+    assert!(one.image.rgba.iter().any(|p| p[0] != two.image.rgba[0][0]), "a uniform image proves nothing");
+}
+
+/// Widening strands to a pixel with matching transparency keeps their average coverage: the
+/// mean image stays close to the true-width render (it does not make hair look denser).
+#[test]
+fn minimum_pixel_width_keeps_coverage() {
+    let groom = small_groom(3000);
+    let mut settings = RenderSettings { width: 48, height: 36, spp: 64, ..Default::default() };
+    settings.scene.floor = false;
+    settings.scene.head = HeadMode::Off;
+    settings.mode = Mode::Depth;
+    let coverage = |s: &RenderSettings| -> f32 {
+        let image = render(&groom, s, &|_, _| {}).unwrap().image;
+        image.rgba.iter().map(|p| p[3]).sum::<f32>() / image.rgba.len() as f32
+    };
+    let true_width = coverage(&settings);
+    settings.scene.min_pixel_width = 1.0;
+    let widened = coverage(&settings);
+    settings.scene.min_pixel_width = 0.0;
+    settings.scene.width_scale = 8.0;
+    let thicker = coverage(&settings);
+    assert!(true_width > 0.01, "some hair in view: {true_width}");
+    assert!((widened - true_width).abs() < 0.15 * true_width, "coverage {widened} vs true {true_width}");
+    assert!(thicker > 2.0 * true_width, "--width-scale does thicken: {thicker} vs {true_width}");
+}
+
+#[test]
+fn cli_writes_png_and_exr_with_aovs() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = "grooms/sample_curly.hair";
+    let png = dir.path().join("preview.png");
+    let out =
+        coif(&["render", groom, "-o", path_str(&png), "--res", "40x30", "--spp", "4", "--view", "front"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let image = coif::render::image::read_png(&png).unwrap();
+    assert_eq!((image.width, image.height), (40, 30));
+
+    let exr_path = dir.path().join("preview.exr");
+    let out = coif(&[
+        "render",
+        groom,
+        "-o",
+        path_str(&exr_path),
+        "--res",
+        "40x30",
+        "--spp",
+        "4",
+        "--aov",
+        "depth,tangent",
+        "--camera",
+        "0,0.05,0.8,0,-0.05,0,35",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let exr = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let names: Vec<String> = exr.layer_data[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    for name in ["R", "G", "B", "A", "Z", "tangent.X", "tangent.Y", "tangent.Z"] {
+        assert!(names.iter().any(|n| n == name), "missing channel {name} in {names:?}");
+    }
+    assert_eq!(dir_listing(dir.path()), vec!["preview.exr", "preview.png"]);
+}
+
+#[test]
+fn cli_rejects_bad_requests_without_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("x.png");
+    let groom = "grooms/sample_wavy.hair";
+    let cases: &[(&[&str], &str)] = &[
+        (&["--res", "40"], "--res"),
+        (&["--attribute", "nonexistent"], "nonexistent"),
+        (&["--camera", "1,2,3"], "--camera"),
+        (&["--spp", "0"], "--spp"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", groom, "-o", path_str(&out_path), "--spp", "1", "--res", "8x8"];
+        args.extend_from_slice(extra);
+        let out = coif(&args);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(needle), "{extra:?}: message should name {needle}: {}", stderr(&out));
+    }
+    let jpg = dir.path().join("x.jpg");
+    let out = coif(&["render", groom, "-o", path_str(&jpg)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(dir_listing(dir.path()).is_empty());
+}
+
+#[test]
+fn a_generous_time_budget_changes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.png");
+    let b = dir.path().join("b.png");
+    let base = ["render", "grooms/sample_wavy.hair", "--res", "32x24", "--spp", "8"];
+    let out = coif(&[&base[..], &["-o", path_str(&a)]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let out = coif(&[&base[..], &["-o", path_str(&b), "--time-budget", "600", "--threads", "1"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
