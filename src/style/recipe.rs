@@ -125,13 +125,22 @@ pub struct Contacts {
     pub hair_hair: bool,
     /// α of S1-18, m/s².
     pub hair_stiffness: f32,
+    /// Edges are sampled this often (metres) to find contacts; smaller finds grazing contacts
+    /// on long segments sooner, larger is faster.
+    pub sample_spacing: f32,
     pub static_friction: f32,
     pub dynamic_friction: f32,
 }
 
 impl Default for Contacts {
     fn default() -> Self {
-        Contacts { hair_hair: false, hair_stiffness: 50.0, static_friction: 0.4, dynamic_friction: 0.3 }
+        Contacts {
+            hair_hair: false,
+            hair_stiffness: 50.0,
+            sample_spacing: 0.005,
+            static_friction: 0.4,
+            dynamic_friction: 0.3,
+        }
     }
 }
 
@@ -438,6 +447,9 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     }
     if !(settings.cuticle_peel_per_metre >= 0.0 && settings.damping >= 0.0) {
         return Err("[settings] cuticle_peel_per_metre and damping must not be negative".into());
+    }
+    if !positive(recipe.contacts.sample_spacing) {
+        return Err("[contacts] sample_spacing must be a positive length".into());
     }
     let b = &recipe.bonds;
     let influences = [b.hydrogen, b.ionic, b.disulfide, b.peptide];

@@ -308,8 +308,8 @@ impl<'r> Session<'r> {
             _ => vec![0.0; n],
         };
         let contacts = recipe.contacts.hair_hair.then(|| {
-            let max_segment = sim.rods.rest_lengths.iter().copied().fold(0.0, f32::max);
-            HairContacts::new(&groom.strand_offsets, &radii, max_segment, recipe.contacts.hair_stiffness)
+            let c = &recipe.contacts;
+            HairContacts::new(&groom.strand_offsets, &radii, c.sample_spacing, c.hair_stiffness)
         });
         let frame_interval = (options.frames_per_second > 0.0)
             .then(|| ((1.0 / (options.frames_per_second * settings.dt)).round() as u64).max(1));
