@@ -89,7 +89,12 @@ impl HairContacts {
             let p = points[i];
             let strand = this.strand_of[i];
             let mut dv = Vec3::ZERO;
+            let near = this.max_reach + 0.5 * this.spacing;
             this.grid.for_each_near(p, |sample| {
+                // A sample further than reach + half a spacing cannot stand for a touching edge.
+                if p.distance_squared(this.samples[sample as usize]) > near * near {
+                    return;
+                }
                 let j = this.sample_edge[sample as usize] as usize;
                 if this.strand_of[j] == strand {
                     return;
