@@ -167,6 +167,10 @@ struct StyleArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Also write the whole process as time samples, this many frames per simulated second
+    /// (USD or Alembic output).
+    #[arg(long, value_name = "FPS")]
+    frames: Option<f32>,
 }
 
 #[derive(Args)]
@@ -328,9 +332,25 @@ fn run_style(args: StyleArgs) -> Result<()> {
     io::Format::from_extension(&args.output)?;
     let loaded = io::read_groom(&args.groom, &args.import.options())?;
     let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
-    let options = coif::style::StyleOptions { progress, ..Default::default() };
+    let frames_per_second = args.frames.unwrap_or(0.0);
+    if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
+        return Err(Error::Usage(format!("--frames {frames_per_second} must be a positive rate")));
+    }
+    if frames_per_second > 0.0 && io::Format::from_extension(&args.output)? == io::Format::Hair {
+        return Err(Error::Usage(format!(
+            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
+            args.output.display()
+        )));
+    }
+    let options = coif::style::StyleOptions { progress, frames_per_second };
     let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
-    let warnings = io::write_groom(&args.output, &styled.groom)?;
+    let warnings = io::write_animated(
+        &args.output,
+        &styled.groom,
+        &styled.frames,
+        frames_per_second,
+        &io::ExportOptions::default(),
+    )?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }

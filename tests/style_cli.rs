@@ -191,3 +191,46 @@ fn malformed_recipes_exit_2_with_the_line_and_write_nothing() {
         assert_eq!(dir_listing(dir.path()), vec!["bad.toml"], "{what}: output written");
     }
 }
+
+#[test]
+fn frames_record_the_whole_process_as_time_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = repo("grooms/recipes/bedhead_scene1.toml");
+    let groom = repo("grooms/seed_200x24cm.hair");
+    let still = dir.path().join("still.usda");
+    style(&recipe, &groom, &still);
+    let settled = read(&still);
+    for name in ["anim.usda", "anim.abc"] {
+        let animated = dir.path().join(name);
+        let out = coif(&[
+            "style",
+            path_str(&recipe),
+            "--groom",
+            path_str(&groom),
+            "-o",
+            path_str(&animated),
+            "--frames",
+            "24",
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        // The first sample is the groom before styling, the last the settled result.
+        let at = |frame: f64| {
+            let selection = coif::io::usda::Selection { time: Some(frame), variants: Vec::new() };
+            let options = coif::io::ImportOptions { frame: Some(frame as u32), ..Default::default() };
+            coif::io::read_groom_selected(&animated, &options, &selection).unwrap().groom
+        };
+        let frames = if name.ends_with(".abc") {
+            let bytes = std::fs::read(&animated).unwrap();
+            coif::io::alembic::CurvesArchive::open(&bytes).unwrap().frame_count() as f64
+        } else {
+            // One line per frame in each of the points and extent time samples.
+            let text = std::fs::read_to_string(&animated).unwrap();
+            (text.lines().filter(|l| l.starts_with("            ") && l.contains(": ")).count() / 2) as f64
+        };
+        assert!(frames > 24.0 * 10.0, "{name}: only {frames} frames for over 10 s of styling");
+        let (first, last) = if name.ends_with(".abc") { (0.0, frames - 1.0) } else { (1.0, frames) };
+        assert_eq!(at(first).points, read(&groom).points, "{name}: first frame is not the input");
+        assert_eq!(at(last).points, settled.points, "{name}: last frame is not the settled groom");
+    }
+}

@@ -224,3 +224,52 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
 fn usd_warnings(path: &Path, groom: &Groom) -> Vec<String> {
     usda::unsupported(groom).into_iter().map(|what| format!("{}: {what}", path.display())).collect()
 }
+
+/// Writes a groom whose points move over time: `frames` holds every frame's points (same
+/// topology as `groom`, whose other data is written once), `frames_per_second` sets the time
+/// codes (frame `k` at time code `k + 1`). USD and Alembic carry time samples; `.hair` cannot.
+pub fn write_animated(
+    path: &Path,
+    groom: &Groom,
+    frames: &[Vec<Vec3>],
+    frames_per_second: f32,
+    options: &ExportOptions,
+) -> Result<Vec<String>> {
+    groom.validate()?;
+    if frames.is_empty() {
+        return write_groom_with(path, groom, options);
+    }
+    match Format::from_extension(path)? {
+        Format::Hair => Err(Error::Usage(format!(
+            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
+            path.display()
+        ))),
+        Format::Usda | Format::Usdc | Format::Usdz => {
+            usda::check_writable(groom, path)?;
+            let times = usda::TimeCodes {
+                start: 1.0,
+                end: frames.len() as f64,
+                per_second: frames_per_second as f64,
+            };
+            usd_interop::write_usd(path, |out| {
+                let mut writer = usda::AnimationWriter::begin(out, groom, times, path)?;
+                for (k, points) in frames.iter().enumerate() {
+                    writer.frame(k as f64 + 1.0, points)?;
+                }
+                writer.finish().map(|_| ())
+            })?;
+            Ok(usd_warnings(path, groom))
+        }
+        Format::Alembic => {
+            let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
+            let mut writer = alembic::AnimationWriter::create(path, groom, &abc_options, true)?;
+            let mut frame = groom.clone();
+            for points in frames {
+                frame.points.clone_from(points);
+                writer.write_frame(&frame)?;
+            }
+            writer.finish()?;
+            Ok(Vec::new())
+        }
+    }
+}

@@ -112,6 +112,9 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         steps: session.sim.steps_taken(),
         stages,
     };
+    if session.frame_interval.is_some() && session.frames.last() != Some(&session.sim.rods.positions) {
+        session.frames.push(session.sim.rods.positions.clone());
+    }
     let mut out = session.groom.clone();
     session.sim.write_to_groom(&mut out);
     out.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, session.wetness.clone()));
