@@ -51,6 +51,58 @@ enum Command {
     Style(StyleArgs),
     /// Path-trace a preview image of a groom (Embree, Kajiya–Kay hair) to PNG or EXR.
     Render(Box<RenderArgs>),
+    /// Run a job manifest's tasks (grooms × recipes × wedges) locally in parallel, or one task
+    /// by index (what a farm array job runs). Complete tasks are skipped, so re-runs resume.
+    Batch {
+        manifest: PathBuf,
+        /// Tasks run at once (each as its own process).
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Run only this task, in this process.
+        #[arg(long)]
+        task: Option<usize>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Submit a manifest to a farm scheduler as an array job, or report its progress.
+    Farm {
+        #[command(subcommand)]
+        action: FarmAction,
+    },
+}
+
+#[derive(Subcommand)]
+enum FarmAction {
+    /// Write an array job whose task i runs `coif batch MANIFEST --task i`, and submit it.
+    Submit {
+        manifest: PathBuf,
+        #[arg(long, value_enum, default_value_t = Scheduler::Slurm)]
+        scheduler: Scheduler,
+        #[arg(long)]
+        partition: Option<String>,
+        /// CPUs per task (and threads coif uses in it).
+        #[arg(long, default_value_t = 2)]
+        cpus: usize,
+        /// Tasks the scheduler may run at once.
+        #[arg(long)]
+        max_parallel: Option<usize>,
+        /// Only write the script (for TDs who submit themselves).
+        #[arg(long)]
+        dry_run: bool,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Which tasks are complete (outputs verified by their sidecars) and which are not.
+    Status {
+        manifest: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Scheduler {
+    Slurm,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -323,6 +375,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Simulate(args) => run_simulate(args),
         Command::Style(args) => run_style(args),
         Command::Render(args) => run_render(*args),
+        Command::Batch { manifest, jobs, task, json } => run_batch(&manifest, jobs, task, json),
+        Command::Farm { action } => run_farm(action),
     }
 }
 
@@ -527,6 +581,118 @@ fn progress_bar() -> Option<indicatif::ProgressBar> {
         bar.set_style(style);
     }
     Some(bar)
+}
+
+fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool) -> Result<()> {
+    use coif::batch::{local, manifest, task as batch_task};
+    let manifest = manifest::load(manifest_path)?;
+    if let Some(index) = task {
+        let task = manifest.tasks.get(index).ok_or_else(|| {
+            Error::Usage(format!(
+                "{}: no task {index}; the manifest has {}",
+                manifest_path.display(),
+                manifest.tasks.len()
+            ))
+        })?;
+        let outcome = batch_task::run(task)?;
+        print_json(json!({ "index": index, "task": task.name, "outcome": outcome }));
+        return Ok(());
+    }
+    let coif = std::env::current_exe()
+        .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
+    let report = local::run(&manifest, &coif, jobs)?;
+    if json {
+        print_json(json!(report));
+    } else {
+        for t in &report.tasks {
+            eprintln!(
+                "{:>4} {:<24} {:<8} {:>7.1} s  {}",
+                t.index,
+                t.name,
+                t.status,
+                t.seconds,
+                t.log.display()
+            );
+        }
+        eprintln!(
+            "{} done, {} skipped, {} failed in {:.1} s",
+            report.done, report.skipped, report.failed, report.seconds
+        );
+    }
+    match report.exit_code() {
+        0 => Ok(()),
+        2 => Err(Error::Usage(format!(
+            "{} of {} tasks had bad input; see their logs",
+            report.failed,
+            report.tasks.len()
+        ))),
+        _ => Err(Error::External(format!(
+            "{} of {} tasks failed; see their logs",
+            report.failed,
+            report.tasks.len()
+        ))),
+    }
+}
+
+fn run_farm(action: FarmAction) -> Result<()> {
+    use coif::batch::{manifest, slurm, task as batch_task};
+    match action {
+        FarmAction::Submit {
+            manifest: path,
+            scheduler: Scheduler::Slurm,
+            partition,
+            cpus,
+            max_parallel,
+            dry_run,
+            json,
+        } => {
+            let manifest = manifest::load(&path)?;
+            let absolute = std::path::absolute(&path).map_err(|e| Error::io(&path, e))?;
+            let coif = std::env::current_exe()
+                .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
+            let logs = std::path::absolute(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
+            std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
+            let options = slurm::SubmitOptions { partition, cpus_per_task: cpus, max_parallel };
+            let dir = slurm::farm_dir(&absolute);
+            let script = slurm::write_script(
+                &dir,
+                &slurm::script(&coif, &absolute, manifest.tasks.len(), &logs, &options),
+            )?;
+            let job = if dry_run { None } else { Some(slurm::submit(&script)?) };
+            if let Some(id) = &job {
+                coif::io::atomic::write_bytes_atomically(&dir.join("job_id"), id.as_bytes())?;
+            }
+            if json {
+                print_json(json!({ "script": script, "tasks": manifest.tasks.len(), "job_id": job }));
+            } else {
+                eprintln!("wrote {} ({} tasks)", script.display(), manifest.tasks.len());
+                if let Some(id) = job {
+                    eprintln!("submitted Slurm job {id}");
+                }
+            }
+            Ok(())
+        }
+        FarmAction::Status { manifest: path, json } => {
+            let manifest = manifest::load(&path)?;
+            let done: Vec<bool> = manifest.tasks.iter().map(batch_task::is_complete).collect();
+            let complete = done.iter().filter(|&&d| d).count();
+            if json {
+                let tasks: Vec<_> = manifest
+                    .tasks
+                    .iter()
+                    .zip(&done)
+                    .map(|(t, d)| json!({ "index": t.index, "task": t.name, "complete": d }))
+                    .collect();
+                print_json(json!({ "complete": complete, "total": done.len(), "tasks": tasks }));
+            } else {
+                for (t, d) in manifest.tasks.iter().zip(&done) {
+                    eprintln!("{:>4} {:<24} {}", t.index, t.name, if *d { "complete" } else { "pending" });
+                }
+                eprintln!("{complete} of {} tasks complete", done.len());
+            }
+            Ok(())
+        }
+    }
 }
 
 fn run_generate(args: GenerateArgs) -> Result<()> {

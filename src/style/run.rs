@@ -440,7 +440,10 @@ impl<'r> Session<'r> {
         }
         if let Some(water) = &self.recipe.water {
             let gravity = self.sim.params().gravity;
-            self.droplets.step(positions, &mut self.dv, Some(&mut self.wetness), gravity, dt, &water.params);
+            // Drying hair takes up no more water: the droplets evaporate with it.
+            let drying = self.heat > 0.0 || self.dryer.is_some();
+            let wetness = (!drying).then_some(&mut self.wetness[..]);
+            self.droplets.step(positions, &mut self.dv, wetness, gravity, dt, &water.params);
         }
         let accel = self.sim.external_acceleration_mut();
         accel.par_iter_mut().zip(self.dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);

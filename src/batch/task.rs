@@ -1,0 +1,91 @@
+//! Running one task: the effective recipe (file plus overrides), styling, outputs written
+//! atomically, an optional preview, and last the completion sidecar. A task whose sidecar proves
+//! its outputs complete for the same inputs is skipped, so re-running a batch resumes it and a
+//! task killed half-way (no sidecar yet) simply runs again.
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::manifest::{apply_override, Task};
+use super::sidecar::{digest_parts, remove_stale_temporaries, Sidecar};
+use crate::error::{Error, Result};
+use crate::style::{recipe, style, StyleOptions};
+
+/// What running a task did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "lowercase", tag = "status")]
+pub enum Outcome {
+    /// Outputs were already complete for these inputs.
+    Skipped,
+    Done {
+        seconds: f64,
+    },
+}
+
+/// The sidecar beside a task's first output (or its preview).
+pub fn sidecar_path(task: &Task) -> PathBuf {
+    let first =
+        task.outputs.first().or(task.preview.as_ref()).expect("manifests reject tasks without outputs");
+    first.parent().unwrap_or(Path::new(".")).join(format!("{}.task.json", task.name))
+}
+
+fn all_outputs(task: &Task) -> Vec<PathBuf> {
+    task.outputs.iter().chain(task.preview.iter()).cloned().collect()
+}
+
+/// The recipe text with the task's overrides applied, and its digest with the groom's bytes.
+fn effective_inputs(task: &Task) -> Result<(String, String)> {
+    let text = std::fs::read_to_string(&task.recipe).map_err(|e| Error::io(&task.recipe, e))?;
+    let effective = if task.overrides.is_empty() {
+        text
+    } else {
+        let mut value: toml::Value =
+            toml::from_str(&text).map_err(|e| Error::format(&task.recipe, e.message()))?;
+        for (key, override_value) in &task.overrides {
+            apply_override(&mut value, key, override_value.clone())
+                .map_err(|m| Error::format(&task.recipe, m))?;
+        }
+        toml::to_string(&value).expect("TOML values serialise")
+    };
+    let groom = std::fs::read(&task.groom).map_err(|e| Error::io(&task.groom, e))?;
+    let digest = digest_parts(&[&groom, effective.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()]);
+    Ok((effective, digest))
+}
+
+/// Whether the task's outputs are complete for its current inputs.
+pub fn is_complete(task: &Task) -> bool {
+    let Ok((_, inputs)) = effective_inputs(task) else { return false };
+    Sidecar::read(&sidecar_path(task)).is_some_and(|s| s.proves_complete(&inputs, &all_outputs(task)))
+}
+
+/// Runs a task unless its outputs are already complete.
+pub fn run(task: &Task) -> Result<Outcome> {
+    let start = Instant::now();
+    let (effective, inputs) = effective_inputs(task)?;
+    let outputs = all_outputs(task);
+    let sidecar = sidecar_path(task);
+    if Sidecar::read(&sidecar).is_some_and(|s| s.proves_complete(&inputs, &outputs)) {
+        return Ok(Outcome::Skipped);
+    }
+    let recipe = recipe::parse(&effective, &task.recipe)?;
+    for output in &outputs {
+        remove_stale_temporaries(output);
+        if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+    }
+    let groom = crate::io::read_groom(&task.groom, &Default::default())?.groom;
+    let styled = style(&groom, &recipe, &StyleOptions::default())?;
+    for output in &task.outputs {
+        crate::io::write_groom(output, &styled.groom)?;
+    }
+    if let Some(preview) = &task.preview {
+        let settings =
+            crate::render::RenderSettings { width: 320, height: 240, spp: 16, ..Default::default() };
+        let rendered = crate::render::render(&styled.groom, &settings, &|_, _| {})?;
+        rendered.image.write(preview)?;
+    }
+    Sidecar::record(&task.name, inputs, &outputs)?.write(&sidecar)?;
+    Ok(Outcome::Done { seconds: start.elapsed().as_secs_f64() })
+}

@@ -1,0 +1,221 @@
+//! `coif batch` and `coif farm`: wedges expand into tasks that run in parallel, re-runs resume,
+//! a failing task does not stop the others, a task killed half-way leaves nothing under an
+//! output name and re-runs to the same bytes, and a real single-node Slurm runs the same tasks.
+mod common;
+use common::*;
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const RECIPE: &str = r#"
+[wetness]
+evaporation = 4.0
+[[obstacles]]
+name = "head"
+shape = "head"
+[[obstacles]]
+name = "pillow"
+shape = "plane"
+point = [0.3, 0.0, 0.0]
+normal = [-1.0, 0.0, 0.0]
+[[stages]]
+kind = "wet"
+duration = 0.05
+[[stages]]
+kind = "press"
+obstacle = "pillow"
+travel = 0.2
+duration = 0.3
+[[stages]]
+kind = "dry"
+duration = 0.3
+[[stages]]
+kind = "release"
+duration = 0.05
+[[stages]]
+kind = "settle"
+max_seconds = 0.5
+"#;
+
+const MANIFEST: &str = r#"
+contact_sheet = "out/sheet.png"
+[defaults]
+groom = "groom.hair"
+recipe = "quick.toml"
+outputs = ["out/{name}/groom.usda", "out/{name}/groom.abc"]
+preview = "out/{name}/preview.png"
+[[wedges]]
+name = "w"
+parameters = { "stages.1.travel" = [0.1, 0.2], "bonds.hydrogen" = [0.2, 0.5], "stages.2.duration" = [0.2, 0.3] }
+"#;
+
+/// A job folder with a small groom, the recipe and the manifest.
+fn job(manifest: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("groom.hair");
+    let out =
+        coif(&["generate", "-o", path_str(&groom), "--strands", "60", "--vertices", "8", "--length", "0.2"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::write(dir.path().join("quick.toml"), RECIPE).unwrap();
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    dir
+}
+
+fn batch(dir: &Path, jobs: &str) -> serde_json::Value {
+    let manifest = dir.join("m.toml");
+    stdout_json(&coif(&["batch", path_str(&manifest), "--jobs", jobs, "--json"]))
+}
+
+/// Every output file of the job folder, by relative path, with its bytes (sidecars and logs
+/// excepted: they hold times and absolute paths).
+fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.join("out")];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if !path.to_string_lossy().ends_with(".task.json") {
+                let name = path.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+                files.push((name, std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn a_wedge_runs_in_parallel_resumes_and_matches_a_serial_run() {
+    let parallel = job(MANIFEST);
+    let report = batch(parallel.path(), "2");
+    assert_eq!(report["done"], 8, "{report}");
+    assert!(parallel.path().join("out/sheet.png").exists());
+    let again = batch(parallel.path(), "2");
+    assert_eq!((again["skipped"].as_u64(), again["done"].as_u64()), (Some(8), Some(0)), "{again}");
+
+    let serial = job(MANIFEST);
+    batch(serial.path(), "1");
+    let (a, b) = (outputs(parallel.path()), outputs(serial.path()));
+    assert_eq!(a.len(), 8 * 3 + 1);
+    assert!(a == b, "parallel and serial batches wrote different bytes");
+
+    // An output changed behind the batch's back is made again.
+    let changed = parallel.path().join("out/w-003/groom.usda");
+    std::fs::write(&changed, b"#usda 1.0\n").unwrap();
+    let repaired = batch(parallel.path(), "2");
+    assert_eq!(repaired["done"], 1, "{repaired}");
+    assert!(outputs(parallel.path()) == b);
+}
+
+#[test]
+fn a_failing_task_does_not_stop_the_others() {
+    let manifest = format!("{MANIFEST}\n[[tasks]]\nname = \"broken\"\ngroom = \"missing.hair\"\n");
+    let dir = job(&manifest);
+    let out = coif(&["batch", path_str(&dir.path().join("m.toml")), "--jobs", "2", "--json"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!((report["done"].as_u64(), report["failed"].as_u64()), (Some(8), Some(1)), "{report}");
+    let log = std::fs::read_to_string(dir.path().join("logs/broken.log")).unwrap();
+    assert!(log.contains("missing.hair"), "{log}");
+}
+
+#[test]
+fn a_task_killed_half_way_leaves_no_output_and_reruns_to_the_same_bytes() {
+    let slow = RECIPE.replace("max_seconds = 0.5", "max_seconds = 30.0\nmax_speed = 1e-9");
+    let killed = job(MANIFEST);
+    std::fs::write(killed.path().join("quick.toml"), &slow).unwrap();
+    let manifest = killed.path().join("m.toml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(["batch", path_str(&manifest), "--task", "0"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let task_dir = killed.path().join("out/w-000");
+    let names: Vec<String> = if task_dir.exists() { dir_listing(&task_dir) } else { Vec::new() };
+    assert!(
+        names.iter().all(|n| n.starts_with('.') && n.ends_with(".tmp")),
+        "a killed task left {names:?} under output names"
+    );
+
+    batch(killed.path(), "1");
+    let clean = job(MANIFEST);
+    std::fs::write(clean.path().join("quick.toml"), &slow).unwrap();
+    batch(clean.path(), "1");
+    assert!(outputs(killed.path()) == outputs(clean.path()), "the re-run differs from an uninterrupted run");
+    assert!(dir_listing(&task_dir).iter().all(|n| !n.ends_with(".tmp")), "stale temporaries remain");
+}
+
+#[test]
+fn farm_submit_dry_run_writes_an_array_job_of_coif_tasks() {
+    let dir = job(MANIFEST);
+    let manifest = dir.path().join("m.toml");
+    let out = coif(&["farm", "submit", path_str(&manifest), "--dry-run", "--partition", "styling", "--json"]);
+    let report = stdout_json(&out);
+    let script = std::fs::read_to_string(report["script"].as_str().unwrap()).unwrap();
+    assert!(
+        script.contains("#SBATCH --array=0-7\n") && script.contains("#SBATCH --partition=styling\n"),
+        "{script}"
+    );
+    assert!(script.contains("batch") && script.contains("--task \"$SLURM_ARRAY_TASK_ID\""), "{script}");
+    let status = stdout_json(&coif(&["farm", "status", path_str(&manifest), "--json"]));
+    assert_eq!((status["complete"].as_u64(), status["total"].as_u64()), (Some(0), Some(8)));
+}
+
+/// The real thing: a single-node Slurm cluster on this host (installed and started by the
+/// project's script), a wedge submitted through `coif farm submit`, outputs byte-identical to a
+/// local batch.
+#[test]
+fn a_wedge_through_a_real_slurm_matches_a_local_batch() {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/slurm_cluster.sh");
+    let install = Command::new("bash").arg(&script).arg("install").status().unwrap();
+    if !install.success() {
+        eprintln!("SKIPPED LOUDLY: Slurm could not be installed on this machine");
+        return;
+    }
+    let state = tempfile::tempdir().unwrap();
+    let started = Command::new("bash").arg(&script).arg("start").arg(state.path()).status().unwrap();
+    assert!(started.success(), "the Slurm cluster did not start; logs in {}", state.path().display());
+    let conf = state.path().join("slurm.conf");
+    struct Stop<'a>(&'a Path, &'a Path);
+    impl Drop for Stop<'_> {
+        fn drop(&mut self) {
+            let _ = Command::new("bash").arg(self.0).arg("stop").arg(self.1).status();
+        }
+    }
+    let _stop = Stop(&script, state.path());
+
+    let farm = job(MANIFEST);
+    let manifest = farm.path().join("m.toml");
+    let start = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(["farm", "submit", path_str(&manifest), "--cpus", "1", "--json"])
+        .env("SLURM_CONF", &conf)
+        .output()
+        .unwrap();
+    let report = stdout_json(&out);
+    assert!(report["job_id"].as_str().is_some_and(|id| !id.is_empty()), "{report}");
+    loop {
+        let status = stdout_json(&coif(&["farm", "status", path_str(&manifest), "--json"]));
+        if status["complete"] == status["total"] {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(300), "Slurm did not finish the wedge: {status}");
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    eprintln!("wedge of 8 tasks through Slurm: {:.1} s", start.elapsed().as_secs_f64());
+    let local = job(MANIFEST);
+    let local_start = Instant::now();
+    batch(local.path(), "2");
+    eprintln!("the same wedge locally (2 jobs): {:.1} s", local_start.elapsed().as_secs_f64());
+    // The contact sheet is a local batch's extra; compare the tasks' outputs.
+    let tasks_only =
+        |dir: &Path| outputs(dir).into_iter().filter(|(n, _)| !n.ends_with("sheet.png")).collect::<Vec<_>>();
+    assert!(tasks_only(farm.path()) == tasks_only(local.path()), "Slurm and local outputs differ");
+}
