@@ -23,46 +23,10 @@ fn wound(radius: f32) -> Vec<Vec3> {
     points
 }
 
-/// Least-squares (Kåsa) circle through points in the xy plane: returns the radius.
+/// Radius of the circle the points lie on (least squares; `coif::analysis`, unit-tested against
+/// analytic helices and arcs).
 fn fitted_radius(points: &[Vec3]) -> f64 {
-    // Minimise Σ (x² + y² + D·x + E·y + F)².
-    let mut m = [[0.0f64; 3]; 3];
-    let mut rhs = [0.0f64; 3];
-    for p in points {
-        let (x, y) = (p.x as f64, p.y as f64);
-        let row = [x, y, 1.0];
-        let target = -(x * x + y * y);
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] += row[i] * row[j];
-            }
-            rhs[i] += row[i] * target;
-        }
-    }
-    let [d, e, f] = solve3(m, rhs);
-    ((d * d + e * e) / 4.0 - f).sqrt()
-}
-
-#[allow(clippy::needless_range_loop)] // index loops read clearest for Gaussian elimination
-fn solve3(mut m: [[f64; 3]; 3], mut b: [f64; 3]) -> [f64; 3] {
-    for col in 0..3 {
-        let pivot = (col..3).max_by(|&a, &c| m[a][col].abs().total_cmp(&m[c][col].abs())).unwrap();
-        m.swap(col, pivot);
-        b.swap(col, pivot);
-        for row in col + 1..3 {
-            let factor = m[row][col] / m[col][col];
-            for k in col..3 {
-                m[row][k] -= factor * m[col][k];
-            }
-            b[row] -= factor * b[col];
-        }
-    }
-    let mut x = [0.0; 3];
-    for row in (0..3).rev() {
-        let sum: f64 = (row + 1..3).map(|k| m[row][k] * x[k]).sum();
-        x[row] = (b[row] - sum) / m[row][row];
-    }
-    x
+    coif::analysis::curl_radius(points).expect("a curled strand") as f64
 }
 
 /// Winds a straight strand on the rod, breaks `broken[j]` of each kind there, re-forms all bonds,

@@ -65,19 +65,7 @@ impl Image {
     }
 
     pub fn encode_png(&self) -> Result<Vec<u8>> {
-        let mut bytes = Vec::new();
-        {
-            let mut encoder = png::Encoder::new(&mut bytes, self.width, self.height);
-            encoder.set_color(png::ColorType::Rgb);
-            encoder.set_depth(png::BitDepth::Eight);
-            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let mut writer =
-                encoder.write_header().map_err(|e| Error::External(format!("PNG encoder: {e}")))?;
-            writer
-                .write_image_data(&self.to_srgb8())
-                .map_err(|e| Error::External(format!("PNG encoder: {e}")))?;
-        }
-        Ok(bytes)
+        encode_srgb8_png(self.width, self.height, &self.to_srgb8())
     }
 
     pub fn encode_exr(&self) -> Result<Vec<u8>> {
@@ -132,18 +120,22 @@ pub struct Rgb8 {
 impl Rgb8 {
     /// Writes the bytes as an 8-bit sRGB PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        let mut bytes = Vec::new();
-        {
-            let mut encoder = png::Encoder::new(&mut bytes, self.width, self.height);
-            encoder.set_color(png::ColorType::Rgb);
-            encoder.set_depth(png::BitDepth::Eight);
-            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let mut writer =
-                encoder.write_header().map_err(|e| Error::External(format!("PNG encoder: {e}")))?;
-            writer.write_image_data(&self.data).map_err(|e| Error::External(format!("PNG encoder: {e}")))?;
-        }
-        write_bytes_atomically(path, &bytes)
+        write_bytes_atomically(path, &encode_srgb8_png(self.width, self.height, &self.data)?)
     }
+}
+
+/// An 8-bit sRGB RGB image as PNG bytes.
+fn encode_srgb8_png(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = encoder.write_header().map_err(|e| Error::External(format!("PNG encoder: {e}")))?;
+        writer.write_image_data(rgb).map_err(|e| Error::External(format!("PNG encoder: {e}")))?;
+    }
+    Ok(bytes)
 }
 
 pub fn read_png(path: &Path) -> Result<Rgb8> {
