@@ -23,6 +23,18 @@ fn wound(radius: f32) -> Vec<Vec3> {
     points
 }
 
+/// Lets go of every wound vertex and relaxes the strand to equilibrium, which must be reached.
+fn release_and_settle(sim: &mut Simulation) {
+    for vertex in 1..VERTICES {
+        sim.detach(vertex);
+    }
+    let report = sim.settle(
+        &SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0, iterations: None },
+        &NoHooks,
+    );
+    assert!(report.converged, "{report:?}");
+}
+
 /// Radius of the circle the points lie on (least squares; `coif::analysis`, unit-tested against
 /// analytic helices and arcs).
 fn fitted_radius(points: &[Vec3]) -> f64 {
@@ -61,15 +73,7 @@ fn perm(influences: BondInfluences, broken: [f32; 4]) -> Vec<Vec3> {
         (rest_radius - predicted).abs() < 0.03 * predicted,
         "rest curve radius {rest_radius}, predicted {predicted}"
     );
-    // Release and settle.
-    for vertex in 1..VERTICES {
-        sim.detach(vertex);
-    }
-    let report = sim.settle(
-        &SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0, iterations: None },
-        &NoHooks,
-    );
-    assert!(report.converged, "{report:?}");
+    release_and_settle(&mut sim);
     sim.rods.positions.clone()
 }
 
@@ -121,14 +125,7 @@ fn broken_bonds_that_do_not_re_form_spring_back() {
     sim.run(0.3, &NoHooks);
     sim.change_bond_rate(BondKind::Hydrogen, BondTarget::All, -1.0);
     sim.run(0.1, &NoHooks);
-    for vertex in 1..VERTICES {
-        sim.detach(vertex);
-    }
-    let report = sim.settle(
-        &SettleOptions { max_speed: 1e-5, quiet_time: 0.2, max_seconds: 30.0, iterations: None },
-        &NoHooks,
-    );
-    assert!(report.converged, "{report:?}");
+    release_and_settle(&mut sim);
     let drift = sim.rods.positions.iter().zip(&straight).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
     assert!(drift < 1e-3 * EDGE * VERTICES as f32, "strand ended {drift} m from straight");
 }
