@@ -1,7 +1,7 @@
 //! Interactions speed: ms per styling step with hair–hair contacts and water droplets, through
 //! the same driver `coif style` uses (forces from a snapshot, solver with obstacle contacts,
 //! wetness update). Configurations from issue 4: seed 2's groom (10,000 strands × 6 vertices,
-//! 4 iterations) with 0, 100 and 1,000 droplets and contacts on; a production groom
+//! 4 iterations) with 0, 100 and 1,000 droplets and contacts on (and, for reference, none and contacts off); a production groom
 //! (100,000 × 32, 5 iterations) with contacts on and off. Medians of 3 runs, 1 and 2 threads.
 //! `cargo bench --bench interactions [-- FILTER]`.
 use std::path::Path;
@@ -16,10 +16,22 @@ struct Config {
     iterations: u32,
     droplets: usize,
     contacts: bool,
+    /// `[contacts] sample_spacing`: seed 2's sparse 4.8 cm segments favour longer pieces.
+    spacing: f32,
     steps: u32,
 }
 
-const CONFIGS: [Config; 5] = [
+const CONFIGS: [Config; 8] = [
+    Config {
+        name: "seed2-10000x6x4-no-contacts",
+        strands: 10_000,
+        vertices: 6,
+        iterations: 4,
+        droplets: 0,
+        contacts: false,
+        spacing: 0.005,
+        steps: 60,
+    },
     Config {
         name: "seed2-10000x6x4-water0",
         strands: 10_000,
@@ -27,6 +39,7 @@ const CONFIGS: [Config; 5] = [
         iterations: 4,
         droplets: 0,
         contacts: true,
+        spacing: 0.005,
         steps: 60,
     },
     Config {
@@ -36,6 +49,7 @@ const CONFIGS: [Config; 5] = [
         iterations: 4,
         droplets: 100,
         contacts: true,
+        spacing: 0.005,
         steps: 60,
     },
     Config {
@@ -45,7 +59,28 @@ const CONFIGS: [Config; 5] = [
         iterations: 4,
         droplets: 1000,
         contacts: true,
+        spacing: 0.005,
         steps: 60,
+    },
+    Config {
+        name: "full-head-20000x32-contacts",
+        strands: 20_000,
+        vertices: 32,
+        iterations: 5,
+        droplets: 0,
+        contacts: true,
+        spacing: 0.002,
+        steps: 30,
+    },
+    Config {
+        name: "full-head-20000x32-no-contacts",
+        strands: 20_000,
+        vertices: 32,
+        iterations: 5,
+        droplets: 0,
+        contacts: false,
+        spacing: 0.002,
+        steps: 30,
     },
     Config {
         name: "production-100000x32-contacts",
@@ -54,6 +89,7 @@ const CONFIGS: [Config; 5] = [
         iterations: 5,
         droplets: 0,
         contacts: true,
+        spacing: 0.002,
         steps: 6,
     },
     Config {
@@ -63,6 +99,7 @@ const CONFIGS: [Config; 5] = [
         iterations: 5,
         droplets: 0,
         contacts: false,
+        spacing: 0.002,
         steps: 6,
     },
 ];
@@ -91,10 +128,10 @@ fn main() {
         };
         let seconds = config.steps as f32 / 360.0;
         let text = format!(
-            "[settings]\niterations = {}\n[contacts]\nhair_hair = {}\n{water}\
+            "[settings]\niterations = {}\n[contacts]\nhair_hair = {}\nsample_spacing = {}\n{water}\
              [[obstacles]]\nname = \"head\"\nshape = \"head\"\n\
              [[stages]]\nkind = \"wet\"\nduration = 0.0\n[[stages]]\nkind = \"process\"\nduration = {seconds}\n",
-            config.iterations, config.contacts
+            config.iterations, config.contacts, config.spacing
         );
         let recipe = recipe::parse(&text, Path::new("bench.toml")).expect("benchmark recipe parses");
         for threads in [1, cores.min(2)] {

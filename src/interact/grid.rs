@@ -1,9 +1,12 @@
 //! Uniform-grid neighbour search (S2 §2.4), shared by hair–hair contacts and water particles.
 //!
-//! Items are bucketed by the cell their point falls in. Cells are hashed into a table sized to
-//! the item count, so the grid needs no bounds and its memory is linear in the items; a query
-//! visits the 27 cells around a point. Building is a counting sort: linear, allocation-free once
-//! the buffers have grown, and its order depends only on the input, never on thread timing.
+//! Items are bucketed by the cell their point falls in. A cell's bucket interleaves the low bits
+//! of its coordinates (a Morton code that wraps around), in a table sized to the item count: the
+//! grid needs no bounds, its memory is linear in the items, and — unlike a scrambling hash —
+//! neighbouring cells land in nearby buckets, so queries made in spatial order (see
+//! [`NeighbourGrid::bucket_of`]) stay in cache. A query visits the 27 cells around a point.
+//! Building is a counting sort: linear, allocation-free once the buffers have grown, and its order
+//! depends only on the input, never on thread timing.
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -11,7 +14,8 @@ use rayon::prelude::*;
 pub struct NeighbourGrid {
     cell_size: f32,
     inv_cell_size: f32,
-    mask: u32,
+    /// Bits per axis of the bucket index (the table has 2^(3·bits) buckets).
+    bits: u32,
     /// `starts[b]..starts[b + 1]` index `items` for bucket `b`.
     starts: Vec<u32>,
     /// Item indices sorted by bucket (and by index within a bucket).
@@ -26,11 +30,22 @@ fn cell_of(p: Vec3, inv_cell_size: f32) -> [i32; 3] {
     [c.x as i32, c.y as i32, c.z as i32]
 }
 
-/// Teschner et al.'s spatial hash: large primes per axis, XOR-combined.
-fn hash_cell(cell: [i32; 3]) -> u32 {
-    (cell[0] as u32).wrapping_mul(73_856_093)
-        ^ (cell[1] as u32).wrapping_mul(19_349_663)
-        ^ (cell[2] as u32).wrapping_mul(83_492_791)
+/// Spreads the low 10 bits of `v` two bits apart.
+fn spread_bits(v: u32) -> u32 {
+    let mut v = v & 0x3ff;
+    v = (v | (v << 16)) & 0x0300_00ff;
+    v = (v | (v << 8)) & 0x0300_f00f;
+    v = (v | (v << 4)) & 0x030c_30c3;
+    (v | (v << 2)) & 0x0924_9249
+}
+
+/// The Morton code of a cell's coordinates modulo 2^bits per axis (two's complement wraps, so
+/// negative cells need no offset).
+fn bucket_of_cell(cell: [i32; 3], bits: u32) -> u32 {
+    let low = (1u32 << bits) - 1;
+    spread_bits(cell[0] as u32 & low)
+        | spread_bits(cell[1] as u32 & low) << 1
+        | spread_bits(cell[2] as u32 & low) << 2
 }
 
 impl NeighbourGrid {
@@ -50,19 +65,26 @@ impl NeighbourGrid {
     }
 
     fn bucket(&self, cell: [i32; 3]) -> u32 {
-        hash_cell(cell) & self.mask
+        bucket_of_cell(cell, self.bits)
+    }
+
+    /// The bucket holding point `p`: sorting queries by it makes neighbouring queries consecutive.
+    pub fn bucket_of(&self, p: Vec3) -> u32 {
+        self.bucket(self.cell_of(p))
     }
 
     /// Rebuilds the grid over `points` (item `i` sits at `points[i]`).
     pub fn rebuild(&mut self, points: &[Vec3]) {
-        let table = (points.len().max(16) * 2).next_power_of_two();
-        self.mask = table as u32 - 1;
-        let (inv, mask) = (self.inv_cell_size, self.mask);
+        // At least as many buckets as items (and 2 bits, so a query's 27 cells never wrap onto
+        // one bucket), at most 2^30.
+        self.bits = ((points.len().max(64) as f64).log2() / 3.0).ceil().min(10.0) as u32;
+        let table = 1usize << (3 * self.bits);
+        let (inv, bits) = (self.inv_cell_size, self.bits);
         self.buckets.resize(points.len(), 0);
         self.buckets
             .par_iter_mut()
             .zip(points.par_iter())
-            .for_each(|(b, &p)| *b = hash_cell(cell_of(p, inv)) & mask);
+            .for_each(|(b, &p)| *b = bucket_of_cell(cell_of(p, inv), bits));
 
         self.starts.clear();
         self.starts.resize(table + 1, 0);
@@ -85,27 +107,73 @@ impl NeighbourGrid {
 
     /// Calls `visit(i)` for every item in the 27 cells around `p`, each item at most once.
     pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        self.for_each_near_run(p, |run| self.items[run].iter().for_each(|&i| visit(i)));
+    }
+
+    /// Item indices sorted by cell bucket: [`for_each_near_run`](Self::for_each_near_run) hands
+    /// out ranges of this order, so callers can keep per-item data in it and read it contiguously.
+    pub fn sorted_items(&self) -> &[u32] {
+        &self.items
+    }
+
+    /// Calls `visit(range)` for the runs of [`sorted_items`](Self::sorted_items) in the 27 cells
+    /// around `p`, each run at most once.
+    pub fn for_each_near_run(&self, p: Vec3, mut visit: impl FnMut(std::ops::Range<usize>)) {
         if self.items.is_empty() {
             return;
         }
+        // The 27 cells have 27 distinct buckets: the code wraps every 2^bits ≥ 4 cells per axis.
         let [cx, cy, cz] = self.cell_of(p);
-        let mut seen = [u32::MAX; 27];
-        let mut count = 0;
-        for dx in -1..=1 {
+        for dz in -1..=1 {
             for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let b = self.bucket([cx + dx, cy + dy, cz + dz]);
-                    // Two neighbour cells can hash to one bucket: visit it once.
-                    if seen[..count].contains(&b) {
-                        continue;
+                for dx in -1..=1 {
+                    let b = self.bucket([cx + dx, cy + dy, cz + dz]) as usize;
+                    let run = self.starts[b] as usize..self.starts[b + 1] as usize;
+                    if !run.is_empty() {
+                        visit(run);
                     }
-                    seen[count] = b;
-                    count += 1;
-                    let range = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                    self.items[range].iter().for_each(|&i| visit(i));
                 }
             }
         }
+    }
+}
+
+/// A coarse, conservative record of where points are: cells are marked in a wrapping table, so
+/// a query may report a box as occupied when it is not (never the reverse).
+#[derive(Clone, Debug, Default)]
+pub struct Occupancy {
+    inv_cell_size: f32,
+    bits: u32,
+    marks: Vec<bool>,
+}
+
+impl Occupancy {
+    /// Marks the cells (`cell_size` wide) holding the points `include` selects.
+    pub fn mark(&mut self, cell_size: f32, points: &[Vec3], include: impl Fn(usize) -> bool) {
+        // 2^18 cells, wrapping every 64 cells per axis.
+        self.bits = 6;
+        self.inv_cell_size = 1.0 / cell_size;
+        self.marks.clear();
+        self.marks.resize(1 << (3 * self.bits), false);
+        for (i, &p) in points.iter().enumerate() {
+            if include(i) {
+                self.marks[bucket_of_cell(cell_of(p, self.inv_cell_size), self.bits) as usize] = true;
+            }
+        }
+    }
+
+    /// Whether any marked cell meets the box `lo`–`hi`.
+    pub fn any_in_box(&self, lo: Vec3, hi: Vec3) -> bool {
+        let (a, b) = (cell_of(lo, self.inv_cell_size), cell_of(hi, self.inv_cell_size));
+        // Boxes wider than the table's period cover all of it.
+        let period = 1 << self.bits;
+        if (0..3).any(|k| b[k] - a[k] >= period) {
+            return self.marks.contains(&true);
+        }
+        (a[2]..=b[2]).any(|z| {
+            (a[1]..=b[1])
+                .any(|y| (a[0]..=b[0]).any(|x| self.marks[bucket_of_cell([x, y, z], self.bits) as usize]))
+        })
     }
 }
 
@@ -135,6 +203,39 @@ mod tests {
                 (0..points.len() as u32).filter(|&i| points[i as usize].distance(*q) <= radius).collect();
             assert_eq!(found, expected);
         }
+    }
+
+    #[test]
+    fn cells_of_a_block_get_distinct_buckets_and_the_code_wraps() {
+        assert_eq!(spread_bits(0b1011), 0b1_000_001_001);
+        let mut grid = NeighbourGrid::new(1.0);
+        grid.rebuild(&vec![Vec3::ZERO; 4096]);
+        assert_eq!(grid.bits, 4);
+        // Every cell of a 16³ block has its own bucket; the block wraps onto itself.
+        let mut seen = std::collections::HashSet::new();
+        for x in -8..8 {
+            for y in -8..8 {
+                for z in -8..8 {
+                    assert!(seen.insert(grid.bucket([x, y, z])));
+                    assert_eq!(grid.bucket([x, y, z]), grid.bucket([x + 16, y - 16, z + 32]));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn occupancy_never_misses_a_marked_point() {
+        let points: Vec<Vec3> =
+            (0..200).map(|i| Vec3::new(0.013 * i as f32, -0.4, 0.02 * (i % 7) as f32)).collect();
+        let mut occupancy = Occupancy::default();
+        occupancy.mark(0.02, &points, |i| i % 3 == 0);
+        for (i, &p) in points.iter().enumerate() {
+            let tiny = Vec3::splat(1e-4);
+            if i % 3 == 0 {
+                assert!(occupancy.any_in_box(p - tiny, p + tiny));
+            }
+        }
+        assert!(!occupancy.any_in_box(Vec3::new(0.1, 0.5, 0.1), Vec3::new(0.2, 0.6, 0.2)));
     }
 
     #[test]

@@ -2,120 +2,380 @@
 //! is pushed away along the line to the edge's closest point,
 //! `Δv = α · (2r − d)/(2r) · (p − p_j)/d · Δt`.
 //!
-//! Candidate edges come from a neighbour grid over points sampled along every edge (at most
-//! `spacing` apart), so the grid's cells only need to span the contact distance plus half the
-//! spacing, however long the segments are. A vertex–edge pair is handled once, through the edge's
-//! sample nearest to the closest point, so no per-query bookkeeping is needed.
+//! Finding the pairs is the whole cost: `2r` is a hair's width, far smaller than the segments and
+//! the spacing of strands. So candidates are kept in Verlet lists: each movable vertex lists the
+//! edges of other strands within `2r + skin`, and the lists are reused until some vertex has moved
+//! `skin / 2` since they were built (then no pair can have closed from beyond `2r + skin` to
+//! within `2r`), or until the set of movable vertices changes. Hair being styled mostly creeps or
+//! is held, so lists last many steps; each step only re-measures the listed pairs, exactly.
+//!
+//! Lists are built from a neighbour grid over pieces of every edge (at most `spacing` long), so
+//! the grid's cells span the search distance plus half a piece however long the segments are. A
+//! vertex–edge pair is listed once, through the piece that holds the closest point.
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::grid::NeighbourGrid;
+use super::grid::{NeighbourGrid, Occupancy};
+
+/// Movable vertices handled per parallel task while building lists (fixed, so lists do not
+/// depend on the thread count).
+const BUILD_CHUNK: usize = 2048;
+
+/// A piece of an edge, carrying what a query needs so candidates are read contiguously: the
+/// whole edge (every piece of an edge computes the same closest point, so exactly one claims
+/// it), its vertex index and strand, its mean radius, and which piece of how many it is.
+#[derive(Clone, Copy, Debug, Default)]
+struct Piece {
+    a: Vec3,
+    b: Vec3,
+    edge: u32,
+    strand: u32,
+    radius: f32,
+    index: u32,
+    count: u32,
+}
 
 pub struct HairContacts {
     /// α, m/s²: the push at full overlap.
     pub stiffness: f32,
-    grid: NeighbourGrid,
+    skin: f32,
     spacing: f32,
-    /// Strand of each vertex, and whether the vertex starts an edge (is not a tip).
+    max_radius: f32,
+    /// Strand of each vertex, and whether the edge a vertex starts is followed by another of the
+    /// same strand.
     strand_of: Vec<u32>,
-    starts_edge: Vec<bool>,
-    max_reach: f32,
-    // Samples along the edges, rebuilt every step: position, edge (its first vertex), index
-    // along the edge, and the edge's sample count.
-    samples: Vec<Vec3>,
-    sample_edge: Vec<u32>,
-    sample_index: Vec<u32>,
-    samples_per_edge: Vec<u32>,
+    edge_continues: Vec<bool>,
+    /// First vertex of every edge.
+    edges: Vec<u32>,
+    // Build scratch: each edge's first piece, the pieces in edge order and their middles, their
+    // grid, and the pieces in the grid's order.
+    first_piece: Vec<u32>,
+    pieces: Vec<Piece>,
+    piece_mids: Vec<Vec3>,
+    grid: NeighbourGrid,
+    sorted_pieces: Vec<Piece>,
+    /// Movable vertices to query, as (bucket << 32 | vertex), sorted.
+    queries: Vec<u64>,
+    // Verlet lists: `list_edges[list_starts[i]..list_starts[i + 1]]` are vertex i's candidates.
+    list_starts: Vec<u32>,
+    list_edges: Vec<u32>,
+    built_positions: Vec<Vec3>,
+    built_fixed: Vec<bool>,
+    built: bool,
+    builds: u64,
+    /// Steps the current lists have served.
+    lifetime: u32,
+    /// Where the movable vertices are, to skip edges far from all of them.
+    movable: Occupancy,
 }
 
 impl HairContacts {
-    /// Prepares contacts for a groom's topology; `radii` are per-vertex strand radii. Edges are
-    /// sampled every `spacing` metres at most (a few hair widths to a few millimetres).
+    /// Prepares contacts for a groom's topology; `radii` are per-vertex strand radii. Edges are cut
+    /// into pieces at most `spacing` metres long to build the lists (a few millimetres suit most
+    /// grooms: it trades pieces for candidates per query, never accuracy).
     pub fn new(strand_offsets: &[u32], radii: &[f32], spacing: f32, stiffness: f32) -> Self {
         let vertices = *strand_offsets.last().unwrap_or(&0) as usize;
         let mut strand_of = vec![0u32; vertices];
         let mut starts_edge = vec![true; vertices];
+        let mut edge_continues = vec![true; vertices];
         for (s, w) in strand_offsets.windows(2).enumerate() {
-            strand_of[w[0] as usize..w[1] as usize].fill(s as u32);
-            if w[1] > w[0] {
-                starts_edge[w[1] as usize - 1] = false;
+            let range = w[0] as usize..w[1] as usize;
+            strand_of[range.clone()].fill(s as u32);
+            if !range.is_empty() {
+                starts_edge[range.end - 1] = false;
+                edge_continues[range.end - 1] = false;
+            }
+            if range.len() >= 2 {
+                edge_continues[range.end - 2] = false;
             }
         }
+        let edges = (0..vertices as u32).filter(|&j| starts_edge[j as usize]).collect();
         let max_radius = radii.iter().copied().fold(0.0, f32::max);
-        let max_reach = 2.0 * max_radius;
-        let spacing = spacing.max(max_reach).max(1e-5);
+        let spacing = spacing.max(2.0 * max_radius).max(1e-5);
+        let skin = Self::DEFAULT_SKIN;
         HairContacts {
             stiffness,
-            grid: NeighbourGrid::new(max_reach + 0.5 * spacing + 1e-6),
+            skin,
             spacing,
+            max_radius,
             strand_of,
-            starts_edge,
-            max_reach,
-            samples: Vec::new(),
-            sample_edge: Vec::new(),
-            sample_index: Vec::new(),
-            samples_per_edge: vec![0; vertices],
+            edge_continues,
+            grid: NeighbourGrid::new(Self::cell_size(max_radius, skin, spacing)),
+            edges,
+            first_piece: Vec::new(),
+            pieces: Vec::new(),
+            piece_mids: Vec::new(),
+            sorted_pieces: Vec::new(),
+            queries: Vec::new(),
+            list_starts: Vec::new(),
+            list_edges: Vec::new(),
+            built_positions: Vec::new(),
+            built_fixed: Vec::new(),
+            built: false,
+            builds: 0,
+            lifetime: 0,
+            movable: Occupancy::default(),
         }
     }
 
-    fn resample(&mut self, points: &[Vec3]) {
-        self.samples.clear();
-        self.sample_edge.clear();
-        self.sample_index.clear();
-        for j in 0..points.len() {
-            if !self.starts_edge[j] {
-                continue;
-            }
-            let (a, b) = (points[j], points[j + 1]);
-            let n = ((a.distance(b) / self.spacing).ceil() as u32).max(1);
-            self.samples_per_edge[j] = n;
-            for k in 0..n {
-                self.samples.push(a.lerp(b, (k as f32 + 0.5) / n as f32));
-                self.sample_edge.push(j as u32);
-                self.sample_index.push(k);
-            }
-        }
+    /// Starting slack of the lists, metres. It adapts as the hair moves (see `adapt_skin`).
+    pub const DEFAULT_SKIN: f32 = 0.0005;
+    const MAX_SKIN: f32 = 0.002;
+
+    /// Sets the lists' starting slack.
+    pub fn with_skin(mut self, skin: f32) -> Self {
+        self.set_skin(skin);
+        self.built = false;
+        self
     }
 
-    /// Adds the penalty velocity change to every vertex touching another strand.
-    pub fn apply(&mut self, points: &[Vec3], radii: &[f32], velocities: &mut [Vec3], dt: f32) {
-        if self.max_reach <= 0.0 {
+    fn set_skin(&mut self, skin: f32) {
+        self.skin = skin.clamp(0.0, Self::MAX_SKIN);
+        self.grid = NeighbourGrid::new(Self::cell_size(self.max_radius, self.skin, self.spacing));
+    }
+
+    /// Sets the skin for the next lists from the motion the last ones saw (`largest_move` over
+    /// their `lifetime` steps): thick enough that lists last about eight steps at that pace (growing
+    /// at most twofold at a time), but thinner than before while lists run long (dense hair: there
+    /// a thicker skin costs more candidates than the rebuilds it saves) or when hair outruns
+    /// the skin within a step (fast motion: lists are rebuilt every step anyway, and thinner ones
+    /// build faster). Depends only on the simulation's history, so runs
+    /// stay deterministic.
+    fn adapt_skin(&mut self, largest_move: f32) {
+        let pairs_per_query = self.list_edges.len() as f32 / self.queries.len().max(1) as f32;
+        let per_step = largest_move / self.lifetime.max(1) as f32;
+        let skin = if pairs_per_query > 4.0 || per_step > 2.0 * self.skin {
+            0.5 * self.skin
+        } else {
+            (16.0 * per_step).min(2.0 * self.skin)
+        };
+        // Never below the contact distance: growing back needs lists that outlast a step.
+        self.set_skin(skin.max(2.0 * self.max_radius));
+    }
+
+    fn cell_size(max_radius: f32, skin: f32, spacing: f32) -> f32 {
+        2.0 * max_radius + skin + 0.5 * spacing + 1e-6
+    }
+
+    /// How many times the lists have been built.
+    pub fn builds(&self) -> u64 {
+        self.builds
+    }
+
+    /// Adds the penalty velocity change to every movable vertex (not `fixed`) touching another
+    /// strand.
+    pub fn apply(
+        &mut self,
+        points: &[Vec3],
+        radii: &[f32],
+        fixed: &[bool],
+        velocities: &mut [Vec3],
+        dt: f32,
+    ) {
+        if self.max_radius <= 0.0 {
             return;
         }
-        self.resample(points);
-        self.grid.rebuild(&self.samples);
+        let rebuild = if !self.built || fixed != self.built_fixed.as_slice() {
+            true
+        } else {
+            // A pair closes by at most twice the largest move since the build.
+            let largest_move = self.largest_move(points);
+            let stale = 2.0 * largest_move >= self.skin;
+            if stale {
+                self.adapt_skin(largest_move);
+            }
+            stale
+        };
+        if rebuild {
+            self.build(points, radii, fixed);
+        }
+        self.lifetime += 1;
         let this = &*self;
-        velocities.par_iter_mut().enumerate().for_each(|(i, v)| {
+        velocities.par_iter_mut().enumerate().with_min_len(1024).for_each(|(i, v)| {
             let p = points[i];
-            let strand = this.strand_of[i];
-            let mut dv = Vec3::ZERO;
-            let near = this.max_reach + 0.5 * this.spacing;
-            this.grid.for_each_near(p, |sample| {
-                // A sample further than reach + half a spacing cannot stand for a touching edge.
-                if p.distance_squared(this.samples[sample as usize]) > near * near {
-                    return;
-                }
-                let j = this.sample_edge[sample as usize] as usize;
-                if this.strand_of[j] == strand {
-                    return;
-                }
+            let listed = this.list_starts[i] as usize..this.list_starts[i + 1] as usize;
+            for &j in &this.list_edges[listed] {
+                let j = j as usize;
                 let (a, b) = (points[j], points[j + 1]);
                 let ab = b - a;
-                let t = ((p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-                // Handle the pair once: through the sample whose stretch holds the closest point.
-                let n = this.samples_per_edge[j];
-                if this.sample_index[sample as usize] != ((t * n as f32) as u32).min(n - 1) {
-                    return;
+                let t = (p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE);
+                // Beyond the end of an edge the closest point is the joint with the next edge,
+                // which that edge (also listed) counts.
+                if t > 1.0 && this.edge_continues[j] {
+                    continue;
                 }
-                let closest = a + ab * t;
+                let offset = p - (a + ab * t.clamp(0.0, 1.0));
                 let contact = radii[i] + 0.5 * (radii[j] + radii[j + 1]);
-                let offset = p - closest;
                 let d = offset.length();
                 if d < contact && d > 0.0 {
-                    dv += offset / d * (this.stiffness * (contact - d) / contact * dt);
+                    *v += offset / d * (this.stiffness * (contact - d) / contact * dt);
                 }
-            });
-            *v += dv;
+            }
+        });
+    }
+
+    /// The largest distance a vertex has moved since the lists were built.
+    fn largest_move(&self, points: &[Vec3]) -> f32 {
+        points
+            .par_iter()
+            .zip(self.built_positions.par_iter())
+            .map(|(p, q)| p.distance_squared(*q))
+            .reduce(|| 0.0, f32::max)
+            .sqrt()
+    }
+
+    fn pieces_of(&self, points: &[Vec3], j: usize) -> u32 {
+        ((points[j].distance(points[j + 1]) / self.spacing).ceil() as u32).max(1)
+    }
+
+    fn piece(&self, points: &[Vec3], radii: &[f32], e: usize, index: u32) -> Piece {
+        let j = self.edges[e] as usize;
+        Piece {
+            a: points[j],
+            b: points[j + 1],
+            edge: j as u32,
+            strand: self.strand_of[j],
+            radius: 0.5 * (radii[j] + radii[j + 1]),
+            index,
+            count: self.first_piece[e + 1] - self.first_piece[e],
+        }
+    }
+
+    /// Cuts the edges into pieces and sorts them into the grid. While most vertices are held
+    /// (wound on rods), only edges near a movable vertex are cut: no other can be a candidate.
+    fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
+        let movable = fixed.iter().filter(|&&f| !f).count();
+        let cull = movable < points.len() / 2;
+        if cull {
+            // Cells a few segments wide: a query reaches no further than reach + skin.
+            self.movable.mark(0.02, points, |i| !fixed[i]);
+        }
+        let reach = 2.0 * self.max_radius + self.skin;
+        let this = &*self;
+        let counts: Vec<u32> = this
+            .edges
+            .par_iter()
+            .map(|&j| {
+                let j = j as usize;
+                let (a, b) = (points[j], points[j + 1]);
+                if cull && !this.movable.any_in_box(a.min(b) - reach, a.max(b) + reach) {
+                    return 0;
+                }
+                this.pieces_of(points, j)
+            })
+            .collect();
+        self.first_piece.clear();
+        self.first_piece.push(0);
+        for c in counts {
+            self.first_piece.push(self.first_piece.last().unwrap() + c);
+        }
+        let total = *self.first_piece.last().unwrap() as usize;
+        let mut pieces = std::mem::take(&mut self.pieces);
+        let mut mids = std::mem::take(&mut self.piece_mids);
+        pieces.resize(total, Piece::default());
+        mids.resize(total, Vec3::ZERO);
+        let this = &*self;
+        pieces.par_chunks_mut(BUILD_CHUNK).zip(mids.par_chunks_mut(BUILD_CHUNK)).enumerate().for_each(
+            |(c, (pieces, mids))| {
+                let first = c * BUILD_CHUNK;
+                let mut e = this.first_piece.partition_point(|&f| f as usize <= first) - 1;
+                for ((k, piece), mid) in (first..).zip(pieces).zip(mids) {
+                    while this.first_piece[e + 1] as usize <= k {
+                        e += 1;
+                    }
+                    *piece = this.piece(points, radii, e, k as u32 - this.first_piece[e]);
+                    *mid = piece.a.lerp(piece.b, (piece.index as f32 + 0.5) / piece.count as f32);
+                }
+            },
+        );
+        self.grid.rebuild(&mids);
+        let mut sorted = std::mem::take(&mut self.sorted_pieces);
+        sorted.resize(total, Piece::default());
+        sorted.par_iter_mut().zip(self.grid.sorted_items().par_iter()).for_each(|(piece, &k)| {
+            *piece = pieces[k as usize];
+        });
+        (self.pieces, self.piece_mids, self.sorted_pieces) = (pieces, mids, sorted);
+    }
+
+    fn build(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
+        self.cut_pieces(points, radii, fixed);
+        // Query the movable vertices in the grid's spatial order, so consecutive queries read
+        // the same buckets.
+        let grid = &self.grid;
+        self.queries.clear();
+        self.queries.par_extend(
+            (0..points.len() as u32)
+                .into_par_iter()
+                .filter(|&i| !fixed[i as usize])
+                .map(|i| (grid.bucket_of(points[i as usize]) as u64) << 32 | i as u64),
+        );
+        self.queries.par_sort_unstable();
+        let this = &*self;
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = this
+            .queries
+            .par_chunks(BUILD_CHUNK)
+            .map(|queries| {
+                let mut counts = Vec::with_capacity(queries.len());
+                let mut edges = Vec::new();
+                for &query in queries {
+                    let before = edges.len();
+                    this.candidates_of(query as u32 as usize, points, radii, &mut edges);
+                    counts.push((edges.len() - before) as u32);
+                }
+                (counts, edges)
+            })
+            .collect();
+        // Gather the lists by vertex.
+        self.list_starts.clear();
+        self.list_starts.resize(points.len() + 1, 0);
+        for (queries, (counts, _)) in self.queries.chunks(BUILD_CHUNK).zip(&chunks) {
+            for (&query, &count) in queries.iter().zip(counts) {
+                self.list_starts[query as u32 as usize + 1] = count;
+            }
+        }
+        for i in 0..points.len() {
+            self.list_starts[i + 1] += self.list_starts[i];
+        }
+        self.list_edges.clear();
+        self.list_edges.resize(self.list_starts[points.len()] as usize, 0);
+        for (queries, (counts, edges)) in self.queries.chunks(BUILD_CHUNK).zip(&chunks) {
+            let mut read = 0;
+            for (&query, &count) in queries.iter().zip(counts) {
+                let start = self.list_starts[query as u32 as usize] as usize;
+                let count = count as usize;
+                self.list_edges[start..start + count].copy_from_slice(&edges[read..read + count]);
+                read += count;
+            }
+        }
+        self.built_positions.clear();
+        self.built_positions.extend_from_slice(points);
+        self.built_fixed.clear();
+        self.built_fixed.extend_from_slice(fixed);
+        self.built = true;
+        self.builds += 1;
+        self.lifetime = 0;
+    }
+
+    /// Appends the edges of other strands within contact distance plus skin of vertex `i`, in
+    /// the grid's (deterministic) order.
+    fn candidates_of(&self, i: usize, points: &[Vec3], radii: &[f32], out: &mut Vec<u32>) {
+        let p = points[i];
+        let strand = self.strand_of[i];
+        self.grid.for_each_near_run(p, |run| {
+            for piece in &self.sorted_pieces[run] {
+                if piece.strand == strand {
+                    continue;
+                }
+                let ab = piece.b - piece.a;
+                let t = ((p - piece.a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+                let reach = radii[i] + piece.radius + self.skin;
+                // List the pair once: through the piece that holds the closest point.
+                if p.distance_squared(piece.a + ab * t) < reach * reach
+                    && piece.index == ((t * piece.count as f32) as u32).min(piece.count - 1)
+                {
+                    out.push(piece.edge);
+                }
+            }
         });
     }
 }
@@ -123,6 +383,7 @@ impl HairContacts {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{Rng, SeedableRng};
 
     #[test]
     fn crossing_strands_repel_and_far_ones_do_not() {
@@ -140,10 +401,11 @@ mod tests {
         ];
         let offsets = [0, 2, 5, 7];
         let radii = vec![r; points.len()];
+        let fixed = vec![false; points.len()];
         let mut contacts = HairContacts::new(&offsets, &radii, 0.02, 100.0);
         let mut v = vec![Vec3::ZERO; points.len()];
         let dt = 1.0 / 360.0;
-        contacts.apply(&points, &radii, &mut v, dt);
+        contacts.apply(&points, &radii, &fixed, &mut v, dt);
         // The crossing vertex of strand 1 is pushed +Z by α (2r − 0.5r)/(2r) Δt.
         let expected = 100.0 * 0.75 * dt;
         assert!((v[3].z - expected).abs() < 1e-6 && v[3].x.abs() < 1e-9, "{:?}", v[3]);
@@ -151,5 +413,84 @@ mod tests {
         for i in [0, 1, 2, 4, 5, 6] {
             assert_eq!(v[i], Vec3::ZERO, "vertex {i}");
         }
+        // A held vertex is not pushed.
+        let mut held = fixed.clone();
+        held[3] = true;
+        let mut v = vec![Vec3::ZERO; points.len()];
+        contacts.apply(&points, &radii, &held, &mut v, dt);
+        assert_eq!(v[3], Vec3::ZERO);
+    }
+
+    /// The penalty every vertex feels, by testing it against every edge of every other strand,
+    /// with each edge's closest point counted once per strand corner (as the lists do).
+    fn brute_force(offsets: &[u32], points: &[Vec3], radii: &[f32], stiffness: f32, dt: f32) -> Vec<Vec3> {
+        let strand_of = |i: usize| offsets.partition_point(|&o| o as usize <= i) - 1;
+        (0..points.len())
+            .map(|i| {
+                let mut dv = Vec3::ZERO;
+                for j in 0..points.len() - 1 {
+                    let s = strand_of(j);
+                    if s == strand_of(i) || j + 1 >= offsets[s + 1] as usize {
+                        continue;
+                    }
+                    let (a, b) = (points[j], points[j + 1]);
+                    let t = (points[i] - a).dot(b - a) / (b - a).length_squared();
+                    if t > 1.0 && j + 2 < offsets[s + 1] as usize {
+                        continue;
+                    }
+                    // The closest point as the lists compute it: a deep contact's direction is
+                    // sensitive to rounding.
+                    let offset = points[i] - (a + (b - a) * t.clamp(0.0, 1.0));
+                    let contact = radii[i] + 0.5 * (radii[j] + radii[j + 1]);
+                    let d = offset.length();
+                    if d < contact && d > 0.0 {
+                        dv += offset / d * (stiffness * (contact - d) / contact * dt);
+                    }
+                }
+                dv
+            })
+            .collect()
+    }
+
+    #[test]
+    fn reused_lists_find_exactly_the_contacts_of_a_full_search_while_strands_move() {
+        // 200 random-walk strands crammed into a 2 cm box, thick enough to touch often; they
+        // drift each step by up to a quarter of the skin, so lists are reused and rebuilt.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
+        let (strands, per_strand) = (200, 8);
+        let mut points = Vec::new();
+        let mut offsets = vec![0u32];
+        for _ in 0..strands {
+            let mut p = Vec3::new(rng.random(), rng.random(), rng.random()) * 0.02;
+            for _ in 0..per_strand {
+                points.push(p);
+                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
+                p += step * 0.006;
+            }
+            offsets.push(points.len() as u32);
+        }
+        let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
+        let fixed: Vec<bool> = (0..points.len()).map(|i| i % 11 == 0).collect();
+        let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
+        let dt = 1.0 / 360.0;
+        let mut touching = 0;
+        for _ in 0..20 {
+            let mut v = vec![Vec3::ZERO; points.len()];
+            contacts.apply(&points, &radii, &fixed, &mut v, dt);
+            let expected = brute_force(&offsets, &points, &radii, 50.0, dt);
+            for i in 0..points.len() {
+                let want = if fixed[i] { Vec3::ZERO } else { expected[i] };
+                assert!(v[i].abs_diff_eq(want, 1e-6), "vertex {i}: {:?} vs {want:?}", v[i]);
+                touching += (want != Vec3::ZERO) as usize;
+            }
+            for p in points.iter_mut() {
+                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
+                *p += step * (0.3 * HairContacts::DEFAULT_SKIN);
+            }
+        }
+        let builds = contacts.builds();
+        assert!(touching > 100, "too few contacts to test: {touching}");
+        eprintln!("{touching} contacts, lists built {builds} times in 20 steps");
+        assert!(builds > 1 && builds < 20, "lists built {builds} times in 20 steps");
     }
 }

@@ -4,6 +4,7 @@
 use std::sync::Arc;
 
 use glam::Vec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::mesh_sdf::MeshSdf;
@@ -79,6 +80,18 @@ impl Shape {
         }
     }
 
+    /// A box holding every point of the solid, or `None` when it is unbounded (or not worth
+    /// bounding).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        match self {
+            Shape::Sphere { center, radius } => Some((*center - *radius, *center + *radius)),
+            Shape::Ellipsoid { center, radii } => Some((*center - *radii, *center + *radii)),
+            Shape::Box { center, half_extents } => Some((*center - *half_extents, *center + *half_extents)),
+            Shape::Capsule { a, b, radius } => Some((a.min(*b) - *radius, a.max(*b) + *radius)),
+            Shape::Plane { .. } | Shape::Mesh(_) => None,
+        }
+    }
+
     /// The same shape moved by `offset` (rods slide along during a stage).
     pub fn translated(&self, offset: Vec3) -> Shape {
         match self {
@@ -142,6 +155,14 @@ pub fn resolve_contact(
     radius: f32,
     friction: Friction,
 ) -> Option<Vec3> {
+    if let Shape::Ellipsoid { center, radii } = shape {
+        // Cheap rejection: a point on the ellipsoid scaled by k is at least (k − 1)·r_min from
+        // it, and most hair is well clear of the head.
+        let clear = 1.0 + radius / radii.min_element();
+        if ((p - *center) / *radii).length_squared() > clear * clear {
+            return None;
+        }
+    }
     let (distance, normal) = shape.distance(p);
     let depth = radius - distance;
     if depth <= 0.0 {
@@ -159,6 +180,63 @@ pub fn resolve_contact(
         Vec3::ZERO
     };
     Some(pushed - correction)
+}
+
+/// Which obstacles each strand can touch this step, so a head with dozens of rods costs each
+/// vertex only the few shapes near its strand. A strand's box holds its vertices at the start of
+/// the step plus a margin; a vertex that leaves the box during the step is tested against every
+/// shape, so culling never changes a result.
+#[derive(Clone, Debug, Default)]
+pub struct ObstacleCulling {
+    /// Per strand: the box (min, max) and a bit per shape that overlaps it.
+    boxes: Vec<(Vec3, Vec3)>,
+    masks: Vec<u128>,
+}
+
+impl ObstacleCulling {
+    /// Shapes beyond the mask's width are always tested.
+    const MAX_CULLED: usize = 128;
+
+    /// Recomputes the boxes from `positions` for vertices of radius up to `max_radius`.
+    pub fn update(&mut self, shapes: &[Shape], strand_offsets: &[u32], positions: &[Vec3], max_radius: f32) {
+        // Hair barely moves a millimetre per step; anything faster falls back to every shape.
+        const MARGIN: f32 = 0.01;
+        let strands = strand_offsets.len().saturating_sub(1);
+        self.boxes.resize(strands, (Vec3::ZERO, Vec3::ZERO));
+        self.masks.resize(strands, 0);
+        let shape_bounds: Vec<Option<(Vec3, Vec3)>> = shapes.iter().map(Shape::bounds).collect();
+        let grow = MARGIN + max_radius;
+        self.boxes.par_iter_mut().zip(self.masks.par_iter_mut()).enumerate().for_each(|(s, (bx, mask))| {
+            let range = strand_offsets[s] as usize..strand_offsets[s + 1] as usize;
+            let (lo, hi) = positions[range]
+                .iter()
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            *bx = (lo - grow, hi + grow);
+            *mask = 0;
+            for (k, bounds) in shape_bounds.iter().take(Self::MAX_CULLED).enumerate() {
+                if bounds.is_none_or(|(a, b)| a.cmple(bx.1).all() && b.cmpge(bx.0).all()) {
+                    *mask |= 1 << k;
+                }
+            }
+        });
+    }
+
+    /// The shapes vertex position `p` of `strand` must be tested against, for [`Self::tests`].
+    #[inline]
+    pub fn mask(&self, strand: usize, p: Vec3) -> u128 {
+        let (lo, hi) = self.boxes[strand];
+        if p.cmpge(lo).all() && p.cmple(hi).all() {
+            self.masks[strand]
+        } else {
+            u128::MAX
+        }
+    }
+
+    /// Whether a vertex with `mask` must be tested against shape `k`.
+    #[inline]
+    pub fn tests(mask: u128, k: usize) -> bool {
+        k >= Self::MAX_CULLED || mask & (1 << k) != 0
+    }
 }
 
 #[cfg(test)]

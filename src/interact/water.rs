@@ -52,14 +52,18 @@ pub fn adhesion(d: f32, r_min: f32, r_max: f32) -> f32 {
 pub struct Droplets {
     pub positions: Vec<Vec3>,
     pub velocities: Vec<Vec3>,
-    grid: Option<NeighbourGrid>,
     hair_grid: Option<NeighbourGrid>,
+    /// Per droplet: the hair vertices in range and their adhesion pulls (towards the droplet).
+    touches: Vec<Vec<(u32, Vec3)>>,
+    /// Hair vertices wetted this step (each takes up water once per step however many droplets
+    /// reach it).
+    wetted: Vec<bool>,
 }
 
 impl Droplets {
     pub fn new(positions: Vec<Vec3>) -> Self {
         let velocities = vec![Vec3::ZERO; positions.len()];
-        Droplets { positions, velocities, grid: None, hair_grid: None }
+        Droplets { positions, velocities, ..Default::default() }
     }
 
     /// One step of droplet–hair adhesion: hair velocities and wetness change, then droplets
@@ -76,55 +80,50 @@ impl Droplets {
         if self.positions.is_empty() {
             return;
         }
-        let grid = self.grid.get_or_insert_with(|| NeighbourGrid::new(params.r_max));
-        grid.rebuild(&self.positions);
-        let (grid, drops) = (&*grid, &self.positions);
-        let pull_on_hair = |p: Vec3| -> (Vec3, bool) {
-            let mut pull = Vec3::ZERO;
-            let mut touched = false;
-            grid.for_each_near(p, |j| {
-                let offset = drops[j as usize] - p;
-                let d = offset.length();
-                if d <= params.r_max && d > 0.0 {
-                    pull += offset / d * adhesion(d, params.r_min, params.r_max);
-                    touched = true;
-                }
-            });
-            (pull, touched)
-        };
-        match wetness {
-            Some(wetness) => {
-                hair_velocities.par_iter_mut().zip(wetness.par_iter_mut()).zip(hair.par_iter()).for_each(
-                    |((v, w), &p)| {
-                        let (pull, touched) = pull_on_hair(p);
-                        *v += pull * (params.hair_pull * dt);
-                        if touched {
-                            *w = (*w + params.uptake * dt).min(1.0);
-                        }
-                    },
-                )
-            }
-            None => hair_velocities.par_iter_mut().zip(hair.par_iter()).for_each(|(v, &p)| {
-                *v += pull_on_hair(p).0 * (params.hair_pull * dt);
-            }),
-        }
-
+        // Droplets are few and hair vertices many: each droplet finds the vertices in its range
+        // (in parallel), then the pulls are applied droplet by droplet, in a fixed order.
         let hair_grid = self.hair_grid.get_or_insert_with(|| NeighbourGrid::new(params.r_max));
         hair_grid.rebuild(hair);
         let hair_grid = &*hair_grid;
-        let damping = (-params.droplet_damping * dt).exp();
-        self.positions.par_iter_mut().zip(self.velocities.par_iter_mut()).for_each(|(x, v)| {
-            let mut pull = Vec3::ZERO;
-            hair_grid.for_each_near(*x, |i| {
-                let offset = hair[i as usize] - *x;
+        self.touches.resize_with(self.positions.len(), Vec::new);
+        self.touches.par_iter_mut().zip(self.positions.par_iter()).for_each(|(touches, &x)| {
+            touches.clear();
+            hair_grid.for_each_near(x, |i| {
+                let offset = x - hair[i as usize];
                 let d = offset.length();
                 if d <= params.r_max && d > 0.0 {
-                    pull += offset / d * adhesion(d, params.r_min, params.r_max);
+                    touches.push((i, offset / d * adhesion(d, params.r_min, params.r_max)));
                 }
             });
-            *v = (*v + (gravity + pull * params.droplet_pull) * dt) * damping;
-            *x += *v * dt;
         });
+        let mut wetness = wetness;
+        if wetness.is_some() {
+            self.wetted.clear();
+            self.wetted.resize(hair.len(), false);
+        }
+        for touches in &self.touches {
+            for &(i, pull) in touches {
+                hair_velocities[i as usize] += pull * (params.hair_pull * dt);
+                if let Some(w) = wetness.as_deref_mut() {
+                    let i = i as usize;
+                    if !self.wetted[i] {
+                        self.wetted[i] = true;
+                        w[i] = (w[i] + params.uptake * dt).min(1.0);
+                    }
+                }
+            }
+        }
+        let damping = (-params.droplet_damping * dt).exp();
+        self.positions
+            .par_iter_mut()
+            .zip(self.velocities.par_iter_mut())
+            .zip(self.touches.par_iter())
+            .for_each(|((x, v), touches)| {
+                // The hair pulls the droplet back along each adhesion line.
+                let pull: Vec3 = touches.iter().map(|&(_, pull)| -pull).sum();
+                *v = (*v + (gravity + pull * params.droplet_pull) * dt) * damping;
+                *x += *v * dt;
+            });
     }
 }
 

@@ -3,6 +3,7 @@
 //! bond rate (`b_hyd = 1 − w`: wet hair has its hydrogen bonds broken, drying re-forms them at
 //! the current shape through S1-16) and the strand's mass.
 use glam::Vec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -44,17 +45,30 @@ pub fn evaporate(wetness: &mut [f32], wind_dv: &[f32], heat: f32, dt: f32, param
     }
 }
 
-/// One step of wicking along each strand (explicit diffusion on the polyline, sub-stepped for
-/// stability, with no flux through root or tip). `scratch` is reused between calls.
-pub fn diffuse(
+/// One step of wicking along every strand, strands in parallel (see [`diffuse`]).
+pub fn diffuse_strands(
     wetness: &mut [f32],
     points: &[Vec3],
-    range: std::ops::Range<usize>,
+    strand_offsets: &[u32],
     dt: f32,
     diffusivity: f32,
-    scratch: &mut Vec<f32>,
 ) {
-    let (w, p) = (&mut wetness[range.clone()], &points[range]);
+    let mut strands = Vec::with_capacity(strand_offsets.len());
+    let mut rest = wetness;
+    for w in strand_offsets.windows(2) {
+        let (strand, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+        strands.push((w[0] as usize, strand));
+        rest = tail;
+    }
+    strands.into_par_iter().for_each_init(Vec::new, |scratch, (first, w)| {
+        let n = w.len();
+        diffuse(w, &points[first..first + n], dt, diffusivity, scratch)
+    });
+}
+
+/// One step of wicking along a strand (explicit diffusion on the polyline, sub-stepped for
+/// stability, with no flux through root or tip). `scratch` is reused between calls.
+pub fn diffuse(w: &mut [f32], p: &[Vec3], dt: f32, diffusivity: f32, scratch: &mut Vec<f32>) {
     let n = w.len();
     if n < 2 || diffusivity <= 0.0 {
         return;
@@ -104,7 +118,7 @@ mod tests {
         let mut scratch = Vec::new();
         let total = |w: &[f32]| w.iter().sum::<f32>();
         for _ in 0..2000 {
-            diffuse(&mut w, &points, 0..10, 0.05, 1e-4, &mut scratch);
+            diffuse(&mut w, &points, 0.05, 1e-4, &mut scratch);
         }
         assert!((total(&w) - 1.0).abs() < 1e-4, "water lost: {}", total(&w));
         assert!(w.iter().all(|&x| (x - 0.1).abs() < 0.01), "{w:?}");

@@ -9,6 +9,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 use glam::{Quat, Vec3};
 
 use super::constraints::{BendTwistCoefficients, StretchShearCoefficients};
+use super::Hooks;
 
 pub const LANES: usize = 8;
 
@@ -224,6 +225,8 @@ pub struct Scratch {
     values: Vec<F>,
     edge_k: Vec<EdgeK>,
     pair_k: Vec<PairK>,
+    /// One lane's positions, handed to the obstacle hook.
+    lane_x: Vec<Vec3>,
 }
 
 /// What the lane solver reads from and writes back to one strand (all slices of equal length).
@@ -239,11 +242,23 @@ pub struct LaneStrand<'a> {
     pub length: &'a [f32],
     pub edge_k: &'a [StretchShearCoefficients],
     pub pair_k: &'a [BendTwistCoefficients],
+    /// The strand's index and first vertex, for the hook.
+    pub strand: usize,
+    pub first_vertex: usize,
 }
 
 fn resize<T: Default + Clone>(v: &mut Vec<T>, n: usize) {
     v.clear();
     v.resize(n, T::default());
+}
+
+/// The step's time, iteration count and velocity factor.
+#[derive(Clone, Copy, Debug)]
+pub struct StepSettings {
+    pub dt: f32,
+    pub iterations: u32,
+    /// Velocity kept per step (damping).
+    pub keep: f32,
 }
 
 /// Prediction, iterations and velocity update for `LANES` strands of `n` vertices whose
@@ -254,17 +269,16 @@ fn resize<T: Default + Clone>(v: &mut Vec<T>, n: usize) {
 pub fn finish_step(
     strands: &mut [LaneStrand<'_>; LANES],
     scratch: &mut Scratch,
-    dt: f32,
-    iterations: u32,
-    keep: f32,
+    step: StepSettings,
+    hooks: &dyn Hooks,
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: the CPU supports AVX (checked just above).
-        unsafe { finish_step_avx(strands, scratch, dt, iterations, keep) };
+        unsafe { finish_step_avx(strands, scratch, step, hooks) };
         return;
     }
-    finish_step_impl(strands, scratch, dt, iterations, keep);
+    finish_step_impl(strands, scratch, step, hooks);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -272,20 +286,18 @@ pub fn finish_step(
 unsafe fn finish_step_avx(
     strands: &mut [LaneStrand<'_>; LANES],
     scratch: &mut Scratch,
-    dt: f32,
-    iterations: u32,
-    keep: f32,
+    step: StepSettings,
+    hooks: &dyn Hooks,
 ) {
-    finish_step_impl(strands, scratch, dt, iterations, keep);
+    finish_step_impl(strands, scratch, step, hooks);
 }
 
 #[inline(always)]
 fn finish_step_impl(
     strands: &mut [LaneStrand<'_>; LANES],
     scratch: &mut Scratch,
-    dt: f32,
-    iterations: u32,
-    keep: f32,
+    StepSettings { dt, iterations, keep }: StepSettings,
+    hooks: &dyn Hooks,
 ) {
     let n = strands[0].x.len();
     let edges = n - 1;
@@ -353,6 +365,9 @@ fn finish_step_impl(
                 }
             }
         }
+        if hooks.projects() {
+            project_lanes(strands, s, hooks);
+        }
     }
 
     // Velocities, then scatter.
@@ -367,6 +382,23 @@ fn finish_step_impl(
         }
         for e in 0..edges {
             st.q[e] = s.q[e].get(l);
+        }
+    }
+}
+
+/// Obstacle contacts, one lane at a time through the scalar hook (the scalar path calls it at the
+/// same point of the iteration).
+#[inline(always)]
+fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn Hooks) {
+    let n = s.x.len();
+    s.lane_x.resize(n, Vec3::ZERO);
+    for (l, st) in strands.iter().enumerate() {
+        for i in 0..n {
+            s.lane_x[i] = s.x[i].get(l);
+        }
+        hooks.project(st.strand, st.first_vertex, &mut s.lane_x, st.w);
+        for i in 0..n {
+            s.x[i].set(l, s.lane_x[i]);
         }
     }
 }

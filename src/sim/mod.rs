@@ -164,8 +164,8 @@ pub trait Hooks: Sync {
         _inverse_masses: &[f32],
     ) {
     }
-    /// Whether [`project`](Self::project) does anything. Strands are solved several at a time in
-    /// SIMD lanes only when it does not (per-iteration callbacks need one strand's positions).
+    /// Whether [`project`](Self::project) does anything; solvers skip the call (and, in SIMD
+    /// lanes, copying each lane's positions out and back) when it does not.
     fn projects(&self) -> bool {
         true
     }

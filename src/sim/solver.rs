@@ -167,37 +167,42 @@ pub(crate) fn step_all(
         bonded,
         broken,
     };
-    let lanes_allowed = !hooks.projects();
     units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
         // SAFETY: work units cover disjoint strand ranges, each visited once; strand ranges are
         // disjoint and within the arrays (validated groom offsets).
-        if in_lanes && lanes_allowed {
+        if in_lanes {
             let mut views: [Strand<'_>; lanes::LANES] =
                 std::array::from_fn(|l| unsafe { parts.strand(first_strand + l) });
             for (l, view) in views.iter_mut().enumerate() {
                 let strand = first_strand + l;
                 begin_step(view, k, hooks, strand, parts.range(strand).start);
             }
-            let mut lane_views = views.map(|s| lanes::LaneStrand {
-                x: s.x,
-                v: s.v,
-                q: s.q,
-                w: s.w,
-                wq: s.wq,
-                kinematic: s.kinematic,
-                targets: s.targets,
-                rest: s.rest,
-                length: s.length,
-                edge_k: s.edge_k,
-                pair_k: s.pair_k,
+            let mut strand = first_strand;
+            let mut lane_views = views.map(|s| {
+                let view = lanes::LaneStrand {
+                    x: s.x,
+                    v: s.v,
+                    q: s.q,
+                    w: s.w,
+                    wq: s.wq,
+                    kinematic: s.kinematic,
+                    targets: s.targets,
+                    rest: s.rest,
+                    length: s.length,
+                    edge_k: s.edge_k,
+                    pair_k: s.pair_k,
+                    strand,
+                    first_vertex: parts.range(strand).start,
+                };
+                strand += 1;
+                view
             });
             LANE_SCRATCH.with(|scratch| {
                 lanes::finish_step(
                     &mut lane_views,
                     &mut scratch.borrow_mut(),
-                    k.dt,
-                    k.iterations,
-                    k.velocity_keep,
+                    lanes::StepSettings { dt: k.dt, iterations: k.iterations, keep: k.velocity_keep },
+                    hooks,
                 )
             });
         } else {

@@ -125,8 +125,9 @@ pub struct Contacts {
     pub hair_hair: bool,
     /// α of S1-18, m/s².
     pub hair_stiffness: f32,
-    /// Edges are sampled this often (metres) to find contacts; smaller finds grazing contacts
-    /// on long segments sooner, larger is faster.
+    /// Edges are cut into pieces this long (metres) to find contact candidates. Only speed
+    /// depends on it: shorter pieces mean fewer candidates per vertex but more pieces to sort
+    /// (dense grooms with short segments favour ~2 mm, sparse long-segment ones ~5 mm).
     pub sample_spacing: f32,
     pub static_friction: f32,
     pub dynamic_friction: f32,
@@ -137,7 +138,7 @@ impl Default for Contacts {
         Contacts {
             hair_hair: false,
             hair_stiffness: 50.0,
-            sample_spacing: 0.005,
+            sample_spacing: 0.002,
             static_friction: 0.4,
             dynamic_friction: 0.3,
         }

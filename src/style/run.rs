@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::head::Head;
 use crate::interact::hair_contacts::HairContacts;
-use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Shape};
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
@@ -125,6 +125,7 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
 /// Projects vertices out of the active obstacles after each solver iteration.
 struct ContactHooks<'a> {
     shapes: &'a [Shape],
+    culling: &'a ObstacleCulling,
     /// Positions at the start of the step (friction measures the slide from there).
     previous: &'a [Vec3],
     radii: &'a [f32],
@@ -136,13 +137,17 @@ impl Hooks for ContactHooks<'_> {
         !self.shapes.is_empty()
     }
 
-    fn project(&self, _strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
+    fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
         for (k, p) in positions.iter_mut().enumerate() {
             if inverse_masses[k] == 0.0 {
                 continue;
             }
             let i = first_vertex + k;
-            for shape in self.shapes {
+            let mask = self.culling.mask(strand, *p);
+            for (s, shape) in self.shapes.iter().enumerate() {
+                if !ObstacleCulling::tests(mask, s) {
+                    continue;
+                }
                 if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
                     *p = q;
                 }
@@ -237,11 +242,13 @@ struct Session<'r> {
     /// Evaporation multiplier while drying (0 when not drying).
     heat: f32,
     friction: Friction,
+    /// The largest strand radius (for obstacle culling).
+    max_radius: f32,
     // Per-step scratch.
+    culling: ObstacleCulling,
     previous: Vec<Vec3>,
     dv: Vec<Vec3>,
     wind_dv: Vec<f32>,
-    scratch: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_interval: Option<u64>,
 }
@@ -339,10 +346,11 @@ impl<'r> Session<'r> {
                 static_friction: recipe.contacts.static_friction,
                 dynamic_friction: recipe.contacts.dynamic_friction,
             },
+            max_radius: radii.iter().copied().fold(0.0, f32::max),
+            culling: ObstacleCulling::default(),
             previous: vec![Vec3::ZERO; n],
             dv: vec![Vec3::ZERO; n],
             wind_dv: vec![0.0; n],
-            scratch: Vec::new(),
             frames: Vec::new(),
             frame_interval,
             radii,
@@ -396,8 +404,10 @@ impl<'r> Session<'r> {
         let dt = self.sim.params().dt;
         self.compute_forces(dt);
         self.previous.copy_from_slice(&self.sim.rods.positions);
+        self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {
             shapes: &self.active,
+            culling: &self.culling,
             previous: &self.previous,
             radii: &self.radii,
             friction: self.friction,
@@ -436,7 +446,7 @@ impl<'r> Session<'r> {
             );
         }
         if let Some(contacts) = &mut self.contacts {
-            contacts.apply(positions, &self.radii, &mut self.dv, dt);
+            contacts.apply(positions, &self.radii, &self.sim.rods.kinematic, &mut self.dv, dt);
         }
         if let Some(water) = &self.recipe.water {
             let gravity = self.sim.params().gravity;
@@ -455,18 +465,13 @@ impl<'r> Session<'r> {
             wetness::evaporate(&mut self.wetness, &self.wind_dv, self.heat, dt, &self.wetness_params);
         }
         if self.wetness_params.diffusion > 0.0 && self.wetness.iter().any(|&w| w > 0.0) {
-            for s in 0..self.groom.strand_count() {
-                let range = self.groom.strand_range(s);
-                let points = &self.sim.rods.positions;
-                wetness::diffuse(
-                    &mut self.wetness,
-                    points,
-                    range,
-                    dt,
-                    self.wetness_params.diffusion,
-                    &mut self.scratch,
-                );
-            }
+            wetness::diffuse_strands(
+                &mut self.wetness,
+                &self.sim.rods.positions,
+                &self.groom.strand_offsets,
+                dt,
+                self.wetness_params.diffusion,
+            );
         }
         self.apply_wetness_change();
     }
@@ -713,12 +718,28 @@ impl<'r> Session<'r> {
                     }
                 }
             }
-            let Some((_, r, first)) = best else { continue };
+            let Some((_, r, mut first)) = best else { continue };
+            let Shape::Capsule { a, b, radius } = self.rods[r] else { unreachable!("rods are capsules") };
+            let axis = (b - a).normalize();
+            let on_rod = |v: usize| {
+                let along = (positions[v] - a).dot(axis).clamp(0.0, a.distance(b));
+                let foot = a + axis * along;
+                foot + (positions[v] - foot).normalize_or_zero() * (radius + self.radii[v])
+            };
+            // The free part between root and rod must reach the rod: start winding further
+            // along the strand until its rest length spans the gap (else the vertices between
+            // a pinned root and a held winding are pulled apart and shake).
+            let root = range.start;
+            while first + 1 < range.end {
+                let slack: f32 = self.sim.rods.rest_lengths[root..first].iter().sum();
+                if positions[root].distance(on_rod(first)) <= 0.95 * slack {
+                    break;
+                }
+                first += 1;
+            }
             if first + 1 >= range.end {
                 continue; // only the tip reaches the rod: nothing to wind
             }
-            let Shape::Capsule { a, b, radius } = self.rods[r] else { unreachable!("rods are capsules") };
-            let axis = (b - a).normalize();
             let winding_radius = radius + self.radii[first];
             let along = (positions[first] - a).dot(axis).clamp(0.0, a.distance(b));
             let outward = positions[first] - (a + axis * along);
