@@ -272,6 +272,16 @@ impl<'r> Session<'r> {
         };
         let sim = Simulation::new(&groom, params)?;
 
+        if let Some(Obstacle::Mesh { name, .. }) = recipe
+            .obstacles
+            .iter()
+            .map(|o| o.get_ref())
+            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
+        {
+            return Err(Error::Usage(format!(
+                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
+            )));
+        }
         let mut head = Head::default();
         let obstacles: Vec<Shape> = recipe
             .obstacles
@@ -291,6 +301,7 @@ impl<'r> Session<'r> {
                 Obstacle::Box { center, half_extents, .. } => {
                     Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
                 }
+                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
             })
             .collect();
         let rods = recipe
