@@ -198,8 +198,10 @@ fn frames_record_the_whole_process_as_time_samples() {
     let recipe = repo("grooms/recipes/bedhead_scene1.toml");
     let groom = repo("grooms/seed_200x24cm.hair");
     let still = dir.path().join("still.usda");
-    style(&recipe, &groom, &still);
+    let steps = style(&recipe, &groom, &still)["report"]["steps"].as_u64().unwrap();
     let settled = read(&still);
+    // 24 frames per second at Δt = 1/360: a frame every 15 steps, plus the input and the result.
+    let expected_frames = (1 + steps / 15 + u64::from(steps % 15 != 0)) as f64;
     for name in ["anim.usda", "anim.abc"] {
         let animated = dir.path().join(name);
         let out = coif(&[
@@ -228,7 +230,7 @@ fn frames_record_the_whole_process_as_time_samples() {
             let text = std::fs::read_to_string(&animated).unwrap();
             (text.lines().filter(|l| l.starts_with("            ") && l.contains(": ")).count() / 2) as f64
         };
-        assert!(frames > 24.0 * 10.0, "{name}: only {frames} frames for over 10 s of styling");
+        assert_eq!(frames, expected_frames, "{name}: {frames} frames for {steps} steps of styling");
         let (first, last) = if name.ends_with(".abc") { (0.0, frames - 1.0) } else { (1.0, frames) };
         assert_eq!(at(first).points, read(&groom).points, "{name}: first frame is not the input");
         assert_eq!(at(last).points, settled.points, "{name}: last frame is not the settled groom");

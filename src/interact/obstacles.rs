@@ -106,6 +106,8 @@ impl Shape {
             Shape::Capsule { a, b, radius } => {
                 Shape::Capsule { a: *a + offset, b: *b + offset, radius: *radius }
             }
+            // Unmoved meshes share their field (obstacles are re-placed every step of a press).
+            Shape::Mesh(sdf) if offset == Vec3::ZERO => Shape::Mesh(sdf.clone()),
             Shape::Mesh(sdf) => Shape::Mesh(Arc::new(sdf.translated(offset))),
         }
     }

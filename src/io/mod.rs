@@ -5,6 +5,7 @@ pub mod alembic;
 pub mod atomic;
 pub mod hair;
 pub mod input;
+pub mod obj;
 pub mod usd_interop;
 pub mod usda;
 

@@ -251,6 +251,16 @@ impl Simulation {
         Ok(())
     }
 
+    /// Changes the frames' inverse inertia relative to the vertices' ([`SimParams::frame_inertia_factor`]):
+    /// a conditioning choice that leaves static shapes unchanged but sets how fast bending relaxes.
+    pub fn set_frame_inertia_factor(&mut self, factor: f32) -> Result<()> {
+        let params = SimParams { frame_inertia_factor: factor, ..self.params.clone() };
+        params.check()?;
+        self.params = params;
+        self.masses_dirty = true;
+        Ok(())
+    }
+
     pub fn steps_taken(&self) -> u64 {
         self.steps
     }

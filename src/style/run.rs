@@ -279,6 +279,16 @@ impl<'r> Session<'r> {
         };
         let sim = Simulation::new(&groom, params)?;
 
+        if let Some(Obstacle::Mesh { name, .. }) = recipe
+            .obstacles
+            .iter()
+            .map(|o| o.get_ref())
+            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
+        {
+            return Err(Error::Usage(format!(
+                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
+            )));
+        }
         let mut head = Head::default();
         let obstacles: Vec<Shape> = recipe
             .obstacles
@@ -298,6 +308,7 @@ impl<'r> Session<'r> {
                 Obstacle::Box { center, half_extents, .. } => {
                     Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
                 }
+                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
             })
             .collect();
         let rods = recipe
@@ -667,6 +678,12 @@ impl<'r> Session<'r> {
     }
 
     /// Steps until every vertex stays slower than `max_speed` for 0.1 s, or `max_seconds` pass.
+    ///
+    /// Frames are made as light as the solver's conditioning allows while settling. The frames are
+    /// quasi-static (they restart every step at rest), so their inertia acts as a drag on every
+    /// bend, `I_frame/Δt` per edge: with the default factor it is ~10³× the air damping on a 3 cm
+    /// segment, makes released curls creep open over many seconds whatever the damping or the
+    /// iteration count, and kept the presets from settling. Static shapes do not depend on it.
     fn settle(
         &mut self,
         max_seconds: f32,
@@ -674,6 +691,8 @@ impl<'r> Session<'r> {
         progress: Option<&indicatif::ProgressBar>,
     ) -> SettleReport {
         let dt = self.sim.params().dt;
+        let frame_inertia_factor = self.sim.params().frame_inertia_factor;
+        self.sim.set_frame_inertia_factor(SETTLE_FRAME_INERTIA_FACTOR).expect("a positive, finite factor");
         let max_steps = self.steps_for(max_seconds).max(1);
         let quiet_steps = (0.1 / dt).ceil() as u64;
         let (mut quiet, mut steps, mut speed) = (0, 0, self.sim.max_speed());
@@ -689,6 +708,7 @@ impl<'r> Session<'r> {
         if let Some(bar) = progress {
             bar.inc(max_steps - steps);
         }
+        self.sim.set_frame_inertia_factor(frame_inertia_factor).expect("the factor the run started with");
         SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
     }
 
@@ -849,6 +869,10 @@ impl<'r> Session<'r> {
         }
     }
 }
+
+/// Frame inertia factor while settling ([`SimParams::frame_inertia_factor`]): large enough that
+/// every frame's inverse inertia sits at its conditioning cap, the bending compliance `α/Δt²`.
+const SETTLE_FRAME_INERTIA_FACTOR: f32 = 1e6;
 
 fn smoothstep(t: f32) -> f32 {
     let t = t.clamp(0.0, 1.0);

@@ -1,0 +1,103 @@
+//! Triangle meshes from Wavefront OBJ files (through the `tobj` crate), for mesh obstacles: a
+//! scanned or modelled head the hair collides with. Polygons are triangulated; every object in
+//! the file joins one mesh; materials, normals and texture coordinates are ignored. Units are
+//! taken as metres with Y up, like the rest of coif.
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+
+/// The vertices and triangles of every object in an OBJ file.
+pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // Material libraries are not read: a mesh obstacle needs only its surface.
+    let (models, _) =
+        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| Error::format(path, format!("not a readable Wavefront OBJ file: {e}")))?;
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for model in &models {
+        let mesh = &model.mesh;
+        let base = vertices.len() as u32;
+        for (k, p) in mesh.positions.chunks_exact(3).enumerate() {
+            let v = Vec3::new(p[0], p[1], p[2]);
+            if !v.is_finite() {
+                return Err(Error::format(
+                    path,
+                    format!("object '{}': vertex {} is not finite", model.name, k + 1),
+                ));
+            }
+            vertices.push(v);
+        }
+        let count = (mesh.positions.len() / 3) as u32;
+        for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+            if let Some(&bad) = tri.iter().find(|&&i| i >= count) {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "object '{}': triangle {} names vertex {} of {count}",
+                        model.name,
+                        t + 1,
+                        bad + 1
+                    ),
+                ));
+            }
+            triangles.push([base + tri[0], base + tri[1], base + tri[2]]);
+        }
+    }
+    if triangles.is_empty() {
+        return Err(Error::format(path, "the OBJ file has no triangles (no `f` faces)"));
+    }
+    Ok((vertices, triangles))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mesh.obj");
+        std::fs::write(&path, text).unwrap();
+        (dir, path)
+    }
+
+    #[test]
+    fn quads_are_triangulated_and_objects_join_one_mesh() {
+        let (_dir, path) = write(
+            "o a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n\
+             o b\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 5 6 7\n",
+        );
+        let (vertices, triangles) = read_triangles(&path).unwrap();
+        assert_eq!(vertices.len(), 7);
+        assert_eq!(triangles.len(), 3);
+        for t in &triangles {
+            assert!(t.iter().all(|&i| (i as usize) < vertices.len()));
+        }
+        // The second object's triangle uses its own vertices.
+        assert!(triangles.contains(&[4, 5, 6]));
+    }
+
+    #[test]
+    fn bad_files_name_the_file_and_the_reason() {
+        let (_dir, path) = write("v 0 0 0\nv 1 0 0\n");
+        let e = read_triangles(&path).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("mesh.obj") && e.to_string().contains("no triangles"), "{e}");
+
+        let (_dir, path) = write("v 0 0 zero\nf 1 1 1\n");
+        let e = read_triangles(&path).unwrap_err();
+        assert!(e.to_string().contains("mesh.obj") && e.to_string().contains("OBJ"), "{e}");
+
+        let missing = Path::new("/nonexistent/head.obj");
+        let e = read_triangles(missing).unwrap_err();
+        assert!(e.to_string().contains("head.obj") && e.exit_code() == 2, "{e}");
+    }
+}
