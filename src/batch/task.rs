@@ -34,7 +34,8 @@ fn all_outputs(task: &Task) -> Vec<PathBuf> {
     task.outputs.iter().chain(task.preview.iter()).cloned().collect()
 }
 
-/// The recipe text with the task's overrides applied, and its digest with the groom's bytes.
+/// The recipe text with the task's overrides applied, and its digest with the bytes of the groom
+/// and of every mesh the recipe loads.
 fn effective_inputs(task: &Task) -> Result<(String, String)> {
     let text = std::fs::read_to_string(&task.recipe).map_err(|e| Error::io(&task.recipe, e))?;
     let effective = if task.overrides.is_empty() {
@@ -49,8 +50,28 @@ fn effective_inputs(task: &Task) -> Result<(String, String)> {
         toml::to_string(&value).expect("TOML values serialise")
     };
     let groom = std::fs::read(&task.groom).map_err(|e| Error::io(&task.groom, e))?;
-    let digest = digest_parts(&[&groom, effective.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()]);
+    let directory = task.recipe.parent().unwrap_or(Path::new("."));
+    // A recipe or mesh that cannot be read adds nothing here: the run itself reports it.
+    let value: Option<toml::Value> = toml::from_str(&effective).ok();
+    let meshes: Vec<Vec<u8>> = value
+        .iter()
+        .flat_map(mesh_paths)
+        .map(|path| std::fs::read(directory.join(path)).unwrap_or_default())
+        .collect();
+    let mut parts: Vec<&[u8]> = vec![&groom, effective.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()];
+    parts.extend(meshes.iter().map(Vec::as_slice));
+    let digest = digest_parts(&parts);
     Ok((effective, digest))
+}
+
+/// The `path`s of a recipe's mesh obstacles.
+fn mesh_paths(recipe: &toml::Value) -> impl Iterator<Item = &str> {
+    let obstacles = recipe.get("obstacles").and_then(toml::Value::as_array);
+    obstacles
+        .into_iter()
+        .flatten()
+        .filter(|o| o.get("shape").and_then(toml::Value::as_str) == Some("mesh"))
+        .filter_map(|o| o.get("path").and_then(toml::Value::as_str))
 }
 
 /// Whether the task's outputs are complete for its current inputs.
@@ -88,4 +109,33 @@ pub fn run(task: &Task) -> Result<Outcome> {
     }
     Sidecar::record(&task.name, inputs, &outputs)?.write(&sidecar)?;
     Ok(Outcome::Done { seconds: start.elapsed().as_secs_f64() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn editing_a_mesh_the_recipe_loads_changes_the_inputs_digest() {
+        let dir = tempfile::tempdir().unwrap();
+        let (groom, recipe, mesh) =
+            (dir.path().join("g.hair"), dir.path().join("r.toml"), dir.path().join("m.obj"));
+        std::fs::write(&groom, b"groom bytes").unwrap();
+        std::fs::write(&recipe, "[[obstacles]]\nname = \"m\"\nshape = \"mesh\"\npath = \"m.obj\"\n").unwrap();
+        std::fs::write(&mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let task = Task {
+            index: 0,
+            name: "t".into(),
+            groom,
+            recipe,
+            overrides: Vec::new(),
+            outputs: Vec::new(),
+            preview: None,
+            wedge_values: Vec::new(),
+        };
+        let before = effective_inputs(&task).unwrap().1;
+        assert_eq!(before, effective_inputs(&task).unwrap().1);
+        std::fs::write(&mesh, "v 0 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert_ne!(before, effective_inputs(&task).unwrap().1);
+    }
 }
