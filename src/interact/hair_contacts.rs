@@ -6,12 +6,15 @@
 //! the spacing of strands. So candidates are kept in Verlet lists: each movable vertex lists the
 //! edges of other strands within `2r + skin`, and the lists are reused until some vertex has moved
 //! `skin / 2` since they were built (then no pair can have closed from beyond `2r + skin` to
-//! within `2r`), or until the set of movable vertices changes. Hair being styled mostly creeps or
-//! is held, so lists last many steps; each step only re-measures the listed pairs, exactly.
+//! within `2r`), or until the set of movable vertices changes. Each step only re-measures the
+//! listed pairs, exactly. The skin follows the motion: thick while hair creeps or is held (lists
+//! last many steps), thin while it springs or in dense hair (cheap rebuilds, short lists).
 //!
-//! Lists are built from a neighbour grid over pieces of every edge (at most `spacing` long), so
+//! Lists are built from a neighbour grid over pieces of the edges (at most `spacing` long), so
 //! the grid's cells span the search distance plus half a piece however long the segments are. A
-//! vertex–edge pair is listed once, through the piece that holds the closest point.
+//! vertex–edge pair is listed once, through the piece that holds the closest point. Queries run
+//! in the grid's spatial order, and while most vertices are held only edges near movable ones
+//! are cut into pieces.
 use glam::Vec3;
 use rayon::prelude::*;
 
