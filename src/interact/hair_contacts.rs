@@ -458,7 +458,7 @@ mod tests {
     #[test]
     fn reused_lists_find_exactly_the_contacts_of_a_full_search_while_strands_move() {
         // 200 random-walk strands crammed into a 2 cm box, thick enough to touch often; they
-        // drift each step by up to a quarter of the skin, so lists are reused and rebuilt.
+        // drift each step by up to a quarter of the starting skin, so lists are reused and rebuilt.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
         let (strands, per_strand) = (200, 8);
         let mut points = Vec::new();
