@@ -8,6 +8,9 @@
 //! animation); `write API` is `coif::io`'s atomic path (velocities, fsync, rename), which waits for
 //! the disk. `read` maps the file and builds owned grooms (every frame for the animation).
 //! Every write starts after `sync`, into a new file, for coif and usd-core alike.
+
+mod common;
+use common::median;
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -52,11 +55,6 @@ fn settle(files: &[&Path]) {
         let _ = std::fs::remove_file(file);
     }
     Command::new("sync").status().unwrap();
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    v[v.len() / 2]
 }
 
 #[derive(Default)]

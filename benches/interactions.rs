@@ -4,6 +4,9 @@
 //! 4 iterations) with 0, 100 and 1,000 droplets and contacts on (and, for reference, none and contacts off); a production groom
 //! (100,000 × 32, 5 iterations) with contacts on and off. Medians of 3 runs, 1 and 2 threads.
 //! `cargo bench --bench interactions [-- FILTER]`.
+
+mod common;
+use common::median;
 use std::path::Path;
 
 use coif::generate::{generate, GenerateParams};
@@ -103,11 +106,6 @@ const CONFIGS: [Config; 8] = [
         steps: 6,
     },
 ];
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
-}
 
 fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));

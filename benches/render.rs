@@ -6,6 +6,9 @@
 //!
 //! `cargo bench --bench render` (release build). COIF_BENCH_RUNS (default 3) sets the runs per
 //! configuration; medians are printed.
+
+mod common;
+use common::median;
 use std::time::Instant;
 
 use coif::generate::{generate, GenerateParams, Style};
@@ -22,11 +25,6 @@ fn cpu_seconds() -> f64 {
     let fields: Vec<&str> = rest.split_whitespace().collect();
     let ticks: f64 = fields.get(11..13).map_or(0.0, |f| f.iter().filter_map(|v| v.parse::<f64>().ok()).sum());
     ticks / 100.0 // USER_HZ is 100 on Linux
-}
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 fn main() {

@@ -3,6 +3,9 @@
 //! the configurations, on 1 thread and on 2 threads. Prints the median of 3 runs, by wall
 //! clock and by CPU time of the workers (robust when other processes share the cores).
 //! `cargo bench --bench sim [-- FILTER]`, FILTER matching a configuration name.
+
+mod common;
+use common::median;
 use std::time::Instant;
 
 use coif::generate::{generate, GenerateParams, Style};
@@ -30,11 +33,6 @@ fn thread_cpu_ns() -> Option<u64> {
 /// CPU time of all the pool's workers in ns.
 fn pool_cpu_ns(pool: &rayon::ThreadPool) -> Option<u64> {
     pool.broadcast(|_| thread_cpu_ns()).into_iter().sum()
-}
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 fn main() {

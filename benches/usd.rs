@@ -4,6 +4,9 @@
 //! (VmHWM) is its own; figures are medians of `COIF_BENCH_RUNS` (default 3) runs.
 //!
 //!     cargo bench --bench usd            (or `make bench-usd`)
+
+mod common;
+use common::median;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -114,11 +117,6 @@ fn run(mut command: Command) -> Sample {
         peak_kb: value["peak_kb"].as_f64().unwrap(),
         baseline_kb: value["baseline_kb"].as_f64().unwrap(),
     }
-}
-
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values[values.len() / 2]
 }
 
 fn main() {
