@@ -177,7 +177,10 @@ fn a_wedge_through_a_real_slurm_matches_a_local_batch() {
     let install = Command::new("bash").arg(&script).arg("install").status().unwrap();
     if !install.success() {
         // Under CI the farm mode must be proven against a real scheduler: no install, no pass.
-        assert!(std::env::var_os("CI").is_none(), "CI: Slurm could not be installed, so the farm mode is untested");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI: Slurm could not be installed, so the farm mode is untested"
+        );
         eprintln!("SKIPPED LOUDLY: Slurm could not be installed on this machine");
         return;
     }

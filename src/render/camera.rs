@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 
 /// The named viewpoints of auto-framing. The face looks +Z, Y is up.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum View {
     /// From the front (+Z), slightly above.
     Front,

@@ -8,7 +8,7 @@ use crate::groom::{attr, AttributeRate, CurveBasis, Groom};
 use crate::head::Head;
 
 /// Whether to put the analytic head under the hair.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum HeadMode {
     /// When the strand roots sit on coif's default head (grooms from `coif generate`).
     #[default]

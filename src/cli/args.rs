@@ -1,0 +1,403 @@
+//! The command line's grammar: clap derives for every subcommand and flag. The library knows
+//! nothing of clap; these types are turned into the library's typed options in `commands`.
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use coif::io::{self, ImportOptions, UpAxis};
+use coif::render::{camera::View, scene::HeadMode};
+
+#[derive(Parser)]
+#[command(name = "coif", version, about = "Offline hair-groom styling: perms and wet sets that stay put")]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Command,
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// Grow a procedural sample groom on an ellipsoid head.
+    Generate(GenerateArgs),
+    /// Print strand and vertex counts, bounds, length statistics and attributes of a groom.
+    Info {
+        file: PathBuf,
+        #[command(flatten)]
+        import: ImportArgs,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Convert a groom between formats (chosen by extension).
+    Convert {
+        input: PathBuf,
+        output: PathBuf,
+        #[command(flatten)]
+        import: ImportArgs,
+        #[arg(long)]
+        json: bool,
+        /// Alembic output for Unreal: centimetres, groom_* attribute names, groom spec version.
+        #[arg(long)]
+        unreal: bool,
+    },
+    /// Simulate a groom (gravity, Cosserat rods, side-chain bonds), optionally settle it, and
+    /// write it with its rest shape and bond rates as attributes.
+    Simulate(SimulateArgs),
+    /// Style a groom with a recipe (perm, water set, blow-dry, bed-head) and settle it into its
+    /// new rest shape.
+    Style(StyleArgs),
+    /// Path-trace a preview image of a groom (Embree, Kajiya–Kay hair) to PNG or EXR.
+    Render(Box<RenderArgs>),
+    /// Run a job manifest's tasks (grooms × recipes × wedges) locally in parallel, or one task
+    /// by index (what a farm array job runs). Complete tasks are skipped, so re-runs resume.
+    Batch {
+        manifest: PathBuf,
+        /// Tasks run at once (each as its own process).
+        #[arg(long, default_value_t = 2)]
+        jobs: usize,
+        /// Run only this task, in this process.
+        #[arg(long)]
+        task: Option<usize>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Submit a manifest to a farm scheduler as an array job, or report its progress.
+    Farm {
+        #[command(subcommand)]
+        action: FarmAction,
+    },
+}
+
+#[derive(Subcommand)]
+pub(crate) enum FarmAction {
+    /// Write an array job whose task i runs `coif batch MANIFEST --task i`, and submit it.
+    Submit {
+        manifest: PathBuf,
+        #[arg(long, value_enum, default_value_t = Scheduler::Slurm)]
+        scheduler: Scheduler,
+        #[arg(long)]
+        partition: Option<String>,
+        /// CPUs per task (and threads coif uses in it).
+        #[arg(long, default_value_t = 2)]
+        cpus: usize,
+        /// Tasks the scheduler may run at once.
+        #[arg(long)]
+        max_parallel: Option<usize>,
+        /// Only write the script (for TDs who submit themselves).
+        #[arg(long)]
+        dry_run: bool,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Which tasks are complete (outputs verified by their sidecars) and which are not.
+    Status {
+        manifest: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum Scheduler {
+    Slurm,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum RenderMode {
+    /// The path-traced image.
+    Beauty,
+    /// False colour (blue → red) of the attribute named by --attribute.
+    Attribute,
+    /// Hair tangents as colour.
+    Tangent,
+    /// Distance from the camera.
+    Depth,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum SamplerName {
+    Sobol,
+    Independent,
+}
+
+#[derive(Args)]
+pub(crate) struct RenderArgs {
+    pub(crate) input: PathBuf,
+    /// Output image: .png (8-bit sRGB) or .exr (linear float, with --aov channels).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    #[command(flatten)]
+    pub(crate) import: ImportArgs,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 32)]
+    pub(crate) spp: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480")]
+    pub(crate) res: String,
+    /// Named viewpoint, framed automatically around the groom (and head).
+    #[arg(long, value_enum, default_value_t = ViewArg::ThreeQuarter)]
+    pub(crate) view: ViewArg,
+    /// Explicit camera instead of --view: px,py,pz,tx,ty,tz[,fov] (metres, degrees).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) camera: Option<String>,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = coif::render::camera::DEFAULT_FOV)]
+    pub(crate) fov: f32,
+    /// Stop after the sample pass during which this many seconds have passed.
+    #[arg(long, value_name = "SECONDS")]
+    pub(crate) time_budget: Option<f64>,
+    /// Worker threads (default: all cores). The image is the same for any count.
+    #[arg(long)]
+    pub(crate) threads: Option<usize>,
+    #[arg(long, default_value_t = 0)]
+    pub(crate) seed: u64,
+    #[arg(long, value_enum, default_value_t = RenderMode::Beauty)]
+    pub(crate) mode: RenderMode,
+    /// Attribute to show in false colour (implies --mode attribute), e.g. wetness, bond_hydrogen.
+    #[arg(long)]
+    pub(crate) attribute: Option<String>,
+    /// Value range mapped to blue..red, lo,hi (default: 0,1 for values in [0, 1], else min,max).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) range: Option<String>,
+    /// Hair colour as linear RGB r,g,b in [0, 1] (default: the groom's `color`, else brown).
+    #[arg(long)]
+    pub(crate) color: Option<String>,
+    /// Multiply strand widths (draws hair thicker than it is; 1 = true width).
+    #[arg(long, default_value_t = 1.0)]
+    pub(crate) width_scale: f32,
+    /// Widen strands to at least this many pixels, fading them so average coverage is unchanged.
+    #[arg(long, default_value_t = 0.0, value_name = "PIXELS")]
+    pub(crate) min_pixel_width: f32,
+    /// Show coif's analytic head under the hair.
+    #[arg(long, value_enum, default_value_t = HeadArg::Auto)]
+    pub(crate) head: HeadArg,
+    /// Leave out the floor.
+    #[arg(long)]
+    pub(crate) no_floor: bool,
+    /// Bounce limit of a path.
+    #[arg(long, default_value_t = 8)]
+    pub(crate) max_depth: u32,
+    /// Exposure, stops.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub(crate) exposure: f32,
+    /// Direction towards the key light, x,y,z in world space (default: above-left of the camera).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) light_dir: Option<String>,
+    /// Key light irradiance multiplier.
+    #[arg(long, default_value_t = 1.0)]
+    pub(crate) light_intensity: f32,
+    /// Uniform environment radiance instead of the sky (1 = white furnace).
+    #[arg(long)]
+    pub(crate) environment: Option<f32>,
+    #[arg(long, value_enum, default_value_t = SamplerName::Sobol)]
+    pub(crate) sampler: SamplerName,
+    /// Extra EXR channels: depth, tangent (comma-separated).
+    #[arg(long, default_value = "")]
+    pub(crate) aov: String,
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+#[derive(Args)]
+pub(crate) struct StyleArgs {
+    /// Recipe file (TOML); presets are in grooms/recipes/.
+    pub(crate) recipe: PathBuf,
+    /// Groom to style.
+    #[arg(long)]
+    pub(crate) groom: PathBuf,
+    /// Styled groom (any format coif writes).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    #[command(flatten)]
+    pub(crate) import: ImportArgs,
+    /// Print one JSON object (the per-stage report) on stdout.
+    #[arg(long)]
+    pub(crate) json: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub(crate) quiet: bool,
+    /// Also write the whole process as time samples, this many frames per simulated second
+    /// (USD or Alembic output).
+    #[arg(long, value_name = "FPS")]
+    pub(crate) frames: Option<f32>,
+}
+
+#[derive(Args)]
+pub(crate) struct SimulateArgs {
+    pub(crate) input: PathBuf,
+    pub(crate) output: PathBuf,
+    #[command(flatten)]
+    pub(crate) import: ImportArgs,
+    /// Simulated time, seconds.
+    #[arg(long, default_value_t = 1.0)]
+    pub(crate) seconds: f32,
+    /// Gravity, m/s² downwards (−Y).
+    #[arg(long, default_value_t = 9.8)]
+    pub(crate) gravity: f32,
+    /// Solver iterations per step.
+    #[arg(long, default_value_t = 5)]
+    pub(crate) iterations: u32,
+    /// Time step, seconds or a fraction.
+    #[arg(long, default_value = "1/360")]
+    pub(crate) dt: String,
+    /// Velocity damping rate, 1/s.
+    #[arg(long, default_value_t = 2.0)]
+    pub(crate) damping: f32,
+    /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
+    #[arg(long, value_delimiter = ',', num_args = 4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    pub(crate) influences: Vec<f32>,
+    /// Young's modulus of hair, Pa.
+    #[arg(long, default_value_t = 3.9e9)]
+    pub(crate) youngs_modulus: f32,
+    /// Relax to static equilibrium after the run (stops when every vertex is slower than
+    /// --settle-speed m/s, or reports that it did not within --settle-seconds).
+    #[arg(long)]
+    pub(crate) settle: bool,
+    #[arg(long, default_value_t = 1e-4)]
+    pub(crate) settle_speed: f32,
+    #[arg(long, default_value_t = 30.0)]
+    pub(crate) settle_seconds: f32,
+    /// Solver iterations while settling (default: --iterations).
+    #[arg(long)]
+    pub(crate) settle_iterations: Option<u32>,
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+#[derive(Args)]
+pub(crate) struct ImportArgs {
+    /// Metres per unit of the input file, for formats that do not say (0.01 = centimetres).
+    #[arg(long, value_name = "METRES")]
+    pub(crate) units: Option<f32>,
+    /// Up axis of the input file, for formats that do not say.
+    #[arg(long, value_enum)]
+    pub(crate) up: Option<UpAxisArg>,
+    /// Animated input: the USD time code to read, or the Alembic sample (0 = first). Default:
+    /// USD's default values (else its first sample), Alembic's first sample.
+    #[arg(long, value_name = "TIME")]
+    pub(crate) frame: Option<f64>,
+    /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).
+    #[arg(long, value_name = "SET=NAME")]
+    pub(crate) variant: Vec<String>,
+}
+
+impl ImportArgs {
+    pub(crate) fn options(&self) -> ImportOptions {
+        let frame = self.frame.map(|f| f.max(0.0) as u32);
+        ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame }
+    }
+
+    pub(crate) fn selection(&self) -> io::usda::Selection {
+        io::usda::Selection { time: self.frame, variants: self.variant.clone() }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum HairStyle {
+    Straight,
+    Wavy,
+    Curly,
+}
+
+#[derive(Args)]
+pub(crate) struct GenerateArgs {
+    /// Output groom file (.hair).
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    #[arg(long, default_value_t = 1000)]
+    pub(crate) strands: usize,
+    /// Mean strand length, metres.
+    #[arg(long, default_value_t = 0.24)]
+    pub(crate) length: f32,
+    /// Relative spread of strand lengths, in [0, 1).
+    #[arg(long, default_value_t = 0.0)]
+    pub(crate) length_variation: f32,
+    /// Vertices per strand.
+    #[arg(long, default_value_t = 16)]
+    pub(crate) vertices: usize,
+    #[arg(long, value_enum, default_value_t = HairStyle::Straight)]
+    pub(crate) style: HairStyle,
+    /// Curl (helix) radius for --style curly, metres.
+    #[arg(long, default_value_t = 0.01)]
+    pub(crate) curl_radius: f32,
+    /// Axial advance per curl turn for --style curly, metres.
+    #[arg(long, default_value_t = 0.03)]
+    pub(crate) curl_pitch: f32,
+    /// Wave amplitude for --style wavy, metres.
+    #[arg(long, default_value_t = 0.008)]
+    pub(crate) wave_amplitude: f32,
+    /// Wavelength for --style wavy, metres.
+    #[arg(long, default_value_t = 0.06)]
+    pub(crate) wavelength: f32,
+    /// Root diameter, metres (strands taper to half at the tip).
+    #[arg(long, default_value_t = 80e-6)]
+    pub(crate) width: f32,
+    /// How fast strands turn downwards, radians per metre.
+    #[arg(long, default_value_t = 14.0)]
+    pub(crate) droop: f32,
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+/// `--up`: the file's up axis.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum UpAxisArg {
+    Y,
+    Z,
+}
+
+impl From<UpAxisArg> for UpAxis {
+    fn from(arg: UpAxisArg) -> Self {
+        match arg {
+            UpAxisArg::Y => UpAxis::Y,
+            UpAxisArg::Z => UpAxis::Z,
+        }
+    }
+}
+
+/// `--view`: the named viewpoints of auto-framing.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum ViewArg {
+    /// From the front, slightly above.
+    Front,
+    /// From the right-hand side.
+    Side,
+    /// Between front and side, slightly above.
+    ThreeQuarter,
+    /// From above, the face towards the bottom of the image.
+    Top,
+    /// From behind: the back of a long groom.
+    Back,
+}
+
+impl From<ViewArg> for View {
+    fn from(arg: ViewArg) -> Self {
+        match arg {
+            ViewArg::Front => View::Front,
+            ViewArg::Side => View::Side,
+            ViewArg::ThreeQuarter => View::ThreeQuarter,
+            ViewArg::Top => View::Top,
+            ViewArg::Back => View::Back,
+        }
+    }
+}
+
+/// `--head`: whether to put the analytic head under the hair.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum HeadArg {
+    /// When the strand roots sit on coif's default head.
+    Auto,
+    On,
+    Off,
+}
+
+impl From<HeadArg> for HeadMode {
+    fn from(arg: HeadArg) -> Self {
+        match arg {
+            HeadArg::Auto => HeadMode::Auto,
+            HeadArg::On => HeadMode::On,
+            HeadArg::Off => HeadMode::Off,
+        }
+    }
+}

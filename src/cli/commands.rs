@@ -1,0 +1,420 @@
+//! What each subcommand does: turn parsed arguments into the library's typed options, call the
+//! library, report (text on stderr, `--json` on stdout).
+use std::path::Path;
+
+use serde_json::json;
+
+use coif::generate::{generate, GenerateParams, Style};
+use coif::info::GroomInfo;
+use coif::io;
+use coif::{Error, Result};
+
+use super::args::*;
+
+pub(crate) fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Generate(args) => run_generate(args),
+        Command::Info { file, import, json } => {
+            let loaded = io::read_groom_selected(&file, &import.options(), &import.selection())?;
+            let info = GroomInfo::of(&loaded.groom);
+            if json {
+                print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
+            } else {
+                print_stdout(&format!("{} ({})\n{info}", file.display(), loaded.format.name()));
+            }
+            Ok(())
+        }
+        Command::Convert { input, output, import, json, unreal } => {
+            let loaded = io::read_groom_selected(&input, &import.options(), &import.selection())?;
+            write_and_report(&output, &loaded.groom, json, &io::ExportOptions { unreal })
+        }
+        Command::Simulate(args) => run_simulate(args),
+        Command::Style(args) => run_style(args),
+        Command::Render(args) => run_render(*args),
+        Command::Batch { manifest, jobs, task, json } => run_batch(&manifest, jobs, task, json),
+        Command::Farm { action } => run_farm(action),
+    }
+}
+
+fn run_style(args: StyleArgs) -> Result<()> {
+    use std::io::IsTerminal;
+    let recipe = coif::style::recipe::load(&args.recipe)?;
+    io::Format::from_extension(&args.output)?;
+    let loaded = io::read_groom(&args.groom, &args.import.options())?;
+    let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
+    let frames_per_second = args.frames.unwrap_or(0.0);
+    if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
+        return Err(Error::Usage(format!("--frames {frames_per_second} must be a positive rate")));
+    }
+    if frames_per_second > 0.0 && io::Format::from_extension(&args.output)? == io::Format::Hair {
+        return Err(Error::Usage(format!(
+            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
+            args.output.display()
+        )));
+    }
+    let options = coif::style::StyleOptions { progress, frames_per_second };
+    let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
+    let warnings = io::write_animated(
+        &args.output,
+        &styled.groom,
+        &styled.frames,
+        frames_per_second,
+        &io::ExportOptions::default(),
+    )?;
+    for warning in &warnings {
+        eprintln!("coif: warning: {warning}");
+    }
+    if let Some(settle) = styled.report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
+        eprintln!(
+            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
+            settle.seconds, settle.max_speed
+        );
+    }
+    if args.json {
+        print_json(json!({ "output": args.output, "report": styled.report, "warnings": warnings }));
+    } else {
+        for stage in &styled.report.stages {
+            let curl = stage.curl_radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
+            let b = &stage.bond_rates;
+            eprintln!(
+                "{:>2} {:<10} {:>6.2} s {:>6} steps {:>7.2} s wall  curl {curl:>9}  bonds H {:.2} I {:.2} S {:.2} P {:.2}  wet {:.2}",
+                stage.index + 1,
+                stage.kind,
+                stage.seconds,
+                stage.steps,
+                stage.wall_seconds,
+                b.hydrogen,
+                b.ionic,
+                b.disulfide,
+                b.peptide,
+                stage.wetness
+            );
+        }
+        eprintln!("wrote {}", args.output.display());
+    }
+    Ok(())
+}
+
+fn run_simulate(args: SimulateArgs) -> Result<()> {
+    use coif::sim::driver::{parse_time_step, simulate, SimulateOptions};
+    use coif::sim::{BondInfluences, SettleOptions, SimParams};
+    io::Format::from_extension(&args.output)?;
+    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let defaults = SimParams::default();
+    let params = SimParams {
+        dt: parse_time_step(&args.dt)?,
+        iterations: args.iterations,
+        gravity: glam::Vec3::new(0.0, -args.gravity, 0.0),
+        damping: args.damping,
+        influences: BondInfluences([
+            args.influences[0],
+            args.influences[1],
+            args.influences[2],
+            args.influences[3],
+        ]),
+        material: coif::sim::Material { youngs_modulus: args.youngs_modulus, ..defaults.material },
+        ..defaults
+    };
+    let settle = args.settle.then(|| SettleOptions {
+        max_speed: args.settle_speed,
+        max_seconds: args.settle_seconds,
+        iterations: args.settle_iterations,
+        ..SettleOptions::default()
+    });
+    let (groom, summary) =
+        simulate(&loaded.groom, &SimulateOptions { params, seconds: args.seconds, settle })?;
+    if let Some(report) = summary.settle.filter(|r| !r.converged) {
+        eprintln!(
+            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
+            report.seconds, report.max_speed
+        );
+    }
+    if args.json {
+        let warnings = io::write_groom(&args.output, &groom)?;
+        print_json(
+            json!({ "output": args.output, "simulation": summary, "groom": GroomInfo::of(&groom), "warnings": warnings }),
+        );
+        Ok(())
+    } else {
+        eprintln!("simulated {} steps ({} s)", summary.steps, summary.seconds);
+        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())
+    }
+}
+
+fn run_render(args: RenderArgs) -> Result<()> {
+    use coif::render::{self, integrator::Mode, light::Environment, sampler::SamplerKind};
+    // Fail on a bad output name before reading or rendering anything.
+    render::image::ImageFormat::from_path(&args.output)?;
+    let (width, height) = render::parse_resolution(&args.res)?;
+    let mode = match (args.mode, &args.attribute) {
+        (RenderMode::Beauty | RenderMode::Attribute, Some(name)) => {
+            let range = args.range.as_deref().map(render::parse_range).transpose()?;
+            Mode::Attribute { name: name.clone(), range }
+        }
+        (RenderMode::Attribute, None) => {
+            return Err(Error::Usage("--mode attribute needs --attribute NAME".into()))
+        }
+        (RenderMode::Beauty, None) => Mode::Beauty,
+        (RenderMode::Tangent, _) => Mode::Tangent,
+        (RenderMode::Depth, _) => Mode::Depth,
+    };
+    let time_budget = match args.time_budget {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            return Err(Error::Usage("--time-budget must be positive seconds".into()))
+        }
+        s => s.map(std::time::Duration::from_secs_f64),
+    };
+    let mut settings = render::RenderSettings {
+        width,
+        height,
+        spp: args.spp,
+        view: args.view.into(),
+        camera: args.camera.as_deref().map(str::parse).transpose()?,
+        fov_degrees: args.fov,
+        mode,
+        max_depth: args.max_depth,
+        sampler: match args.sampler {
+            SamplerName::Sobol => SamplerKind::Sobol,
+            SamplerName::Independent => SamplerKind::Independent,
+        },
+        seed: args.seed,
+        exposure: args.exposure,
+        time_budget,
+        aovs: render::parse_aovs(&args.aov)?,
+        ..Default::default()
+    };
+    settings.scene.head = args.head.into();
+    settings.scene.floor = !args.no_floor;
+    settings.scene.width_scale = args.width_scale;
+    settings.scene.min_pixel_width = args.min_pixel_width;
+    settings.scene.color = args.color.as_deref().map(|c| render::parse_vec3(c, "--color")).transpose()?;
+    settings.key.direction =
+        args.light_dir.as_deref().map(|d| render::parse_vec3(d, "--light-dir")).transpose()?;
+    settings.key.irradiance *= args.light_intensity;
+    if let Some(radiance) = args.environment {
+        settings.environment = Environment::Constant(glam::Vec3::splat(radiance));
+    }
+
+    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let bar = progress_bar();
+    let progress = |done: u64, total: u64| {
+        if let Some(bar) = &bar {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
+    };
+    let rendered =
+        render::with_threads(args.threads, || render::render(&loaded.groom, &settings, &progress))??;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    rendered.image.write(&args.output)?;
+    let stats = rendered.stats;
+    if args.json {
+        print_json(json!({ "output": args.output, "width": width, "height": height, "stats": stats }));
+    } else {
+        eprintln!(
+            "wrote {} ({width}x{height}, {} spp, {:.1} s, {:.2} Mrays/s)",
+            args.output.display(),
+            stats.spp,
+            stats.seconds,
+            stats.rays as f64 / stats.seconds.max(1e-9) / 1e6
+        );
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr, only when stderr is a terminal (never in logs or pipes).
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(1);
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("rendering {bar:40} {percent:>3}% {elapsed}<{eta}")
+    {
+        bar.set_style(style);
+    }
+    Some(bar)
+}
+
+fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool) -> Result<()> {
+    use coif::batch::{local, manifest, task as batch_task};
+    let manifest = manifest::load(manifest_path)?;
+    if let Some(index) = task {
+        let task = manifest.tasks.get(index).ok_or_else(|| {
+            Error::Usage(format!(
+                "{}: no task {index}; the manifest has {}",
+                manifest_path.display(),
+                manifest.tasks.len()
+            ))
+        })?;
+        let outcome = batch_task::run(task)?;
+        print_json(json!({ "index": index, "task": task.name, "outcome": outcome }));
+        return Ok(());
+    }
+    let coif = std::env::current_exe()
+        .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
+    let report = local::run(&manifest, &coif, jobs)?;
+    if json {
+        print_json(json!(report));
+    } else {
+        for t in &report.tasks {
+            eprintln!(
+                "{:>4} {:<24} {:<8} {:>7.1} s  {}",
+                t.index,
+                t.name,
+                t.status,
+                t.seconds,
+                t.log.display()
+            );
+        }
+        eprintln!(
+            "{} done, {} skipped, {} failed in {:.1} s",
+            report.done, report.skipped, report.failed, report.seconds
+        );
+    }
+    match report.exit_code() {
+        0 => Ok(()),
+        2 => Err(Error::Usage(format!(
+            "{} of {} tasks had bad input; see their logs",
+            report.failed,
+            report.tasks.len()
+        ))),
+        _ => Err(Error::External(format!(
+            "{} of {} tasks failed; see their logs",
+            report.failed,
+            report.tasks.len()
+        ))),
+    }
+}
+
+fn run_farm(action: FarmAction) -> Result<()> {
+    use coif::batch::{manifest, slurm, task as batch_task};
+    match action {
+        FarmAction::Submit {
+            manifest: path,
+            scheduler: Scheduler::Slurm,
+            partition,
+            cpus,
+            max_parallel,
+            dry_run,
+            json,
+        } => {
+            let manifest = manifest::load(&path)?;
+            let absolute = std::path::absolute(&path).map_err(|e| Error::io(&path, e))?;
+            let coif = std::env::current_exe()
+                .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
+            let logs = std::path::absolute(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
+            std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
+            let options = slurm::SubmitOptions { partition, cpus_per_task: cpus, max_parallel };
+            let dir = slurm::farm_dir(&absolute);
+            let script = slurm::write_script(
+                &dir,
+                &slurm::script(&coif, &absolute, manifest.tasks.len(), &logs, &options),
+            )?;
+            let job = if dry_run { None } else { Some(slurm::submit(&script)?) };
+            if let Some(id) = &job {
+                coif::io::atomic::write_bytes_atomically(&dir.join("job_id"), id.as_bytes())?;
+            }
+            if json {
+                print_json(json!({ "script": script, "tasks": manifest.tasks.len(), "job_id": job }));
+            } else {
+                eprintln!("wrote {} ({} tasks)", script.display(), manifest.tasks.len());
+                if let Some(id) = job {
+                    eprintln!("submitted Slurm job {id}");
+                }
+            }
+            Ok(())
+        }
+        FarmAction::Status { manifest: path, json } => {
+            let manifest = manifest::load(&path)?;
+            let done: Vec<bool> = manifest.tasks.iter().map(batch_task::is_complete).collect();
+            let complete = done.iter().filter(|&&d| d).count();
+            if json {
+                let tasks: Vec<_> = manifest
+                    .tasks
+                    .iter()
+                    .zip(&done)
+                    .map(|(t, d)| json!({ "index": t.index, "task": t.name, "complete": d }))
+                    .collect();
+                print_json(json!({ "complete": complete, "total": done.len(), "tasks": tasks }));
+            } else {
+                for (t, d) in manifest.tasks.iter().zip(&done) {
+                    eprintln!("{:>4} {:<24} {}", t.index, t.name, if *d { "complete" } else { "pending" });
+                }
+                eprintln!("{complete} of {} tasks complete", done.len());
+            }
+            Ok(())
+        }
+    }
+}
+
+fn run_generate(args: GenerateArgs) -> Result<()> {
+    let style = match args.style {
+        HairStyle::Straight => Style::Straight,
+        HairStyle::Wavy => Style::Wavy { amplitude: args.wave_amplitude, wavelength: args.wavelength },
+        HairStyle::Curly => Style::Curly { radius: args.curl_radius, pitch: args.curl_pitch },
+    };
+    let params = GenerateParams {
+        strands: args.strands,
+        length: args.length,
+        length_variation: args.length_variation,
+        vertices_per_strand: args.vertices,
+        style,
+        root_width: args.width,
+        droop: args.droop,
+        seed: args.seed,
+        ..Default::default()
+    };
+    // Fail on an unwritable extension before spending time generating.
+    io::Format::from_extension(&args.output)?;
+    let groom = generate(&params)?;
+    write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
+}
+
+fn write_and_report(
+    output: &Path,
+    groom: &coif::Groom,
+    json: bool,
+    options: &io::ExportOptions,
+) -> Result<()> {
+    let warnings = io::write_groom_with(output, groom, options)?;
+    for warning in &warnings {
+        eprintln!("coif: warning: {warning}");
+    }
+    let info = GroomInfo::of(groom);
+    if json {
+        print_json(json!({ "output": output, "groom": info, "warnings": warnings }));
+    } else {
+        eprintln!("wrote {} ({} strands, {} vertices)", output.display(), info.strands, info.vertices);
+    }
+    Ok(())
+}
+
+fn print_json(value: serde_json::Value) {
+    let text = serde_json::to_string_pretty(&value).expect("JSON values always serialise");
+    print_stdout(&format!("{text}\n"));
+}
+
+/// Prints to stdout; a closed pipe (`coif info x | head`) ends output quietly instead of panicking.
+fn print_stdout(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_all(text.as_bytes());
+}
+
+/// The error and its causes, one after another, so the user sees the root cause too.
+pub(crate) fn error_chain(error: &Error) -> String {
+    let mut text = error.to_string();
+    let mut source = std::error::Error::source(error);
+    while let Some(cause) = source {
+        let cause_text = cause.to_string();
+        if !text.contains(&cause_text) {
+            text.push_str(": ");
+            text.push_str(&cause_text);
+        }
+        source = cause.source();
+    }
+    text
+}
