@@ -114,6 +114,12 @@ pub(crate) enum RenderMode {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum LobeArg {
+    Chiang,
+    KajiyaKay,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum SamplerName {
     Sobol,
     Independent,
@@ -161,6 +167,26 @@ pub(crate) struct RenderArgs {
     /// Hair colour as linear RGB r,g,b in [0, 1] (default: the groom's `color`, else brown).
     #[arg(long)]
     pub(crate) color: Option<String>,
+    /// Hair scattering model: kajiya-kay (the preview default) or chiang (physically based:
+    /// R, TT, TRT and residual lobes, melanin pigments).
+    #[arg(long, value_enum, default_value_t = LobeArg::KajiyaKay)]
+    pub(crate) lobe: LobeArg,
+    /// Eumelanin concentration, 0 (white) .. 8 (black), 10 at most (chiang lobe; overrides the
+    /// groom's colour and `melanin` attribute).
+    #[arg(long)]
+    pub(crate) melanin: Option<f32>,
+    /// Pheomelanin concentration, 0..10 (red; chiang lobe).
+    #[arg(long)]
+    pub(crate) pheomelanin: Option<f32>,
+    /// Longitudinal roughness β_m of the chiang lobe, 0.02..1.
+    #[arg(long, default_value_t = 0.3)]
+    pub(crate) roughness: f32,
+    /// Azimuthal roughness β_n of the chiang lobe, 0.02..1.
+    #[arg(long, default_value_t = 0.3)]
+    pub(crate) azimuthal_roughness: f32,
+    /// Cuticle scale tilt of the chiang lobe, degrees (-10..10).
+    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    pub(crate) cuticle_tilt: f32,
     /// Multiply strand widths (draws hair thicker than it is; 1 = true width).
     #[arg(long, default_value_t = 1.0)]
     pub(crate) width_scale: f32,

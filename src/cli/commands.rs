@@ -188,6 +188,15 @@ fn run_render(args: RenderArgs) -> Result<()> {
     settings.scene.width_scale = args.width_scale;
     settings.scene.min_pixel_width = args.min_pixel_width;
     settings.scene.color = args.color.as_deref().map(|c| render::parse_vec3(c, "--color")).transpose()?;
+    settings.lobe = match args.lobe {
+        LobeArg::Chiang => render::integrator::Lobe::Chiang,
+        LobeArg::KajiyaKay => render::integrator::Lobe::KajiyaKay,
+    };
+    settings.chiang =
+        render::hair_bsdf::ChiangParams::new(args.roughness, args.azimuthal_roughness, args.cuticle_tilt);
+    if args.melanin.is_some() || args.pheomelanin.is_some() {
+        settings.scene.melanin = Some([args.melanin.unwrap_or(0.0), args.pheomelanin.unwrap_or(0.0)]);
+    }
     settings.key.direction =
         args.light_dir.as_deref().map(|d| render::parse_vec3(d, "--light-dir")).transpose()?;
     settings.key.irradiance *= args.light_intensity;
