@@ -24,14 +24,14 @@ pub struct TimeCodes {
 }
 
 /// One primvar as it will be written.
-struct Primvar<'a> {
-    usd_type: &'static str,
-    name: String,
-    interpolation: &'static str,
-    data: PrimvarData<'a>,
+pub(crate) struct Primvar<'a> {
+    pub usd_type: &'static str,
+    pub name: String,
+    pub interpolation: &'static str,
+    pub data: PrimvarData<'a>,
 }
 
-enum PrimvarData<'a> {
+pub(crate) enum PrimvarData<'a> {
     Floats { values: &'a [f32], components: usize },
     UVs(&'a [[f32; 2]]),
     Ints(Vec<i64>),
@@ -242,7 +242,7 @@ fn write_tail(out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {
 }
 
 /// The primvars a groom becomes, and warnings for attributes renamed or dropped.
-fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
+pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
     // Names the reader gives a meaning of their own are never taken by attributes.
@@ -329,7 +329,7 @@ fn valid_name(name: &str) -> String {
 }
 
 /// Points' bounds grown by half the widest width: the extent USD expects on curves.
-fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
+pub(crate) fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
     let (lo, hi) = bounds(points)?;
     let half = Vec3::splat(widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5);
     Some([lo - half, hi + half])
