@@ -170,6 +170,40 @@ def Xform "root" (
 }
 "#;
 
+/// Values pxr stores in its compact forms: a small-integer translate inline, a constant colour,
+/// half floats, a width lookup table, whole-number floats as integers, compressed counts.
+const COMPACT_VALUES: &str = r#"#usda 1.0
+(
+    defaultPrim = "Groom"
+    metersPerUnit = 0.01
+    upAxis = "Z"
+)
+
+def Xform "Groom"
+{
+    double3 xformOp:translate = (1, 2, 3)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+    def BasisCurves "Strands"
+    {
+        uniform token type = "linear"
+        int[] curveVertexCounts = [2, 3, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2, 2]
+        point3f[] points = [(0,0,0),(0,1,0),(1,0,0),(1,1,0),(1,2,0),(2,0,0),(2,1,0),(3,0,0),(3,1,0),(4,0,0),(4,1,0),(5,0,0),(5,1,0),(6,0,0),(6,1,0),(7,0,0),(7,1,0),(8,0,0),(8,1,0),(9,0,0),(9,1,0),(10,0,0),(10,1,0),(11,0,0),(11,1,0),(12,0,0),(12,1,0),(13,0,0),(13,1,0),(14,0,0),(14,1,0),(15,0,0),(15,1,0),(16,0,0),(16,1,0)]
+        float[] widths = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1] (
+            interpolation = "uniform"
+        )
+        float[] primvars:melanin = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17] (
+            interpolation = "uniform"
+        )
+        color3f[] primvars:displayColor = [(1, 0, 0)] (
+            interpolation = "constant"
+        )
+        half[] primvars:h = [0.5, 0.25, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1] (
+            interpolation = "uniform"
+        )
+    }
+}
+"#;
+
 #[test]
 fn coif_reads_usdc_pxr_wrote_into_the_groom_of_its_usda() {
     let dir = tempfile::tempdir().unwrap();
@@ -189,6 +223,9 @@ fn coif_reads_usdc_pxr_wrote_into_the_groom_of_its_usda() {
     let blender = dir.path().join("blender.usda");
     std::fs::write(&blender, BLENDER_STYLE).unwrap();
     sources.push((blender, vec![None]));
+    let compact = dir.path().join("compact.usda");
+    std::fs::write(&compact, COMPACT_VALUES).unwrap();
+    sources.push((compact, vec![None]));
 
     for (text, times) in sources {
         let binary = text.with_extension("usdc");

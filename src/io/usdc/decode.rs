@@ -59,7 +59,7 @@ pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64
 }
 
 /// A path: its parent path (`None` for the pseudo-root), its last element, whether a property.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct PathEntry {
     parent: Option<u32>,
     token: u32,
@@ -855,4 +855,48 @@ fn build_paths(
         }
     }
     Ok(paths)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_well_formed_tree_rebuilds() {
+        // / -> A (-> A.x), B: root child-only, A child and sibling 2 ahead, A.x leaf, B leaf.
+        let paths = build_paths(&[0, 1, 3, 2], &[0, 1, -3, 2], &[-1, 2, -2, -2], 4, 4).unwrap();
+        let entry = |i: usize| paths[i].unwrap();
+        assert!(entry(0).parent.is_none());
+        assert_eq!((entry(1).parent, entry(1).token), (Some(0), 1));
+        assert_eq!((entry(3).parent, entry(3).token, entry(3).property), (Some(1), 3, true));
+        assert_eq!(entry(2).parent, Some(0));
+    }
+
+    #[test]
+    fn repeats_cycles_and_bad_indices_are_refused() {
+        // A sibling jump landing on the child that follows: the node is reached twice.
+        let twice = build_paths(&[0, 1, 2], &[0, 1, 2], &[-1, 1, -2], 3, 3).unwrap_err();
+        assert!(twice.contains("twice"), "{twice}");
+        let repeated = build_paths(&[0, 1, 1], &[0, 1, 2], &[-1, 0, -2], 3, 3).unwrap_err();
+        assert!(repeated.contains("appears twice"), "{repeated}");
+        let beyond = build_paths(&[0, 1], &[0, 1], &[-1, 5], 2, 3).unwrap_err();
+        assert!(beyond.contains("beyond"), "{beyond}");
+        let token = build_paths(&[0, 1], &[0, -9], &[-1, -2], 2, 3).unwrap_err();
+        assert!(token.contains("element token"), "{token}");
+        let index = build_paths(&[0, 7], &[0, 1], &[-1, -2], 2, 3).unwrap_err();
+        assert!(index.contains("path index 7"), "{index}");
+        let root_sibling = build_paths(&[0, 1], &[0, 1], &[0, -2], 2, 3).unwrap_err();
+        assert!(root_sibling.contains("root"), "{root_sibling}");
+        assert!(build_paths(&[0], &[i32::MIN], &[-3], 1, 1).is_err(), "bad jump");
+    }
+
+    #[test]
+    fn halves_convert_exactly() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0xc000), -2.0);
+        assert_eq!(half_to_f32(0x0001), 2f32.powi(-24));
+        assert_eq!(half_to_f32(0x7bff), 65504.0);
+        assert!(half_to_f32(0x7e00).is_nan());
+        assert_eq!(half_to_f32(0xfc00), f32::NEG_INFINITY);
+    }
 }
