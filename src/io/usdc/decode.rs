@@ -542,6 +542,7 @@ impl<'a> Crate<'a> {
         } else {
             match self.array(value, elem, components)? {
                 ArrayData::Scalars(scalars) => scalars,
+                ArrayData::Floats(values) => return Ok(Value::F32(values)),
                 // Plain float arrays (points, widths, primvars) are copied as they lie.
                 ArrayData::Raw(bytes) if elem == Elem::F32 && !matches!(kind, Quatf) => {
                     return Ok(if components == 3 {
@@ -656,6 +657,21 @@ impl<'a> Crate<'a> {
                     };
                     ints(at + 1, Elem::I32)?.into_iter().map(from).collect()
                 }
+                b't' if elem == Elem::F32 => {
+                    // Widths and float primvars: straight to floats, no wider intermediate.
+                    let lut_len = u32::from_le_bytes(self.at(at + 1, 4)?.try_into().unwrap()) as usize;
+                    let lut: Vec<f32> = self.copy_out(self.at(at + 5, lut_len * 4)?)?;
+                    let packed_at = at + 5 + lut_len as u64 * 4;
+                    let n = self.u64_at(packed_at)?;
+                    let bytes = self.at(packed_at + 8, usize::try_from(n).unwrap_or(usize::MAX))?;
+                    let indices = decompress_ints::<u32>(bytes, scalars)?;
+                    let values = indices.into_iter().map(|i| {
+                        lut.get(i as usize)
+                            .copied()
+                            .ok_or_else(|| format!("lookup index {i} beyond the table of {lut_len}"))
+                    });
+                    return Ok(ArrayData::Floats(values.collect::<Checked<_>>()?));
+                }
                 b't' => {
                     let lut_len = u32::from_le_bytes(self.at(at + 1, 4)?.try_into().unwrap()) as usize;
                     let lut_bytes = self.at(at + 5, lut_len * elem.size())?;
@@ -681,6 +697,7 @@ impl<'a> Crate<'a> {
 /// An array as stored uncompressed, or decoded.
 enum ArrayData<'a> {
     Raw(&'a [u8]),
+    Floats(Vec<f32>),
     Scalars(Vec<Scalar>),
 }
 
