@@ -219,6 +219,10 @@ pub(crate) struct StyleArgs {
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
+    /// Simulate this many guides (spread evenly over the scalp) and interpolate the other
+    /// strands from them; overrides the recipe's `[guides]`.
+    #[arg(long, value_name = "N")]
+    pub(crate) guides: Option<usize>,
 }
 
 #[derive(Args)]

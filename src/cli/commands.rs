@@ -38,7 +38,10 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 
 fn run_style(args: StyleArgs) -> Result<()> {
     use std::io::IsTerminal;
-    let recipe = coif::style::recipe::load(&args.recipe)?;
+    let mut recipe = coif::style::recipe::load(&args.recipe)?;
+    if let Some(count) = args.guides {
+        recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
+    }
     io::Format::from_extension(&args.output)?;
     let loaded = io::read_groom(&args.groom, &args.import.options())?;
     let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();

@@ -34,6 +34,9 @@ pub struct Recipe {
     pub obstacles: Vec<Spanned<Obstacle>>,
     #[serde(default)]
     pub rods: Vec<Spanned<Rod>>,
+    /// Simulate only guides and interpolate the other strands (`crate::guides`).
+    #[serde(default)]
+    pub guides: Option<crate::guides::GuideSpec>,
     pub stages: Vec<Spanned<Stage>>,
 }
 

@@ -63,6 +63,9 @@ pub struct StageReport {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StyleReport {
     pub strands: usize,
+    /// Strands simulated as guides when the rest were interpolated from them (`crate::guides`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guides: Option<usize>,
     pub vertices: usize,
     pub steps: u64,
     pub stages: Vec<StageReport>,
@@ -78,8 +81,16 @@ pub struct Styled {
     pub frames_per_second: f32,
 }
 
-/// Styles a groom with a recipe.
+/// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    if crate::guides::wanted(groom, recipe) {
+        return crate::guides::style(groom, recipe, options);
+    }
+    style_strands(groom, recipe, options)
+}
+
+/// Styles every strand of a groom with a recipe.
+pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
@@ -108,6 +119,7 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     }
     let report = StyleReport {
         strands: session.groom.strand_count(),
+        guides: None,
         vertices: session.groom.vertex_count(),
         steps: session.sim.steps_taken(),
         stages,
@@ -279,38 +291,7 @@ impl<'r> Session<'r> {
         };
         let sim = Simulation::new(&groom, params)?;
 
-        if let Some(Obstacle::Mesh { name, .. }) = recipe
-            .obstacles
-            .iter()
-            .map(|o| o.get_ref())
-            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
-        {
-            return Err(Error::Usage(format!(
-                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
-            )));
-        }
-        let mut head = Head::default();
-        let obstacles: Vec<Shape> = recipe
-            .obstacles
-            .iter()
-            .map(|o| match o.get_ref() {
-                Obstacle::Head { center, radii, .. } => {
-                    head.center = center.map_or(head.center, Vec3::from);
-                    head.radii = radii.map_or(head.radii, Vec3::from);
-                    Shape::Ellipsoid { center: head.center, radii: head.radii }
-                }
-                Obstacle::Sphere { center, radius, .. } => {
-                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
-                }
-                Obstacle::Plane { point, normal, .. } => {
-                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
-                }
-                Obstacle::Box { center, half_extents, .. } => {
-                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
-                }
-                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
-            })
-            .collect();
+        let (obstacles, head) = obstacle_shapes(recipe)?;
         let rods = recipe
             .rods
             .iter()
@@ -868,6 +849,40 @@ impl<'r> Session<'r> {
             settle,
         }
     }
+}
+
+/// The recipe's obstacles as collision shapes, and the head they place (for masks).
+pub(crate) fn obstacle_shapes(recipe: &Recipe) -> Result<(Vec<Shape>, Head)> {
+    if let Some(Obstacle::Mesh { name, .. }) =
+        recipe.obstacles.iter().map(|o| o.get_ref()).find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
+    {
+        return Err(Error::Usage(format!(
+            "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
+        )));
+    }
+    let mut head = Head::default();
+    let obstacles = recipe
+        .obstacles
+        .iter()
+        .map(|o| match o.get_ref() {
+            Obstacle::Head { center, radii, .. } => {
+                head.center = center.map_or(head.center, Vec3::from);
+                head.radii = radii.map_or(head.radii, Vec3::from);
+                Shape::Ellipsoid { center: head.center, radii: head.radii }
+            }
+            Obstacle::Sphere { center, radius, .. } => {
+                Shape::Sphere { center: Vec3::from(*center), radius: *radius }
+            }
+            Obstacle::Plane { point, normal, .. } => {
+                Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
+            }
+            Obstacle::Box { center, half_extents, .. } => {
+                Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
+            }
+            Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
+        })
+        .collect();
+    Ok((obstacles, head))
 }
 
 /// Frame inertia factor while settling ([`SimParams::frame_inertia_factor`]): large enough that
