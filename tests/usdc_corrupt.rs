@@ -197,3 +197,8 @@ fn a_crate_file_with_a_wrong_extension_is_still_read_by_its_magic() {
     let loaded = coif::io::read_groom(Path::new(&path), &Default::default()).unwrap();
     assert_eq!(loaded.format, coif::io::Format::Usdc);
 }
+
+#[test]
+fn an_empty_usdc_is_bad_input() {
+    assert_rejected(&[], "bootstrap");
+}

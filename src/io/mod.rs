@@ -160,8 +160,7 @@ pub fn read_groom_selected(
             }
         }
         Format::Usdc if selection.variants.is_empty() => {
-            let bytes = input::map_file(path)?;
-            match usdc::read(&bytes, path, options, selection.time)? {
+            match usdc::read_file(path, options, selection.time)? {
                 usdc::ReadOutcome::Groom(groom) => groom,
                 usdc::ReadOutcome::NeedsComposition { .. } => {
                     usd_interop::read(path, options, selection.time, &[])?

@@ -205,12 +205,7 @@ fn write_head(
     head.push_str(
         "    upAxis = \"Y\"\n)\n\ndef Xform \"Groom\"\n{\n    def BasisCurves \"Strands\"\n    {\n",
     );
-    let (curve_type, basis) = match groom.basis {
-        CurveBasis::Linear => ("linear", None),
-        CurveBasis::Bezier => ("cubic", Some("bezier")),
-        CurveBasis::BSpline => ("cubic", Some("bspline")),
-        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-    };
+    let (curve_type, basis) = curve_type_and_basis(groom.basis);
     if let Some(basis) = basis {
         head.push_str(&format!("        uniform token basis = \"{basis}\"\n"));
     }
@@ -254,6 +249,16 @@ fn write_head(
         )?;
     }
     Ok(())
+}
+
+/// USD's `type` and `basis` tokens for a curve basis.
+pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&'static str>) {
+    match basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::BSpline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+    }
 }
 
 fn write_tail(out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {

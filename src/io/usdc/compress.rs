@@ -132,16 +132,21 @@ fn encode_ints<T: CodedInt>(values: &[T]) -> Vec<u8> {
     for (i, &d) in deltas.iter().enumerate() {
         let c = code(d);
         out[codes_at + i / 4] |= c << (2 * (i % 4));
-        let width = match (c, wide) {
-            (0, _) => 0,
-            (1, false) => 1,
-            (1, true) | (2, false) => 2,
-            (2, true) | (3, false) => 4,
-            _ => 8,
-        };
+        let width = code_width(c, wide);
         out.extend_from_slice(&d.to_le_bytes()[..width]);
     }
     out
+}
+
+/// Bytes a delta with 2-bit code `code` takes (0 for the common delta).
+fn code_width(code: u8, wide: bool) -> usize {
+    match (code, wide) {
+        (0, _) => 0,
+        (1, false) => 1,
+        (1, true) | (2, false) => 2,
+        (2, true) | (3, false) => 4,
+        _ => 8,
+    }
 }
 
 /// The most frequent delta; ties go to the smaller value so output is deterministic.
@@ -188,13 +193,7 @@ fn decode_ints<T: CodedInt>(coded: &[u8], count: usize) -> Result<Vec<T>, String
     let mut previous = 0i64;
     for i in 0..count {
         let c = (codes[i / 4] >> (2 * (i % 4))) & 3;
-        let width = match (c, wide) {
-            (0, _) => 0,
-            (1, false) => 1,
-            (1, true) | (2, false) => 2,
-            (2, true) | (3, false) => 4,
-            _ => 8,
-        };
+        let width = code_width(c, wide);
         let delta = if width == 0 {
             common
         } else {

@@ -146,6 +146,25 @@ impl<W: Write + Seek> Encoder<W> {
         Ok(rep::compressed(rep::array_at(Type::Int, at)))
     }
 
+    /// A `float[]`: as a lookup table and compressed indices when it holds few distinct values
+    /// (widths usually do), else plain — what usd-core writes, without its integer form.
+    pub fn float_array(&mut self, values: &[f32]) -> std::io::Result<Rep> {
+        match lookup_table(values) {
+            None => self.array(Type::Float, values.len(), bytemuck::cast_slice(values)),
+            Some((table, indices)) => {
+                let at = self.position;
+                self.write(&(values.len() as u64).to_le_bytes())?;
+                self.write(b"t")?;
+                self.write(&(table.len() as u32).to_le_bytes())?;
+                self.write(bytemuck::cast_slice(&table))?;
+                let packed = compress_ints(&indices);
+                self.write(&(packed.len() as u64).to_le_bytes())?;
+                self.write(&packed)?;
+                Ok(rep::compressed(rep::array_at(Type::Float, at)))
+            }
+        }
+    }
+
     /// Time samples: the times as a double vector, then one value per time.
     pub fn time_samples(&mut self, times: &[f64], values: &[Rep]) -> std::io::Result<Rep> {
         let times_at = self.position;
@@ -288,6 +307,38 @@ impl<W: Write + Seek> Encoder<W> {
             .collect();
         (order, tokens, jumps)
     }
+}
+
+/// The distinct values (at most a quarter of the count, and 1024) and each value's index, or
+/// `None` when there are more. Values are compared bit for bit, so every float reads back exactly.
+fn lookup_table(values: &[f32]) -> Option<(Vec<f32>, Vec<u32>)> {
+    if values.len() < MIN_COMPRESSED_ARRAY {
+        return None;
+    }
+    let limit = (values.len() / 4).min(1024);
+    let mut table = Vec::new();
+    let mut index: HashMap<u32, u32> = HashMap::new();
+    let mut indices = Vec::with_capacity(values.len());
+    let mut last = None;
+    for &v in values {
+        let bits = v.to_bits();
+        // Runs of one value (a strand's constant width) skip the hash.
+        let i = match last {
+            Some((b, i)) if b == bits => i,
+            _ => match index.get(&bits) {
+                Some(&i) => i,
+                None if table.len() == limit => return None,
+                None => {
+                    table.push(v);
+                    index.insert(bits, table.len() as u32 - 1);
+                    table.len() as u32 - 1
+                }
+            },
+        };
+        last = Some((bits, i));
+        indices.push(i);
+    }
+    Some((table, indices))
 }
 
 fn u64s(values: &[u64]) -> Vec<u8> {

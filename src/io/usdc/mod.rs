@@ -90,7 +90,20 @@ fn write_with(path: &Path, groom: &Groom, animation: Option<&write::Animation>) 
     atomic::commit(path, out)
 }
 
-/// Reads a crate file into a groom (metres, Y up), or says it needs composition.
+/// Reads crate-file bytes into a groom (metres, Y up), or says it needs composition.
 pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
-    decode::read(bytes, path, options, time)
+    decode::read(bytes, None, path, options, time)
+}
+
+/// Reads a crate file: the structure through a map, large arrays straight from the file.
+pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    // SAFETY: read-only map; every offset is checked against its length, and coif replaces
+    // files by renaming, never truncating them in place (as for `input::map_file`).
+    let empty = file.metadata().map_err(|e| Error::io(path, e))?.len() == 0;
+    if empty {
+        return decode::read(&[], None, path, options, time);
+    }
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+    decode::read(&map, Some(&file), path, options, time)
 }

@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::encode::{Encoder, Rep};
 use super::format::{rep, SpecType, Type, SPECIFIER_DEF, UNIFORM, VARYING};
-use crate::groom::{CurveBasis, Groom};
+use crate::groom::Groom;
 use crate::io::usda::{self, PrimvarData, TimeCodes};
 
 /// Points over time: every frame's points and the time codes (frame `k` at `start + k`).
@@ -25,12 +25,7 @@ pub fn encode<W: Write + Seek>(groom: &Groom, animation: Option<&Animation>, out
         let fields = attribute_fields(e, "token", UNIFORM, value, "default", None);
         properties.push((name.to_string(), fields));
     };
-    let (curve_type, basis) = match groom.basis {
-        CurveBasis::Linear => ("linear", None),
-        CurveBasis::Bezier => ("cubic", Some("bezier")),
-        CurveBasis::BSpline => ("cubic", Some("bspline")),
-        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-    };
+    let (curve_type, basis) = usda::curve_type_and_basis(groom.basis);
     if let Some(basis) = basis {
         uniform_token(&mut e, "basis", basis);
     }
@@ -43,7 +38,7 @@ pub fn encode<W: Write + Seek>(groom: &Groom, animation: Option<&Animation>, out
         "curveVertexCounts".into(),
         attribute_fields(&mut e, "int[]", VARYING, value, "default", None),
     ));
-    let value = e.array(Type::Float, groom.widths.len(), bytemuck::cast_slice(&groom.widths))?;
+    let value = e.float_array(&groom.widths)?;
     properties.push((
         "widths".into(),
         attribute_fields(&mut e, "float[]", VARYING, value, "default", Some("vertex")),
@@ -51,6 +46,7 @@ pub fn encode<W: Write + Seek>(groom: &Groom, animation: Option<&Animation>, out
 
     for primvar in usda::plan_primvars(groom).0 {
         let value = match &primvar.data {
+            PrimvarData::Floats { values, components: 1 } => e.float_array(values)?,
             PrimvarData::Floats { values, components } => {
                 let kind = [Type::Float, Type::Vec2f, Type::Vec3f, Type::Vec4f][components - 1];
                 e.array(kind, values.len() / components, bytemuck::cast_slice(values))?
