@@ -22,7 +22,10 @@ use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Sha
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
-use crate::sim::{BondInfluences, BondKind, Cuticle, Hooks, Material, SettleReport, SimParams, Simulation};
+use crate::sim::settle::settle_with;
+use crate::sim::{
+    BondInfluences, BondKind, Cuticle, Hooks, Material, SettleOptions, SettleReport, SimParams, Simulation,
+};
 
 /// Options of a styling run that are not part of the recipe.
 #[derive(Clone, Debug, Default)]
@@ -611,12 +614,14 @@ impl<'r> Session<'r> {
                 self.refresh_obstacles();
                 self.run_steps(steps, progress, |_, _| {});
             }
-            Stage::Settle { max_seconds, max_speed, gravity } => {
+            Stage::Settle { max_seconds, tolerance, gravity } => {
                 if *gravity == Some(false) {
                     let p = self.sim.params().clone();
                     self.sim.set_step_params(p.dt, p.iterations, Vec3::ZERO, p.damping)?;
                 }
-                return Ok(Some(self.settle(*max_seconds, *max_speed, progress)));
+                let options =
+                    SettleOptions { tolerance: *tolerance, max_seconds: *max_seconds, iterations: None };
+                return Ok(Some(self.settle(&options, progress)));
             }
         }
         Ok(None)
@@ -658,39 +663,25 @@ impl<'r> Session<'r> {
         self.run_steps(steps, progress, |s, _| apply(s));
     }
 
-    /// Steps until every vertex stays slower than `max_speed` for 0.1 s, or `max_seconds` pass.
-    ///
-    /// Frames are made as light as the solver's conditioning allows while settling. The frames are
-    /// quasi-static (they restart every step at rest), so their inertia acts as a drag on every
-    /// bend, `I_frame/Δt` per edge: with the default factor it is ~10³× the air damping on a 3 cm
-    /// segment, makes released curls creep open over many seconds whatever the damping or the
-    /// iteration count, and kept the presets from settling. Static shapes do not depend on it.
-    fn settle(
-        &mut self,
-        max_seconds: f32,
-        max_speed: f32,
-        progress: Option<&indicatif::ProgressBar>,
-    ) -> SettleReport {
-        let dt = self.sim.params().dt;
-        let frame_inertia_factor = self.sim.params().frame_inertia_factor;
-        self.sim.set_frame_inertia_factor(SETTLE_FRAME_INERTIA_FACTOR).expect("a positive, finite factor");
-        let max_steps = self.steps_for(max_seconds).max(1);
-        let quiet_steps = (0.1 / dt).ceil() as u64;
-        let (mut quiet, mut steps, mut speed) = (0, 0, self.sim.max_speed());
-        while steps < max_steps && quiet < quiet_steps {
-            self.step();
-            steps += 1;
-            speed = self.sim.max_speed();
-            quiet = if speed < max_speed { quiet + 1 } else { 0 };
-            if let Some(bar) = progress {
-                bar.inc(1);
-            }
-        }
+    /// The static solve (`sim::settle`) with this session's full step: forces, contacts and
+    /// wetness.
+    fn settle(&mut self, options: &SettleOptions, progress: Option<&indicatif::ProgressBar>) -> SettleReport {
+        let budget = self.steps_for(options.max_seconds).max(1);
+        let report = settle_with(
+            self,
+            |s| &mut s.sim,
+            Self::step,
+            options,
+            || {
+                if let Some(bar) = progress {
+                    bar.inc(1);
+                }
+            },
+        );
         if let Some(bar) = progress {
-            bar.inc(max_steps - steps);
+            bar.inc(budget.saturating_sub(report.steps));
         }
-        self.sim.set_frame_inertia_factor(frame_inertia_factor).expect("the factor the run started with");
-        SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
+        report
     }
 
     /// Poses every wound strand at stage time `t ∈ [0, 1]`.
@@ -884,10 +875,6 @@ pub(crate) fn obstacle_shapes(recipe: &Recipe) -> Result<(Vec<Shape>, Head)> {
         .collect();
     Ok((obstacles, head))
 }
-
-/// Frame inertia factor while settling ([`SimParams::frame_inertia_factor`]): large enough that
-/// every frame's inverse inertia sits at its conditioning cap, the bending compliance `α/Δt²`.
-const SETTLE_FRAME_INERTIA_FACTOR: f32 = 1e6;
 
 fn smoothstep(t: f32) -> f32 {
     let t = t.clamp(0.0, 1.0);
