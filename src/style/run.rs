@@ -859,7 +859,7 @@ pub(crate) fn obstacle_shapes(recipe: &Recipe) -> Result<(Vec<Shape>, Head)> {
             Obstacle::Head { center, radii, .. } => {
                 head.center = center.map_or(head.center, Vec3::from);
                 head.radii = radii.map_or(head.radii, Vec3::from);
-                Shape::Ellipsoid { center: head.center, radii: head.radii }
+                Shape::Ellipsoid { center: head.center, radii: head.radii, rotation: glam::Quat::IDENTITY }
             }
             Obstacle::Sphere { center, radius, .. } => {
                 Shape::Sphere { center: Vec3::from(*center), radius: *radius }
