@@ -43,7 +43,7 @@ fn depth_inside(planes: &[(Vec3, f32)], p: Vec3) -> f32 {
     -planes.iter().map(|&(n, offset)| n.dot(p) - offset).fold(f32::MIN, f32::max)
 }
 
-const SETTLE: &str = "\n[[stages]]\nkind = \"settle\"\nmax_seconds = 3.0\nmax_speed = 0.001\n";
+const SETTLE: &str = "\n[[stages]]\nkind = \"settle\"\nmax_seconds = 3.0\ntolerance = 1e-3\n";
 
 /// Styles the 200-strand seed groom with `obstacles` (TOML) and a 3 s settle under gravity,
 /// from a recipe in `dir`; returns the settled points.

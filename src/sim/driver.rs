@@ -53,6 +53,9 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
             options.seconds
         )));
     }
+    if let Some(settle) = &options.settle {
+        settle.check("--settle-tolerance", "--settle-seconds")?;
+    }
     let mut sim = Simulation::new(groom, options.params.clone())?;
     let steps = sim.run(options.seconds, &NoHooks);
     let settle = options.settle.as_ref().map(|settle| sim.settle(settle, &NoHooks));

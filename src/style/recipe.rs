@@ -34,6 +34,9 @@ pub struct Recipe {
     pub obstacles: Vec<Spanned<Obstacle>>,
     #[serde(default)]
     pub rods: Vec<Spanned<Rod>>,
+    /// Simulate only guides and interpolate the other strands (`crate::guides`).
+    #[serde(default)]
+    pub guides: Option<crate::guides::GuideSpec>,
     pub stages: Vec<Spanned<Stage>>,
 }
 
@@ -364,9 +367,9 @@ pub enum Stage {
     Settle {
         #[serde(default = "default_settle_seconds")]
         max_seconds: f32,
-        /// Stop once no vertex moves faster than this, m/s.
-        #[serde(default = "default_settle_speed")]
-        max_speed: f32,
+        /// Largest accepted net force and torque relative to gravity's (`sim::settle`).
+        #[serde(default = "default_settle_tolerance")]
+        tolerance: f32,
         /// Settle without gravity (to measure the free curl).
         #[serde(default)]
         gravity: Option<bool>,
@@ -381,8 +384,8 @@ fn default_settle_seconds() -> f32 {
     10.0
 }
 
-fn default_settle_speed() -> f32 {
-    1e-3
+fn default_settle_tolerance() -> f32 {
+    crate::sim::settle::DEFAULT_TOLERANCE
 }
 
 impl Stage {
@@ -635,15 +638,20 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 }
                 held = None;
             }
-            Stage::Settle { max_speed, .. } => {
+            Stage::Settle { max_seconds, tolerance, .. } => {
                 if index != last {
                     return fail("settle must be the last stage".into());
                 }
                 if let Some(holder) = held {
                     return fail(format!("the hair is still held by the earlier {holder}; release it first"));
                 }
-                if !positive(*max_speed) {
-                    return fail(format!("max_speed {max_speed} must be positive"));
+                let options = crate::sim::SettleOptions {
+                    tolerance: *tolerance,
+                    max_seconds: *max_seconds,
+                    iterations: None,
+                };
+                if let Err(e) = options.check("tolerance", "max_seconds") {
+                    return fail(e.to_string());
                 }
             }
             Stage::Process { .. } | Stage::Rinse { reform: None, .. } => {}

@@ -22,7 +22,10 @@ use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Sha
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
-use crate::sim::{BondInfluences, BondKind, Cuticle, Hooks, Material, SettleReport, SimParams, Simulation};
+use crate::sim::settle::settle_with;
+use crate::sim::{
+    BondInfluences, BondKind, Cuticle, Hooks, Material, SettleOptions, SettleReport, SimParams, Simulation,
+};
 
 /// Options of a styling run that are not part of the recipe.
 #[derive(Clone, Debug, Default)]
@@ -63,6 +66,9 @@ pub struct StageReport {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StyleReport {
     pub strands: usize,
+    /// Strands simulated as guides when the rest were interpolated from them (`crate::guides`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guides: Option<usize>,
     pub vertices: usize,
     pub steps: u64,
     pub stages: Vec<StageReport>,
@@ -78,8 +84,16 @@ pub struct Styled {
     pub frames_per_second: f32,
 }
 
-/// Styles a groom with a recipe.
+/// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    if crate::guides::wanted(groom, recipe) {
+        return crate::guides::style(groom, recipe, options);
+    }
+    style_strands(groom, recipe, options)
+}
+
+/// Styles every strand of a groom with a recipe.
+pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
@@ -108,6 +122,7 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     }
     let report = StyleReport {
         strands: session.groom.strand_count(),
+        guides: None,
         vertices: session.groom.vertex_count(),
         steps: session.sim.steps_taken(),
         stages,
@@ -279,38 +294,7 @@ impl<'r> Session<'r> {
         };
         let sim = Simulation::new(&groom, params)?;
 
-        if let Some(Obstacle::Mesh { name, .. }) = recipe
-            .obstacles
-            .iter()
-            .map(|o| o.get_ref())
-            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
-        {
-            return Err(Error::Usage(format!(
-                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
-            )));
-        }
-        let mut head = Head::default();
-        let obstacles: Vec<Shape> = recipe
-            .obstacles
-            .iter()
-            .map(|o| match o.get_ref() {
-                Obstacle::Head { center, radii, .. } => {
-                    head.center = center.map_or(head.center, Vec3::from);
-                    head.radii = radii.map_or(head.radii, Vec3::from);
-                    Shape::Ellipsoid { center: head.center, radii: head.radii }
-                }
-                Obstacle::Sphere { center, radius, .. } => {
-                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
-                }
-                Obstacle::Plane { point, normal, .. } => {
-                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
-                }
-                Obstacle::Box { center, half_extents, .. } => {
-                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
-                }
-                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
-            })
-            .collect();
+        let (obstacles, head) = obstacle_shapes(recipe)?;
         let rods = recipe
             .rods
             .iter()
@@ -630,12 +614,14 @@ impl<'r> Session<'r> {
                 self.refresh_obstacles();
                 self.run_steps(steps, progress, |_, _| {});
             }
-            Stage::Settle { max_seconds, max_speed, gravity } => {
+            Stage::Settle { max_seconds, tolerance, gravity } => {
                 if *gravity == Some(false) {
                     let p = self.sim.params().clone();
                     self.sim.set_step_params(p.dt, p.iterations, Vec3::ZERO, p.damping)?;
                 }
-                return Ok(Some(self.settle(*max_seconds, *max_speed, progress)));
+                let options =
+                    SettleOptions { tolerance: *tolerance, max_seconds: *max_seconds, iterations: None };
+                return Ok(Some(self.settle(&options, progress)));
             }
         }
         Ok(None)
@@ -677,39 +663,25 @@ impl<'r> Session<'r> {
         self.run_steps(steps, progress, |s, _| apply(s));
     }
 
-    /// Steps until every vertex stays slower than `max_speed` for 0.1 s, or `max_seconds` pass.
-    ///
-    /// Frames are made as light as the solver's conditioning allows while settling. The frames are
-    /// quasi-static (they restart every step at rest), so their inertia acts as a drag on every
-    /// bend, `I_frame/Δt` per edge: with the default factor it is ~10³× the air damping on a 3 cm
-    /// segment, makes released curls creep open over many seconds whatever the damping or the
-    /// iteration count, and kept the presets from settling. Static shapes do not depend on it.
-    fn settle(
-        &mut self,
-        max_seconds: f32,
-        max_speed: f32,
-        progress: Option<&indicatif::ProgressBar>,
-    ) -> SettleReport {
-        let dt = self.sim.params().dt;
-        let frame_inertia_factor = self.sim.params().frame_inertia_factor;
-        self.sim.set_frame_inertia_factor(SETTLE_FRAME_INERTIA_FACTOR).expect("a positive, finite factor");
-        let max_steps = self.steps_for(max_seconds).max(1);
-        let quiet_steps = (0.1 / dt).ceil() as u64;
-        let (mut quiet, mut steps, mut speed) = (0, 0, self.sim.max_speed());
-        while steps < max_steps && quiet < quiet_steps {
-            self.step();
-            steps += 1;
-            speed = self.sim.max_speed();
-            quiet = if speed < max_speed { quiet + 1 } else { 0 };
-            if let Some(bar) = progress {
-                bar.inc(1);
-            }
-        }
+    /// The static solve (`sim::settle`) with this session's full step: forces, contacts and
+    /// wetness.
+    fn settle(&mut self, options: &SettleOptions, progress: Option<&indicatif::ProgressBar>) -> SettleReport {
+        let budget = self.steps_for(options.max_seconds).max(1);
+        let report = settle_with(
+            self,
+            |s| &mut s.sim,
+            Self::step,
+            options,
+            || {
+                if let Some(bar) = progress {
+                    bar.inc(1);
+                }
+            },
+        );
         if let Some(bar) = progress {
-            bar.inc(max_steps - steps);
+            bar.inc(budget.saturating_sub(report.steps));
         }
-        self.sim.set_frame_inertia_factor(frame_inertia_factor).expect("the factor the run started with");
-        SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
+        report
     }
 
     /// Poses every wound strand at stage time `t ∈ [0, 1]`.
@@ -870,9 +842,39 @@ impl<'r> Session<'r> {
     }
 }
 
-/// Frame inertia factor while settling ([`SimParams::frame_inertia_factor`]): large enough that
-/// every frame's inverse inertia sits at its conditioning cap, the bending compliance `α/Δt²`.
-const SETTLE_FRAME_INERTIA_FACTOR: f32 = 1e6;
+/// The recipe's obstacles as collision shapes, and the head they place (for masks).
+pub(crate) fn obstacle_shapes(recipe: &Recipe) -> Result<(Vec<Shape>, Head)> {
+    if let Some(Obstacle::Mesh { name, .. }) =
+        recipe.obstacles.iter().map(|o| o.get_ref()).find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
+    {
+        return Err(Error::Usage(format!(
+            "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
+        )));
+    }
+    let mut head = Head::default();
+    let obstacles = recipe
+        .obstacles
+        .iter()
+        .map(|o| match o.get_ref() {
+            Obstacle::Head { center, radii, .. } => {
+                head.center = center.map_or(head.center, Vec3::from);
+                head.radii = radii.map_or(head.radii, Vec3::from);
+                Shape::Ellipsoid { center: head.center, radii: head.radii, rotation: glam::Quat::IDENTITY }
+            }
+            Obstacle::Sphere { center, radius, .. } => {
+                Shape::Sphere { center: Vec3::from(*center), radius: *radius }
+            }
+            Obstacle::Plane { point, normal, .. } => {
+                Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
+            }
+            Obstacle::Box { center, half_extents, .. } => {
+                Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
+            }
+            Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
+        })
+        .collect();
+    Ok((obstacles, head))
+}
 
 fn smoothstep(t: f32) -> f32 {
     let t = t.clamp(0.0, 1.0);

@@ -32,9 +32,17 @@ pub(crate) struct Primvar<'a> {
 }
 
 pub(crate) enum PrimvarData<'a> {
-    Floats { values: &'a [f32], components: usize },
+    Floats {
+        values: &'a [f32],
+        components: usize,
+    },
     UVs(&'a [[f32; 2]]),
     Ints(Vec<i64>),
+    /// Integer tuples kept as floats in the groom model (`groom_closest_guides`: int3).
+    IntTuples {
+        values: &'a [f32],
+        components: usize,
+    },
 }
 
 /// Checks what `.usda` cannot store: cubic strands with too few control points for their basis.
@@ -223,6 +231,17 @@ fn write_head(
             PrimvarData::Ints(values) => write_array(out, values, |buf, &v| {
                 buf.extend_from_slice(itoa::Buffer::new().format(v).as_bytes())
             })?,
+            PrimvarData::IntTuples { values, components } => {
+                let tuples: Vec<&[f32]> = values.chunks_exact(*components).collect();
+                write_array(out, &tuples, |buf, t| {
+                    let text: Vec<String> = t.iter().map(|&v| (v.round() as i64).to_string()).collect();
+                    let text = text.join(", ");
+                    match t.len() {
+                        1 => buf.extend_from_slice(text.as_bytes()),
+                        _ => buf.extend_from_slice(format!("({text})").as_bytes()),
+                    }
+                })?
+            }
         }
         write_label(
             out,
@@ -292,7 +311,12 @@ pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
                 attribute.name
             ));
         }
+        let integer = attribute.name == crate::guides::CLOSEST_GUIDES;
         let usd_type = match (attribute.name.as_str(), attribute.components) {
+            (_, 1) if integer => "int[]",
+            (_, 2) if integer => "int2[]",
+            (_, 3) if integer => "int3[]",
+            (_, _) if integer => "int4[]",
             (crate::groom::attr::COLOR, 3) => "color3f[]",
             (names::REST, 3) => "point3f[]",
             (_, 1) => "float[]",
@@ -309,7 +333,11 @@ pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
             usd_type,
             name,
             interpolation,
-            data: PrimvarData::Floats { values: &attribute.data, components: attribute.components },
+            data: if integer {
+                PrimvarData::IntTuples { values: &attribute.data, components: attribute.components }
+            } else {
+                PrimvarData::Floats { values: &attribute.data, components: attribute.components }
+            },
         });
     }
     (primvars, warnings)

@@ -56,6 +56,15 @@ pub fn encode<W: Write + Seek>(groom: &Groom, animation: Option<&Animation>, out
                 let ints: Vec<i32> = values.iter().map(|&v| v as i32).collect();
                 e.int_array(&ints)?
             }
+            PrimvarData::IntTuples { values, components: 1 } => {
+                let ints: Vec<i32> = values.iter().map(|&v| v.round() as i32).collect();
+                e.int_array(&ints)?
+            }
+            PrimvarData::IntTuples { values, components } => {
+                let kind = [Type::Int, Type::Vec2i, Type::Vec3i, Type::Vec4i][components - 1];
+                let ints: Vec<i32> = values.iter().map(|&v| v.round() as i32).collect();
+                e.array(kind, ints.len() / components, bytemuck::cast_slice(&ints))?
+            }
         };
         let fields = attribute_fields(
             &mut e,
