@@ -18,13 +18,13 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::head::Head;
 use crate::interact::hair_contacts::HairContacts;
-use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Shape};
+use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
 use crate::sim::settle::settle_with;
 use crate::sim::{
-    BondInfluences, BondKind, Cuticle, Hooks, Material, SettleOptions, SettleReport, SimParams, Simulation,
+    BondInfluences, BondKind, Cuticle, Material, SettleOptions, SettleReport, SimParams, Simulation,
 };
 
 /// Options of a styling run that are not part of the recipe.
@@ -123,40 +123,6 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     out.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, session.wetness.clone()));
     out.validate()?;
     Ok(Styled { groom: out, report, frames: session.frames, frames_per_second: options.frames_per_second })
-}
-
-/// Projects vertices out of the active obstacles after each solver iteration.
-struct ContactHooks<'a> {
-    shapes: &'a [Shape],
-    culling: &'a ObstacleCulling,
-    /// Positions at the start of the step (friction measures the slide from there).
-    previous: &'a [Vec3],
-    radii: &'a [f32],
-    friction: Friction,
-}
-
-impl Hooks for ContactHooks<'_> {
-    fn projects(&self) -> bool {
-        !self.shapes.is_empty()
-    }
-
-    fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
-        for (k, p) in positions.iter_mut().enumerate() {
-            if inverse_masses[k] == 0.0 {
-                continue;
-            }
-            let i = first_vertex + k;
-            let mask = self.culling.mask(strand, *p);
-            for (s, shape) in self.shapes.iter().enumerate() {
-                if !ObstacleCulling::tests(mask, s) {
-                    continue;
-                }
-                if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
-                    *p = q;
-                }
-            }
-        }
-    }
 }
 
 /// The helix a strand is wound onto: around `axis` through `origin`, starting at `e1`.
@@ -264,23 +230,13 @@ impl<'r> Session<'r> {
             None => input.clone(),
         };
         groom.validate()?;
-        let b = &recipe.bonds;
-        let params = SimParams {
-            dt: settings.dt,
-            iterations: settings.iterations,
-            gravity: Vec3::from(settings.gravity),
-            damping: settings.damping,
-            material: Material {
-                density: settings.density,
-                youngs_modulus: settings.youngs_modulus,
-                shear_modulus: settings.shear_modulus,
-                cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
-                ..Material::default()
-            },
-            influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
-            ..SimParams::default()
-        };
-        let sim = Simulation::new(&groom, params)?;
+        let params = sim_params(recipe);
+        let mut sim = Simulation::new(&groom, params)?;
+        if settings.sag_free {
+            sim.make_sag_free();
+        } else {
+            sim.adopt_rest_state(&groom)?;
+        }
 
         if let Some(Obstacle::Mesh { name, .. }) = recipe
             .obstacles
@@ -292,28 +248,7 @@ impl<'r> Session<'r> {
                 "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
             )));
         }
-        let mut head = Head::default();
-        let obstacles: Vec<Shape> = recipe
-            .obstacles
-            .iter()
-            .map(|o| match o.get_ref() {
-                Obstacle::Head { center, radii, .. } => {
-                    head.center = center.map_or(head.center, Vec3::from);
-                    head.radii = radii.map_or(head.radii, Vec3::from);
-                    Shape::Ellipsoid { center: head.center, radii: head.radii }
-                }
-                Obstacle::Sphere { center, radius, .. } => {
-                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
-                }
-                Obstacle::Plane { point, normal, .. } => {
-                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
-                }
-                Obstacle::Box { center, half_extents, .. } => {
-                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
-                }
-                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
-            })
-            .collect();
+        let (obstacles, head) = obstacle_shapes(recipe);
         let rods = recipe
             .rods
             .iter()
@@ -417,6 +352,17 @@ impl<'r> Session<'r> {
     fn step(&mut self) {
         let dt = self.sim.params().dt;
         self.compute_forces(dt);
+        self.contact_step();
+        self.update_wetness(dt);
+        if let Some(every) = self.frame_interval {
+            if self.sim.steps_taken() % every == 0 {
+                self.frames.push(self.sim.rods.positions.clone());
+            }
+        }
+    }
+
+    /// The rod solver with the active obstacles' contacts.
+    fn contact_step(&mut self) {
         self.previous.copy_from_slice(&self.sim.rods.positions);
         self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {
@@ -427,12 +373,6 @@ impl<'r> Session<'r> {
             friction: self.friction,
         };
         self.sim.step_with(&hooks);
-        self.update_wetness(dt);
-        if let Some(every) = self.frame_interval {
-            if self.sim.steps_taken() % every == 0 {
-                self.frames.push(self.sim.rods.positions.clone());
-            }
-        }
     }
 
     /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
@@ -859,6 +799,58 @@ impl<'r> Session<'r> {
             settle,
         }
     }
+}
+
+/// The simulation settings a recipe asks for (also for simulating its output again).
+pub fn sim_params(recipe: &Recipe) -> SimParams {
+    let settings = &recipe.settings;
+    let b = &recipe.bonds;
+    SimParams {
+        dt: settings.dt,
+        iterations: settings.iterations,
+        gravity: Vec3::from(settings.gravity),
+        damping: settings.damping,
+        material: Material {
+            density: settings.density,
+            youngs_modulus: settings.youngs_modulus,
+            shear_modulus: settings.shear_modulus,
+            cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
+            ..Material::default()
+        },
+        influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
+        ..SimParams::default()
+    }
+}
+
+/// The recipe's obstacles as collider shapes at rest (no pressing offsets, no rods), and its head.
+/// Mesh obstacles must have their field baked (`recipe::load`); others stay out.
+pub fn obstacle_shapes(recipe: &Recipe) -> (Vec<Shape>, Head) {
+    let mut head = Head::default();
+    let obstacles: Vec<Shape> = recipe
+        .obstacles
+        .iter()
+        .filter_map(|o| match o.get_ref() {
+            Obstacle::Mesh { sdf, .. } => sdf.clone().map(Shape::Mesh),
+            other => Some(match other {
+                Obstacle::Head { center, radii, .. } => {
+                    head.center = center.map_or(head.center, Vec3::from);
+                    head.radii = radii.map_or(head.radii, Vec3::from);
+                    Shape::Ellipsoid { center: head.center, radii: head.radii }
+                }
+                Obstacle::Sphere { center, radius, .. } => {
+                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
+                }
+                Obstacle::Plane { point, normal, .. } => {
+                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
+                }
+                Obstacle::Box { center, half_extents, .. } => {
+                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
+                }
+                Obstacle::Mesh { .. } => unreachable!("matched above"),
+            }),
+        })
+        .collect();
+    (obstacles, head)
 }
 
 fn smoothstep(t: f32) -> f32 {
