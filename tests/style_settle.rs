@@ -39,6 +39,29 @@ fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
     assert!(settle["force_residual"].as_f64().unwrap() <= 1e-3, "{settle}");
     assert!(settle["torque_residual"].as_f64().unwrap() <= 1e-3, "{settle}");
 
-    // An equilibrium also stays put: simulated again (`tests/sag_free.rs`) it moves < 1 mm.
-    assert_eq!(settled.strand_count(), 200);
+    // An equilibrium also stays put: simulated again for 2 s with its exported rest state and the
+    // recipe's head, it moves (measured: 197 of 200 strands under 1 mm, the worst 9 mm; see
+    // `tests/sag_free.rs` for the < 1 mm goal the solver does not reach yet).
+    let parsed = coif::style::recipe::load(&recipe).unwrap();
+    let options = coif::sim::driver::SimulateOptions {
+        params: coif::style::run::sim_params(&parsed),
+        seconds: 2.0,
+        settle: None,
+        sag_free: false,
+        colliders: coif::style::run::obstacle_shapes(&parsed).unwrap().0,
+    };
+    let (again, summary) = coif::sim::driver::simulate(&settled, &options).unwrap();
+    assert_eq!(summary.rest, "rest_darboux");
+    let moved: Vec<f32> = (0..settled.strand_count())
+        .map(|s| {
+            settled.strand_range(s).map(|i| settled.points[i].distance(again.points[i])).fold(0.0, f32::max)
+        })
+        .collect();
+    let still = moved.iter().filter(|&&m| m < 1e-3).count();
+    eprintln!(
+        "simulated again: {still} of {} strands move < 1 mm, worst {:.4} m",
+        moved.len(),
+        moved.iter().fold(0.0f32, |a, &b| a.max(b))
+    );
+    assert!(still * 100 >= moved.len() * 97, "only {still} strands hold still");
 }

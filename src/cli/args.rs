@@ -262,6 +262,14 @@ pub(crate) struct SimulateArgs {
     pub(crate) settle_tolerance: f32,
     #[arg(long, default_value_t = 30.0)]
     pub(crate) settle_seconds: f32,
+    /// Solve for the rest shape that holds the groom's current shape under gravity (for grooms
+    /// fresh from a DCC tool), instead of taking the shape, or a styled groom's exported
+    /// `rest_darboux`, as the rest shape.
+    #[arg(long)]
+    pub(crate) sag_free: bool,
+    /// Collide with coif's default head (the ellipsoid `coif generate` grows hair on).
+    #[arg(long)]
+    pub(crate) head: bool,
     /// Exit 1 when the settle does not reach its tolerance (the output is still written).
     #[arg(long, requires = "settle")]
     pub(crate) require_converged: bool,

@@ -120,8 +120,19 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         max_seconds: args.settle_seconds,
         iterations: args.settle_iterations,
     });
-    let (groom, summary) =
-        simulate(&loaded.groom, &SimulateOptions { params, seconds: args.seconds, settle })?;
+    let head = coif::head::Head::default();
+    let colliders = if args.head {
+        vec![coif::interact::obstacles::Shape::Ellipsoid {
+            center: head.center,
+            radii: head.radii,
+            rotation: glam::Quat::IDENTITY,
+        }]
+    } else {
+        Vec::new()
+    };
+    let options =
+        SimulateOptions { params, seconds: args.seconds, settle, sag_free: args.sag_free, colliders };
+    let (groom, summary) = simulate(&loaded.groom, &options)?;
     let unsettled = summary.settle.filter(|r| !r.converged);
     if let Some(report) = unsettled {
         eprintln!("coif: warning: {}", settle_failure(&report));

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::mesh_sdf::MeshSdf;
+use crate::sim::Hooks;
 
 /// An obstacle's shape. Distances are signed: negative inside the solid.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -250,6 +251,40 @@ impl ObstacleCulling {
     #[inline]
     pub fn tests(mask: u128, k: usize) -> bool {
         k >= Self::MAX_CULLED || mask & (1 << k) != 0
+    }
+}
+
+/// Projects vertices out of the active obstacles after each solver iteration.
+pub struct ContactHooks<'a> {
+    pub shapes: &'a [Shape],
+    pub culling: &'a ObstacleCulling,
+    /// Positions at the start of the step (friction measures the slide from there).
+    pub previous: &'a [Vec3],
+    pub radii: &'a [f32],
+    pub friction: Friction,
+}
+
+impl Hooks for ContactHooks<'_> {
+    fn projects(&self) -> bool {
+        !self.shapes.is_empty()
+    }
+
+    fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
+        for (k, p) in positions.iter_mut().enumerate() {
+            if inverse_masses[k] == 0.0 {
+                continue;
+            }
+            let i = first_vertex + k;
+            let mask = self.culling.mask(strand, *p);
+            for (s, shape) in self.shapes.iter().enumerate() {
+                if !ObstacleCulling::tests(mask, s) {
+                    continue;
+                }
+                if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
+                    *p = q;
+                }
+            }
+        }
     }
 }
 

@@ -66,6 +66,7 @@ pub mod constraints;
 pub mod cuticle;
 pub mod driver;
 pub mod rod;
+pub mod sag_free;
 pub mod settle;
 pub mod solver;
 

@@ -65,6 +65,10 @@ pub struct Settings {
     pub damping: f32,
     /// Seed for every random choice the recipe makes (masks, droplet placement).
     pub seed: u64,
+    /// Start from a rest shape that holds the groom's shape under gravity (`sim::sag_free`), so
+    /// the style is the only change. Off: the groom's shape, or a styled groom's exported
+    /// `rest_darboux`, is the rest shape.
+    pub sag_free: bool,
 }
 
 impl Default for Settings {
@@ -80,6 +84,7 @@ impl Default for Settings {
             max_segment: None,
             damping: 2.0,
             seed: 1,
+            sag_free: false,
         }
     }
 }

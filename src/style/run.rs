@@ -18,13 +18,13 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::head::Head;
 use crate::interact::hair_contacts::HairContacts;
-use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Shape};
+use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
 use crate::sim::settle::settle_with;
 use crate::sim::{
-    BondInfluences, BondKind, Cuticle, Hooks, Material, SettleOptions, SettleReport, SimParams, Simulation,
+    BondInfluences, BondKind, Cuticle, Material, SettleOptions, SettleReport, SimParams, Simulation,
 };
 
 /// Options of a styling run that are not part of the recipe.
@@ -137,40 +137,6 @@ pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptio
     Ok(Styled { groom: out, report, frames: session.frames, frames_per_second: options.frames_per_second })
 }
 
-/// Projects vertices out of the active obstacles after each solver iteration.
-struct ContactHooks<'a> {
-    shapes: &'a [Shape],
-    culling: &'a ObstacleCulling,
-    /// Positions at the start of the step (friction measures the slide from there).
-    previous: &'a [Vec3],
-    radii: &'a [f32],
-    friction: Friction,
-}
-
-impl Hooks for ContactHooks<'_> {
-    fn projects(&self) -> bool {
-        !self.shapes.is_empty()
-    }
-
-    fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
-        for (k, p) in positions.iter_mut().enumerate() {
-            if inverse_masses[k] == 0.0 {
-                continue;
-            }
-            let i = first_vertex + k;
-            let mask = self.culling.mask(strand, *p);
-            for (s, shape) in self.shapes.iter().enumerate() {
-                if !ObstacleCulling::tests(mask, s) {
-                    continue;
-                }
-                if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
-                    *p = q;
-                }
-            }
-        }
-    }
-}
-
 /// The helix a strand is wound onto: around `axis` through `origin`, starting at `e1`.
 #[derive(Clone, Copy)]
 struct Helix {
@@ -276,23 +242,13 @@ impl<'r> Session<'r> {
             None => input.clone(),
         };
         groom.validate()?;
-        let b = &recipe.bonds;
-        let params = SimParams {
-            dt: settings.dt,
-            iterations: settings.iterations,
-            gravity: Vec3::from(settings.gravity),
-            damping: settings.damping,
-            material: Material {
-                density: settings.density,
-                youngs_modulus: settings.youngs_modulus,
-                shear_modulus: settings.shear_modulus,
-                cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
-                ..Material::default()
-            },
-            influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
-            ..SimParams::default()
-        };
-        let sim = Simulation::new(&groom, params)?;
+        let params = sim_params(recipe);
+        let mut sim = Simulation::new(&groom, params)?;
+        if settings.sag_free {
+            sim.make_sag_free();
+        } else {
+            sim.adopt_rest_state(&groom)?;
+        }
 
         let (obstacles, head) = obstacle_shapes(recipe)?;
         let rods = recipe
@@ -398,6 +354,17 @@ impl<'r> Session<'r> {
     fn step(&mut self) {
         let dt = self.sim.params().dt;
         self.compute_forces(dt);
+        self.contact_step();
+        self.update_wetness(dt);
+        if let Some(every) = self.frame_interval {
+            if self.sim.steps_taken() % every == 0 {
+                self.frames.push(self.sim.rods.positions.clone());
+            }
+        }
+    }
+
+    /// The rod solver with the active obstacles' contacts.
+    fn contact_step(&mut self) {
         self.previous.copy_from_slice(&self.sim.rods.positions);
         self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {
@@ -408,12 +375,6 @@ impl<'r> Session<'r> {
             friction: self.friction,
         };
         self.sim.step_with(&hooks);
-        self.update_wetness(dt);
-        if let Some(every) = self.frame_interval {
-            if self.sim.steps_taken() % every == 0 {
-                self.frames.push(self.sim.rods.positions.clone());
-            }
-        }
     }
 
     /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
@@ -842,8 +803,30 @@ impl<'r> Session<'r> {
     }
 }
 
-/// The recipe's obstacles as collision shapes, and the head they place (for masks).
-pub(crate) fn obstacle_shapes(recipe: &Recipe) -> Result<(Vec<Shape>, Head)> {
+/// The simulation settings a recipe asks for (also for simulating its output again).
+pub fn sim_params(recipe: &Recipe) -> SimParams {
+    let settings = &recipe.settings;
+    let b = &recipe.bonds;
+    SimParams {
+        dt: settings.dt,
+        iterations: settings.iterations,
+        gravity: Vec3::from(settings.gravity),
+        damping: settings.damping,
+        material: Material {
+            density: settings.density,
+            youngs_modulus: settings.youngs_modulus,
+            shear_modulus: settings.shear_modulus,
+            cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
+            ..Material::default()
+        },
+        influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
+        ..SimParams::default()
+    }
+}
+
+/// The recipe's obstacles as collider shapes at rest (no pressing offsets, no rods), and the head
+/// they place (for masks). Mesh obstacles must have their field baked (`recipe::load`).
+pub fn obstacle_shapes(recipe: &Recipe) -> Result<(Vec<Shape>, Head)> {
     if let Some(Obstacle::Mesh { name, .. }) =
         recipe.obstacles.iter().map(|o| o.get_ref()).find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
     {
