@@ -106,7 +106,8 @@ fn bed_head_keeps_the_pressed_shape_only_when_it_dries_pressed() {
         style(&recipe, &groom, &out);
         read(&out)
     };
-    let unpressed = |t: &str| t.replace("travel = 0.21", "travel = 0.0");
+    assert!(base.contains("travel = 2.47"), "the control below must change the preset's travel");
+    let unpressed = |t: &str| t.replace("travel = 2.47", "travel = 0.0");
     let kept_wet = |t: &str| t.replace("kind = \"dry\"", "kind = \"process\"");
     let (dried, dried_rest) =
         pressed_side_tip_distances(&run("pressed", base.clone()), &run("unpressed", unpressed(&base)));

@@ -52,7 +52,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
             args.output.display()
         )));
     }
-    let options = coif::style::StyleOptions { progress, frames_per_second };
+    let options = coif::style::StyleOptions { progress, frames_per_second, ..Default::default() };
     let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
     let warnings = io::write_animated(
         &args.output,

@@ -6,18 +6,20 @@
 //! Every step is: forces from a snapshot (wind, hair–hair penalty, water) → the rod solver with
 //! obstacle contacts projected each iteration → wetness update (uptake, wicking, evaporation),
 //! whose changes re-form or break hydrogen bonds (S1-16) and change strand mass.
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::recipe::{Mask, Obstacle, Recipe, Stage};
+use super::placement::place;
+use super::recipe::{Mask, Recipe, Stage, DEFAULT_FALLOFF};
 use crate::analysis::{curl_radius, mean_curvature, resample_groom};
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
-use crate::head::Head;
 use crate::interact::hair_contacts::HairContacts;
+use crate::interact::mesh_sdf::TriangleMesh;
 use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Shape};
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
@@ -31,6 +33,9 @@ pub struct StyleOptions {
     pub frames_per_second: f32,
     /// Draw a progress bar on stderr (only shown on a terminal).
     pub progress: bool,
+    /// The groom's own scalp or head mesh: `shape = "scalp"` obstacles collide with it and the
+    /// head frame is fitted to it. Readers of groom files that carry a mesh fill it in.
+    pub scalp: Option<Arc<TriangleMesh>>,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -92,7 +97,9 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         );
         bar
     });
-    for (index, spanned) in recipe.stages.iter().enumerate() {
+    // The stages placed on this groom (head-frame lengths in metres, layouts as rods).
+    let placed_stages = session.recipe.stages.clone();
+    for (index, spanned) in placed_stages.iter().enumerate() {
         let stage = spanned.get_ref();
         if let Some(bar) = &progress {
             bar.set_message(stage.kind());
@@ -216,8 +223,9 @@ impl Winding {
     }
 }
 
-struct Session<'r> {
-    recipe: &'r Recipe,
+struct Session {
+    /// The recipe placed on the groom: world coordinates, layouts laid out as rods.
+    recipe: Recipe,
     /// The groom being styled (resampled if the recipe asks), for topology and attributes.
     groom: Groom,
     sim: Simulation,
@@ -253,14 +261,16 @@ struct Session<'r> {
     frame_interval: Option<u64>,
 }
 
-impl<'r> Session<'r> {
-    fn new(input: &Groom, recipe: &'r Recipe, options: &StyleOptions) -> Result<Session<'r>> {
-        let settings = &recipe.settings;
-        let groom = match settings.max_segment {
+impl Session {
+    fn new(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Session> {
+        let groom = match recipe.settings.max_segment {
             Some(max) => resample_groom(input, max),
             None => input.clone(),
         };
         groom.validate()?;
+        let placed = place(recipe, &groom, options.scalp.as_deref())?;
+        let recipe = placed.recipe;
+        let settings = &recipe.settings;
         let b = &recipe.bonds;
         let params = SimParams {
             dt: settings.dt,
@@ -279,42 +289,7 @@ impl<'r> Session<'r> {
         };
         let sim = Simulation::new(&groom, params)?;
 
-        if let Some(Obstacle::Mesh { name, .. }) = recipe
-            .obstacles
-            .iter()
-            .map(|o| o.get_ref())
-            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
-        {
-            return Err(Error::Usage(format!(
-                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
-            )));
-        }
-        let mut head = Head::default();
-        let obstacles: Vec<Shape> = recipe
-            .obstacles
-            .iter()
-            .map(|o| match o.get_ref() {
-                Obstacle::Head { center, radii, .. } => {
-                    head.center = center.map_or(head.center, Vec3::from);
-                    head.radii = radii.map_or(head.radii, Vec3::from);
-                    Shape::Ellipsoid {
-                        center: head.center,
-                        radii: head.radii,
-                        rotation: glam::Quat::IDENTITY,
-                    }
-                }
-                Obstacle::Sphere { center, radius, .. } => {
-                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
-                }
-                Obstacle::Plane { point, normal, .. } => {
-                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
-                }
-                Obstacle::Box { center, half_extents, .. } => {
-                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
-                }
-                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
-            })
-            .collect();
+        let obstacles = placed.shapes;
         let rods = recipe
             .rods
             .iter()
@@ -323,8 +298,10 @@ impl<'r> Session<'r> {
                 Shape::Capsule { a: Vec3::from(r.a), b: Vec3::from(r.b), radius: r.radius }
             })
             .collect();
+        // Masks see each root's direction along the head's axes (coif's X side, Y up, Z front).
+        let to_head = placed.mask_rotation.inverse();
         let root_dirs = (0..groom.strand_count())
-            .map(|s| (groom.points[groom.strand_range(s).start] - head.center).normalize_or_zero())
+            .map(|s| (to_head * (groom.strand_points(s)[0] - placed.mask_center)).normalize_or_zero())
             .collect();
         let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
         let n = groom.vertex_count();
@@ -339,6 +316,11 @@ impl<'r> Session<'r> {
         let frame_interval = (options.frames_per_second > 0.0)
             .then(|| ((1.0 / (options.frames_per_second * settings.dt)).round() as u64).max(1));
         let offsets = vec![Vec3::ZERO; obstacles.len()];
+        let friction = Friction {
+            static_friction: recipe.contacts.static_friction,
+            dynamic_friction: recipe.contacts.dynamic_friction,
+        };
+        let wetness_params = recipe.wetness;
         let mut session = Session {
             recipe,
             sim,
@@ -352,15 +334,12 @@ impl<'r> Session<'r> {
             wound: vec![None; groom.strand_count()],
             wetness_before: wetness.clone(),
             wetness,
-            wetness_params: recipe.wetness,
+            wetness_params,
             droplets: Droplets::default(),
             contacts,
             dryer: None,
             heat: 0.0,
-            friction: Friction {
-                static_friction: recipe.contacts.static_friction,
-                dynamic_friction: recipe.contacts.dynamic_friction,
-            },
+            friction,
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             culling: ObstacleCulling::default(),
             previous: vec![Vec3::ZERO; n],
@@ -596,7 +575,7 @@ impl<'r> Session<'r> {
                     position: Vec3::from(d.position),
                     target: Vec3::from(d.target),
                     strength: d.strength,
-                    falloff: d.falloff,
+                    falloff: d.falloff.unwrap_or(DEFAULT_FALLOFF),
                     cone_half_angle: d.cone_degrees.map(f32::to_radians),
                     heat: *heat,
                 });
