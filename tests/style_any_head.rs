@@ -235,3 +235,27 @@ fn the_water_set_curls_and_the_bed_head_presses_on_any_head() {
         case.assert_outside("bed-head", &bed.groom, 2e-4 * size / 0.085);
     }
 }
+
+#[test]
+fn rods_laid_out_in_rows_over_the_scalp_wind_and_curl_the_hair() {
+    // The perm preset with its rods left out and the wrap laying rows of rods over the scalp.
+    let preset = std::fs::read_to_string("grooms/recipes/perm_scene3.toml").unwrap();
+    let (head, tail) = preset.split_at(preset.find("[[rods]]").unwrap());
+    let stages = &tail[tail.find("[[stages]]").unwrap()..];
+    let (diameter, spacing) = (0.2824, 0.6);
+    let text = format!("{head}{}", stages.replacen(
+        "kind = \"wrap\"\nduration = 1.0",
+        &format!("kind = \"wrap\"\nduration = 1.0\nlayout = \"rows\"\ndiameter = {diameter}\nspacing = {spacing}"),
+        1,
+    ));
+    assert!(text.contains("layout = \"rows\"") && !text.contains("[[rods]]"));
+    let case = cases(16, 0.40, 15).swap_remove(0);
+    let styled = run_text(&text, &case);
+    let predicted = 0.5 * diameter * frame(&case).size() / 0.67;
+    let wound = styled.report.stages[2].curl_radius.unwrap();
+    let settled = styled.report.stages.last().unwrap().curl_radius.unwrap();
+    eprintln!("rows layout: wound at {wound:.4} m, settled curl {settled:.4} m, predicted {predicted:.4} m");
+    assert!((wound / (0.67 * predicted) - 1.0).abs() < 0.1, "not wound on the laid-out rods: {wound}");
+    assert!((settled / predicted - 1.0).abs() < 0.1, "curl {settled} vs {predicted}");
+    case.assert_outside("rows layout", &styled.groom, 2e-4 * frame(&case).size() / 0.085);
+}

@@ -174,6 +174,11 @@ fn malformed_recipes_exit_2_with_the_line_and_write_nothing() {
             let t = base.replace("kind = \"release\"", "kind = \"process\"");
             ("settle while wound", format!("line {}", line_of("kind = \"settle\"", &t) - 1), t)
         },
+        {
+            // Metres where head units belong: a rod 40 head units (3.4 m) from the head.
+            let t = base.replacen("a = [-0.470, -1.828, 1.441]", "a = [-40.0, -1.828, 1.441]", 1);
+            ("head position out of range", format!("line {}", line_of("name = \"rod0\"", &t) - 1), t)
+        },
     ];
     for (what, expected, text) in cases {
         let dir = tempfile::tempdir().unwrap();

@@ -952,6 +952,26 @@ kind = "settle"
         let peptide = PERM.replace("disulfide = 0.2 }", "peptide = 0.5 }");
         assert!(error_of(&peptide).contains("peptide bonds do not break"));
 
+        // Head-frame recipes: positions and lengths in head units, at most MAX_HEAD_UNITS.
+        let head = format!("frame = \"head\"\n{PERM}");
+        assert!(parse(&head, Path::new("r.toml")).is_ok());
+        let far = head.replace("a = [-0.1, -0.2, 0.1]", "a = [-10.0, -0.2, 0.1]");
+        let e = error_of(&far);
+        assert!(e.contains("line 13") && e.contains("rod 'rod'") && e.contains("head units"), "{e}");
+        let world_rod = far.replace("radius = 0.01", "radius = 0.01\nframe = \"world\"");
+        assert!(parse(&world_rod, Path::new("r.toml")).is_ok(), "a world item may be anywhere");
+        let no_spacing = PERM.replace("duration = 2.0", "duration = 2.0\nlayout = \"rows\"\ndiameter = 0.02");
+        assert!(
+            error_of(&no_spacing).contains("needs a diameter and a spacing"),
+            "{}",
+            error_of(&no_spacing)
+        );
+        let laid = PERM.replace(
+            "duration = 2.0",
+            "duration = 2.0\nlayout = \"spiral\"\ndiameter = 0.02\nspacing = 0.03",
+        );
+        assert!(parse(&laid, Path::new("r.toml")).is_ok());
+
         let unknown_stage = PERM.replace("kind = \"release\"", "kind = \"curl\"");
         assert!(error_of(&unknown_stage).contains("line 33"), "{}", error_of(&unknown_stage));
     }
