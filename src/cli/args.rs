@@ -219,6 +219,10 @@ pub(crate) struct StyleArgs {
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
+    /// The groom's scalp or head mesh, a Wavefront OBJ in coif's space (metres, Y up): the
+    /// recipe's `shape = "scalp"` obstacles collide with it and its head frame is fitted to it.
+    #[arg(long, value_name = "OBJ")]
+    pub(crate) scalp: Option<PathBuf>,
 }
 
 #[derive(Args)]
