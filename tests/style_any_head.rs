@@ -127,6 +127,8 @@ fn the_perm_winds_and_curls_to_the_predicted_radius_on_any_head() {
         let styled = run("perm_scene3", &case);
         // 0.63 + 0.20 × 0.20 = 0.67 of the bonds remember the rod (model.md §2).
         let predicted = perm_rod_radius() * frame(&case).size() / 0.67;
+        let reported = styled.report.head_frame.expect("the report shows the head frame");
+        assert_eq!(reported.size, frame(&case).size(), "{}: the report's frame", case.name);
         let radii: Vec<f32> = (0..styled.groom.strand_count())
             .filter_map(|s| {
                 let points = styled.groom.strand_points(s);

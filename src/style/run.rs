@@ -13,6 +13,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::head_frame::HeadFrame;
 use super::placement::place;
 use super::recipe::{Mask, Recipe, Stage, DEFAULT_FALLOFF};
 use crate::analysis::{curl_radius, mean_curvature, resample_groom};
@@ -70,7 +71,19 @@ pub struct StyleReport {
     pub strands: usize,
     pub vertices: usize,
     pub steps: u64,
+    /// The head frame the recipe was placed in, when it needed one.
+    pub head_frame: Option<HeadFrameReport>,
     pub stages: Vec<StageReport>,
+}
+
+/// A fitted head frame as the report shows it (world coordinates, metres).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct HeadFrameReport {
+    pub center: [f32; 3],
+    pub up: [f32; 3],
+    pub front: [f32; 3],
+    /// Metres per head unit.
+    pub size: f32,
 }
 
 /// The outcome of a styling run.
@@ -117,6 +130,12 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         strands: session.groom.strand_count(),
         vertices: session.groom.vertex_count(),
         steps: session.sim.steps_taken(),
+        head_frame: session.head_frame.map(|f| HeadFrameReport {
+            center: f.center().to_array(),
+            up: f.up().to_array(),
+            front: f.front().to_array(),
+            size: f.size(),
+        }),
         stages,
     };
     if session.frame_interval.is_some() && session.frames.last() != Some(&session.sim.rods.positions) {
@@ -259,6 +278,7 @@ struct Session {
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_interval: Option<u64>,
+    head_frame: Option<HeadFrame>,
 }
 
 impl Session {
@@ -347,6 +367,7 @@ impl Session {
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
             frame_interval,
+            head_frame: placed.frame,
             radii,
             groom,
         };
