@@ -223,6 +223,10 @@ pub(crate) struct StyleArgs {
     /// strands from them; overrides the recipe's `[guides]`.
     #[arg(long, value_name = "N")]
     pub(crate) guides: Option<usize>,
+    /// The groom's scalp or head mesh, a Wavefront OBJ in coif's space (metres, Y up): the
+    /// recipe's `shape = "scalp"` obstacles collide with it and its head frame is fitted to it.
+    #[arg(long, value_name = "OBJ")]
+    pub(crate) scalp: Option<PathBuf>,
 }
 
 #[derive(Args)]

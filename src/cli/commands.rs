@@ -55,7 +55,14 @@ fn run_style(args: StyleArgs) -> Result<()> {
             args.output.display()
         )));
     }
-    let options = coif::style::StyleOptions { progress, frames_per_second };
+    let scalp = match &args.scalp {
+        Some(path) => {
+            let (points, triangles) = coif::io::obj::read_triangles(path)?;
+            Some(std::sync::Arc::new(coif::interact::mesh_sdf::TriangleMesh { points, triangles }))
+        }
+        None => None,
+    };
+    let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
     let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
     let warnings = io::write_animated(
         &args.output,

@@ -31,10 +31,12 @@ pub enum Shape {
         point: Vec3,
         normal: Vec3,
     },
-    /// An axis-aligned box (a pillow, a table).
+    /// A box (a pillow, a table) along the X, Y, Z axes turned by `rotation`.
     Box {
         center: Vec3,
         half_extents: Vec3,
+        #[serde(default)]
+        rotation: Quat,
     },
     /// A segment `a`–`b` swept by a sphere: a perm rod (curler).
     Capsule {
@@ -71,7 +73,10 @@ impl Shape {
                 let n = normal.normalize();
                 ((p - *point).dot(n), n)
             }
-            Shape::Box { center, half_extents } => box_distance(p - *center, *half_extents),
+            Shape::Box { center, half_extents, rotation } => {
+                let (d, n) = box_distance(rotation.inverse() * (p - *center), *half_extents);
+                (d, *rotation * n)
+            }
             Shape::Capsule { a, b, radius } => {
                 let ab = *b - *a;
                 let t = ((p - *a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
@@ -90,16 +95,25 @@ impl Shape {
         match self {
             Shape::Sphere { center, radius } => Some((*center - *radius, *center + *radius)),
             Shape::Ellipsoid { center, radii, rotation } => {
-                // Half-extent along each world axis: the length of that row of R·diag(radii).
-                let m = glam::Mat3::from_quat(*rotation).transpose();
+                // Half extent along each world axis: the length of that row of R·diag(radii).
+                let rows = glam::Mat3::from_quat(*rotation).transpose();
                 let half = Vec3::new(
-                    (m.x_axis * *radii).length(),
-                    (m.y_axis * *radii).length(),
-                    (m.z_axis * *radii).length(),
+                    (rows.x_axis * *radii).length(),
+                    (rows.y_axis * *radii).length(),
+                    (rows.z_axis * *radii).length(),
                 );
                 Some((*center - half, *center + half))
             }
-            Shape::Box { center, half_extents } => Some((*center - *half_extents, *center + *half_extents)),
+            Shape::Box { center, half_extents, rotation } => {
+                // The turned box's corners: per world axis, |row of R| · half extents.
+                let rows = glam::Mat3::from_quat(*rotation).transpose();
+                let half = Vec3::new(
+                    rows.x_axis.abs().dot(*half_extents),
+                    rows.y_axis.abs().dot(*half_extents),
+                    rows.z_axis.abs().dot(*half_extents),
+                );
+                Some((*center - half, *center + half))
+            }
             Shape::Capsule { a, b, radius } => Some((a.min(*b) - *radius, a.max(*b) + *radius)),
             Shape::Plane { .. } | Shape::Mesh(_) => None,
         }
@@ -113,8 +127,8 @@ impl Shape {
                 Shape::Ellipsoid { center: *center + offset, radii: *radii, rotation: *rotation }
             }
             Shape::Plane { point, normal } => Shape::Plane { point: *point + offset, normal: *normal },
-            Shape::Box { center, half_extents } => {
-                Shape::Box { center: *center + offset, half_extents: *half_extents }
+            Shape::Box { center, half_extents, rotation } => {
+                Shape::Box { center: *center + offset, half_extents: *half_extents, rotation: *rotation }
             }
             Shape::Capsule { a, b, radius } => {
                 Shape::Capsule { a: *a + offset, b: *b + offset, radius: *radius }
@@ -303,10 +317,24 @@ mod tests {
         assert!((d - 0.2).abs() < 1e-6 && n.abs_diff_eq(Vec3::Z, 1e-6));
         let (d, n) = capsule.distance(Vec3::new(1.5, 0.0, 0.0));
         assert!((d - 0.4).abs() < 1e-6 && n.abs_diff_eq(Vec3::X, 1e-6));
-        let bx = Shape::Box { center: Vec3::ZERO, half_extents: Vec3::new(1.0, 0.5, 2.0) };
+        let bx = Shape::Box {
+            center: Vec3::ZERO,
+            half_extents: Vec3::new(1.0, 0.5, 2.0),
+            rotation: Quat::IDENTITY,
+        };
         let (d, n) = bx.distance(Vec3::new(0.2, 0.4, 0.0));
         assert!((d + 0.1).abs() < 1e-6 && n == Vec3::Y);
         assert!((bx.distance(Vec3::new(2.0, 1.5, 0.0)).0 - 2f32.sqrt()).abs() < 1e-6);
+        // Turned a quarter about X: its Y half extent lies along Z.
+        let rotation = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let turned = Shape::Box { center: Vec3::ZERO, half_extents: Vec3::new(1.0, 0.5, 2.0), rotation };
+        let (d, n) = turned.distance(Vec3::new(0.0, 0.0, 0.7));
+        assert!((d - 0.2).abs() < 1e-6 && n.abs_diff_eq(Vec3::Z, 1e-6), "{d} {n:?}");
+        let (lo, hi) = turned.bounds().unwrap();
+        assert!(
+            lo.abs_diff_eq(Vec3::new(-1.0, -2.0, -0.5), 1e-5)
+                && hi.abs_diff_eq(Vec3::new(1.0, 2.0, 0.5), 1e-5)
+        );
     }
 
     #[test]

@@ -159,33 +159,125 @@ impl HeadFrame {
         HeadFrame::new(center, up, front, size)
     }
 
-    /// An ellipsoid along the frame's axes fitted to `points` (the roots), as its centre and
-    /// semi-axes in head coordinates, shrunk (by at most 10 %) so no point lies inside it.
-    pub fn fit_ellipsoid(&self, points: &[Vec3]) -> Option<(Vec3, Vec3)> {
-        // a·x² + b·y² + c·z² + d·x + e·y + f·z = 1 in head coordinates (the centre is inside).
+    /// The ellipsoid that best fits `points` (the roots), in head coordinates, shrunk (by at most
+    /// 10 %) so that no point lies inside it: a general quadric when the points determine a
+    /// head-like ellipsoid (they do on an ellipsoidal scalp, whatever its tilt), else one along
+    /// the frame's axes.
+    pub fn fit_ellipsoid(&self, points: &[Vec3]) -> Option<Ellipsoid> {
         let local: Vec<Vec3> = points.iter().map(|&p| self.to_head(p)).collect();
-        let rows = local.iter().map(|p| {
-            let row = [p.x * p.x, p.y * p.y, p.z * p.z, p.x, p.y, p.z].map(f64::from);
-            (row, 1.0, 1.0)
-        });
-        let k = least_squares::<6>(rows)?;
-        let quadratic = [k[0], k[1], k[2]];
-        if quadratic.iter().any(|&q| q <= 0.0) {
-            return None;
-        }
-        let centre = [0, 1, 2].map(|i| -k[i + 3] / (2.0 * quadratic[i]));
-        let g = 1.0 + (0..3).map(|i| k[i + 3] * k[i + 3] / (4.0 * quadratic[i])).sum::<f64>();
-        let radii = [0, 1, 2].map(|i| (g / quadratic[i]).sqrt());
-        let (centre, radii) = (
-            Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32),
-            Vec3::new(radii[0] as f32, radii[1] as f32, radii[2] as f32),
-        );
-        if !(centre.is_finite() && radii.is_finite()) {
-            return None;
-        }
-        let innermost = local.iter().map(|&p| ((p - centre) / radii).length()).fold(f32::INFINITY, f32::min);
-        Some((centre, radii * innermost.clamp(0.9, 1.0)))
+        let head_like = |e: &Ellipsoid| {
+            e.center.length() < 1.0 && e.radii.min_element() > 0.3 && e.radii.max_element() < 3.0
+        };
+        let fitted = fit_quadric(&local).filter(head_like).or_else(|| fit_aligned(&local))?;
+        let innermost = local.iter().map(|&p| fitted.implicit(p).sqrt()).fold(f32::INFINITY, f32::min);
+        Some(Ellipsoid { radii: fitted.radii * innermost.clamp(0.9, 1.0), ..fitted })
     }
+}
+
+/// An ellipsoid: semi-axes `radii` along the axes turned by `rotation`, around `center`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ellipsoid {
+    pub center: Vec3,
+    pub radii: Vec3,
+    pub rotation: Quat,
+}
+
+impl Ellipsoid {
+    /// < 1 inside, 1 on the surface, > 1 outside.
+    pub fn implicit(&self, p: Vec3) -> f32 {
+        ((self.rotation.inverse() * (p - self.center)) / self.radii).length_squared()
+    }
+}
+
+/// `pᵀAp + b·p = 1` by least squares (the origin inside), as an ellipsoid when it is one.
+fn fit_quadric(points: &[Vec3]) -> Option<Ellipsoid> {
+    let rows = points.iter().map(|p| {
+        let row = [
+            p.x * p.x,
+            p.y * p.y,
+            p.z * p.z,
+            2.0 * p.x * p.y,
+            2.0 * p.x * p.z,
+            2.0 * p.y * p.z,
+            p.x,
+            p.y,
+            p.z,
+        ]
+        .map(f64::from);
+        (row, 1.0, 1.0)
+    });
+    let k = least_squares::<9>(rows)?;
+    let a = glam::DMat3::from_cols_array(&[k[0], k[3], k[4], k[3], k[1], k[5], k[4], k[5], k[2]]);
+    let b = glam::DVec3::new(k[6], k[7], k[8]);
+    if a.determinant().abs() < 1e-12 {
+        return None;
+    }
+    let center = -0.5 * (a.inverse() * b);
+    let scale = 1.0 + center.dot(a * center);
+    let (values, vectors) = symmetric_eigen(a / scale);
+    if values.iter().any(|&v| v.is_nan() || v <= 0.0) {
+        return None;
+    }
+    let mut axes = vectors;
+    if axes.determinant() < 0.0 {
+        axes.z_axis = -axes.z_axis;
+    }
+    let radii = Vec3::new(values[0] as f32, values[1] as f32, values[2] as f32).map(|v| 1.0 / v.sqrt());
+    let rotation = Quat::from_mat3(&axes.as_mat3()).normalize();
+    Some(Ellipsoid { center: center.as_vec3(), radii, rotation })
+        .filter(|e| e.center.is_finite() && e.radii.is_finite())
+}
+
+/// `a·x² + b·y² + c·z² + d·x + e·y + f·z = 1` by least squares: an ellipsoid along the axes.
+fn fit_aligned(points: &[Vec3]) -> Option<Ellipsoid> {
+    let rows =
+        points.iter().map(|p| ([p.x * p.x, p.y * p.y, p.z * p.z, p.x, p.y, p.z].map(f64::from), 1.0, 1.0));
+    let k = least_squares::<6>(rows)?;
+    if k[..3].iter().any(|&q| q <= 0.0) {
+        return None;
+    }
+    let centre = [0, 1, 2].map(|i| -k[i + 3] / (2.0 * k[i]));
+    let g = 1.0 + (0..3).map(|i| k[i + 3] * k[i + 3] / (4.0 * k[i])).sum::<f64>();
+    let center = Vec3::new(centre[0] as f32, centre[1] as f32, centre[2] as f32);
+    let radii = Vec3::new(k[0] as f32, k[1] as f32, k[2] as f32).map(|q| (g as f32 / q).sqrt());
+    (center.is_finite() && radii.is_finite()).then_some(Ellipsoid { center, radii, rotation: Quat::IDENTITY })
+}
+
+/// Eigenvalues and eigenvectors (columns) of a symmetric 3×3 matrix, by cyclic Jacobi rotations.
+fn symmetric_eigen(m: glam::DMat3) -> ([f64; 3], glam::DMat3) {
+    let mut a = [m.x_axis.to_array(), m.y_axis.to_array(), m.z_axis.to_array()];
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..50 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diagonal = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if off <= 1e-30 * diagonal {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for row in a.iter_mut() {
+                let (kp, kq) = (row[p], row[q]);
+                (row[p], row[q]) = (c * kp - s * kq, s * kp + c * kq);
+            }
+            let (row_p, row_q) = (a[p], a[q]);
+            for (k, (&pk, &qk)) in row_p.iter().zip(&row_q).enumerate() {
+                (a[p][k], a[q][k]) = (c * pk - s * qk, s * pk + c * qk);
+            }
+            for row in v.iter_mut() {
+                let (kp, kq) = (row[p], row[q]);
+                (row[p], row[q]) = (c * kp - s * kq, s * kp + c * kq);
+            }
+        }
+    }
+    // `v` holds the eigenvectors as columns, stored row by row.
+    let vectors = glam::DMat3::from_cols_array_2d(&v).transpose();
+    ([a[0][0], a[1][1], a[2][2]], vectors)
 }
 
 /// The least-squares sphere through weighted points: `|p|² = 2c·p + k` is linear in `c` and `k`.
@@ -223,15 +315,16 @@ fn least_squares<const N: usize>(rows: impl Iterator<Item = ([f64; N], f64, f64)
     let scale = (0..N).map(|i| a[i][i].abs()).fold(0.0, f64::max);
     for col in 0..N {
         let pivot = (col..N).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
-        if !(a[pivot][col].abs() > 1e-12 * scale) {
+        if a[pivot][col].is_nan() || a[pivot][col].abs() <= 1e-12 * scale {
             return None;
         }
         a.swap(col, pivot);
         b.swap(col, pivot);
+        let pivot_row = a[col];
         for r in col + 1..N {
-            let f = a[r][col] / a[col][col];
-            for c in col..N {
-                a[r][c] -= f * a[col][c];
+            let f = a[r][col] / pivot_row[col];
+            for (x, &p) in a[r].iter_mut().zip(&pivot_row).skip(col) {
+                *x -= f * p;
             }
             b[r] -= f * b[col];
         }
@@ -325,15 +418,23 @@ mod tests {
         eprintln!("roots {from_roots:?}\nmesh {from_mesh:?}");
         assert!(from_mesh.center().distance(from_roots.center()) < 0.01);
         assert!((from_mesh.size() / from_roots.size() - 1.0).abs() < 0.05);
-        // The analytic head is recovered by the ellipsoid fit to the roots.
-        let (centre, radii) = from_roots
-            .fit_ellipsoid(
-                &(0..base.strand_count())
-                    .map(|s| base.points[base.strand_range(s).start])
-                    .collect::<Vec<_>>(),
-            )
-            .unwrap();
-        eprintln!("ellipsoid centre {:?} radii {:?}", from_roots.point(centre), radii * from_roots.size());
+        // The analytic head is recovered by the ellipsoid fit to the roots, though the frame's
+        // axes lean off the head's.
+        let roots: Vec<Vec3> = (0..base.strand_count()).map(|s| base.strand_points(s)[0]).collect();
+        let e = from_roots.fit_ellipsoid(&roots).unwrap();
+        let (centre, radii) = (from_roots.point(e.center), e.radii * from_roots.size());
+        let axes = from_roots.rotation() * e.rotation;
+        eprintln!("ellipsoid centre {centre:?} radii {radii:?} axes {axes:?}");
+        assert!(centre.length() < 1e-3, "{centre:?}");
+        for (k, axis) in [Vec3::X, Vec3::Y, Vec3::Z].into_iter().enumerate() {
+            // The fitted semi-axis nearest to each of the head's axes has its length.
+            let nearest = (0..3).max_by(|&i, &j| {
+                let along = |n: usize| (axes * Vec3::AXES[n]).dot(axis).abs();
+                along(i).total_cmp(&along(j))
+            });
+            let r = radii[nearest.unwrap()];
+            assert!((r / head.radii[k] - 1.0).abs() < 0.01, "axis {k}: {r} vs {}", head.radii[k]);
+        }
     }
 
     #[test]
