@@ -74,9 +74,9 @@ fn children_curl_like_their_guides_and_keep_their_roots() {
     assert!(guides > 0.008 && guides < 0.03, "guides did not curl: {guides}");
     assert!((children / guides - 1.0).abs() < 0.05, "children {children} vs guides {guides}");
     let mut stretch = 0.0f32;
-    for s in 0..STRANDS {
+    for (s, &guide) in flags.iter().enumerate() {
         assert_eq!(groom.strand_points(s)[0], unstyled().strand_points(s)[0], "strand {s}'s root moved");
-        if !flags[s] {
+        if !guide {
             stretch = stretch.max((groom.strand_length(s) / unstyled().strand_length(s) - 1.0).abs());
         }
     }
