@@ -1,28 +1,24 @@
-//! Moving children with their guides. Each child is expressed, once, relative to each of its
-//! guides before styling: its shape from its own root minus the guide's shape from the guide's
-//! root, at the same fraction of length, in the guide's rotation-minimising frame there. After
-//! styling the child is its root plus the weighted sum, over its guides, of the styled guide's
-//! shape plus that offset turned by the styled guide's frame. A child beside a curl therefore
-//! curls with it — the offset turns with the frame — instead of averaging world positions of
-//! guides at different phases, which flattens curls.
+//! Moving children with their guides. Each guide carries a rotation-minimising (parallel
+//! transport) frame along its length, before and after styling; at each fraction of length the
+//! change of frame is the guide's local rotation. A child's edges turn by its guides' rotations
+//! at the same fraction and are chained from its root, so a child beside a curl curls with it
+//! at the same curvature — instead of averaging world positions of guides at different phases,
+//! which flattens curls, or carrying offsets from the guide, which swing out into loops when
+//! the child's shape differs from the guide's.
 use glam::{Quat, Vec3};
 use rayon::prelude::*;
 
 use super::binding::Binding;
 
-/// Guide curves with what sampling needs: arc-length fractions and a frame at each vertex.
+/// Guide curves with what sampling needs: arc-length fractions of the vertices, and a frame
+/// per edge placed at the edge's middle (the last vertex repeats the last edge's).
 pub struct Curves {
     points: Vec<Vec3>,
     offsets: Vec<u32>,
     fractions: Vec<f32>,
+    /// Fraction of length at each edge's middle (1 for the last vertex).
+    middles: Vec<f32>,
     frames: Vec<Quat>,
-}
-
-/// A point and frame sampled at a fraction of a guide's length.
-#[derive(Clone, Copy)]
-struct Sample {
-    point: Vec3,
-    frame: Quat,
 }
 
 impl Curves {
@@ -43,7 +39,13 @@ impl Curves {
             strand_frames(p, root, fm);
         });
         debug_assert_eq!(frac_parts.len(), strands);
-        Curves { points, offsets, fractions, frames }
+        let middles = (0..points.len())
+            .map(|i| match offsets.binary_search(&(i as u32 + 1)) {
+                Ok(_) => 1.0, // the strand's last vertex
+                Err(_) => 0.5 * (fractions[i] + fractions[i + 1]),
+            })
+            .collect();
+        Curves { points, offsets, fractions, middles, frames }
     }
 
     /// Each guide's root frame after its first edge turned from `self`'s to `posed`'s by the
@@ -63,10 +65,6 @@ impl Curves {
         self.offsets[guide] as usize..self.offsets[guide + 1] as usize
     }
 
-    fn root(&self, guide: usize) -> Vec3 {
-        self.points[self.offsets[guide] as usize]
-    }
-
     /// Index of the vertex that starts the span containing fraction `u`, and where in it `u` is.
     fn locate(&self, guide: usize, u: f32) -> (usize, f32) {
         let range = self.range(guide);
@@ -77,12 +75,15 @@ impl Curves {
         (range.start + j - 1, t)
     }
 
-    fn sample(&self, guide: usize, u: f32) -> Sample {
-        let (i, t) = self.locate(guide, u);
-        Sample {
-            point: self.points[i].lerp(self.points[i + 1], t),
-            frame: self.frames[i].slerp(self.frames[i + 1], t),
-        }
+    /// The guide's frame at fraction `u` of its length, between the frames of the edges whose
+    /// middles surround `u` (exactly an edge's frame at its middle).
+    fn frame(&self, guide: usize, u: f32) -> Quat {
+        let range = self.range(guide);
+        let m = &self.middles[range.clone()];
+        let j = m.partition_point(|&x| x <= u).clamp(1, m.len() - 1);
+        let span = m[j] - m[j - 1];
+        let t = if span > 0.0 { ((u - m[j - 1]) / span).clamp(0.0, 1.0) } else { 0.0 };
+        self.frames[range.start + j - 1].slerp(self.frames[range.start + j], t)
     }
 
     /// A per-vertex scalar of the guide (`values` indexed like the points) at fraction `u`.
@@ -114,7 +115,11 @@ impl Children<'_> {
     }
 }
 
-/// The children's points after their guides moved from `before` to `after`.
+/// The children's points after their guides moved from `before` to `after`: every edge of a
+/// child turns by its guides' frame rotations at the same fraction of length (weighted), keeps
+/// its length, and the edges are chained from the child's root. Curvature and twist follow
+/// the guides exactly; lengths are kept; a child whose shape differs from its guide's keeps
+/// that difference as a turned direction, never as an offset that could swing out.
 pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3> {
     let mut out = vec![Vec3::ZERO; children.points.len()];
     let mut parts = split_mut(&mut out, children.offsets);
@@ -123,19 +128,22 @@ pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3>
         let rest = &children.points[start..start + out.len()];
         let fractions = children.fractions(c);
         let binding = &children.bindings[c];
-        for (k, o) in out.iter_mut().enumerate() {
-            let child_shape = rest[k] - rest[0];
-            let mut moved = Vec3::ZERO;
+        out[0] = rest[0];
+        for k in 1..out.len() {
+            let edge = rest[k] - rest[k - 1];
+            let u = 0.5 * (fractions[k - 1] + fractions[k]);
+            let mut turned = Vec3::ZERO;
             for (&g, &w) in binding.guides.iter().zip(&binding.weights) {
                 if w == 0.0 {
                     continue;
                 }
                 let g = g as usize;
-                let (b, a) = (before.sample(g, fractions[k]), after.sample(g, fractions[k]));
-                let local = b.frame.inverse() * (child_shape - (b.point - before.root(g)));
-                moved += w * ((a.point - after.root(g)) + a.frame * local);
+                let rotation = after.frame(g, u) * before.frame(g, u).inverse();
+                turned += w * (rotation * edge);
             }
-            *o = rest[0] + moved;
+            // Guides turning opposite ways can cancel: keep the rest direction then.
+            let direction = turned.try_normalize().unwrap_or_else(|| edge.normalize());
+            out[k] = out[k - 1] + direction * edge.length();
         }
     });
     out
@@ -184,21 +192,18 @@ fn initial_frame(tangent: Vec3) -> Quat {
     Quat::from_rotation_arc(Vec3::X, tangent.normalize())
 }
 
-/// Parallel transport of `root` (x axis along the first edge) down the strand. Each vertex gets
-/// the frame halfway between its two edges' frames, so frames change smoothly along the strand.
+/// Parallel transport of `root` (x axis along the first edge) down the strand: each edge's
+/// frame is the previous one turned by the smallest rotation between their tangents.
 fn strand_frames(points: &[Vec3], root: Quat, out: &mut [Quat]) {
     let n = points.len();
-    let mut edge = root;
-    let mut previous_tangent = (points[1] - points[0]).normalize();
     out[0] = root;
+    let mut previous_tangent = (points[1] - points[0]).normalize();
     for i in 1..n - 1 {
         let tangent = (points[i + 1] - points[i]).normalize();
-        let next = (Quat::from_rotation_arc(previous_tangent, tangent) * edge).normalize();
-        out[i] = edge.slerp(next, 0.5);
-        edge = next;
+        out[i] = (Quat::from_rotation_arc(previous_tangent, tangent) * out[i - 1]).normalize();
         previous_tangent = tangent;
     }
-    out[n - 1] = edge;
+    out[n - 1] = out[n - 2];
 }
 
 /// Cuts `data` into the per-strand slices `offsets` describes.
@@ -220,7 +225,7 @@ mod tests {
         (0..n).map(|i| origin + Vec3::Y * (i as f32 * step)).collect()
     }
 
-    /// A straight guide wound into a helix: a child beside it, bound only to it, winds into a
+    /// A straight guide wound into a circle: a child beside it, bound only to it, winds into a
     /// helix of the same pitch around the same axis — radius changed by at most its offset.
     #[test]
     fn a_child_follows_a_curl_in_the_guides_frame() {
@@ -229,8 +234,8 @@ mod tests {
         let guide = line(Vec3::ZERO, n, step);
         let child = line(Vec3::new(0.0, 0.0, 0.002), n, step);
         let radius = 0.01;
-        let dphi = step / radius;
-        // The helix the guide winds into (unit speed: chord ≈ step).
+        // The circle the guide winds into, with chords as long as its edges.
+        let dphi = 2.0 * (step / (2.0 * radius)).asin();
         let helix: Vec<Vec3> = (0..n)
             .map(|i| {
                 let phi = i as f32 * dphi;
@@ -247,7 +252,7 @@ mod tests {
         assert_eq!(moved[0], child[0], "roots stay");
         // The offset is along the curl's axis (z): the child is the guide's helix shifted by it.
         for (m, h) in moved.iter().zip(&helix) {
-            assert!((*m - (*h + Vec3::new(0.0, 0.0, 0.002))).length() < 2e-4, "{m} vs {h}");
+            assert!((*m - (*h + Vec3::new(0.0, 0.0, 0.002))).length() < 1e-5, "{m} vs {h}");
         }
         // Scalars follow the fraction of length.
         let values: Vec<f32> = (0..n).map(|i| i as f32).collect();

@@ -308,21 +308,38 @@ fn merge_vertex_attribute(
     Attribute::new(guide_part.name.clone(), AttributeRate::Vertex, c, data)
 }
 
-/// Moves children's vertices (never roots) out of the recipe's colliders.
+/// Moves children out of the recipe's colliders, root to tip: each edge keeps its deformed
+/// direction from the (possibly pushed) vertex before it, is pushed out, and is brought back to
+/// its length, so a child that meets the head slides over it instead of folding into a stack of
+/// pushed vertices. Roots stay.
 fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape]) {
     use rayon::prelude::*;
     let still = Friction { static_friction: 0.0, dynamic_friction: 0.0 };
-    points.par_iter_mut().enumerate().for_each(|(i, p)| {
-        if offsets.binary_search(&(i as u32)).is_ok() {
-            return;
-        }
-        // A second pass catches a vertex pushed from one collider into another.
-        for _ in 0..2 {
-            for shape in shapes {
-                if let Some(q) = resolve_contact(shape, *p, *p, radii[i], still) {
-                    *p = q;
-                }
+    let outside = |mut p: Vec3, radius: f32| {
+        for shape in shapes {
+            if let Some(q) = resolve_contact(shape, p, p, radius, still) {
+                p = q;
             }
+        }
+        p
+    };
+    let mut strands = Vec::with_capacity(offsets.len().saturating_sub(1));
+    let mut rest: &mut [Vec3] = points;
+    for w in offsets.windows(2) {
+        let (strand, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+        strands.push((w[0] as usize, strand));
+        rest = tail;
+    }
+    strands.par_iter_mut().for_each(|(first, strand)| {
+        let mut previous_deformed = strand[0];
+        for k in 1..strand.len() {
+            let deformed = strand[k];
+            let edge = deformed - previous_deformed;
+            previous_deformed = deformed;
+            let radius = radii[*first + k];
+            let pushed = outside(strand[k - 1] + edge, radius);
+            let direction = (pushed - strand[k - 1]).try_normalize().unwrap_or(edge.normalize_or_zero());
+            strand[k] = outside(strand[k - 1] + direction * edge.length(), radius);
         }
     });
 }
