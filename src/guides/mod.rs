@@ -127,7 +127,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     };
     let bound = Children { points: &children.points, offsets: &children.strand_offsets, bindings: &bindings };
     let after = posed(styled.groom.points.clone());
-    let shapes = obstacle_shapes(recipe)?.0;
+    let shapes = obstacle_shapes(recipe, &guides, options.scalp.as_deref())?;
     let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
     let mut child_points = deform::deform(&bound, &before, &after);
     push_out(&mut child_points, &children.strand_offsets, &radii, &shapes);

@@ -24,14 +24,14 @@ pub struct TimeCodes {
 }
 
 /// One primvar as it will be written.
-struct Primvar<'a> {
-    usd_type: &'static str,
-    name: String,
-    interpolation: &'static str,
-    data: PrimvarData<'a>,
+pub(crate) struct Primvar<'a> {
+    pub usd_type: &'static str,
+    pub name: String,
+    pub interpolation: &'static str,
+    pub data: PrimvarData<'a>,
 }
 
-enum PrimvarData<'a> {
+pub(crate) enum PrimvarData<'a> {
     Floats {
         values: &'a [f32],
         components: usize,
@@ -205,12 +205,7 @@ fn write_head(
     head.push_str(
         "    upAxis = \"Y\"\n)\n\ndef Xform \"Groom\"\n{\n    def BasisCurves \"Strands\"\n    {\n",
     );
-    let (curve_type, basis) = match groom.basis {
-        CurveBasis::Linear => ("linear", None),
-        CurveBasis::Bezier => ("cubic", Some("bezier")),
-        CurveBasis::BSpline => ("cubic", Some("bspline")),
-        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-    };
+    let (curve_type, basis) = curve_type_and_basis(groom.basis);
     if let Some(basis) = basis {
         head.push_str(&format!("        uniform token basis = \"{basis}\"\n"));
     }
@@ -256,12 +251,22 @@ fn write_head(
     Ok(())
 }
 
+/// USD's `type` and `basis` tokens for a curve basis.
+pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&'static str>) {
+    match basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::BSpline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+    }
+}
+
 fn write_tail(out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {
     out.write_all(b"    }\n}\n\n")
 }
 
 /// The primvars a groom becomes, and warnings for attributes renamed or dropped.
-fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
+pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
     // Names the reader gives a meaning of their own are never taken by attributes.
@@ -357,7 +362,7 @@ fn valid_name(name: &str) -> String {
 }
 
 /// Points' bounds grown by half the widest width: the extent USD expects on curves.
-fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
+pub(crate) fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
     let (lo, hi) = bounds(points)?;
     let half = Vec3::splat(widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5);
     Some([lo - half, hi + half])
