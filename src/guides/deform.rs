@@ -207,7 +207,7 @@ fn strand_frames(points: &[Vec3], root: Quat, out: &mut [Quat]) {
 }
 
 /// Cuts `data` into the per-strand slices `offsets` describes.
-fn split_mut<'a, T>(mut data: &'a mut [T], offsets: &[u32]) -> Vec<&'a mut [T]> {
+pub(crate) fn split_mut<'a, T>(mut data: &'a mut [T], offsets: &[u32]) -> Vec<&'a mut [T]> {
     let mut parts = Vec::with_capacity(offsets.len().saturating_sub(1));
     for w in offsets.windows(2) {
         let (head, tail) = data.split_at_mut((w[1] - w[0]) as usize);

@@ -323,20 +323,15 @@ fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape
         }
         p
     };
-    let mut strands = Vec::with_capacity(offsets.len().saturating_sub(1));
-    let mut rest: &mut [Vec3] = points;
-    for w in offsets.windows(2) {
-        let (strand, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
-        strands.push((w[0] as usize, strand));
-        rest = tail;
-    }
-    strands.par_iter_mut().for_each(|(first, strand)| {
+    let mut strands = deform::split_mut(points, offsets);
+    strands.par_iter_mut().enumerate().for_each(|(s, strand)| {
+        let first = offsets[s] as usize;
         let mut previous_deformed = strand[0];
         for k in 1..strand.len() {
             let deformed = strand[k];
             let edge = deformed - previous_deformed;
             previous_deformed = deformed;
-            let radius = radii[*first + k];
+            let radius = radii[first + k];
             let pushed = outside(strand[k - 1] + edge, radius);
             let direction = (pushed - strand[k - 1]).try_normalize().unwrap_or(edge.normalize_or_zero());
             strand[k] = outside(strand[k - 1] + direction * edge.length(), radius);
