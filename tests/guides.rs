@@ -33,7 +33,7 @@ fn unstyled() -> &'static Groom {
 /// The production perm preset with guides.
 fn perm() -> Recipe {
     let text = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
-    let text = format!("[guides]\ncount = {GUIDES}\n{text}");
+    let text = format!("{text}\n[guides]\ncount = {GUIDES}\n");
     recipe::parse(&text, Path::new("grooms/recipes/perm_full_head.toml")).unwrap()
 }
 
