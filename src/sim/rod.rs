@@ -74,11 +74,6 @@ pub struct Rods {
     pub(crate) lambdas: Vec<Vec3>,
 }
 
-/// Largest frame inverse-inertia factor the solver uses. Frames carry angular velocity; nearly
-/// massless ones spin up from round-off and give the Newton step wild starting points, and the
-/// direct solve needs no light frames for conditioning (the Gauss–Seidel solver did).
-pub const FRAME_INERTIA_FACTOR_MAX: f32 = 1.0;
-
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
 pub fn frame_along(t: Vec3) -> Quat {
     Quat::from_rotation_arc(E3, t.normalize())
@@ -198,8 +193,7 @@ impl Rods {
             for i in first..last {
                 let l = self.rest_lengths[i];
                 let w = 2.0 / (self.mass[i] * self.mass_scale[i] + self.mass[i + 1] * self.mass_scale[i + 1]);
-                let factor = frame_inertia_factor.min(FRAME_INERTIA_FACTOR_MAX);
-                self.frame_inv_inertia[i] = if i == first { 0.0 } else { factor * w / (l * l) };
+                self.frame_inv_inertia[i] = if i == first { 0.0 } else { frame_inertia_factor * w / (l * l) };
             }
         }
     }

@@ -161,14 +161,10 @@ type Block = [[f64; 6]; 6];
 /// What the forward elimination keeps per edge for back substitution and the position update.
 #[derive(Clone, Copy, Default)]
 struct Row {
-    /// Cholesky factor `C_e` of the eliminated diagonal block `D_e = C_e·C_eᵀ` (lower triangle)…
-    factor: Block,
-    /// …and the inverses of its diagonal.
-    inverse_diagonal: [f64; 6],
-    /// `V_e = C_{e−1}⁻¹·L_eᵀ`, the coupling to the previous edge through the previous factor.
-    v: Block,
-    /// `C_e⁻¹·g_e` (the eliminated right-hand side), then `Δλ_e` after back substitution.
-    h: [f64; 6],
+    /// `D_e⁻¹·L_{e+1}ᵀ`: how the next edge's increments feed back into this one.
+    u: Block,
+    /// `D_e⁻¹·y_e`, then `Δλ_e` after back substitution.
+    z: [f64; 6],
     /// Third director of edge `e` at the start of the iteration.
     d: DVec3,
     /// `∂Ω_e/∂θ_e` (zero for the root, which has no pair).
@@ -213,25 +209,21 @@ fn cholesky(m: &mut Block, inv: &mut [f64; 6]) {
     }
 }
 
-/// `x ← C⁻¹·x` with a factor from [`cholesky`].
-fn forward_substitute(c: &Block, inv: &[f64; 6], x: &mut [f64; 6]) {
+/// Solves `L·Lᵀ·x = b` in place with a factor from [`cholesky`].
+fn cholesky_solve(l: &Block, inv: &[f64; 6], b: &mut [f64; 6]) {
     for i in 0..6 {
-        let mut t = x[i];
+        let mut t = b[i];
         for k in 0..i {
-            t -= c[i][k] * x[k];
+            t -= l[i][k] * b[k];
         }
-        x[i] = t * inv[i];
+        b[i] = t * inv[i];
     }
-}
-
-/// `x ← C⁻ᵀ·x` with a factor from [`cholesky`].
-fn back_substitute(c: &Block, inv: &[f64; 6], x: &mut [f64; 6]) {
     for i in (0..6).rev() {
-        let mut t = x[i];
+        let mut t = b[i];
         for k in i + 1..6 {
-            t -= c[k][i] * x[k];
+            t -= l[k][i] * b[k];
         }
-        x[i] = t * inv[i];
+        b[i] = t * inv[i];
     }
 }
 
@@ -307,17 +299,20 @@ fn solve_strand(s: &mut Span<'_>, rows: &mut [Row], inv_dt2: f64) {
     let edges = rows.len();
     let w = |i: usize| s.w[i] as f64;
     let wq = |e: usize| s.wq[e] as f64;
+    let mut inv = [0.0; 6];
     // Row e's coupling to row e − 1, `L_e`, is built while row e − 1 is eliminated.
     for e in 0..edges {
         let d = s.q[e] * Vec3::Z;
         rows[e].d = d.as_dvec3();
         rows[e].b = if e > 0 { pair_jacobian(s.q[e - 1], s.q[e]) } else { DMat3::ZERO };
     }
+    let mut previous_u: Block = [[0.0; 6]; 6];
+    let mut previous_z = [0.0; 6];
     for e in 0..edges {
         let (d, b) = (rows[e].d, rows[e].b);
         let l = s.length[e] as f64;
         let se = skew(d);
-        // Diagonal block A_ee and right-hand side r_e.
+        // Diagonal block A_ee.
         let mut m: Block = [[0.0; 6]; 6];
         let a = (w(e) + w(e + 1)) / (l * l);
         let shear = DMat3::IDENTITY * a + (DMat3::IDENTITY - outer(d, d)) * wq(e);
@@ -344,59 +339,57 @@ fn solve_strand(s: &mut Span<'_>, rows: &mut [Row], inv_dt2: f64) {
             for i in 0..3 {
                 rhs[i] = -c[i];
             }
-            // Eliminate the previous edge: D_e = A_ee − VᵀV, g_e = r_e − Vᵀ·h_{e−1} with
-            // V = C_{e−1}⁻¹·L_eᵀ (column j of L_eᵀ is row j of L_e).
+            // Subtract L_e·U_{e−1} and L_e·z_{e−1}, with L_e's blocks written out.
             let coupling = coupling(rows, s, e);
-            let (previous, current) = rows.split_at_mut(e);
-            let previous = &previous[e - 1];
-            let mut v: Block = [[0.0; 6]; 6];
-            for j in 0..6 {
-                let mut column = coupling[j];
-                forward_substitute(&previous.factor, &previous.inverse_diagonal, &mut column);
-                for i in 0..6 {
-                    v[i][j] = column[i];
-                }
-            }
             for i in 0..6 {
-                for j in 0..=i {
+                for j in 0..6 {
                     let mut t = 0.0;
-                    for k in 0..6 {
-                        t += v[k][i] * v[k][j];
+                    for (k, u) in previous_u.iter().enumerate() {
+                        t += coupling[i][k] * u[j];
                     }
                     m[i][j] -= t;
                 }
                 let mut t = 0.0;
-                for k in 0..6 {
-                    t += v[k][i] * previous.h[k];
+                for kk in 0..6 {
+                    t += coupling[i][kk] * previous_z[kk];
                 }
                 rhs[i] -= t;
             }
-            current[0].v = v;
         }
-        let row = &mut rows[e];
-        cholesky(&mut m, &mut row.inverse_diagonal);
-        forward_substitute(&m, &row.inverse_diagonal, &mut rhs);
-        row.factor = m;
-        row.h = rhs;
-    }
-    // Back substitution: Δλ_e = C_e⁻ᵀ·(h_e − V_{e+1}·Δλ_{e+1}).
-    for e in (0..edges).rev() {
-        let (current, next) = rows.split_at_mut(e + 1);
-        let row = &mut current[e];
-        if let Some(next) = next.first() {
-            for i in 0..6 {
-                let mut t = 0.0;
-                for j in 0..6 {
-                    t += next.v[i][j] * next.h[j];
+        cholesky(&mut m, &mut inv);
+        cholesky_solve(&m, &inv, &mut rhs);
+        rows[e].z = rhs;
+        previous_z = rhs;
+        if e + 1 < edges {
+            let next = coupling(rows, s, e + 1);
+            let mut u: Block = [[0.0; 6]; 6];
+            for j in 0..6 {
+                // Column j of L_{e+1}ᵀ is row j of L_{e+1}.
+                let mut column = next[j];
+                cholesky_solve(&m, &inv, &mut column);
+                for i in 0..6 {
+                    u[i][j] = column[i];
                 }
-                row.h[i] -= t;
             }
+            rows[e].u = u;
+            previous_u = u;
         }
-        back_substitute(&row.factor, &row.inverse_diagonal, &mut row.h);
+    }
+    // Back substitution: Δλ_e = z_e − U_e·Δλ_{e+1}.
+    for e in (0..edges.saturating_sub(1)).rev() {
+        let next = rows[e + 1].z;
+        let row = &mut rows[e];
+        for i in 0..6 {
+            let mut t = 0.0;
+            for j in 0..6 {
+                t += row.u[i][j] * next[j];
+            }
+            row.z[i] -= t;
+        }
     }
     // Δx = W·Jᵀ·Δλ.
     for e in 0..edges {
-        let z = rows[e].h;
+        let z = rows[e].z;
         let twist = DVec3::new(z[0], z[1], z[2]);
         let stretch = DVec3::new(z[3], z[4], z[5]);
         let l = s.length[e] as f64;
@@ -404,7 +397,7 @@ fn solve_strand(s: &mut Span<'_>, rows: &mut [Row], inv_dt2: f64) {
         if !s.kinematic[e] {
             let mut dx = -stretch / l;
             if e > 0 {
-                let before = rows[e - 1].h;
+                let before = rows[e - 1].z;
                 dx += DVec3::new(before[3], before[4], before[5]) / s.length[e - 1] as f64;
             }
             s.x[e] += (dx * w(e)).as_vec3();
@@ -412,7 +405,7 @@ fn solve_strand(s: &mut Span<'_>, rows: &mut [Row], inv_dt2: f64) {
         if wq(e) > 0.0 {
             let mut dtheta = stretch.cross(rows[e].d) + rows[e].b.transpose() * twist;
             if e + 1 < edges {
-                let after = rows[e + 1].h;
+                let after = rows[e + 1].z;
                 dtheta -= rows[e + 1].b.transpose() * DVec3::new(after[0], after[1], after[2]);
             }
             let dtheta = (dtheta * wq(e)).as_vec3();
@@ -422,7 +415,7 @@ fn solve_strand(s: &mut Span<'_>, rows: &mut [Row], inv_dt2: f64) {
     }
     let last = edges;
     if !s.kinematic[last] {
-        let before = rows[last - 1].h;
+        let before = rows[last - 1].z;
         let dx = DVec3::new(before[3], before[4], before[5]) / s.length[last - 1] as f64;
         s.x[last] += (dx * w(last)).as_vec3();
     }
