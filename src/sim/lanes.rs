@@ -1,0 +1,483 @@
+//! The same step as the scalar strand solver, for `LANES` strands with equal vertex counts at
+//! once: one strand per lane of plain `[f32; LANES]` arrays, which the compiler turns into SIMD
+//! registers. Every lane does exactly the operations the scalar path does, in the same order of
+//! constraints; whether a strand runs here or in the scalar path depends only on the groom
+//! (strand index and vertex counts), never on threads, so results stay deterministic.
+use std::array::from_fn;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use glam::{Quat, Vec3};
+
+use super::constraints::{BendTwistCoefficients, StretchShearCoefficients};
+use super::Hooks;
+
+pub const LANES: usize = 8;
+
+/// One float per lane.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(align(32))]
+pub struct F(pub [f32; LANES]);
+
+macro_rules! lanewise {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for F {
+            type Output = F;
+            #[inline(always)]
+            fn $method(self, rhs: F) -> F {
+                F(from_fn(|l| self.0[l] $op rhs.0[l]))
+            }
+        }
+    };
+}
+lanewise!(Add, add, +);
+lanewise!(Sub, sub, -);
+lanewise!(Mul, mul, *);
+lanewise!(Div, div, /);
+
+impl Neg for F {
+    type Output = F;
+    #[inline(always)]
+    fn neg(self) -> F {
+        F(from_fn(|l| -self.0[l]))
+    }
+}
+
+impl F {
+    #[inline(always)]
+    pub fn splat(v: f32) -> F {
+        F([v; LANES])
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F {
+        F(from_fn(|l| self.0[l].sqrt()))
+    }
+    #[inline(always)]
+    fn recip(self) -> F {
+        F(from_fn(|l| 1.0 / self.0[l]))
+    }
+    /// Per lane: `self > 0 ? a : b`.
+    #[inline(always)]
+    fn positive_select(self, a: F, b: F) -> F {
+        F(from_fn(|l| if self.0[l] > 0.0 { a.0[l] } else { b.0[l] }))
+    }
+}
+
+/// A vector per lane.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct V3 {
+    x: F,
+    y: F,
+    z: F,
+}
+
+impl V3 {
+    #[inline(always)]
+    fn dot(self, o: V3) -> F {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    fn scale(self, s: F) -> V3 {
+        V3 { x: self.x * s, y: self.y * s, z: self.z * s }
+    }
+    #[inline(always)]
+    fn mul(self, o: V3) -> V3 {
+        V3 { x: self.x * o.x, y: self.y * o.y, z: self.z * o.z }
+    }
+    #[inline(always)]
+    fn select(mask: F, a: V3, b: V3) -> V3 {
+        V3 {
+            x: mask.positive_select(a.x, b.x),
+            y: mask.positive_select(a.y, b.y),
+            z: mask.positive_select(a.z, b.z),
+        }
+    }
+    fn get(&self, l: usize) -> Vec3 {
+        Vec3::new(self.x.0[l], self.y.0[l], self.z.0[l])
+    }
+    fn set(&mut self, l: usize, v: Vec3) {
+        (self.x.0[l], self.y.0[l], self.z.0[l]) = (v.x, v.y, v.z);
+    }
+}
+
+impl Add for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn add(self, o: V3) -> V3 {
+        V3 { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
+    }
+}
+
+impl Sub for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn sub(self, o: V3) -> V3 {
+        V3 { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
+    }
+}
+
+/// A quaternion per lane.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Q {
+    x: F,
+    y: F,
+    z: F,
+    w: F,
+}
+
+impl Q {
+    /// Hamilton product `self ⊗ o`.
+    #[inline(always)]
+    fn mul(self, o: Q) -> Q {
+        Q {
+            w: self.w * o.w - self.x * o.x - self.y * o.y - self.z * o.z,
+            x: self.w * o.x + self.x * o.w + self.y * o.z - self.z * o.y,
+            y: self.w * o.y - self.x * o.z + self.y * o.w + self.z * o.x,
+            z: self.w * o.z + self.x * o.y - self.y * o.x + self.z * o.w,
+        }
+    }
+    #[inline(always)]
+    fn pure(v: V3) -> Q {
+        Q { x: v.x, y: v.y, z: v.z, w: F::splat(0.0) }
+    }
+    #[inline(always)]
+    fn conjugate(self) -> Q {
+        Q { x: -self.x, y: -self.y, z: -self.z, w: self.w }
+    }
+    #[inline(always)]
+    fn add_scaled(self, o: Q, s: F) -> Q {
+        Q { x: self.x + o.x * s, y: self.y + o.y * s, z: self.z + o.z * s, w: self.w + o.w * s }
+    }
+    #[inline(always)]
+    fn normalize(self) -> Q {
+        let inv = (self.x * self.x + self.y * self.y + self.z * self.z + self.w * self.w).sqrt().recip();
+        Q { x: self.x * inv, y: self.y * inv, z: self.z * inv, w: self.w * inv }
+    }
+    #[inline(always)]
+    fn vector(self) -> V3 {
+        V3 { x: self.x, y: self.y, z: self.z }
+    }
+    #[inline(always)]
+    fn select(mask: F, a: Q, b: Q) -> Q {
+        Q {
+            x: mask.positive_select(a.x, b.x),
+            y: mask.positive_select(a.y, b.y),
+            z: mask.positive_select(a.z, b.z),
+            w: mask.positive_select(a.w, b.w),
+        }
+    }
+    /// Third director `R(q)e`.
+    #[inline(always)]
+    fn director3(self) -> V3 {
+        let two = F::splat(2.0);
+        V3 {
+            x: two * (self.x * self.z + self.w * self.y),
+            y: two * (self.y * self.z - self.w * self.x),
+            z: F::splat(1.0) - two * (self.x * self.x + self.y * self.y),
+        }
+    }
+    /// `self ⊗ ē`, `ē = (0,0,−1; 0)`.
+    #[inline(always)]
+    fn times_e_bar(self) -> Q {
+        Q { x: -self.y, y: self.x, z: -self.w, w: self.z }
+    }
+    fn get(&self, l: usize) -> Quat {
+        Quat::from_xyzw(self.x.0[l], self.y.0[l], self.z.0[l], self.w.0[l])
+    }
+    fn set(&mut self, l: usize, q: Quat) {
+        (self.x.0[l], self.y.0[l], self.z.0[l], self.w.0[l]) = (q.x, q.y, q.z, q.w);
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct EdgeK {
+    inv_length: F,
+    length: F,
+    shear1: F,
+    shear2: F,
+    stretch1: F,
+    stretch2: F,
+    frame: F,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct PairK {
+    compliance_dt2: V3,
+    inv_denominator: V3,
+    /// `wq1 + wq2`: the pair is skipped where it is 0.
+    wsum: F,
+}
+
+/// Per-thread working set of one lane group, reused from step to step.
+#[derive(Default)]
+pub struct Scratch {
+    x: Vec<V3>,
+    x_prev: Vec<V3>,
+    v: Vec<V3>,
+    target: Vec<V3>,
+    kinematic: Vec<F>,
+    w: Vec<F>,
+    wq: Vec<F>,
+    q: Vec<Q>,
+    rest: Vec<V3>,
+    lambda: Vec<V3>,
+    directions: Vec<V3>,
+    upper: Vec<F>,
+    values: Vec<F>,
+    edge_k: Vec<EdgeK>,
+    pair_k: Vec<PairK>,
+    /// One lane's positions, handed to the obstacle hook.
+    lane_x: Vec<Vec3>,
+}
+
+/// What the lane solver reads from and writes back to one strand (all slices of equal length).
+pub struct LaneStrand<'a> {
+    pub x: &'a mut [Vec3],
+    pub v: &'a mut [Vec3],
+    pub q: &'a mut [Quat],
+    pub w: &'a [f32],
+    pub wq: &'a [f32],
+    pub kinematic: &'a [bool],
+    pub targets: &'a [Vec3],
+    pub rest: &'a [Vec3],
+    pub length: &'a [f32],
+    pub edge_k: &'a [StretchShearCoefficients],
+    pub pair_k: &'a [BendTwistCoefficients],
+    /// The strand's index and first vertex, for the hook.
+    pub strand: usize,
+    pub first_vertex: usize,
+}
+
+fn resize<T: Default + Clone>(v: &mut Vec<T>, n: usize) {
+    v.clear();
+    v.resize(n, T::default());
+}
+
+/// The step's time, iteration count and velocity factor.
+#[derive(Clone, Copy, Debug)]
+pub struct StepSettings {
+    pub dt: f32,
+    pub iterations: u32,
+    /// Velocity kept per step (damping).
+    pub keep: f32,
+}
+
+/// Prediction, iterations and velocity update for `LANES` strands of `n` vertices whose
+/// velocities already include this step's forces (see the scalar `begin_step`).
+///
+/// On x86-64 CPUs with AVX the same code is compiled a second time with 256-bit registers. AVX
+/// without FMA rounds every lane operation exactly as SSE2 does, so both give identical bits.
+pub fn finish_step(
+    strands: &mut [LaneStrand<'_>; LANES],
+    scratch: &mut Scratch,
+    step: StepSettings,
+    hooks: &dyn Hooks,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU supports AVX (checked just above).
+        unsafe { finish_step_avx(strands, scratch, step, hooks) };
+        return;
+    }
+    finish_step_impl(strands, scratch, step, hooks);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn finish_step_avx(
+    strands: &mut [LaneStrand<'_>; LANES],
+    scratch: &mut Scratch,
+    step: StepSettings,
+    hooks: &dyn Hooks,
+) {
+    finish_step_impl(strands, scratch, step, hooks);
+}
+
+#[inline(always)]
+fn finish_step_impl(
+    strands: &mut [LaneStrand<'_>; LANES],
+    scratch: &mut Scratch,
+    StepSettings { dt, iterations, keep }: StepSettings,
+    hooks: &dyn Hooks,
+) {
+    let n = strands[0].x.len();
+    let edges = n - 1;
+    let s = scratch;
+    for v in [&mut s.x, &mut s.x_prev, &mut s.v, &mut s.target, &mut s.rest, &mut s.lambda] {
+        resize(v, n);
+    }
+    resize(&mut s.directions, n);
+    for v in [&mut s.kinematic, &mut s.w, &mut s.wq, &mut s.upper, &mut s.values] {
+        resize(v, n);
+    }
+    resize(&mut s.q, n);
+    resize(&mut s.edge_k, n);
+    resize(&mut s.pair_k, n);
+
+    // Gather.
+    for (l, st) in strands.iter().enumerate() {
+        for i in 0..n {
+            s.x[i].set(l, st.x[i]);
+            s.v[i].set(l, st.v[i]);
+            s.target[i].set(l, st.targets[i]);
+            s.kinematic[i].0[l] = if st.kinematic[i] { 1.0 } else { 0.0 };
+            s.w[i].0[l] = st.w[i];
+            s.wq[i].0[l] = st.wq[i];
+            s.q[i].set(l, st.q[i]);
+            s.rest[i].set(l, st.rest[i]);
+            let ek = &st.edge_k[i];
+            let k = &mut s.edge_k[i];
+            k.inv_length.0[l] = ek.inv_length;
+            k.length.0[l] = st.length[i];
+            k.shear1.0[l] = ek.shear1;
+            k.shear2.0[l] = ek.shear2;
+            k.stretch1.0[l] = ek.stretch1;
+            k.stretch2.0[l] = ek.stretch2;
+            k.frame.0[l] = ek.frame;
+            let pk = &st.pair_k[i];
+            let k = &mut s.pair_k[i];
+            k.compliance_dt2.set(l, pk.compliance_dt2);
+            k.inv_denominator.set(l, pk.inv_denominator);
+            k.wsum.0[l] = if i > 0 && i < edges { st.wq[i - 1] + st.wq[i] } else { 0.0 };
+        }
+    }
+
+    // Prediction.
+    let dt_f = F::splat(dt);
+    for i in 0..n {
+        s.x_prev[i] = s.x[i];
+        s.x[i] = V3::select(s.kinematic[i], s.target[i], s.x[i] + s.v[i].scale(dt_f));
+        s.lambda[i] = V3::default();
+    }
+    for iteration in 0..iterations {
+        solve_lengths(s, edges);
+        if iteration % 2 == 0 {
+            for e in 0..edges {
+                project_edge(s, e);
+                if e >= 1 {
+                    project_pair(s, e);
+                }
+            }
+        } else {
+            for e in (0..edges).rev() {
+                project_edge(s, e);
+                if e + 1 < edges {
+                    project_pair(s, e + 1);
+                }
+            }
+        }
+        if hooks.projects() {
+            project_lanes(strands, s, hooks);
+        }
+    }
+
+    // Velocities, then scatter.
+    let inv_dt = F::splat(keep / dt);
+    for i in 0..n {
+        s.v[i] = (s.x[i] - s.x_prev[i]).scale(inv_dt);
+    }
+    for (l, st) in strands.iter_mut().enumerate() {
+        for i in 0..n {
+            st.x[i] = s.x[i].get(l);
+            st.v[i] = s.v[i].get(l);
+        }
+        for e in 0..edges {
+            st.q[e] = s.q[e].get(l);
+        }
+    }
+}
+
+/// Obstacle contacts, one lane at a time through the scalar hook (the scalar path calls it at the
+/// same point of the iteration).
+#[inline(always)]
+fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn Hooks) {
+    let n = s.x.len();
+    s.lane_x.resize(n, Vec3::ZERO);
+    for (l, st) in strands.iter().enumerate() {
+        for i in 0..n {
+            s.lane_x[i] = s.x[i].get(l);
+        }
+        hooks.project(st.strand, st.first_vertex, &mut s.lane_x, st.w);
+        for i in 0..n {
+            s.x[i].set(l, s.lane_x[i]);
+        }
+    }
+}
+
+#[inline(always)]
+fn solve_lengths(s: &mut Scratch, edges: usize) {
+    for i in 0..edges {
+        let d = s.x[i + 1] - s.x[i];
+        let length = d.dot(d).sqrt();
+        s.directions[i] = d.scale(length.recip());
+        s.values[i] = s.edge_k[i].length - length;
+    }
+    let zero = F::splat(0.0);
+    let mut upper_prev = zero;
+    let mut value_prev = zero;
+    for i in 0..edges {
+        let n = s.directions[i];
+        let a = if i > 0 { -(s.w[i] * n.dot(s.directions[i - 1])) } else { zero };
+        let b = s.w[i] + s.w[i + 1];
+        let c = if i + 1 < edges { -(s.w[i + 1] * n.dot(s.directions[i + 1])) } else { zero };
+        let pivot = b - a * upper_prev;
+        let ok = F(from_fn(|l| if pivot.0[l] > 1e-7 * b.0[l] && b.0[l] > 0.0 { 1.0 } else { 0.0 }));
+        let inv_pivot = pivot.recip();
+        upper_prev = ok.positive_select(c * inv_pivot, zero);
+        value_prev = ok.positive_select((s.values[i] - a * value_prev) * inv_pivot, zero);
+        s.upper[i] = upper_prev;
+        s.values[i] = value_prev;
+    }
+    let mut next = zero;
+    for i in (0..edges).rev() {
+        next = s.values[i] - s.upper[i] * next;
+        s.values[i] = next;
+    }
+    for j in 0..=edges {
+        let mut dp = V3::default();
+        if j > 0 {
+            dp = dp + s.directions[j - 1].scale(s.values[j - 1]);
+        }
+        if j < edges {
+            dp = dp - s.directions[j].scale(s.values[j]);
+        }
+        s.x[j] = s.x[j] + dp.scale(s.w[j]);
+    }
+}
+
+#[inline(always)]
+fn project_edge(s: &mut Scratch, e: usize) {
+    let k = s.edge_k[e];
+    let (p1, p2, q) = (s.x[e], s.x[e + 1], s.q[e]);
+    let d3 = q.director3();
+    let gamma = (p2 - p1).scale(k.inv_length) - d3;
+    let stretch = d3.scale(gamma.dot(d3));
+    let shear = gamma - stretch;
+    s.x[e] = p1 + shear.scale(k.shear1) + stretch.scale(k.stretch1);
+    s.x[e + 1] = p2 - (shear.scale(k.shear2) + stretch.scale(k.stretch2));
+    let dq = Q::pure(shear).mul(q.times_e_bar());
+    s.q[e] = Q::select(k.frame, q.add_scaled(dq, k.frame).normalize(), q);
+}
+
+#[inline(always)]
+fn project_pair(s: &mut Scratch, e: usize) {
+    let k = s.pair_k[e];
+    let (q1, q2) = (s.q[e - 1], s.q[e]);
+    let relative = q1.conjugate().mul(q2);
+    let omega = relative.vector();
+    let rest = s.rest[e];
+    // Double cover: compare the whole relative rotation (w, Ω) with ±(w0, Ω0). Comparing the
+    // vector parts alone accepts (w > 0, −Ω0), the mirrored bend, as a second rest state.
+    let slack = F::splat(1.0) - rest.dot(rest);
+    let w0 = slack.positive_select(slack, F::splat(0.0)).sqrt();
+    let flip = relative.w * w0 + omega.dot(rest);
+    let rest = V3::select(-flip, V3::default() - rest, rest);
+    let c = omega - rest;
+    let lambda = s.lambda[e];
+    let dl = (V3::default() - c - k.compliance_dt2.mul(lambda)).mul(k.inv_denominator);
+    s.lambda[e] = lambda + dl;
+    let correction = Q::pure(dl);
+    let new_q1 = q1.add_scaled(q2.mul(correction), -s.wq[e - 1]).normalize();
+    let new_q2 = q2.add_scaled(q1.mul(correction), s.wq[e]).normalize();
+    s.q[e - 1] = Q::select(k.wsum, new_q1, q1);
+    s.q[e] = Q::select(k.wsum, new_q2, q2);
+}
