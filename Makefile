@@ -9,7 +9,7 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic
+.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic fuzz-usdc
 
 setup: .deps/.setup-done
 
@@ -50,6 +50,12 @@ fuzz-alembic:
 	command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz --locked
 	mkdir -p fuzz/corpus/alembic_reader
 	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run alembic_reader corpus/alembic_reader seeds -- \
+		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
+# The same for the crate-file (.usdc) reader, from the seeds in fuzz/seeds-usdc.
+fuzz-usdc:
+	command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz --locked
+	mkdir -p fuzz/corpus/usdc_reader
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run usdc_reader corpus/usdc_reader seeds-usdc -- \
 		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
 # Re-renders the renderer's golden images in tests/golden/ (view them before committing).
 golden: setup

@@ -58,7 +58,7 @@ fn styled_presets_hold_still_when_simulated_again() {
         if let recipe::Stage::Settle { gravity: Some(false), .. } = recipe.stages.last().unwrap().get_ref() {
             params.gravity = glam::Vec3::ZERO;
         }
-        let (colliders, _) = obstacle_shapes(&recipe);
+        let colliders = obstacle_shapes(&recipe, &styled.groom, None).unwrap();
         let again = resimulate(&styled.groom, params, colliders, false);
         let worst = moved(&styled.groom, &again).into_iter().fold(0.0, f32::max);
         eprintln!("{preset}: styled output moves {:.3} mm in 2 s ({settle:?})", worst * 1e3);
@@ -82,7 +82,8 @@ fn curly_dcc_groom_holds_still_with_the_sag_free_option() {
 
 fn dcc_groom_holds_still(style_kind: Style) {
     let head = Head::default();
-    let colliders = vec![Shape::Ellipsoid { center: head.center, radii: head.radii }];
+    let colliders =
+        vec![Shape::Ellipsoid { center: head.center, radii: head.radii, rotation: glam::Quat::IDENTITY }];
     {
         let groom = generate(&GenerateParams {
             strands: 30,

@@ -48,7 +48,7 @@ fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
         seconds: 2.0,
         settle: None,
         sag_free: false,
-        colliders: coif::style::run::obstacle_shapes(&parsed).0,
+        colliders: coif::style::run::obstacle_shapes(&parsed, &settled, None).unwrap(),
     };
     let (again, summary) = coif::sim::driver::simulate(&settled, &options).unwrap();
     assert_eq!(summary.rest, "rest_darboux");

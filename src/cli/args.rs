@@ -219,6 +219,14 @@ pub(crate) struct StyleArgs {
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
+    /// Simulate this many guides (spread evenly over the scalp) and interpolate the other
+    /// strands from them; overrides the recipe's `[guides]`.
+    #[arg(long, value_name = "N")]
+    pub(crate) guides: Option<usize>,
+    /// The groom's scalp or head mesh, a Wavefront OBJ in coif's space (metres, Y up): the
+    /// recipe's `shape = "scalp"` obstacles collide with it and its head frame is fitted to it.
+    #[arg(long, value_name = "OBJ")]
+    pub(crate) scalp: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -243,7 +251,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    #[arg(long, value_delimiter = ',', num_args = 4, default_values_t = coif::sim::BondInfluences::SCENE_3.0)]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
     #[arg(long, default_value_t = 3.9e9)]

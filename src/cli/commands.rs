@@ -38,7 +38,10 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 
 fn run_style(args: StyleArgs) -> Result<()> {
     use std::io::IsTerminal;
-    let recipe = coif::style::recipe::load(&args.recipe)?;
+    let mut recipe = coif::style::recipe::load(&args.recipe)?;
+    if let Some(count) = args.guides {
+        recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
+    }
     io::Format::from_extension(&args.output)?;
     let loaded = io::read_groom(&args.groom, &args.import.options())?;
     let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
@@ -52,7 +55,14 @@ fn run_style(args: StyleArgs) -> Result<()> {
             args.output.display()
         )));
     }
-    let options = coif::style::StyleOptions { progress, frames_per_second };
+    let scalp = match &args.scalp {
+        Some(path) => {
+            let (points, triangles) = coif::io::obj::read_triangles(path)?;
+            Some(std::sync::Arc::new(coif::interact::mesh_sdf::TriangleMesh { points, triangles }))
+        }
+        None => None,
+    };
+    let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
     let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
     let warnings = io::write_animated(
         &args.output,
@@ -119,7 +129,11 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     });
     let head = coif::head::Head::default();
     let colliders = if args.head {
-        vec![coif::interact::obstacles::Shape::Ellipsoid { center: head.center, radii: head.radii }]
+        vec![coif::interact::obstacles::Shape::Ellipsoid {
+            center: head.center,
+            radii: head.radii,
+            rotation: glam::Quat::IDENTITY,
+        }]
     } else {
         Vec::new()
     };

@@ -6,18 +6,21 @@
 //! Every step is: forces from a snapshot (wind, hair–hair penalty, water) → the rod solver with
 //! obstacle contacts projected each iteration → wetness update (uptake, wicking, evaporation),
 //! whose changes re-form or break hydrogen bonds (S1-16) and change strand mass.
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::recipe::{Mask, Obstacle, Recipe, Stage};
+use super::head_frame::HeadFrame;
+use super::placement::place;
+use super::recipe::{Mask, Recipe, Stage, DEFAULT_FALLOFF};
 use crate::analysis::{curl_radius, mean_curvature, resample_groom};
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
-use crate::head::Head;
 use crate::interact::hair_contacts::HairContacts;
+use crate::interact::mesh_sdf::TriangleMesh;
 use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
@@ -34,6 +37,9 @@ pub struct StyleOptions {
     pub frames_per_second: f32,
     /// Draw a progress bar on stderr (only shown on a terminal).
     pub progress: bool,
+    /// The groom's own scalp or head mesh: `shape = "scalp"` obstacles collide with it and the
+    /// head frame is fitted to it. Readers of groom files that carry a mesh fill it in.
+    pub scalp: Option<Arc<TriangleMesh>>,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -69,9 +75,24 @@ pub struct StageReport {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StyleReport {
     pub strands: usize,
+    /// Strands simulated as guides when the rest were interpolated from them (`crate::guides`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guides: Option<usize>,
     pub vertices: usize,
     pub steps: u64,
+    /// The head frame the recipe was placed in, when it needed one.
+    pub head_frame: Option<HeadFrameReport>,
     pub stages: Vec<StageReport>,
+}
+
+/// A fitted head frame as the report shows it (world coordinates, metres).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct HeadFrameReport {
+    pub center: [f32; 3],
+    pub up: [f32; 3],
+    pub front: [f32; 3],
+    /// Metres per head unit.
+    pub size: f32,
 }
 
 /// The outcome of a styling run.
@@ -84,8 +105,16 @@ pub struct Styled {
     pub frames_per_second: f32,
 }
 
-/// Styles a groom with a recipe.
+/// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    if crate::guides::wanted(groom, recipe) {
+        return crate::guides::style(groom, recipe, options);
+    }
+    style_strands(groom, recipe, options)
+}
+
+/// Styles every strand of a groom with a recipe.
+pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
@@ -98,7 +127,9 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         );
         bar
     });
-    for (index, spanned) in recipe.stages.iter().enumerate() {
+    // The stages placed on this groom (head-frame lengths in metres, layouts as rods).
+    let placed_stages = session.recipe.stages.clone();
+    for (index, spanned) in placed_stages.iter().enumerate() {
         let stage = spanned.get_ref();
         if let Some(bar) = &progress {
             bar.set_message(stage.kind());
@@ -115,8 +146,15 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     }
     let report = StyleReport {
         strands: session.groom.strand_count(),
+        guides: None,
         vertices: session.groom.vertex_count(),
         steps: session.sim.steps_taken(),
+        head_frame: session.head_frame.map(|f| HeadFrameReport {
+            center: f.center().to_array(),
+            up: f.up().to_array(),
+            front: f.front().to_array(),
+            size: f.size(),
+        }),
         stages,
     };
     if session.frame_interval.is_some() && session.frames.last() != Some(&session.sim.rods.positions) {
@@ -189,8 +227,9 @@ impl Winding {
     }
 }
 
-struct Session<'r> {
-    recipe: &'r Recipe,
+struct Session {
+    /// The recipe placed on the groom: world coordinates, layouts laid out as rods.
+    recipe: Recipe,
     /// The groom being styled (resampled if the recipe asks), for topology and attributes.
     groom: Groom,
     sim: Simulation,
@@ -226,35 +265,27 @@ struct Session<'r> {
     frame_interval: Option<u64>,
     /// Deepest penetration of the current stage so far (metres).
     penetration: f32,
+    head_frame: Option<HeadFrame>,
 }
 
-impl<'r> Session<'r> {
-    fn new(input: &Groom, recipe: &'r Recipe, options: &StyleOptions) -> Result<Session<'r>> {
-        let settings = &recipe.settings;
-        let groom = match settings.max_segment {
+impl Session {
+    fn new(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Session> {
+        let groom = match recipe.settings.max_segment {
             Some(max) => resample_groom(input, max),
             None => input.clone(),
         };
         groom.validate()?;
-        let params = sim_params(recipe);
-        let mut sim = Simulation::new(&groom, params)?;
+        let placed = place(recipe, &groom, options.scalp.as_deref())?;
+        let recipe = placed.recipe;
+        let settings = &recipe.settings;
+        let mut sim = Simulation::new(&groom, sim_params(&recipe))?;
         if settings.sag_free {
             sim.make_sag_free();
         } else {
             sim.adopt_rest_state(&groom)?;
         }
 
-        if let Some(Obstacle::Mesh { name, .. }) = recipe
-            .obstacles
-            .iter()
-            .map(|o| o.get_ref())
-            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
-        {
-            return Err(Error::Usage(format!(
-                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
-            )));
-        }
-        let (obstacles, head) = obstacle_shapes(recipe);
+        let obstacles = placed.shapes;
         let rods = recipe
             .rods
             .iter()
@@ -263,8 +294,10 @@ impl<'r> Session<'r> {
                 Shape::Capsule { a: Vec3::from(r.a), b: Vec3::from(r.b), radius: r.radius }
             })
             .collect();
+        // Masks see each root's direction along the head's axes (coif's X side, Y up, Z front).
+        let to_head = placed.mask_rotation.inverse();
         let root_dirs = (0..groom.strand_count())
-            .map(|s| (groom.points[groom.strand_range(s).start] - head.center).normalize_or_zero())
+            .map(|s| (to_head * (groom.strand_points(s)[0] - placed.mask_center)).normalize_or_zero())
             .collect();
         let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
         let n = groom.vertex_count();
@@ -279,6 +312,11 @@ impl<'r> Session<'r> {
         let frame_interval = (options.frames_per_second > 0.0)
             .then(|| ((1.0 / (options.frames_per_second * settings.dt)).round() as u64).max(1));
         let offsets = vec![Vec3::ZERO; obstacles.len()];
+        let friction = Friction {
+            static_friction: recipe.contacts.static_friction,
+            dynamic_friction: recipe.contacts.dynamic_friction,
+        };
+        let wetness_params = recipe.wetness;
         let mut session = Session {
             recipe,
             sim,
@@ -292,15 +330,12 @@ impl<'r> Session<'r> {
             wound: vec![None; groom.strand_count()],
             wetness_before: wetness.clone(),
             wetness,
-            wetness_params: recipe.wetness,
+            wetness_params,
             droplets: Droplets::default(),
             contacts,
             dryer: None,
             heat: 0.0,
-            friction: Friction {
-                static_friction: recipe.contacts.static_friction,
-                dynamic_friction: recipe.contacts.dynamic_friction,
-            },
+            friction,
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             culling: ObstacleCulling::default(),
             previous: vec![Vec3::ZERO; n],
@@ -309,6 +344,7 @@ impl<'r> Session<'r> {
             frames: Vec::new(),
             frame_interval,
             penetration: 0.0,
+            head_frame: placed.frame,
             radii,
             groom,
         };
@@ -563,7 +599,7 @@ impl<'r> Session<'r> {
                     position: Vec3::from(d.position),
                     target: Vec3::from(d.target),
                     strength: d.strength,
-                    falloff: d.falloff,
+                    falloff: d.falloff.unwrap_or(DEFAULT_FALLOFF),
                     cone_half_angle: d.cone_degrees.map(f32::to_radians),
                     heat: *heat,
                 });
@@ -865,35 +901,10 @@ pub fn sim_params(recipe: &Recipe) -> SimParams {
     }
 }
 
-/// The recipe's obstacles as collider shapes at rest (no pressing offsets, no rods), and its head.
-/// Mesh obstacles must have their field baked (`recipe::load`); others stay out.
-pub fn obstacle_shapes(recipe: &Recipe) -> (Vec<Shape>, Head) {
-    let mut head = Head::default();
-    let obstacles: Vec<Shape> = recipe
-        .obstacles
-        .iter()
-        .filter_map(|o| match o.get_ref() {
-            Obstacle::Mesh { sdf, .. } => sdf.clone().map(Shape::Mesh),
-            other => Some(match other {
-                Obstacle::Head { center, radii, .. } => {
-                    head.center = center.map_or(head.center, Vec3::from);
-                    head.radii = radii.map_or(head.radii, Vec3::from);
-                    Shape::Ellipsoid { center: head.center, radii: head.radii }
-                }
-                Obstacle::Sphere { center, radius, .. } => {
-                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
-                }
-                Obstacle::Plane { point, normal, .. } => {
-                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
-                }
-                Obstacle::Box { center, half_extents, .. } => {
-                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
-                }
-                Obstacle::Mesh { .. } => unreachable!("matched above"),
-            }),
-        })
-        .collect();
-    (obstacles, head)
+/// The recipe's obstacles as collider shapes at rest (no pressing offsets, no rods), placed on
+/// `groom` exactly as a styling run places them (head frame, the groom's scalp).
+pub fn obstacle_shapes(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<Vec<Shape>> {
+    Ok(place(recipe, groom, scalp)?.shapes)
 }
 
 fn smoothstep(t: f32) -> f32 {
