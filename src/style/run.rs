@@ -67,6 +67,9 @@ pub struct StageReport {
     /// Mean wetness at the stage's end.
     pub wetness: f32,
     pub settle: Option<SettleReport>,
+    /// Deepest any vertex went inside an active obstacle or rod after any step of the stage,
+    /// metres (0: never inside; a vertex's radius counts).
+    pub max_penetration: f32,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -132,6 +135,7 @@ pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptio
             bar.set_message(stage.kind());
         }
         let start = Instant::now();
+        session.penetration = 0.0;
         let steps_before = session.sim.steps_taken();
         let settle = session.run_stage(index, stage, progress.as_ref())?;
         let steps = session.sim.steps_taken() - steps_before;
@@ -259,6 +263,8 @@ struct Session {
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_interval: Option<u64>,
+    /// Deepest penetration of the current stage so far (metres).
+    penetration: f32,
     head_frame: Option<HeadFrame>,
 }
 
@@ -337,6 +343,7 @@ impl Session {
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
             frame_interval,
+            penetration: 0.0,
             head_frame: placed.frame,
             radii,
             groom,
@@ -409,6 +416,27 @@ impl Session {
             friction: self.friction,
         };
         self.sim.step_with(&hooks);
+        self.penetration = self.penetration.max(self.deepest_penetration());
+    }
+
+    /// How deep the deepest vertex is inside an active obstacle now.
+    fn deepest_penetration(&self) -> f32 {
+        let positions = &self.sim.rods.positions;
+        (0..self.groom.strand_count())
+            .into_par_iter()
+            .map(|strand| {
+                let mut deepest = 0.0f32;
+                for i in self.groom.strand_range(strand) {
+                    let mask = self.culling.mask(strand, positions[i]);
+                    for (k, shape) in self.active.iter().enumerate() {
+                        if ObstacleCulling::tests(mask, k) {
+                            deepest = deepest.max(self.radii[i] - shape.distance(positions[i]).0);
+                        }
+                    }
+                }
+                deepest
+            })
+            .reduce(|| 0.0, f32::max)
     }
 
     /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
@@ -679,11 +707,22 @@ impl Session {
         report
     }
 
-    /// Poses every wound strand at stage time `t ∈ [0, 1]`.
+    /// Poses every wound strand at stage time `t ∈ [0, 1]`. The path from the strand's shape to
+    /// the rod may cross the head or other rods: poses are pushed out of every active obstacle
+    /// and rod (the finished helix lies on its own rod's surface, where the push is zero).
     fn drive(&mut self, windings: &[Winding], t: f32) {
+        let solids = &self.active;
         for w in windings {
             for (k, vertex) in (w.first..w.end).enumerate() {
-                self.sim.attach(vertex, w.pose(k, t));
+                let mut target = w.pose(k, t);
+                for shape in solids {
+                    let (distance, normal) = shape.distance(target);
+                    let depth = self.radii[vertex] - distance;
+                    if depth > 0.0 {
+                        target += normal * depth;
+                    }
+                }
+                self.sim.attach(vertex, target);
             }
         }
     }
@@ -708,11 +747,15 @@ impl Session {
             let Some((_, r, mut first)) = best else { continue };
             let Shape::Capsule { a, b, radius } = self.rods[r] else { unreachable!("rods are capsules") };
             let axis = (b - a).normalize();
-            let on_rod = |v: usize| {
-                let along = (positions[v] - a).dot(axis).clamp(0.0, a.distance(b));
-                let foot = a + axis * along;
-                foot + (positions[v] - foot).normalize_or_zero() * (radius + self.radii[v])
+            // Feet on the rod's cylinder, and directions away from its axis (not from a foot on
+            // an end cap, which would tilt the helix into the cap).
+            let length = a.distance(b);
+            let foot = |p: Vec3| a + axis * (p - a).dot(axis).clamp(0.0, length);
+            let away = |p: Vec3| {
+                let d = p - a;
+                (d - axis * d.dot(axis)).try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector())
             };
+            let on_rod = |v: usize| foot(positions[v]) + away(positions[v]) * (radius + self.radii[v]);
             // The free part between root and rod must reach the rod: start winding further
             // along the strand until its rest length spans the gap (else the vertices between
             // a pinned root and a held winding are pulled apart and shake).
@@ -728,14 +771,13 @@ impl Session {
                 continue; // only the tip reaches the rod: nothing to wind
             }
             let winding_radius = radius + self.radii[first];
-            let along = (positions[first] - a).dot(axis).clamp(0.0, a.distance(b));
-            let outward = positions[first] - (a + axis * along);
-            let e1 = outward.try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector());
+            let along = (positions[first] - a).dot(axis).clamp(0.0, length);
+            let e1 = away(positions[first]);
             let e2 = axis.cross(e1);
             // Wind the way the strand already heads, and advance along the rod towards its middle.
             let heading = positions[first + 1] - positions[first];
             let turn = if heading.dot(e2) >= 0.0 { 1.0 } else { -1.0 };
-            let advance = if along < 0.5 * a.distance(b) { 1.0 } else { -1.0 };
+            let advance = if along < 0.5 * length { 1.0 } else { -1.0 };
             // Turns a few hair widths apart: a tight, nearly planar curl.
             let pitch = 8.0 * self.radii[first];
             let helix = Helix {
@@ -832,6 +874,7 @@ impl Session {
                 peptide: mean(BondKind::Peptide),
             },
             wetness: self.wetness.iter().sum::<f32>() / self.wetness.len().max(1) as f32,
+            max_penetration: self.penetration,
             settle,
         }
     }
