@@ -88,8 +88,7 @@ pub struct Manifest {
 
 /// Reads a manifest and expands its tasks and wedges.
 pub fn load(path: &Path) -> Result<Manifest> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse(&text, path)
+    parse(&crate::io::input::read_text(path)?, path)
 }
 
 pub fn parse(text: &str, path: &Path) -> Result<Manifest> {

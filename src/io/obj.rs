@@ -10,6 +10,7 @@ use crate::error::{Error, Result};
 
 /// The vertices and triangles of every object in an OBJ file.
 pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
+    crate::io::input::check_regular(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -28,11 +29,9 @@ pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
         let base = vertices.len() as u32;
         for (k, p) in mesh.positions.chunks_exact(3).enumerate() {
             let v = Vec3::new(p[0], p[1], p[2]);
-            if !v.is_finite() {
-                return Err(Error::format(
-                    path,
-                    format!("object '{}': vertex {} is not finite", model.name, k + 1),
-                ));
+            let key = format!("vertex {}", k + 1);
+            if let Err(message) = crate::validate::vector(&key, v.into(), crate::validate::COORDINATE) {
+                return Err(Error::format(path, format!("object '{}': {message}", model.name)));
             }
             vertices.push(v);
         }

@@ -80,6 +80,7 @@ pub struct Styled {
 
 /// Styles a groom with a recipe.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    crate::limits::check_style(groom, recipe, options.frames_per_second)?;
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
