@@ -3,6 +3,7 @@
 //! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
 pub mod alembic;
 pub mod atomic;
+pub mod cleanup;
 pub mod hair;
 pub mod input;
 pub mod obj;
