@@ -162,6 +162,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
     for spanned in &file.wedges {
         let line = line_of(text, spanned.span().start);
         let wedge = spanned.get_ref();
+        check_name(&wedge.name).map_err(|m| bad(format!("line {line}: wedge {m}")))?;
         if wedge.task.name.is_some() {
             return Err(bad(format!(
                 "line {line}: a wedge's tasks are named after the wedge; drop `name` from its task fields"

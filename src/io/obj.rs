@@ -12,6 +12,11 @@ use crate::error::{Error, Result};
 pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
     crate::io::input::check_regular(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_triangles(&bytes, path)
+}
+
+/// [`read_triangles`] on bytes already in memory; `path` names them in errors.
+pub fn parse_triangles(bytes: &[u8], path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -19,9 +24,8 @@ pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
         ..Default::default()
     };
     // Material libraries are not read: a mesh obstacle needs only its surface.
-    let (models, _) =
-        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| Error::format(path, format!("not a readable Wavefront OBJ file: {e}")))?;
+    let (models, _) = tobj::load_obj_buf(&mut &bytes[..], &options, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| Error::format(path, format!("not a readable Wavefront OBJ file: {e}")))?;
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
     for model in &models {

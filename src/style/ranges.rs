@@ -5,7 +5,7 @@
 //!
 //! | key | range |
 //! |---|---|
-//! | `[settings]` `dt` | (0, 0.1] s |
+//! | `[settings]` `dt` | [1e-6, 0.1] s |
 //! | `gravity` | components in [-1000, 1000] m/s² |
 //! | `youngs_modulus`, `shear_modulus` | (0, 1e12] Pa |
 //! | `density` | (0, 1e5] kg/m³ |
@@ -86,7 +86,7 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         })
     };
     let s = &recipe.settings;
-    table("settings", "dt", s.dt.into(), Range::above(0.0, 0.1))?;
+    table("settings", "dt", s.dt.into(), Range::closed(1e-6, 0.1))?;
     validate::vector("[settings] gravity", s.gravity, COORDINATE)?;
     table("settings", "youngs_modulus", s.youngs_modulus.into(), Range::above(0.0, 1e12))?;
     table("settings", "shear_modulus", s.shear_modulus.into(), Range::above(0.0, 1e12))?;
