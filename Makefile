@@ -9,7 +9,7 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic
+.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic fuzz-usdc
 
 setup: .deps/.setup-done
 
@@ -61,6 +61,12 @@ fuzz-smoke:
 	$(MAKE) fuzz FUZZ_RUNS=100000
 fuzz-alembic:
 	$(MAKE) fuzz FUZZ_TARGETS=alembic_reader
+# The same for the crate-file (.usdc) reader, from the seeds in fuzz/seeds-usdc.
+fuzz-usdc:
+	command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz --locked
+	mkdir -p fuzz/corpus/usdc_reader
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run usdc_reader corpus/usdc_reader seeds-usdc -- \
+		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
 # Re-renders the renderer's golden images in tests/golden/ (view them before committing).
 golden: setup
 	COIF_UPDATE_GOLDEN=1 $(CARGO) test --locked --test render_golden canonical_scenes

@@ -18,8 +18,9 @@ struct Config {
     iterations: u32,
 }
 
-const CONFIGS: [Config; 3] = [
+const CONFIGS: [Config; 4] = [
     Config { name: "1000x32x5", strands: 1_000, vertices: 32, iterations: 5 },
+    Config { name: "10000x32x2", strands: 10_000, vertices: 32, iterations: 2 },
     Config { name: "10000x6x4", strands: 10_000, vertices: 6, iterations: 4 },
     Config { name: "100000x32x5", strands: 100_000, vertices: 32, iterations: 5 },
 ];

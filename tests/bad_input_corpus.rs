@@ -203,7 +203,7 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         ("cone -1", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = 1, cone_degrees = -1 }", "cone_degrees"),
         ("cone 400", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = 1, cone_degrees = 400 }", "cone_degrees"),
         ("settle max_seconds", "kind = \"settle\"\nmax_seconds = 1e30", "max_seconds"),
-        ("settle max_speed", "kind = \"settle\"\nmax_speed = nan", "max_speed"),
+        ("settle tolerance", "kind = \"settle\"\ntolerance = nan", "tolerance"),
         ("lotion nan", "kind = \"lotion\"\nduration = 1\nbreak = { ionic = nan }", "ionic"),
     ];
     for (name, stage, culprit) in stages {
@@ -275,7 +275,7 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["--dt", "1e-30"], "simulation steps"),
         (&["--dt", "nan"], "time step"),
         (&["--settle", "--settle-seconds", "1e30"], "--settle-seconds"),
-        (&["--settle", "--settle-speed", "nan"], "--settle-speed"),
+        (&["--settle", "--settle-tolerance", "nan"], "--settle-tolerance"),
         (&["--settle", "--settle-iterations", "0"], "--settle-iterations"),
         (&["--youngs-modulus", "0"], "--youngs-modulus = 0"),
         (&["--youngs-modulus", "nan"], "--youngs-modulus"),

@@ -40,7 +40,7 @@ fn bad_simulate_options_exit_2_without_output() {
         (vec!["--influences", "0", "0", "0", "0"], "influence"),
         (vec!["--seconds=-1"], "--seconds = -1"),
         (vec!["--youngs-modulus", "0"], "--youngs-modulus = 0"),
-        (vec!["--settle", "--settle-speed", "nan"], "--settle-speed = NaN"),
+        (vec!["--settle", "--settle-tolerance", "nan"], "--settle-tolerance = NaN"),
         (vec!["--settle", "--settle-iterations", "0"], "--settle-iterations = 0"),
     ] {
         let mut args = vec!["simulate", path_str(&input), path_str(&output)];

@@ -78,13 +78,13 @@ fn ten_thousand_steps_are_finite_bounded_and_thread_count_independent() {
     assert!(identical, "1 and 2 threads disagree");
 }
 
-/// Hooks that declare a projection (doing nothing) force the one-strand-at-a-time scalar path.
-struct ScalarOnly;
-impl coif::sim::Hooks for ScalarOnly {}
+/// Hooks that declare a projection (doing nothing).
+struct ProjectNothing;
+impl coif::sim::Hooks for ProjectNothing {}
 
 #[test]
-fn simd_lanes_match_the_scalar_solver() {
-    // 19 strands of 12 vertices: two lane groups of 8 and three strands alone.
+fn a_projection_that_does_nothing_changes_nothing() {
+    // 19 strands of 12 vertices.
     let groom = generate(&GenerateParams {
         strands: 19,
         vertices_per_strand: 12,
@@ -94,25 +94,14 @@ fn simd_lanes_match_the_scalar_solver() {
         ..GenerateParams::default()
     })
     .unwrap();
-    let mut lanes = Simulation::new(&groom, SimParams::default()).unwrap();
-    let mut scalar = lanes.clone();
-    let difference = |a: &Simulation, b: &Simulation| {
-        a.rods.positions.iter().zip(&b.rods.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max)
-    };
-    // One step: the same arithmetic up to the order of a few roundings (coordinates ~0.1 m,
-    // f32 spacing ~1e-8 m).
-    lanes.step();
-    scalar.step_with(&ScalarOnly);
-    let first = difference(&lanes, &scalar);
-    assert!(first < 1e-7, "after one step lanes and scalar differ by {first} m");
-    // Falling and bouncing curls amplify round-off, but it stays far below anything visible.
-    for _ in 1..400 {
-        lanes.step();
-        scalar.step_with(&ScalarOnly);
+    let mut plain = Simulation::new(&groom, SimParams::default()).unwrap();
+    let mut hooked = plain.clone();
+    for _ in 0..400 {
+        plain.step();
+        hooked.step_with(&ProjectNothing);
     }
     let moved =
-        groom.points.iter().zip(&scalar.rods.positions).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+        groom.points.iter().zip(&plain.rods.positions).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
     assert!(moved > 0.01, "the groom should fall under gravity (moved {moved} m)");
-    let last = difference(&lanes, &scalar);
-    assert!(last < 5e-5 * 0.2, "after 400 steps lanes and scalar differ by {last} m");
+    assert!(plain.rods.positions == hooked.rods.positions, "a no-op projection changed the result");
 }

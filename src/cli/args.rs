@@ -225,6 +225,14 @@ pub(crate) struct StyleArgs {
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
+    /// Simulate this many guides (spread evenly over the scalp) and interpolate the other
+    /// strands from them; overrides the recipe's `[guides]`.
+    #[arg(long, value_name = "N")]
+    pub(crate) guides: Option<usize>,
+    /// The groom's scalp or head mesh, a Wavefront OBJ in coif's space (metres, Y up): the
+    /// recipe's `shape = "scalp"` obstacles collide with it and its head frame is fitted to it.
+    #[arg(long, value_name = "OBJ")]
+    pub(crate) scalp: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -249,19 +257,32 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = coif::sim::BondInfluences::SCENE_3.0)]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
     #[arg(long, default_value_t = 3.9e9)]
     pub(crate) youngs_modulus: f32,
-    /// Relax to static equilibrium after the run (stops when every vertex is slower than
-    /// --settle-speed m/s, or reports that it did not within --settle-seconds).
+    /// Solve for static equilibrium after the run (elasticity, gravity, contacts), to
+    /// --settle-tolerance or until --settle-seconds of simulated time; the report gives the
+    /// residual reached and whether it converged.
     #[arg(long)]
     pub(crate) settle: bool,
-    #[arg(long, default_value_t = 1e-4)]
-    pub(crate) settle_speed: f32,
+    /// Largest accepted net force and torque, relative to gravity's (1e-5 to 0.5).
+    #[arg(long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
+    pub(crate) settle_tolerance: f32,
     #[arg(long, default_value_t = 30.0)]
     pub(crate) settle_seconds: f32,
+    /// Solve for the rest shape that holds the groom's current shape under gravity (for grooms
+    /// fresh from a DCC tool), instead of taking the shape, or a styled groom's exported
+    /// `rest_darboux`, as the rest shape.
+    #[arg(long)]
+    pub(crate) sag_free: bool,
+    /// Collide with coif's default head (the ellipsoid `coif generate` grows hair on).
+    #[arg(long)]
+    pub(crate) head: bool,
+    /// Exit 1 when the settle does not reach its tolerance (the output is still written).
+    #[arg(long, requires = "settle")]
+    pub(crate) require_converged: bool,
     /// Solver iterations while settling (default: --iterations).
     #[arg(long)]
     pub(crate) settle_iterations: Option<u32>,

@@ -40,7 +40,7 @@ pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
         flag(&format!("--influences {name}"), *value, Range::closed(0.0, 1e3))?;
     }
     flag("--youngs-modulus", args.youngs_modulus, Range::above(0.0, 1e12))?;
-    flag("--settle-speed", args.settle_speed, Range::above(0.0, 1e3))?;
+    flag("--settle-tolerance", args.settle_tolerance, Range::above(0.0, 1e3))?;
     flag("--settle-seconds", args.settle_seconds, SECONDS)?;
     if let Some(iterations) = args.settle_iterations {
         flag("--settle-iterations", iterations, Range::closed(1.0, 1000.0))?;

@@ -43,7 +43,10 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 fn run_style(args: StyleArgs) -> Result<()> {
     use std::io::IsTerminal;
     super::checks::style(&args)?;
-    let recipe = coif::style::recipe::load(&args.recipe)?;
+    let mut recipe = coif::style::recipe::load(&args.recipe)?;
+    if let Some(count) = args.guides {
+        recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
+    }
     io::Format::from_extension(&args.output)?;
     let loaded = io::read_groom(&args.groom, &args.import.options()?)?;
     let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
@@ -57,7 +60,14 @@ fn run_style(args: StyleArgs) -> Result<()> {
             args.output.display()
         )));
     }
-    let options = coif::style::StyleOptions { progress, frames_per_second };
+    let scalp = match &args.scalp {
+        Some(path) => {
+            let (points, triangles) = coif::io::obj::read_triangles(path)?;
+            Some(std::sync::Arc::new(coif::interact::mesh_sdf::TriangleMesh { points, triangles }))
+        }
+        None => None,
+    };
+    let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
     let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
     let warnings = io::write_animated(
         &args.output,
@@ -70,10 +80,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
         eprintln!("coif: warning: {warning}");
     }
     if let Some(settle) = styled.report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
-        eprintln!(
-            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
-            settle.seconds, settle.max_speed
-        );
+        eprintln!("coif: warning: {}", settle_failure(&settle));
     }
     if args.json {
         print_json(json!({ "output": args.output, "report": styled.report, "warnings": warnings }));
@@ -128,30 +135,57 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         0.0,
         coif::limits::steps_for(seconds, params.dt.into()),
     )?;
-    let settle = args.settle.then(|| SettleOptions {
-        max_speed: args.settle_speed,
+    let settle = args.settle.then_some(SettleOptions {
+        tolerance: args.settle_tolerance,
         max_seconds: args.settle_seconds,
         iterations: args.settle_iterations,
-        ..SettleOptions::default()
     });
-    let (groom, summary) =
-        simulate(&loaded.groom, &SimulateOptions { params, seconds: args.seconds, settle })?;
-    if let Some(report) = summary.settle.filter(|r| !r.converged) {
-        eprintln!(
-            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
-            report.seconds, report.max_speed
-        );
+    let head = coif::head::Head::default();
+    let colliders = if args.head {
+        vec![coif::interact::obstacles::Shape::Ellipsoid {
+            center: head.center,
+            radii: head.radii,
+            rotation: glam::Quat::IDENTITY,
+        }]
+    } else {
+        Vec::new()
+    };
+    let options =
+        SimulateOptions { params, seconds: args.seconds, settle, sag_free: args.sag_free, colliders };
+    let (groom, summary) = simulate(&loaded.groom, &options)?;
+    let unsettled = summary.settle.filter(|r| !r.converged);
+    if let Some(report) = unsettled {
+        eprintln!("coif: warning: {}", settle_failure(&report));
     }
     if args.json {
         let warnings = io::write_groom(&args.output, &groom)?;
         print_json(
             json!({ "output": args.output, "simulation": summary, "groom": GroomInfo::of(&groom), "warnings": warnings }),
         );
-        Ok(())
     } else {
         eprintln!("simulated {} steps ({} s)", summary.steps, summary.seconds);
-        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())
+        if let Some(settle) = &summary.settle {
+            eprintln!(
+                "settle: {} after {:.2} s, force residual {:.2e}, torque residual {:.2e}",
+                if settle.converged { "converged" } else { "not converged" },
+                settle.seconds,
+                settle.force_residual,
+                settle.torque_residual
+            );
+        }
+        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())?;
     }
+    match unsettled {
+        Some(report) if args.require_converged => Err(Error::NotConverged(settle_failure(&report))),
+        _ => Ok(()),
+    }
+}
+
+fn settle_failure(report: &coif::sim::SettleReport) -> String {
+    format!(
+        "settling did not reach its tolerance {:.1e} within {:.2} s (force residual {:.2e}, torque residual {:.2e})",
+        report.tolerance, report.seconds, report.force_residual, report.torque_residual
+    )
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {

@@ -9,6 +9,7 @@ pub mod input;
 pub mod obj;
 pub mod usd_interop;
 pub mod usda;
+pub mod usdc;
 
 use std::path::Path;
 
@@ -26,7 +27,7 @@ pub enum Format {
     Hair,
     /// USD text, read and written by coif itself.
     Usda,
-    /// USD binary (crate), through usd-core.
+    /// USD binary (crate), read and written by coif itself.
     Usdc,
     /// USD zip package, through usd-core.
     Usdz,
@@ -62,7 +63,7 @@ impl Format {
             Some(Format::Hair)
         } else if head.starts_with(usda::MAGIC) {
             Some(Format::Usda)
-        } else if head.starts_with(b"PXR-USDC") {
+        } else if head.starts_with(usdc::MAGIC) {
             Some(Format::Usdc)
         } else if head.starts_with(b"PK\x03\x04") {
             Some(Format::Usdz)
@@ -159,6 +160,14 @@ pub fn read_groom_selected(
                 }
             }
         }
+        Format::Usdc if selection.variants.is_empty() => {
+            match usdc::read_file(path, options, selection.time)? {
+                usdc::ReadOutcome::Groom(groom) => groom,
+                usdc::ReadOutcome::NeedsComposition { .. } => {
+                    usd_interop::read(path, options, selection.time, &[])?
+                }
+            }
+        }
         Format::Usda | Format::Usdc | Format::Usdz => {
             usd_interop::read(path, options, selection.time, &selection.variants)?
         }
@@ -240,7 +249,12 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
             atomic::write_atomically(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))?;
             Ok(usd_warnings(path, groom))
         }
-        Format::Usdc | Format::Usdz => {
+        Format::Usdc => {
+            usda::check_writable(groom, path)?;
+            usdc::write(path, groom)?;
+            Ok(usd_warnings(path, groom))
+        }
+        Format::Usdz => {
             usda::check_writable(groom, path)?;
             usd_interop::write(path, groom)?;
             Ok(usd_warnings(path, groom))
@@ -271,7 +285,8 @@ pub fn write_animated(
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
-    match Format::from_extension(path)? {
+    let format = Format::from_extension(path)?;
+    match format {
         Format::Hair => Err(Error::Usage(format!(
             "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
             path.display()
@@ -283,6 +298,10 @@ pub fn write_animated(
                 end: frames.len() as f64,
                 per_second: frames_per_second as f64,
             };
+            if format == Format::Usdc {
+                usdc::write_animated(path, groom, frames, times)?;
+                return Ok(usd_warnings(path, groom));
+            }
             usd_interop::write_usd(path, |out| {
                 let mut writer = usda::AnimationWriter::begin(out, groom, times, path)?;
                 for (k, points) in frames.iter().enumerate() {

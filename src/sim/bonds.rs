@@ -45,8 +45,10 @@ pub struct BondInfluences(pub [f32; 4]);
 impl BondInfluences {
     /// Table 1, scenes 1 and 2: hydrogen 33 %, the other kinds 67 % (split here 20/30/17).
     pub const SCENE_1: BondInfluences = BondInfluences([0.33, 0.20, 0.30, 0.17]);
-    /// Table 1, scene 3 (perm): hydrogen + ionic 63 % (split evenly), disulfide 20 %, peptide 17 %.
-    pub const SCENE_3: BondInfluences = BondInfluences([0.315, 0.315, 0.20, 0.17]);
+    /// Table 1, scene 3 (perm): hydrogen + ionic 63 % (hydrogen 33 % as in scenes 1 and 2, ionic
+    /// the other 30 %), disulfide 20 %, peptide 17 %. The one source of the default: `simulate`'s
+    /// `--influences` and the recipe's `[bonds]` start from it.
+    pub const SCENE_3: BondInfluences = BondInfluences([0.33, 0.30, 0.20, 0.17]);
 
     pub fn total(&self) -> f32 {
         self.0.iter().sum()

@@ -65,8 +65,8 @@ pub mod bonds;
 pub mod constraints;
 pub mod cuticle;
 pub mod driver;
-mod lanes;
 pub mod rod;
+pub mod sag_free;
 pub mod settle;
 pub mod solver;
 
@@ -274,7 +274,6 @@ impl Simulation {
     pub fn step_with(&mut self, hooks: &dyn Hooks) {
         if self.masses_dirty || self.coefficients_dt != self.params.dt {
             self.rods.update_inverse_masses(self.params.frame_inertia_factor);
-            self.rods.update_coefficients(self.params.dt);
             self.masses_dirty = false;
             self.coefficients_dt = self.params.dt;
         }

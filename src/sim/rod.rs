@@ -6,9 +6,8 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::constraints::{darboux_canonical, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
+use super::constraints::{darboux_canonical, director3, E3};
 use super::cuticle::Cuticle;
-use super::lanes::LANES;
 use crate::groom::Groom;
 
 /// Physical material of hair. Moduli are SI; the rod radius comes from the groom's widths.
@@ -66,40 +65,43 @@ pub struct Rods {
     pub rest_darboux: Vec<Vec3>,
     /// Bend–twist compliance `α` per component (bend, bend, twist), 1/(N·m).
     pub compliance: Vec<Vec3>,
-    // Scratch, kept here so a step allocates nothing.
+    // Solver state, kept here so a step allocates nothing.
     pub(crate) previous_positions: Vec<Vec3>,
+    pub(crate) previous_frames: Vec<Quat>,
+    /// Angular velocity of each edge frame (world, rad/s).
+    pub(crate) angular_velocities: Vec<Vec3>,
+    /// Bend–twist multipliers accumulated in the current step.
     pub(crate) lambdas: Vec<Vec3>,
-    pub(crate) edge_directions: Vec<Vec3>,
-    pub(crate) solve_upper: Vec<f32>,
-    pub(crate) solve_values: Vec<f32>,
-    pub(crate) edge_coefficients: Vec<StretchShearCoefficients>,
-    pub(crate) pair_coefficients: Vec<BendTwistCoefficients>,
-    /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
-    pub(crate) work_units: Vec<(usize, usize, bool)>,
 }
+
+/// Largest frame inverse-inertia factor the solver uses. Frames carry angular velocity; nearly
+/// massless ones spin up from round-off and give the Newton step wild starting points, and the
+/// direct solve needs no light frames for conditioning (the Gauss–Seidel solver did).
+pub const FRAME_INERTIA_FACTOR_MAX: f32 = 1.0;
 
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
 pub fn frame_along(t: Vec3) -> Quat {
     Quat::from_rotation_arc(E3, t.normalize())
 }
 
-/// Groups of `LANES` consecutive strands with equal vertex counts run in SIMD lanes, every other
-/// strand alone. Depends only on the groom, so results do not depend on threads.
-fn work_units(offsets: &[u32]) -> Vec<(usize, usize, bool)> {
-    let strands = offsets.len().saturating_sub(1);
-    let count = |s: usize| offsets[s + 1] - offsets[s];
-    let mut units = Vec::new();
-    let mut s = 0;
-    while s < strands {
-        if s + LANES <= strands && (s..s + LANES).all(|t| count(t) == count(s)) {
-            units.push((s, LANES, true));
-            s += LANES;
-        } else {
-            units.push((s, 1, false));
-            s += 1;
-        }
-    }
-    units
+/// The arrays the strand solver works on, borrowed together.
+pub(crate) struct SolverParts<'a> {
+    pub offsets: &'a [u32],
+    pub x: &'a mut [Vec3],
+    pub v: &'a mut [Vec3],
+    pub x_prev: &'a mut [Vec3],
+    pub q: &'a mut [Quat],
+    pub q_prev: &'a mut [Quat],
+    pub omega: &'a mut [Vec3],
+    pub rest: &'a mut [Vec3],
+    pub lambda: &'a mut [Vec3],
+    pub w: &'a [f32],
+    pub wq: &'a [f32],
+    pub kinematic: &'a [bool],
+    pub targets: &'a [Vec3],
+    pub external: &'a [Vec3],
+    pub length: &'a [f32],
+    pub compliance: &'a [Vec3],
 }
 
 impl Rods {
@@ -124,13 +126,9 @@ impl Rods {
             rest_darboux: vec![Vec3::ZERO; n],
             compliance: vec![Vec3::ZERO; n],
             previous_positions: groom.points.clone(),
+            previous_frames: vec![Quat::IDENTITY; n],
+            angular_velocities: vec![Vec3::ZERO; n],
             lambdas: vec![Vec3::ZERO; n],
-            edge_directions: vec![Vec3::ZERO; n],
-            solve_upper: vec![0.0; n],
-            solve_values: vec![0.0; n],
-            edge_coefficients: vec![StretchShearCoefficients::default(); n],
-            pair_coefficients: vec![BendTwistCoefficients::default(); n],
-            work_units: Vec::new(),
         };
         let radius = |i: usize| {
             let w = groom.widths.get(i).copied().unwrap_or(0.0);
@@ -180,7 +178,6 @@ impl Rods {
             }
             rods.kinematic[first] = true;
         }
-        rods.work_units = work_units(&groom.strand_offsets);
         rods.update_inverse_masses(frame_inertia_factor);
         rods
     }
@@ -201,45 +198,31 @@ impl Rods {
             for i in first..last {
                 let l = self.rest_lengths[i];
                 let w = 2.0 / (self.mass[i] * self.mass_scale[i] + self.mass[i + 1] * self.mass_scale[i + 1]);
-                self.frame_inv_inertia[i] = if i == first { 0.0 } else { frame_inertia_factor * w / (l * l) };
+                let factor = frame_inertia_factor.min(FRAME_INERTIA_FACTOR_MAX);
+                self.frame_inv_inertia[i] = if i == first { 0.0 } else { factor * w / (l * l) };
             }
         }
     }
 
-    /// Recomputes the constraint projections' constants (they depend on masses, frame inertia,
-    /// compliance and Δt, none of which changes inside a step).
-    pub(crate) fn update_coefficients(&mut self, dt: f32) {
-        let inv_dt2 = 1.0 / (dt * dt);
-        for strand in 0..self.strand_count() {
-            let range = self.strand_range(strand);
-            let (first, last) = (range.start, range.end - 1);
-            // Stiff pairs (small α/Δt², fine segments) would leave light frames that swallow the
-            // shear corrections and pass bending to the vertices only after very many iterations:
-            // cap each frame's inverse inertia at the bending compliance α/Δt² of its pairs.
-            for e in first + 1..last {
-                let mut sum = 0.0;
-                let mut count = 0.0;
-                for pair in [e, e + 1] {
-                    if pair > first && pair < last {
-                        sum += self.compliance[pair].x;
-                        count += 1.0;
-                    }
-                }
-                if count > 0.0 {
-                    let cap = sum / count * inv_dt2;
-                    self.frame_inv_inertia[e] = self.frame_inv_inertia[e].min(cap);
-                }
-            }
-            for e in first..last {
-                let (w1, w2, wq, l) =
-                    (self.inv_mass[e], self.inv_mass[e + 1], self.frame_inv_inertia[e], self.rest_lengths[e]);
-                self.edge_coefficients[e] = StretchShearCoefficients::new(w1, w2, wq, l, 2.0);
-            }
-            for i in first + 1..last {
-                let (wq1, wq2) = (self.frame_inv_inertia[i - 1], self.frame_inv_inertia[i]);
-                self.pair_coefficients[i] =
-                    BendTwistCoefficients::new(wq1, wq2, self.compliance[i] * inv_dt2);
-            }
+    /// Every array the solver reads, split into the parts it writes and reads.
+    pub(crate) fn solver_parts(&mut self) -> SolverParts<'_> {
+        SolverParts {
+            offsets: &self.strand_offsets,
+            x: &mut self.positions,
+            v: &mut self.velocities,
+            x_prev: &mut self.previous_positions,
+            q: &mut self.frames,
+            q_prev: &mut self.previous_frames,
+            omega: &mut self.angular_velocities,
+            rest: &mut self.rest_darboux,
+            lambda: &mut self.lambdas,
+            w: &self.inv_mass,
+            wq: &self.frame_inv_inertia,
+            kinematic: &self.kinematic,
+            targets: &self.kinematic_targets,
+            external: &self.external_acceleration,
+            length: &self.rest_lengths,
+            compliance: &self.compliance,
         }
     }
 

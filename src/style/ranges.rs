@@ -27,7 +27,7 @@
 //! | stage `duration`, settle `max_seconds` | [0, 1e5] s |
 //! | `amount`, mask `fraction`, bond amounts | [0, 1] |
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
-//! | dry `heat` | [0, 100]; press `travel` [0, 1000] m; settle `max_speed` (0, 1000] m/s |
+//! | dry `heat` | [0, 100]; press `travel` [0, 1000] m; settle `tolerance` (0, 1000] |
 //! | stages | at most 10,000 |
 use crate::validate::{self, Range, COORDINATE, FRACTION, SECONDS};
 
@@ -143,6 +143,10 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
                 validate::vector("center", *center, COORDINATE).map_err(at)?;
                 validate::vector("half_extents", *half_extents, SIZE).map_err(at)?;
             }
+            Obstacle::Scalp { resolution, .. } => {
+                let cell = resolution.unwrap_or(super::recipe::MESH_RESOLUTION);
+                validate::number("resolution", cell, Range::closed(1e-4, 1.0)).map_err(at)?;
+            }
             Obstacle::Mesh { resolution, band, .. } => {
                 let cell = resolution.unwrap_or(super::recipe::MESH_RESOLUTION);
                 validate::number("resolution", cell, Range::closed(1e-4, 1.0)).map_err(at)?;
@@ -183,7 +187,9 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
                     validate::vector("dryer position", d.position, COORDINATE).map_err(at)?;
                     validate::vector("dryer target", d.target, COORDINATE).map_err(at)?;
                     validate::number("dryer strength", d.strength, Range::closed(0.0, 1e5)).map_err(at)?;
-                    validate::number("dryer falloff", d.falloff, Range::above(0.0, 1e3)).map_err(at)?;
+                    if let Some(falloff) = d.falloff {
+                        validate::number("dryer falloff", falloff, Range::above(0.0, 1e3)).map_err(at)?;
+                    }
                     if let Some(cone) = d.cone_degrees {
                         validate::number("dryer cone_degrees", cone, Range::above(0.0, 180.0)).map_err(at)?;
                     }
@@ -193,8 +199,8 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
                 validate::number("travel", *travel, Range::closed(0.0, 1e3)).map_err(at)?;
                 direction.map_or(Ok(()), |d| validate::direction("direction", d)).map_err(at)?;
             }
-            Stage::Settle { max_speed, .. } => {
-                validate::number("max_speed", *max_speed, Range::above(0.0, 1e3)).map_err(at)?;
+            Stage::Settle { tolerance, .. } => {
+                validate::number("tolerance", *tolerance, Range::above(0.0, 1e3)).map_err(at)?;
             }
             Stage::Process { .. }
             | Stage::Neutralise { .. }

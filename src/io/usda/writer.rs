@@ -24,17 +24,25 @@ pub struct TimeCodes {
 }
 
 /// One primvar as it will be written.
-struct Primvar<'a> {
-    usd_type: &'static str,
-    name: String,
-    interpolation: &'static str,
-    data: PrimvarData<'a>,
+pub(crate) struct Primvar<'a> {
+    pub usd_type: &'static str,
+    pub name: String,
+    pub interpolation: &'static str,
+    pub data: PrimvarData<'a>,
 }
 
-enum PrimvarData<'a> {
-    Floats { values: &'a [f32], components: usize },
+pub(crate) enum PrimvarData<'a> {
+    Floats {
+        values: &'a [f32],
+        components: usize,
+    },
     UVs(&'a [[f32; 2]]),
     Ints(Vec<i64>),
+    /// Integer tuples kept as floats in the groom model (`groom_closest_guides`: int3).
+    IntTuples {
+        values: &'a [f32],
+        components: usize,
+    },
 }
 
 /// Checks what `.usda` cannot store: cubic strands with too few control points for their basis.
@@ -197,12 +205,7 @@ fn write_head(
     head.push_str(
         "    upAxis = \"Y\"\n)\n\ndef Xform \"Groom\"\n{\n    def BasisCurves \"Strands\"\n    {\n",
     );
-    let (curve_type, basis) = match groom.basis {
-        CurveBasis::Linear => ("linear", None),
-        CurveBasis::Bezier => ("cubic", Some("bezier")),
-        CurveBasis::BSpline => ("cubic", Some("bspline")),
-        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-    };
+    let (curve_type, basis) = curve_type_and_basis(groom.basis);
     if let Some(basis) = basis {
         head.push_str(&format!("        uniform token basis = \"{basis}\"\n"));
     }
@@ -228,6 +231,17 @@ fn write_head(
             PrimvarData::Ints(values) => write_array(out, values, |buf, &v| {
                 buf.extend_from_slice(itoa::Buffer::new().format(v).as_bytes())
             })?,
+            PrimvarData::IntTuples { values, components } => {
+                let tuples: Vec<&[f32]> = values.chunks_exact(*components).collect();
+                write_array(out, &tuples, |buf, t| {
+                    let text: Vec<String> = t.iter().map(|&v| (v.round() as i64).to_string()).collect();
+                    let text = text.join(", ");
+                    match t.len() {
+                        1 => buf.extend_from_slice(text.as_bytes()),
+                        _ => buf.extend_from_slice(format!("({text})").as_bytes()),
+                    }
+                })?
+            }
         }
         write_label(
             out,
@@ -237,12 +251,22 @@ fn write_head(
     Ok(())
 }
 
+/// USD's `type` and `basis` tokens for a curve basis.
+pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&'static str>) {
+    match basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::BSpline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+    }
+}
+
 fn write_tail(out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {
     out.write_all(b"    }\n}\n\n")
 }
 
 /// The primvars a groom becomes, and warnings for attributes renamed or dropped.
-fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
+pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
     // Names the reader gives a meaning of their own are never taken by attributes.
@@ -287,7 +311,12 @@ fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
                 attribute.name
             ));
         }
+        let integer = attribute.name == crate::guides::CLOSEST_GUIDES;
         let usd_type = match (attribute.name.as_str(), attribute.components) {
+            (_, 1) if integer => "int[]",
+            (_, 2) if integer => "int2[]",
+            (_, 3) if integer => "int3[]",
+            (_, _) if integer => "int4[]",
             (crate::groom::attr::COLOR, 3) => "color3f[]",
             (names::REST, 3) => "point3f[]",
             (_, 1) => "float[]",
@@ -304,7 +333,11 @@ fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
             usd_type,
             name,
             interpolation,
-            data: PrimvarData::Floats { values: &attribute.data, components: attribute.components },
+            data: if integer {
+                PrimvarData::IntTuples { values: &attribute.data, components: attribute.components }
+            } else {
+                PrimvarData::Floats { values: &attribute.data, components: attribute.components }
+            },
         });
     }
     (primvars, warnings)
@@ -329,7 +362,7 @@ fn valid_name(name: &str) -> String {
 }
 
 /// Points' bounds grown by half the widest width: the extent USD expects on curves.
-fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
+pub(crate) fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
     let (lo, hi) = bounds(points)?;
     let half = Vec3::splat(widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5);
     Some([lo - half, hi + half])
