@@ -15,9 +15,11 @@ pub mod head;
 pub mod info;
 pub mod interact;
 pub mod io;
+pub mod limits;
 pub mod render;
 pub mod sim;
 pub mod style;
+pub mod validate;
 
 pub use error::{Error, Result};
 pub use groom::Groom;

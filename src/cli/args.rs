@@ -12,6 +12,12 @@ use coif::render::{camera::View, scene::HeadMode};
 pub(crate) struct Cli {
     #[command(subcommand)]
     pub(crate) command: Command,
+    /// Refuse jobs whose estimated memory exceeds this (e.g. 8G, 512M; default half the RAM).
+    #[arg(long, global = true, value_name = "SIZE")]
+    pub(crate) max_memory: Option<String>,
+    /// Refuse simulations of more steps than this.
+    #[arg(long, global = true, value_name = "STEPS", default_value_t = coif::limits::DEFAULT_MAX_STEPS)]
+    pub(crate) max_steps: u64,
 }
 
 #[derive(Subcommand)]
@@ -277,7 +283,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
     #[arg(long, default_value_t = 3.9e9)]
@@ -328,9 +334,10 @@ pub(crate) struct ImportArgs {
 }
 
 impl ImportArgs {
-    pub(crate) fn options(&self) -> ImportOptions {
+    pub(crate) fn options(&self) -> coif::Result<ImportOptions> {
+        super::checks::import(self)?;
         let frame = self.frame.map(|f| f.max(0.0) as u32);
-        ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame }
+        Ok(ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame })
     }
 
     pub(crate) fn selection(&self) -> io::usda::Selection {

@@ -12,10 +12,14 @@ use coif::{Error, Result};
 use super::args::*;
 
 pub(crate) fn run(cli: Cli) -> Result<()> {
+    if let Some(size) = &cli.max_memory {
+        coif::limits::set_max_memory(coif::limits::parse_size(size)?);
+    }
+    coif::limits::set_max_steps(cli.max_steps);
     match cli.command {
         Command::Generate(args) => run_generate(args),
         Command::Info { file, import, json } => {
-            let loaded = io::read_groom_selected(&file, &import.options(), &import.selection())?;
+            let loaded = io::read_groom_selected(&file, &import.options()?, &import.selection())?;
             let info = GroomInfo::of(&loaded.groom);
             if json {
                 print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
@@ -25,7 +29,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Convert { input, output, import, json, unreal } => {
-            let loaded = io::read_groom_selected(&input, &import.options(), &import.selection())?;
+            let loaded = io::read_groom_selected(&input, &import.options()?, &import.selection())?;
             write_and_report(&output, &loaded.groom, json, &io::ExportOptions { unreal })
         }
         Command::Simulate(args) => run_simulate(args),
@@ -38,12 +42,13 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 
 fn run_style(args: StyleArgs) -> Result<()> {
     use std::io::IsTerminal;
+    super::checks::style(&args)?;
     let mut recipe = coif::style::recipe::load(&args.recipe)?;
     if let Some(count) = args.guides {
         recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
     }
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.groom, &args.import.options())?;
+    let loaded = io::read_groom(&args.groom, &args.import.options()?)?;
     let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
     let frames_per_second = args.frames.unwrap_or(0.0);
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
@@ -105,8 +110,9 @@ fn run_style(args: StyleArgs) -> Result<()> {
 fn run_simulate(args: SimulateArgs) -> Result<()> {
     use coif::sim::driver::{parse_time_step, simulate, SimulateOptions};
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
+    super::checks::simulate(&args)?;
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
     let defaults = SimParams::default();
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
@@ -122,6 +128,13 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         material: coif::sim::Material { youngs_modulus: args.youngs_modulus, ..defaults.material },
         ..defaults
     };
+    let seconds = args.seconds as f64 + if args.settle { args.settle_seconds as f64 } else { 0.0 };
+    coif::limits::check_simulation(
+        &format!("simulating {} vertices for {seconds} s", loaded.groom.vertex_count()),
+        loaded.groom.vertex_count() as f64,
+        0.0,
+        coif::limits::steps_for(seconds, params.dt.into()),
+    )?;
     let settle = args.settle.then_some(SettleOptions {
         tolerance: args.settle_tolerance,
         max_seconds: args.settle_seconds,
@@ -177,6 +190,7 @@ fn settle_failure(report: &coif::sim::SettleReport) -> String {
 
 fn run_render(args: RenderArgs) -> Result<()> {
     use coif::render::{self, integrator::Mode, light::Environment, sampler::SamplerKind};
+    super::checks::render(&args)?;
     // Fail on a bad output name before reading or rendering anything.
     render::image::ImageFormat::from_path(&args.output)?;
     let (width, height) = render::parse_resolution(&args.res)?;
@@ -238,7 +252,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.environment = Environment::Constant(glam::Vec3::splat(radiance));
     }
 
-    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
     let bar = progress_bar();
     let progress = |done: u64, total: u64| {
         if let Some(bar) = &bar {
@@ -395,6 +409,7 @@ fn run_farm(action: FarmAction) -> Result<()> {
 }
 
 fn run_generate(args: GenerateArgs) -> Result<()> {
+    super::checks::generate(&args)?;
     let style = match args.style {
         HairStyle::Straight => Style::Straight,
         HairStyle::Wavy => Style::Wavy { amplitude: args.wave_amplitude, wavelength: args.wavelength },

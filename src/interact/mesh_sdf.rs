@@ -67,10 +67,18 @@ impl MeshSdf {
         let margin = Vec3::splat(band + cell);
         let origin = lo - margin;
         let extent = hi + margin - origin;
-        let dims = [0, 1, 2].map(|a| (extent[a] / cell).ceil() as usize + 1);
-        if dims.iter().product::<usize>() > 64 << 20 {
-            return Err(format!("a {}×{}×{} grid is too large; use larger cells", dims[0], dims[1], dims[2]));
+        // Counted in floats first: a huge extent or a tiny cell must not wrap the product.
+        let cells = [0, 1, 2].map(|a| (extent[a] as f64 / cell as f64).ceil() + 1.0);
+        if !cells.iter().all(|c| c.is_finite()) || cells.iter().product::<f64>() > (64 << 20) as f64 {
+            return Err(format!(
+                "a {:.0}×{:.0}×{:.0} grid is too large (at most {} cells); use larger cells",
+                cells[0],
+                cells[1],
+                cells[2],
+                64 << 20
+            ));
         }
+        let dims = cells.map(|c| c as usize);
         let normals = PseudoNormals::new(vertices, triangles);
 
         let count = dims[0] * dims[1] * dims[2];

@@ -3,6 +3,7 @@
 //! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
 pub mod alembic;
 pub mod atomic;
+pub mod cleanup;
 pub mod hair;
 pub mod input;
 pub mod obj;
@@ -172,12 +173,42 @@ pub fn read_groom_selected(
         }
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
+    check_contents(&groom, path)?;
     Ok(Loaded { groom, format })
+}
+
+/// What the groom model allows but no job can use: a file without strands, or attribute values
+/// (colours, wetness) that are not finite and would flow into every output.
+fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
+    if groom.strand_count() == 0 {
+        return Err(Error::format(path, "the file holds no strands"));
+    }
+    for attribute in &groom.attributes {
+        if let Some(index) = attribute.data.iter().position(|v| !v.is_finite()) {
+            let element = index / attribute.components.max(1);
+            let (rate, strand) = match attribute.rate {
+                crate::groom::AttributeRate::Strand => ("strand", element),
+                crate::groom::AttributeRate::Vertex => (
+                    "vertex",
+                    groom.strand_offsets.partition_point(|&o| o as usize <= element).saturating_sub(1),
+                ),
+            };
+            return Err(Error::format(
+                path,
+                format!(
+                    "attribute '{}': {rate} {element} (strand {strand}) has a non-finite value {}",
+                    attribute.name, attribute.data[index]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The first bytes of a file, enough to recognise every format's magic.
 fn read_head(path: &Path) -> Result<Vec<u8>> {
     use std::io::Read;
+    input::check_regular(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut head = Vec::with_capacity(16);
     file.take(16).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;

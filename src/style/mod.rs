@@ -3,6 +3,7 @@
 pub mod head_frame;
 pub mod layout;
 pub mod placement;
+pub mod ranges;
 pub mod recipe;
 pub mod run;
 

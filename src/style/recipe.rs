@@ -499,8 +499,7 @@ impl Stage {
 
 /// Reads and checks a recipe file.
 pub fn load(path: &Path) -> Result<Recipe> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse(&text, path)
+    parse(&crate::io::input::read_text(path)?, path)
 }
 
 /// Parses and checks recipe text; `path` names it in errors, and mesh obstacles' files are found
@@ -516,8 +515,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Recipe> {
 /// mesh is bad input: the error names the recipe, its line and the mesh file.
 fn bake_meshes(recipe: &mut Recipe, text: &str, recipe_path: &Path) -> Result<()> {
     let directory = recipe_path.parent().unwrap_or(Path::new(""));
+    let lines = super::ranges::Lines::new(text);
     for obstacle in &mut recipe.obstacles {
-        let line = line_column(text, obstacle.span().start).0;
+        let line = lines.line_column(text, obstacle.span().start).0;
         if let Obstacle::Mesh { name, path, resolution, band, sdf, mesh } = obstacle.get_mut() {
             let file = directory.join(&*path);
             let fail = |what: String| {
@@ -558,15 +558,14 @@ fn toml_message(error: &toml::de::Error, text: &str) -> String {
 }
 
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-    (line, column)
+    super::ranges::Lines::new(text).line_column(text, offset)
 }
 
 /// Semantic checks the types cannot express; each failure names its line.
 fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
-    let line_of = |span: std::ops::Range<usize>| line_column(text, span.start).0;
+    super::ranges::check_numbers(recipe, text)?;
+    let lines = super::ranges::Lines::new(text);
+    let line_of = |span: std::ops::Range<usize>| lines.line_column(text, span.start).0;
     let settings = &recipe.settings;
     let positive = |value: f32| value.is_finite() && value > 0.0;
     if !positive(settings.dt) || settings.dt > 0.1 {

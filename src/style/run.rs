@@ -107,6 +107,7 @@ pub struct Styled {
 
 /// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    crate::limits::check_style(groom, recipe, options.frames_per_second)?;
     if crate::guides::wanted(groom, recipe) {
         return crate::guides::style(groom, recipe, options);
     }

@@ -133,6 +133,18 @@ impl Walker<'_> {
             return Ok(None);
         };
         let points_line = points_attr.line;
+        // Like Alembic's --frame, a time outside the animation is refused, not clamped.
+        if let (Some(at), false) = (time, points_attr.samples.is_empty()) {
+            let times: Vec<f64> = points_attr.samples.iter().map(|s| s.0).collect();
+            let inside =
+                times.contains(&at) || (times.iter().any(|&t| t < at) && times.iter().any(|&t| t > at));
+            if !inside {
+                return Err(at_prim(
+                    points_line,
+                    format!("time {at} is outside the time samples of 'points' (nearest: {})", times[0]),
+                ));
+            }
+        }
         let points = match take_value(points_attr, time) {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,
