@@ -63,7 +63,7 @@ fn settle_options_out_of_range_exit_2_naming_key_and_range() {
         (["--settle-tolerance", "NaN"], "--settle-tolerance", "[1e-5, 0.5]"),
         (["--settle-seconds", "0"], "--settle-seconds", "(0, 3600]"),
         (["--settle-seconds", "1e9"], "--settle-seconds", "(0, 3600]"),
-        (["--settle-iterations", "0"], "iterations", "between 1 and 1000"),
+        (["--settle-iterations", "0"], "--settle-iterations", "[1, 1000]"),
         (["--dt", "2"], "time step", "(0, 1]"),
         (["--iterations", "5000"], "iterations", "between 1 and 1000"),
     ] {
@@ -86,7 +86,7 @@ fn recipe_settle_keys_out_of_range_exit_2_with_key_range_and_line() {
         (format!("{base}tolerance = 0.0\n"), "tolerance", "[1e-5, 0.5]"),
         (format!("{base}tolerance = 5.0\n"), "tolerance", "[1e-5, 0.5]"),
         (base.replace("max_seconds = 1.0", "max_seconds = 0.0"), "max_seconds", "(0, 3600]"),
-        (base.replace("dt = 0.0027777778", "dt = 0.5"), "dt", "at most 0.1 s"),
+        (base.replace("dt = 0.0027777778", "dt = 0.5"), "dt", "[0.000001, 0.1]"),
     ] {
         let recipe = dir.path().join("bad.toml");
         std::fs::write(&recipe, &text).unwrap();

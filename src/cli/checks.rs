@@ -40,8 +40,9 @@ pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
         flag(&format!("--influences {name}"), *value, Range::closed(0.0, 1e3))?;
     }
     flag("--youngs-modulus", args.youngs_modulus, Range::above(0.0, 1e12))?;
-    flag("--settle-tolerance", args.settle_tolerance, Range::above(0.0, 1e3))?;
-    flag("--settle-seconds", args.settle_seconds, SECONDS)?;
+    // The settle's own budget range (`sim::settle::MAX_SECONDS_RANGE`), one source for both.
+    let (_, max_settle) = coif::sim::settle::MAX_SECONDS_RANGE;
+    flag("--settle-seconds", args.settle_seconds, Range::above(0.0, max_settle as f64))?;
     if let Some(iterations) = args.settle_iterations {
         flag("--settle-iterations", iterations, Range::closed(1.0, 1000.0))?;
     }

@@ -27,7 +27,7 @@
 //! | stage `duration`, settle `max_seconds` | [0, 1e5] s |
 //! | `amount`, mask `fraction`, bond amounts | [0, 1] |
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
-//! | dry `heat` | [0, 100]; press `travel` [0, 1000] m; settle `tolerance` (0, 1000] |
+//! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | stages | at most 10,000 |
 use crate::validate::{self, Range, COORDINATE, FRACTION, SECONDS};
 
@@ -199,9 +199,8 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
                 validate::number("travel", *travel, Range::closed(0.0, 1e3)).map_err(at)?;
                 direction.map_or(Ok(()), |d| validate::direction("direction", d)).map_err(at)?;
             }
-            Stage::Settle { tolerance, .. } => {
-                validate::number("tolerance", *tolerance, Range::above(0.0, 1e3)).map_err(at)?;
-            }
+            // The settle tolerance is checked by the settle itself (`sim::settle::TOLERANCE_RANGE`).
+            Stage::Settle { .. } => {}
             Stage::Process { .. }
             | Stage::Neutralise { .. }
             | Stage::Rinse { .. }

@@ -133,15 +133,14 @@ impl Walker<'_> {
             return Ok(None);
         };
         let points_line = points_attr.line;
-        // Like Alembic's --frame, a time outside the animation is refused, not clamped.
-        if let (Some(at), false) = (time, points_attr.samples.is_empty()) {
-            let times: Vec<f64> = points_attr.samples.iter().map(|s| s.0).collect();
-            let inside =
-                times.contains(&at) || (times.iter().any(|&t| t < at) && times.iter().any(|&t| t > at));
-            if !inside {
+        // A time before the first sample is a frame the animation never reached (0 when it starts
+        // at 1): refused, not clamped. After the last sample the last value holds, as USD itself
+        // (and pxr) defines it: a shot often runs past a groom's final sample.
+        if let (Some(at), Some(first)) = (time, points_attr.samples.iter().map(|s| s.0).reduce(f64::min)) {
+            if at < first {
                 return Err(at_prim(
                     points_line,
-                    format!("time {at} is outside the time samples of 'points' (nearest: {})", times[0]),
+                    format!("time {at} is before the first time sample of 'points' ({first})"),
                 ));
             }
         }
