@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::groom::Groom;
 
 /// Bytes the simulation holds per vertex (positions, velocities, frames, rest shape, bonds,
-/// wetness, contact lists and scratch; measured ≈ 300 on the perm preset, rounded up).
+/// wetness, contact lists and scratch): a generous estimate, not yet measured.
 pub const SIM_BYTES_PER_VERTEX: f64 = 512.0;
 /// Bytes per water droplet (position, velocity, its list of touched vertices).
 pub const DROPLET_BYTES: f64 = 128.0;
