@@ -65,7 +65,7 @@ fn settle_options_out_of_range_exit_2_naming_key_and_range() {
         (["--settle-seconds", "1e9"], "--settle-seconds", "(0, 3600]"),
         (["--settle-iterations", "0"], "--settle-iterations", "[1, 1000]"),
         (["--dt", "2"], "time step", "(0, 1]"),
-        (["--iterations", "5000"], "iterations", "between 1 and 1000"),
+        (["--iterations", "5000"], "--iterations", "[1, 1000]"),
     ] {
         let mut args = vec!["simulate", path_str(&input), path_str(&output), "--settle"];
         args.extend(bad.iter());
