@@ -43,14 +43,16 @@ fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
     // recipe's head, it moves (measured: 197 of 200 strands under 1 mm, the worst 9 mm; see
     // `tests/sag_free.rs` for the < 1 mm goal the solver does not reach yet).
     let parsed = coif::style::recipe::load(&recipe).unwrap();
+    // The recipe as the run placed it on the input groom: its head frame turns the preset's
+    // gravity and colliders into world coordinates.
     let input = coif::io::read_groom(&groom, &Default::default()).unwrap().groom;
+    let placed = coif::style::placement::place(&parsed, &input, None).unwrap();
     let options = coif::sim::driver::SimulateOptions {
-        params: coif::style::run::sim_params(&parsed),
+        params: coif::style::run::sim_params(&placed.recipe),
         seconds: 2.0,
         settle: None,
         sag_free: false,
-        // Placed on the groom as it was styled (the head frame is fitted to the input).
-        colliders: coif::style::run::obstacle_shapes(&parsed, &input, None).unwrap(),
+        colliders: placed.shapes,
     };
     let (again, summary) = coif::sim::driver::simulate(&settled, &options).unwrap();
     assert_eq!(summary.rest, "rest_darboux");
