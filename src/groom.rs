@@ -6,6 +6,8 @@ use std::ops::Range;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+pub use crate::groups::{CurveGroup, CurveWrap};
+
 /// Canonical names of the attributes coif itself reads or writes. Format modules map them to
 /// their own conventions (`displayColor` in USD, `groom_color` in Alembic…).
 pub mod attr {
@@ -94,7 +96,13 @@ pub struct Groom {
     pub root_uvs: Option<Vec<[f32; 2]>>,
     /// Per-strand guide flag, when the groom distinguishes guides from rendered strands.
     pub guides: Option<Vec<bool>>,
+    /// The basis of a groom without a group table; with one, the first group's (each group
+    /// has its own, see [`crate::groups`]).
     pub basis: CurveBasis,
+    /// Named curve groups (one per curve prim / curves object); empty: one unnamed group.
+    pub groups: Vec<CurveGroup>,
+    /// Per-strand index into `groups`; empty when `groups` is.
+    pub group_ids: Vec<u32>,
     /// Named attributes, sorted by name (use [`Groom::set_attribute`] to add one).
     pub attributes: Vec<Attribute>,
 }
@@ -194,6 +202,7 @@ impl Groom {
         if let Some(guides) = &self.guides {
             check_len("guide flags", strands, guides.len())?;
         }
+        crate::groups::validate(self)?;
         for strand in 0..strands {
             let range = self.strand_range(strand);
             let points = &self.points[range.clone()];
