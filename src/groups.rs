@@ -116,11 +116,12 @@ impl Groom {
 
     /// One groom per group, each with a one-entry group table and only the attributes its group
     /// carries. A groom of one group is borrowed, not copied.
-    pub fn split_groups(&self) -> Result<Vec<(CurveGroup, Cow<'_, Groom>)>, GroomError> {
+    /// Each entry: the group's index, the group, and its strands.
+    pub fn split_groups(&self) -> Result<Vec<(usize, CurveGroup, Cow<'_, Groom>)>, GroomError> {
         if self.groups.len() <= 1 {
             let group = self.group(0).into_owned();
             if group.missing.is_empty() {
-                return Ok(vec![(group, Cow::Borrowed(self))]);
+                return Ok(vec![(0, group, Cow::Borrowed(self))]);
             }
         }
         let mut parts = Vec::with_capacity(self.group_count());
@@ -135,7 +136,7 @@ impl Groom {
             let mut table_entry = group.clone();
             table_entry.missing.clear();
             part.set_single_group(table_entry);
-            parts.push((group, Cow::Owned(part)));
+            parts.push((g, group, Cow::Owned(part)));
         }
         Ok(parts)
     }
@@ -365,8 +366,8 @@ mod tests {
         assert_eq!(groom.groups[1].missing, vec!["rest".to_string()]);
         let parts = groom.split_groups().unwrap();
         assert_eq!(parts.len(), 2);
-        assert_eq!(*parts[0].1, guides);
-        assert_eq!(*parts[1].1, children);
+        assert_eq!(*parts[0].2, guides);
+        assert_eq!(*parts[1].2, children);
     }
 
     #[test]

@@ -252,13 +252,7 @@ pub fn write_animated(
                 end: frames.len() as f64,
                 per_second: frames_per_second as f64,
             };
-            usd_interop::write_usd(path, |out| {
-                let mut writer = usda::AnimationWriter::begin(out, groom, times, path)?;
-                for (k, points) in frames.iter().enumerate() {
-                    writer.frame(k as f64 + 1.0, points)?;
-                }
-                writer.finish().map(|_| ())
-            })?;
+            usd_interop::write_usd(path, |out| usda::write_animated(groom, frames, times, out, path))?;
             Ok(usd_warnings(path, groom))
         }
         Format::Alembic => {
