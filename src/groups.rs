@@ -97,6 +97,17 @@ impl Groom {
         }
     }
 
+    /// [`Groom::drop_default_group`] for formats whose default group sits at any depth (an
+    /// Alembic curves object named `object_name` under optional Xforms).
+    pub fn drop_default_group_named(&mut self, object_name: &str) {
+        if let [group] = self.groups.as_slice() {
+            if group.name.rsplit('/').next() == Some(object_name) {
+                let name = group.name.clone();
+                self.drop_default_group(&name);
+            }
+        }
+    }
+
     /// Strand indices of group `group`, in order.
     pub fn group_strands(&self, group: usize) -> Vec<usize> {
         if self.groups.len() <= 1 {

@@ -219,6 +219,10 @@ pub(crate) struct StyleArgs {
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
+    /// Style only this curve group (a prim or object path, or its last name); repeatable. The
+    /// other groups pass through untouched.
+    #[arg(long = "group", value_name = "NAME")]
+    pub(crate) groups: Vec<String>,
 }
 
 #[derive(Args)]

@@ -720,7 +720,7 @@ fn vertex_hint(prim: &Prim) -> usize {
 
 /// Attributes whose values the groom reader uses; others are checked for syntax and dropped.
 fn wanted(name: &str) -> bool {
-    matches!(name, "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "xformOpOrder")
+    matches!(name, "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "purpose" | "xformOpOrder")
         || name.starts_with("primvars:")
         || name.starts_with("xformOp:")
 }
