@@ -36,6 +36,26 @@ pub enum AttributeRate {
     Strand,
 }
 
+/// What an attribute's numbers are, when a file said more than "floats" (a USD value type or
+/// role), so writers give the same type back and conversions move directions with the points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AttributeKind {
+    /// Plain numbers (the writer picks the type it always has for the name).
+    #[default]
+    Float,
+    Int,
+    Bool,
+    /// Positions: transformed like the points.
+    Point,
+    /// Unit directions: rotated with the points and kept unit length.
+    Normal,
+    /// Directions or velocities: rotated and scaled with the points.
+    Vector,
+    Color,
+    TexCoord,
+}
+
 /// A named float attribute with 1–4 components per element (bond rates, wetness, rest positions…).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attribute {
@@ -43,11 +63,17 @@ pub struct Attribute {
     pub rate: AttributeRate,
     pub components: usize,
     pub data: Vec<f32>,
+    pub kind: AttributeKind,
 }
 
 impl Attribute {
     pub fn new(name: impl Into<String>, rate: AttributeRate, components: usize, data: Vec<f32>) -> Self {
-        Attribute { name: name.into(), rate, components, data }
+        Attribute { name: name.into(), rate, components, data, kind: AttributeKind::Float }
+    }
+
+    pub fn with_kind(mut self, kind: AttributeKind) -> Self {
+        self.kind = kind;
+        self
     }
 
     /// Number of elements (vertices or strands) the data covers.

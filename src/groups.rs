@@ -311,7 +311,7 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
                 group.missing.push(name.to_string());
             }
         }
-        out.attributes.push(Attribute::new(name, rate, components, data));
+        out.attributes.push(Attribute::new(name, rate, components, data).with_kind(found[0].kind));
     }
     if let Some(first) = out.groups.first() {
         out.basis = first.basis;

@@ -90,6 +90,13 @@ fn unstyled_convert_round_trip_is_exact_in_pxr_and_in_coif() {
         for key in ["type", "basis", "wrap", "purpose", "counts", "segmentEnds"] {
             assert_eq!(a[key], b[key], "{path}: {key}");
         }
+        for (name, primvar) in a["primvars"].as_object().unwrap() {
+            let written = &b["primvars"][name];
+            assert_eq!(primvar["type"], written["type"], "{path}: primvar {name} keeps its type and role");
+            if primvar["interpolation"] == "uniform" {
+                assert_eq!(primvar["interpolation"], written["interpolation"], "{path}: primvar {name}");
+            }
+        }
         let (pa, pb) = (f32s(&a["world_points"]), f32s(&b["world_points"]));
         assert_eq!(pa.len(), pb.len());
         for (x, y) in pa.iter().zip(&pb) {
@@ -149,4 +156,38 @@ fn a_periodic_prim_exits_2_naming_it() {
     assert_eq!(out.status.code(), Some(2));
     let message = stderr(&out);
     assert!(message.contains("</Ring>") && message.contains("periodic"), "{message}");
+}
+
+#[test]
+fn directions_rotate_with_the_points_from_z_up() {
+    // Blender-style Z-up stage: a normal3f primvar and a plain float3 `surface_normal`.
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("zup.usda");
+    let normals = [[0.0f32, 0.0, 1.0], [0.0, 0.6, 0.8], [1.0, 0.0, 0.0]];
+    let text_normals: Vec<String> = normals.iter().map(|n| format!("({}, {}, {})", n[0], n[1], n[2])).collect();
+    std::fs::write(
+        &source,
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Z\"\n)\ndef BasisCurves \"Hair\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2, 2, 2]\n    point3f[] points = [(0, 0, 0), (0, 0, 1), (1, 0, 0), (1, 0, 1), (2, 0, 0), (2, 1, 1)]\n    normal3f[] primvars:N = [{0}] (\n        interpolation = \"uniform\"\n    )\n    float3[] primvars:surface_normal = [{0}] (\n        interpolation = \"uniform\"\n    )\n}}\n",
+            text_normals.join(", ")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("yup.usda");
+    let result = coif(&["convert", path_str(&source), path_str(&out)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let written = pxr_dump(&out, None);
+    assert_eq!(written["upAxis"], "Y");
+    for name in ["N", "surface_normal"] {
+        let values = f32s(&written["curves"][0]["primvars"][name]["values"]);
+        // Z up to Y up: (x, y, z) -> (x, z, -y).
+        let mean_dot: f32 = normals
+            .iter()
+            .zip(values.chunks_exact(3))
+            .map(|(n, w)| n[0] * w[0] + n[2] * w[1] - n[1] * w[2])
+            .sum::<f32>()
+            / normals.len() as f32;
+        assert!(mean_dot >= 0.999, "{name}: mean dot with the rotated source {mean_dot}");
+    }
+    assert_eq!(written["curves"][0]["primvars"]["N"]["type"], "normal3f[]");
 }

@@ -8,7 +8,9 @@ use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 use super::parser::{Attribute, Layer, Prim, Value};
 use super::{names, DEFAULT_WIDTH};
 use crate::error::{Error, Result};
-use crate::groom::{Attribute as GroomAttribute, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{
+    Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
+};
 use crate::io::{ImportOptions, UpAxis};
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
@@ -222,6 +224,7 @@ impl Walker<'_> {
                 .map(|v| v.to_f64());
             let attr = prim.attributes.iter_mut().find(|a| a.name == format!("primvars:{name}")).unwrap();
             let line = attr.line;
+            let type_name = attr.type_name.trim_end_matches("[]").to_string();
             let interpolation = attr.interpolation.clone().unwrap_or_else(|| "constant".into());
             let (kind_components, element_size) =
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
@@ -258,7 +261,8 @@ impl Walker<'_> {
                 }
                 _ => {
                     let groom_name = names::attribute_for_primvar(&name);
-                    curves.attributes.push(GroomAttribute::new(groom_name, rate, components, data));
+                    let kind = attribute_kind(&type_name, &groom_name, components);
+                    curves.attributes.push(GroomAttribute::new(groom_name, rate, components, data).with_kind(kind));
                 }
             }
         }
@@ -269,12 +273,19 @@ impl Walker<'_> {
             let width_scale = to_coif.determinant().abs().cbrt() as f32;
             let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
             curves.points.iter_mut().for_each(|p| *p = transform(*p));
-            for attribute in
-                curves.attributes.iter_mut().filter(|a| a.name == names::REST && a.components == 3)
-            {
+            let linear = glam::DMat3::from_mat4(to_coif);
+            for attribute in curves.attributes.iter_mut().filter(|a| a.components == 3) {
+                let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(attribute) {
+                    Some(AttributeKind::Point) => Box::new(transform),
+                    Some(AttributeKind::Normal) => {
+                        let normal_matrix = linear.inverse().transpose();
+                        Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
+                    }
+                    Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
+                    None => continue,
+                };
                 for c in attribute.data.chunks_exact_mut(3) {
-                    let p = transform(Vec3::from_slice(c));
-                    c.copy_from_slice(&p.to_array());
+                    c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
                 }
             }
             curves.widths = match widths {
@@ -288,6 +299,48 @@ impl Walker<'_> {
             curves.widths = widths.unwrap_or_else(|| vec![DEFAULT_WIDTH; curves.points.len()]);
         }
         Ok(Some(curves))
+    }
+}
+
+/// The kind a primvar's USD type gives an attribute; plain floats when the type is the one
+/// coif's writer would choose for that name anyway, so what coif writes reads back unchanged.
+fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKind {
+    let kind = match type_name {
+        "int" | "uint" | "int64" | "uint64" | "uchar" => AttributeKind::Int,
+        "bool" => AttributeKind::Bool,
+        t if t.starts_with("point3") => AttributeKind::Point,
+        t if t.starts_with("normal3") => AttributeKind::Normal,
+        t if t.starts_with("vector3") => AttributeKind::Vector,
+        t if t.starts_with("color") => AttributeKind::Color,
+        t if t.starts_with("texCoord") => AttributeKind::TexCoord,
+        _ => AttributeKind::Float,
+    };
+    let written_as_float = super::writer::usd_type(AttributeKind::Float, name, components);
+    if written_as_float.trim_end_matches("[]") == type_name.replace('h', "f").replace('d', "f") {
+        AttributeKind::Float
+    } else {
+        kind
+    }
+}
+
+/// How a 3-vector attribute follows the points from file space to coif's: by its kind, or for
+/// plain float3 data by its name (Blender's `surface_normal`, velocities…); `None`: not at all.
+fn direction_kind(attribute: &GroomAttribute) -> Option<AttributeKind> {
+    match attribute.kind {
+        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(attribute.kind),
+        AttributeKind::Float => {
+            let name = attribute.name.to_ascii_lowercase();
+            if name == names::REST {
+                Some(AttributeKind::Point)
+            } else if name == "n" || name.contains("normal") {
+                Some(AttributeKind::Normal)
+            } else if name == "v" || name.starts_with("velocit") {
+                Some(AttributeKind::Vector)
+            } else {
+                None
+            }
+        }
+        _ => None,
     }
 }
 

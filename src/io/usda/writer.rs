@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::names;
 use crate::error::{Error, Result};
-use crate::groom::{AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 
 /// Array elements formatted per task.
 const CHUNK: usize = 16 * 1024;
@@ -347,14 +347,7 @@ fn plan_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>,
                 attribute.name
             ));
         }
-        let usd_type = match (attribute.name.as_str(), attribute.components) {
-            (crate::groom::attr::COLOR, 3) => "color3f[]",
-            (names::REST, 3) => "point3f[]",
-            (_, 1) => "float[]",
-            (_, 2) => "float2[]",
-            (_, 3) => "float3[]",
-            _ => "float4[]",
-        };
+        let usd_type = usd_type(attribute.kind, &attribute.name, attribute.components);
         let interpolation = match attribute.rate {
             AttributeRate::Vertex => "vertex",
             AttributeRate::Strand => "uniform",
@@ -364,10 +357,36 @@ fn plan_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>,
             usd_type,
             name,
             interpolation,
-            data: PrimvarData::Floats { values: &attribute.data, components: attribute.components },
+            data: match attribute.kind {
+                AttributeKind::Int | AttributeKind::Bool => {
+                    PrimvarData::Ints(attribute.data.iter().map(|&v| v as i64).collect())
+                }
+                _ => PrimvarData::Floats { values: &attribute.data, components: attribute.components },
+            },
         });
     }
     (primvars, warnings)
+}
+
+/// The USD array type an attribute is written as: its kind's, or for plain floats the type coif
+/// always gives that name (the reader maps that type back to plain floats).
+pub(super) fn usd_type(kind: AttributeKind, name: &str, components: usize) -> &'static str {
+    const FLOATS: [&str; 4] = ["float[]", "float2[]", "float3[]", "float4[]"];
+    let by_size = |types: [&'static str; 4]| types[components.clamp(1, 4) - 1];
+    match kind {
+        AttributeKind::Int if components == 1 => "int[]",
+        AttributeKind::Bool if components == 1 => "bool[]",
+        AttributeKind::Point if components == 3 => "point3f[]",
+        AttributeKind::Normal if components == 3 => "normal3f[]",
+        AttributeKind::Vector if components == 3 => "vector3f[]",
+        AttributeKind::Color if components >= 3 => by_size(["", "", "color3f[]", "color4f[]"]),
+        AttributeKind::TexCoord if components >= 2 => by_size(["", "texCoord2f[]", "texCoord3f[]", ""]),
+        _ => match (name, components) {
+            (crate::groom::attr::COLOR, 3) => "color3f[]",
+            (names::REST, 3) => "point3f[]",
+            _ => by_size(FLOATS),
+        },
+    }
 }
 
 /// A USD property name (identifier segments joined by ':') made from any attribute name.
