@@ -9,7 +9,7 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic
+.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic fuzz-usdc
 
 setup: .deps/.setup-done
 
@@ -43,13 +43,29 @@ check-blender: setup
 	$(CARGO) run --release --locked --example alembic_check_files -- out/check-blender
 	.deps/bpy-venv/bin/python scripts/check_blender.py out/check-blender
 
-# Optional: fuzz the Alembic reader for FUZZ_RUNS executions (cargo-fuzz, installed if missing;
-# libFuzzer needs nightly flags, which RUSTC_BOOTSTRAP=1 unlocks on the stable toolchain).
-FUZZ_RUNS ?= 1000000
+# Fuzzing (cargo-fuzz, installed by scripts/fuzz_setup.sh if missing; libFuzzer needs nightly
+# flags, which RUSTC_BOOTSTRAP=1 unlocks on the stable toolchain). `make fuzz` runs every target
+# for FUZZ_RUNS executions from its seeds in fuzz/seeds/TARGET, with memory and time limits;
+# `make fuzz-smoke` runs 10^5 each. A crash leaves its input in fuzz/artifacts/TARGET.
+FUZZ_TARGETS := hair_reader usda_reader alembic_reader obj_reader recipe manifest
+FUZZ_RUNS ?= 10000000
+.PHONY: fuzz fuzz-smoke
+fuzz:
+	bash scripts/fuzz_setup.sh
+	set -e; for target in $(FUZZ_TARGETS); do \
+		mkdir -p fuzz/corpus/$$target; \
+		(cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run $$target corpus/$$target seeds/$$target -- \
+			-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10); \
+	done
+fuzz-smoke:
+	$(MAKE) fuzz FUZZ_RUNS=100000
 fuzz-alembic:
+	$(MAKE) fuzz FUZZ_TARGETS=alembic_reader
+# The same for the crate-file (.usdc) reader, from the seeds in fuzz/seeds-usdc.
+fuzz-usdc:
 	command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz --locked
-	mkdir -p fuzz/corpus/alembic_reader
-	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run alembic_reader corpus/alembic_reader seeds -- \
+	mkdir -p fuzz/corpus/usdc_reader
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run usdc_reader corpus/usdc_reader seeds-usdc -- \
 		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
 # Re-renders the renderer's golden images in tests/golden/ (view them before committing).
 golden: setup

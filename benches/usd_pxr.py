@@ -1,6 +1,7 @@
 """The pure-pxr side of `cargo bench --bench usd`: writes and reads the same groom as .usdc.
 
   usd_pxr.py write RAW_DIR OUT.usdc    RAW_DIR holds points.f32, widths.f32, counts.i32, ids.i32
+                                       and attributes.json naming NAME.f32 primvars
   usd_pxr.py read STAGE.usdc
 
 Prints one JSON object: seconds of the timed part, peak resident memory (VmHWM) and the resident
@@ -42,6 +43,8 @@ def main():
         folder, out = sys.argv[2], sys.argv[3]
         points, widths = load(folder, "points.f32", "f"), load(folder, "widths.f32", "f")
         counts, ids = load(folder, "counts.i32", "i"), load(folder, "ids.i32", "i")
+        with open(f"{folder}/attributes.json") as f:
+            attributes = [(a, load(folder, a["name"] + ".f32", "f")) for a in json.load(f)]
         start, cpu_start = time.perf_counter(), cpu_seconds()
         stage = Usd.Stage.CreateNew(out)
         UsdGeom.SetStageMetersPerUnit(stage, 1.0)
@@ -62,6 +65,12 @@ def main():
             "groom_id", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform
         )
         ids_primvar.Set(Vt.IntArray.FromBuffer(ids))
+        for attribute, values in attributes:
+            primvar = UsdGeom.PrimvarsAPI(curves).CreatePrimvar(
+                attribute["name"], Sdf.ValueTypeNames.Find(attribute["type"]), attribute["interpolation"]
+            )
+            array_type = Vt.FloatArray if attribute["type"] == "float[]" else Vt.Vec3fArray
+            primvar.Set(array_type.FromBuffer(values))
         stage.GetRootLayer().Save()
         seconds = time.perf_counter() - start
     else:
@@ -74,8 +83,8 @@ def main():
             bytes(memoryview(curves.GetCurveVertexCountsAttr().Get())),
             bytes(memoryview(curves.GetPointsAttr().Get())),
             bytes(memoryview(curves.GetWidthsAttr().Get())),
-            bytes(memoryview(UsdGeom.PrimvarsAPI(curves).GetPrimvar("groom_id").Get())),
         ]
+        data += [bytes(memoryview(p.Get())) for p in UsdGeom.PrimvarsAPI(curves).GetAuthoredPrimvars()]
         seconds = time.perf_counter() - start
         assert sum(len(d) for d in data) > 0
     cpu = cpu_seconds() - cpu_start

@@ -142,6 +142,15 @@ unsafe extern "C" fn filter_trampoline(args: *const sys::RTCFilterFunctionNArgum
 /// Lanes in a ray packet.
 pub const PACKET: usize = 8;
 
+/// A ray-hit struct as the bundled headers declare it, followed by room for the `instPrimID`
+/// field that Embree ≥ 4.3 built with instance arrays (the library we load) appends to its hit
+/// structs and writes on every hit. Without the room it overwrites the caller's stack.
+#[repr(C)]
+struct WithInstPrimId<T, const N: usize> {
+    value: T,
+    inst_prim_id: [u32; N],
+}
+
 /// A committed Embree scene.
 pub struct Scene<'d> {
     raw: sys::RTCScene,
@@ -284,21 +293,26 @@ impl<'d> Scene<'d> {
 
     /// The closest hit along a ray (its id goes to hit filters).
     pub fn intersect_ray(&self, ray: &Ray) -> Option<Hit> {
-        let mut rayhit = sys::RTCRayHit {
-            ray: raw_ray(ray),
-            hit: sys::RTCHit {
-                Ng_x: 0.0,
-                Ng_y: 0.0,
-                Ng_z: 0.0,
-                u: 0.0,
-                v: 0.0,
-                primID: sys::RTC_INVALID_GEOMETRY_ID,
-                geomID: sys::RTC_INVALID_GEOMETRY_ID,
-                instID: [sys::RTC_INVALID_GEOMETRY_ID],
+        let mut padded = WithInstPrimId {
+            value: sys::RTCRayHit {
+                ray: raw_ray(ray),
+                hit: sys::RTCHit {
+                    Ng_x: 0.0,
+                    Ng_y: 0.0,
+                    Ng_z: 0.0,
+                    u: 0.0,
+                    v: 0.0,
+                    primID: sys::RTC_INVALID_GEOMETRY_ID,
+                    geomID: sys::RTC_INVALID_GEOMETRY_ID,
+                    instID: [sys::RTC_INVALID_GEOMETRY_ID],
+                },
             },
+            inst_prim_id: [0],
         };
-        // SAFETY: committed scene; rayhit is a valid, aligned struct; null args use defaults.
-        unsafe { sys::rtcIntersect1(self.raw, &mut rayhit, ptr::null_mut()) };
+        // SAFETY: committed scene; rayhit is a valid, aligned struct followed by room for the
+        // instPrimID field the library writes; null args use defaults.
+        unsafe { sys::rtcIntersect1(self.raw, &mut padded.value, ptr::null_mut()) };
+        let rayhit = padded.value;
         let hit = rayhit.hit;
         (hit.geomID != sys::RTC_INVALID_GEOMETRY_ID).then(|| Hit {
             t: rayhit.ray.tfar,
@@ -331,32 +345,36 @@ impl<'d> Scene<'d> {
         #[repr(C, align(32))]
         struct Valid([i32; PACKET]);
         let mut valid = Valid([0; PACKET]);
-        let mut rh = sys::RTCRayHit8 {
-            ray: sys::RTCRay8 {
-                org_x: [0.0; PACKET],
-                org_y: [0.0; PACKET],
-                org_z: [0.0; PACKET],
-                tnear: [0.0; PACKET],
-                dir_x: [0.0; PACKET],
-                dir_y: [0.0; PACKET],
-                dir_z: [1.0; PACKET],
-                time: [0.0; PACKET],
-                tfar: [0.0; PACKET],
-                mask: [u32::MAX; PACKET],
-                id: [0; PACKET],
-                flags: [0; PACKET],
+        let mut padded = WithInstPrimId {
+            value: sys::RTCRayHit8 {
+                ray: sys::RTCRay8 {
+                    org_x: [0.0; PACKET],
+                    org_y: [0.0; PACKET],
+                    org_z: [0.0; PACKET],
+                    tnear: [0.0; PACKET],
+                    dir_x: [0.0; PACKET],
+                    dir_y: [0.0; PACKET],
+                    dir_z: [1.0; PACKET],
+                    time: [0.0; PACKET],
+                    tfar: [0.0; PACKET],
+                    mask: [u32::MAX; PACKET],
+                    id: [0; PACKET],
+                    flags: [0; PACKET],
+                },
+                hit: sys::RTCHit8 {
+                    Ng_x: [0.0; PACKET],
+                    Ng_y: [0.0; PACKET],
+                    Ng_z: [0.0; PACKET],
+                    u: [0.0; PACKET],
+                    v: [0.0; PACKET],
+                    primID: [sys::RTC_INVALID_GEOMETRY_ID; PACKET],
+                    geomID: [sys::RTC_INVALID_GEOMETRY_ID; PACKET],
+                    instID: [[sys::RTC_INVALID_GEOMETRY_ID; PACKET]],
+                },
             },
-            hit: sys::RTCHit8 {
-                Ng_x: [0.0; PACKET],
-                Ng_y: [0.0; PACKET],
-                Ng_z: [0.0; PACKET],
-                u: [0.0; PACKET],
-                v: [0.0; PACKET],
-                primID: [sys::RTC_INVALID_GEOMETRY_ID; PACKET],
-                geomID: [sys::RTC_INVALID_GEOMETRY_ID; PACKET],
-                instID: [[sys::RTC_INVALID_GEOMETRY_ID; PACKET]],
-            },
+            inst_prim_id: [0; PACKET],
         };
+        let rh = &mut padded.value;
         for (lane, ray) in rays.iter().enumerate() {
             let Some(ray) = ray else { continue };
             valid.0[lane] = -1;
@@ -373,7 +391,7 @@ impl<'d> Scene<'d> {
         // SAFETY: committed scene; `valid` and the 32-byte aligned packet live across the call.
         // Default (null) query arguments: the bundled headers' `RTCIntersectArguments` layout
         // does not match the 4.4 library's, and passing one crashes.
-        unsafe { sys::rtcIntersect8(valid.0.as_ptr(), self.raw, &mut rh, ptr::null_mut()) };
+        unsafe { sys::rtcIntersect8(valid.0.as_ptr(), self.raw, rh, ptr::null_mut()) };
         std::array::from_fn(|lane| {
             (valid.0[lane] != 0 && rh.hit.geomID[lane] != sys::RTC_INVALID_GEOMETRY_ID).then(|| Hit {
                 t: rh.ray.tfar[lane],

@@ -39,6 +39,10 @@ pub enum Error {
     /// An external library or helper program failed.
     #[error("{0}")]
     External(String),
+
+    /// A static solve did not reach its tolerance and the caller required it to.
+    #[error("{0}")]
+    NotConverged(String),
 }
 
 impl Error {
@@ -55,7 +59,7 @@ impl Error {
         match self {
             Error::Format { .. } | Error::InvalidGroom { .. } | Error::Groom(_) | Error::Usage(_) => 2,
             Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => 2,
-            Error::Io { .. } | Error::External(_) => 1,
+            Error::Io { .. } | Error::External(_) | Error::NotConverged(_) => 1,
         }
     }
 }

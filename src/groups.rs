@@ -229,7 +229,10 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
             let mut group = groom.group(g).into_owned();
             group.missing.clear();
             let index = match out.groups.iter().position(|o| {
-                o.name == group.name && o.basis == group.basis && o.wrap == group.wrap && o.purpose == group.purpose
+                o.name == group.name
+                    && o.basis == group.basis
+                    && o.wrap == group.wrap
+                    && o.purpose == group.purpose
             }) {
                 Some(i) => i,
                 None => {
@@ -271,7 +274,10 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         let found: Vec<&Attribute> = parts.iter().filter_map(|(g, _)| g.attribute(name)).collect();
         let components = found[0].components;
         if let Some(other) = found.iter().find(|a| a.components != components) {
-            return Err(GroomError::AttributeComponents { name: name.to_string(), components: other.components });
+            return Err(GroomError::AttributeComponents {
+                name: name.to_string(),
+                components: other.components,
+            });
         }
         let rate = if found.iter().all(|a| a.rate == AttributeRate::Strand) {
             AttributeRate::Strand
@@ -325,7 +331,11 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
 pub(crate) fn validate(groom: &Groom) -> Result<(), GroomError> {
     if groom.groups.is_empty() {
         if !groom.group_ids.is_empty() {
-            return Err(GroomError::Length { what: "group ids".into(), expected: 0, found: groom.group_ids.len() });
+            return Err(GroomError::Length {
+                what: "group ids".into(),
+                expected: 0,
+                found: groom.group_ids.len(),
+            });
         }
         return Ok(());
     }
@@ -353,9 +363,8 @@ mod tests {
     use super::*;
 
     fn prim(name: &str, basis: CurveBasis, strands: usize, with_rest: bool) -> Groom {
-        let lines: Vec<Vec<Vec3>> = (0..strands)
-            .map(|s| (0..4).map(|i| Vec3::new(s as f32, i as f32, 0.0)).collect())
-            .collect();
+        let lines: Vec<Vec<Vec3>> =
+            (0..strands).map(|s| (0..4).map(|i| Vec3::new(s as f32, i as f32, 0.0)).collect()).collect();
         let mut groom = Groom::from_strands(&lines, 1e-4);
         if with_rest {
             let data = groom.points.iter().flat_map(|p| p.to_array()).collect();

@@ -11,13 +11,16 @@ pub mod error;
 pub mod generate;
 pub mod groom;
 pub mod groups;
+pub mod guides;
 pub mod head;
 pub mod info;
 pub mod interact;
 pub mod io;
+pub mod limits;
 pub mod render;
 pub mod sim;
 pub mod style;
+pub mod validate;
 
 pub use error::{Error, Result};
 pub use groom::Groom;

@@ -8,6 +8,9 @@ mod cli;
 
 fn main() -> ExitCode {
     let parsed = cli::Cli::parse();
+    if let Err(error) = coif::io::cleanup::install_signal_handlers() {
+        eprintln!("coif: warning: cannot catch interrupts to clean up temporary files: {error}");
+    }
     match cli::run(parsed) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {

@@ -164,7 +164,8 @@ fn directions_rotate_with_the_points_from_z_up() {
     let dir = tempfile::tempdir().unwrap();
     let source = dir.path().join("zup.usda");
     let normals = [[0.0f32, 0.0, 1.0], [0.0, 0.6, 0.8], [1.0, 0.0, 0.0]];
-    let text_normals: Vec<String> = normals.iter().map(|n| format!("({}, {}, {})", n[0], n[1], n[2])).collect();
+    let text_normals: Vec<String> =
+        normals.iter().map(|n| format!("({}, {}, {})", n[0], n[1], n[2])).collect();
     std::fs::write(
         &source,
         format!(

@@ -138,7 +138,11 @@ duration = 1.0
 "#;
     // Press holds the floor at y = -0.18 at the end of the run.
     let styled = run(&groom, text);
-    let head = Shape::Ellipsoid { center: Vec3::ZERO, radii: coif::head::Head::default().radii };
+    let head = Shape::Ellipsoid {
+        center: Vec3::ZERO,
+        radii: coif::head::Head::default().radii,
+        rotation: glam::Quat::IDENTITY,
+    };
     let floor = Shape::Plane { point: Vec3::new(0.0, -0.18, 0.0), normal: Vec3::Y };
     let bar = Shape::Sphere { center: Vec3::new(0.0, -0.16, -0.1), radius: 0.03 };
     for (name, shape) in [("head", &head), ("floor", &floor), ("bar", &bar)] {

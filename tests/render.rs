@@ -3,7 +3,7 @@
 mod common;
 
 use coif::generate::{generate, GenerateParams, Style};
-use coif::render::integrator::Mode;
+use coif::render::integrator::{Lobe, Mode};
 use coif::render::light::Environment;
 use coif::render::scene::HeadMode;
 use coif::render::{render, with_threads, AovSet, RenderSettings};
@@ -53,12 +53,65 @@ fn white_furnace_image_is_uniformly_one() {
     assert!(grey_mean < 0.9, "grey hair in a furnace should darken: {grey_mean}");
 }
 
+/// The same furnace with the Chiang lobe: white hair has zero absorption (σa from colour 1), so
+/// every fibre passes on all light and the hair vanishes into the uniform environment.
+#[test]
+fn chiang_white_furnace_image_is_uniformly_one() {
+    let groom = small_groom(400);
+    let mut settings =
+        RenderSettings { width: 40, height: 30, spp: 64, max_depth: 256, ..Default::default() };
+    settings.lobe = Lobe::Chiang;
+    settings.scene.head = HeadMode::Off;
+    settings.scene.floor = false;
+    settings.scene.width_scale = 20.0;
+    settings.scene.color = Some(Vec3::ONE);
+    settings.key.irradiance = Vec3::ZERO;
+    settings.environment = Environment::Constant(Vec3::ONE);
+    let image = render(&groom, &settings, &|_, _| {}).unwrap().image;
+    let hair: Vec<f32> =
+        image.rgba.iter().filter(|p| p[3] > 0.5).map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
+    assert!(hair.len() > 100, "the hair should cover much of the frame ({} pixels)", hair.len());
+    let mean = hair.iter().sum::<f32>() / hair.len() as f32;
+    assert!((0.98..=1.02).contains(&mean), "mean radiance over hair {mean}, expected 1");
+
+    // Melanin absorbs: the furnace darkens, blue most.
+    settings.scene.melanin = Some([1.0, 0.0]);
+    let dark = render(&groom, &settings, &|_, _| {}).unwrap().image;
+    let mean_of =
+        |c: usize| dark.rgba.iter().filter(|p| p[3] > 0.5).map(|p| p[c]).sum::<f32>() / hair.len() as f32;
+    assert!(mean_of(0) < 0.9 && mean_of(2) < mean_of(0), "{} {}", mean_of(0), mean_of(2));
+}
+
+/// Pigment attributes out of range stop the render with a usage error naming the attribute and
+/// the strand, for either lobe (the groom is checked before anything is shaded).
+#[test]
+fn bad_pigment_attributes_are_rejected_by_name() {
+    use coif::groom::{Attribute, AttributeRate};
+    for (name, components, bad) in [("melanin", 1, 12.0f32), ("color", 3, -0.2), ("melanin", 1, f32::NAN)] {
+        let mut groom = small_groom(50);
+        let n = groom.strand_count();
+        let mut data = vec![0.5; n * components];
+        data[7 * components] = bad;
+        groom.set_attribute(Attribute::new(name, AttributeRate::Strand, components, data));
+        let settings =
+            RenderSettings { width: 8, height: 8, spp: 1, lobe: Lobe::Chiang, ..Default::default() };
+        let error = render(&groom, &settings, &|_, _| {}).err().expect("a bad attribute must fail");
+        let message = error.to_string();
+        assert!(matches!(error, coif::Error::Usage(_)), "{message}");
+        assert!(message.contains(name) && message.contains("strand 7"), "{message}");
+    }
+}
+
 #[test]
 fn image_is_bit_identical_on_one_and_two_threads() {
     let groom = small_groom(1500);
     let mut settings = RenderSettings { width: 64, height: 48, spp: 8, ..Default::default() };
     settings.scene.min_pixel_width = 0.5; // exercise the transparency filter too
     settings.aovs = AovSet { depth: true, tangent: true };
+    let chiang = RenderSettings { lobe: Lobe::Chiang, ..settings.clone() };
+    let c1 = with_threads(Some(1), || render(&groom, &chiang, &|_, _| {})).unwrap().unwrap();
+    let c2 = with_threads(Some(2), || render(&groom, &chiang, &|_, _| {})).unwrap().unwrap();
+    assert_eq!(c1.image.encode_png().unwrap(), c2.image.encode_png().unwrap(), "chiang lobe");
     let one = with_threads(Some(1), || render(&groom, &settings, &|_, _| {})).unwrap().unwrap();
     let two = with_threads(Some(2), || render(&groom, &settings, &|_, _| {})).unwrap().unwrap();
     let bits = |i: &coif::render::image::Image| -> Vec<u32> {
@@ -143,6 +196,14 @@ fn cli_rejects_bad_requests_without_writing() {
         (&["--attribute", "nonexistent"], "nonexistent"),
         (&["--camera", "1,2,3"], "--camera"),
         (&["--spp", "0"], "--spp"),
+        (&["--lobe", "chiang", "--melanin", "11"], "--melanin"),
+        (&["--lobe", "chiang", "--pheomelanin=-1"], "--pheomelanin"),
+        (&["--lobe", "chiang", "--melanin", "NaN"], "--melanin"),
+        (&["--lobe", "chiang", "--roughness", "0"], "--roughness"),
+        (&["--lobe", "chiang", "--azimuthal-roughness", "1.5"], "--azimuthal-roughness"),
+        (&["--lobe", "chiang", "--cuticle-tilt", "45"], "--cuticle-tilt"),
+        (&["--color", "0.5,-0.1,0.2"], "--color"),
+        (&["--lobe", "phong"], "--lobe"),
     ];
     for (extra, needle) in cases {
         let mut args = vec!["render", groom, "-o", path_str(&out_path), "--spp", "1", "--res", "8x8"];

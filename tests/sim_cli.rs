@@ -31,16 +31,34 @@ fn bad_simulate_options_exit_2_without_output() {
     let input = dir.path().join("in.hair");
     assert!(coif(&["generate", "-o", path_str(&input), "--strands", "5"]).status.success());
     let output = dir.path().join("out.hair");
-    for bad in [
-        vec!["--dt", "0"],
-        vec!["--iterations", "0"],
-        vec!["--influences", "0,0,0,0"],
-        vec!["--seconds", "-1"],
+    // Each refusal names what it refuses: the comma form of --influences parses (as the README
+    // writes it), so all-zero influences are refused for being zero, not for their syntax.
+    for (bad, named) in [
+        (vec!["--dt", "0"], "time step"),
+        (vec!["--iterations", "0"], "--iterations"),
+        (vec!["--influences", "0,0,0,0"], "influence"),
+        (vec!["--influences", "0", "0", "0", "0"], "influence"),
+        (vec!["--seconds=-1"], "--seconds = -1"),
+        (vec!["--youngs-modulus", "0"], "--youngs-modulus = 0"),
+        (vec!["--settle", "--settle-tolerance", "nan"], "--settle-tolerance = NaN"),
+        (vec!["--settle", "--settle-iterations", "0"], "--settle-iterations = 0"),
     ] {
         let mut args = vec!["simulate", path_str(&input), path_str(&output)];
         args.extend(bad.iter());
         let result = coif(&args);
         assert_eq!(result.status.code(), Some(2), "{bad:?}: {}", stderr(&result));
+        assert!(stderr(&result).contains(named), "{bad:?}: {}", stderr(&result));
     }
     assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
+}
+
+#[test]
+fn the_readme_influences_comma_form_parses() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    assert!(coif(&["generate", "-o", path_str(&input), "--strands", "3"]).status.success());
+    let output = dir.path().join("out.hair");
+    let args = ["--influences", "0.315,0.315,0.2,0.17", "--seconds", "0.01"];
+    let result = coif(&[&["simulate", path_str(&input), path_str(&output)][..], &args[..]].concat());
+    assert!(result.status.success(), "{}", stderr(&result));
 }

@@ -11,10 +11,7 @@ fn horizontal_strand(vertices: usize, length: f32) -> Groom {
 }
 
 fn settle(sim: &mut Simulation, hooks: &dyn Hooks) {
-    let report = sim.settle(
-        &SettleOptions { max_speed: 1e-4, quiet_time: 0.2, max_seconds: 40.0, iterations: None },
-        hooks,
-    );
+    let report = sim.settle(&SettleOptions { tolerance: 1e-4, max_seconds: 40.0, iterations: None }, hooks);
     assert!(report.converged, "{report:?}");
 }
 

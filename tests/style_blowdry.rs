@@ -6,6 +6,7 @@ use common::*;
 
 use std::path::{Path, PathBuf};
 
+use coif::style::head_frame::{FrameOverrides, HeadFrame};
 use coif::Groom;
 use glam::Vec3;
 
@@ -46,11 +47,23 @@ fn mean(values: impl Iterator<Item = f32>) -> f32 {
 fn blow_dry_sets_hair_fastest_near_the_jet_and_keeps_the_blown_shape() {
     let dir = tempfile::tempdir().unwrap();
     let preset = std::fs::read_to_string(repo("grooms/recipes/blowdry_scene2.toml")).unwrap();
-    // The preset's jet and drying, restated: the test's expectations derive from them.
-    let dryer_line = "dryer = { position = [0.0, -0.1, 0.35], target = [0.0, -0.15, 0.0], strength = 300.0, falloff = 0.05 }";
-    assert!(preset.contains(dryer_line) && preset.contains("evaporation = 0.3"));
+    // The preset's jet and drying, restated: the test's expectations derive from them. The jet is
+    // given in the head frame fitted to the groom (head units from the head's centre).
+    let dryer_line = "dryer = { position = [0.00, -1.07, 4.22], target = [0.00, -1.91, 0.15], strength = 300.0, falloff = 0.59 }";
+    assert!(
+        preset.contains("frame = \"head\"")
+            && preset.contains(dryer_line)
+            && preset.contains("evaporation = 0.3")
+    );
     assert!(preset.contains("duration = 1.5\nheat = 1.5"));
-    let (nozzle, target, falloff) = (Vec3::new(0.0, -0.1, 0.35), Vec3::new(0.0, -0.15, 0.0), 0.05);
+    let groom = coif::io::read_groom(&repo("grooms/seed_200x24cm.hair"), &Default::default()).unwrap().groom;
+    let head = HeadFrame::fit(&groom, None, &FrameOverrides::default()).unwrap();
+    let (nozzle, target, falloff) = (
+        head.point(Vec3::new(0.0, -1.07, 4.22)),
+        head.point(Vec3::new(0.0, -1.91, 0.15)),
+        0.59 * head.size(),
+    );
+    eprintln!("jet from {nozzle:?} to {target:?}, falloff {falloff} m");
 
     // Where each strand is when the dryer starts: the recipe up to the end of the press.
     let pressed = style(dir.path(), "pressed", &preset[..preset.find("[[stages]]\nkind = \"dry\"").unwrap()]);

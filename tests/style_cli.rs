@@ -106,7 +106,8 @@ fn bed_head_keeps_the_pressed_shape_only_when_it_dries_pressed() {
         style(&recipe, &groom, &out);
         read(&out)
     };
-    let unpressed = |t: &str| t.replace("travel = 0.21", "travel = 0.0");
+    assert!(base.contains("travel = 2.47"), "the control below must change the preset's travel");
+    let unpressed = |t: &str| t.replace("travel = 2.47", "travel = 0.0");
     let kept_wet = |t: &str| t.replace("kind = \"dry\"", "kind = \"process\"");
     let (dried, dried_rest) =
         pressed_side_tip_distances(&run("pressed", base.clone()), &run("unpressed", unpressed(&base)));
@@ -172,6 +173,11 @@ fn malformed_recipes_exit_2_with_the_line_and_write_nothing() {
         {
             let t = base.replace("kind = \"release\"", "kind = \"process\"");
             ("settle while wound", format!("line {}", line_of("kind = \"settle\"", &t) - 1), t)
+        },
+        {
+            // Metres where head units belong: a rod 40 head units (3.4 m) from the head.
+            let t = base.replacen("a = [-0.470, -1.828, 1.441]", "a = [-40.0, -1.828, 1.441]", 1);
+            ("head position out of range", format!("line {}", line_of("name = \"rod0\"", &t) - 1), t)
         },
     ];
     for (what, expected, text) in cases {

@@ -43,7 +43,7 @@ fn depth_inside(planes: &[(Vec3, f32)], p: Vec3) -> f32 {
     -planes.iter().map(|&(n, offset)| n.dot(p) - offset).fold(f32::MIN, f32::max)
 }
 
-const SETTLE: &str = "\n[[stages]]\nkind = \"settle\"\nmax_seconds = 3.0\nmax_speed = 0.001\n";
+const SETTLE: &str = "\n[[stages]]\nkind = \"settle\"\nmax_seconds = 3.0\ntolerance = 1e-3\n";
 
 /// Styles the 200-strand seed groom with `obstacles` (TOML) and a 3 s settle under gravity,
 /// from a recipe in `dir`; returns the settled points.
@@ -120,4 +120,40 @@ fn broken_mesh_files_exit_2_naming_the_file_and_the_recipe_line() {
         assert!(message.contains(reason), "{file}: {message:?} lacks {reason:?}");
         assert!(!output.exists(), "{file}: output written");
     }
+}
+
+#[test]
+fn a_scalp_given_on_the_command_line_is_the_recipes_scalp_obstacle() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = repo("grooms/meshes/head_lowpoly.obj");
+    let planes = convex_planes(&mesh);
+    let recipe = dir.path().join("scalp.toml");
+    std::fs::write(&recipe, format!("[[obstacles]]\nname = \"head\"\nshape = \"scalp\"\n{SETTLE}")).unwrap();
+    let groom = repo("grooms/seed_200x24cm.hair");
+    let out = dir.path().join("out.usda");
+    let args = ["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&out), "--quiet"];
+    let result = coif(&[&args[..], &["--scalp", path_str(&mesh)]].concat());
+    assert!(result.status.success(), "{}", stderr(&result));
+    let points = coif::io::read_groom(&out, &Default::default()).unwrap().groom.points;
+    let deepest = points.iter().map(|&p| depth_inside(&planes, p)).fold(f32::MIN, f32::max);
+    let resting = points.iter().filter(|&&p| depth_inside(&planes, p).abs() < 0.002).count();
+    eprintln!("--scalp: deepest vertex {deepest:.6} m inside the mesh, {resting} resting on it");
+    assert!(deepest < 2e-4 && resting >= 100, "deepest {deepest} m, {resting} resting");
+
+    // A scalp file that cannot be read is bad input: exit 2 naming it, nothing written.
+    let missing = dir.path().join("missing.obj");
+    let unwritten = dir.path().join("unwritten.usda");
+    let result = coif(&[
+        "style",
+        path_str(&recipe),
+        "--groom",
+        path_str(&groom),
+        "-o",
+        path_str(&unwritten),
+        "--scalp",
+        path_str(&missing),
+    ]);
+    assert_eq!(result.status.code(), Some(2), "{}", stderr(&result));
+    assert!(stderr(&result).contains("missing.obj"), "{}", stderr(&result));
+    assert!(!unwritten.exists(), "output written");
 }

@@ -317,7 +317,8 @@ fn composed_stages_are_flattened_by_usd_core_with_the_chosen_variant() {
 fn missing_python_or_usd_core_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let hair = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/sample_wavy.hair");
-    let out_path = dir.path().join("x.usdc");
+    // .usdc is native now; .usdz still goes through usd-core.
+    let out_path = dir.path().join("x.usdz");
     for (python, expected) in
         [("/nonexistent/python", "COIF_PYTHON"), ("python3", "usd-core (pxr) is missing")]
     {

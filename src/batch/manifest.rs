@@ -88,8 +88,7 @@ pub struct Manifest {
 
 /// Reads a manifest and expands its tasks and wedges.
 pub fn load(path: &Path) -> Result<Manifest> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse(&text, path)
+    parse(&crate::io::input::read_text(path)?, path)
 }
 
 pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
@@ -105,6 +104,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
                    wedge_values: Vec<String>,
                    line: usize|
      -> Result<()> {
+        check_name(&name).map_err(|m| bad(format!("line {line}: {m}")))?;
         let pick = |field: &Option<String>, default: &Option<String>, what: &str| {
             field.clone().or_else(|| default.clone()).ok_or_else(|| {
                 bad(format!("line {line}: task '{name}' has no {what} (and [defaults] gives none)"))
@@ -127,6 +127,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
                 .replace("{groom}", &stem(&groom))
                 .replace("{recipe}", &stem(&recipe))
         };
+        for template in outputs.iter().chain(preview.iter()) {
+            if Path::new(&fill(template)).components().any(|c| c == std::path::Component::ParentDir) {
+                return Err(bad(format!(
+                    "line {line}: task '{name}': output '{}' climbs out of its folder with '..'",
+                    fill(template)
+                )));
+            }
+        }
         let mut all_overrides: Vec<(String, toml::Value)> =
             file.defaults.overrides.clone().into_iter().collect();
         all_overrides.extend(spec.overrides.clone());
@@ -150,9 +158,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
         let name = spec.name.clone().ok_or_else(|| bad(format!("line {line}: a task needs a name")))?;
         add(spec, name, Vec::new(), Vec::new(), line)?;
     }
+    let mut planned = file.tasks.len();
     for spanned in &file.wedges {
         let line = line_of(text, spanned.span().start);
         let wedge = spanned.get_ref();
+        check_name(&wedge.name).map_err(|m| bad(format!("line {line}: wedge {m}")))?;
         if wedge.task.name.is_some() {
             return Err(bad(format!(
                 "line {line}: a wedge's tasks are named after the wedge; drop `name` from its task fields"
@@ -164,13 +174,19 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
                 wedge.name
             )));
         }
-        let combinations: usize = wedge.parameters.values().map(Vec::len).product();
-        if combinations > 100_000 {
+        // Counted with overflow checks: 2^64 combinations must not wrap to a small number.
+        let combinations = wedge
+            .parameters
+            .values()
+            .try_fold(1usize, |n, values| n.checked_mul(values.len()).filter(|&n| n <= MAX_TASKS));
+        let Some(combinations) = combinations.filter(|&n| planned + n <= MAX_TASKS) else {
+            let exact = wedge.parameters.values().map(|v| v.len() as f64).product::<f64>();
             return Err(bad(format!(
-                "line {line}: wedge '{}' expands to {combinations} tasks; split it",
+                "line {line}: wedge '{}' expands to {exact:.0} tasks; a manifest may have at most {MAX_TASKS}",
                 wedge.name
             )));
-        }
+        };
+        planned += combinations;
         for combination in 0..combinations {
             // Mixed-radix counting over the parameters, last parameter fastest.
             let mut rest = combination;
@@ -208,6 +224,28 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
         contact_sheet: file.contact_sheet.as_deref().map(resolve),
         tasks,
     })
+}
+
+/// Tasks a manifest may expand to.
+pub const MAX_TASKS: usize = 100_000;
+
+/// Task and wedge names become file names (logs, sidecars, `{name}` in outputs): one plain path
+/// component, so no name can reach outside the folder it is put in.
+fn check_name(name: &str) -> std::result::Result<(), String> {
+    let plain = !name.is_empty()
+        && name != "."
+        && name != ".."
+        && !name.contains(['/', '\\', '\0'])
+        && !name.chars().any(char::is_control)
+        && name.len() <= 200;
+    if plain {
+        Ok(())
+    } else {
+        Err(format!(
+            "task name {name:?} must be a plain file name (no '/', '\\', '..' or control characters, \
+             at most 200 bytes)"
+        ))
+    }
 }
 
 fn line_of(text: &str, offset: usize) -> usize {

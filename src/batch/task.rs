@@ -37,7 +37,7 @@ fn all_outputs(task: &Task) -> Vec<PathBuf> {
 /// The recipe text with the task's overrides applied, and its digest with the bytes of the groom
 /// and of every mesh the recipe loads.
 fn effective_inputs(task: &Task) -> Result<(String, String)> {
-    let text = std::fs::read_to_string(&task.recipe).map_err(|e| Error::io(&task.recipe, e))?;
+    let text = crate::io::input::read_text(&task.recipe)?;
     let effective = if task.overrides.is_empty() {
         text
     } else {
@@ -49,6 +49,7 @@ fn effective_inputs(task: &Task) -> Result<(String, String)> {
         }
         toml::to_string(&value).expect("TOML values serialise")
     };
+    crate::io::input::check_regular(&task.groom)?;
     let groom = std::fs::read(&task.groom).map_err(|e| Error::io(&task.groom, e))?;
     let directory = task.recipe.parent().unwrap_or(Path::new("."));
     // A recipe or mesh that cannot be read adds nothing here: the run itself reports it.

@@ -12,6 +12,12 @@ use coif::render::{camera::View, scene::HeadMode};
 pub(crate) struct Cli {
     #[command(subcommand)]
     pub(crate) command: Command,
+    /// Refuse jobs whose estimated memory exceeds this (e.g. 8G, 512M; default half the RAM).
+    #[arg(long, global = true, value_name = "SIZE")]
+    pub(crate) max_memory: Option<String>,
+    /// Refuse simulations of more steps than this.
+    #[arg(long, global = true, value_name = "STEPS", default_value_t = coif::limits::DEFAULT_MAX_STEPS)]
+    pub(crate) max_steps: u64,
 }
 
 #[derive(Subcommand)]
@@ -114,6 +120,12 @@ pub(crate) enum RenderMode {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum LobeArg {
+    Chiang,
+    KajiyaKay,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum SamplerName {
     Sobol,
     Independent,
@@ -161,6 +173,26 @@ pub(crate) struct RenderArgs {
     /// Hair colour as linear RGB r,g,b in [0, 1] (default: the groom's `color`, else brown).
     #[arg(long)]
     pub(crate) color: Option<String>,
+    /// Hair scattering model: kajiya-kay (the preview default) or chiang (physically based:
+    /// R, TT, TRT and residual lobes, melanin pigments).
+    #[arg(long, value_enum, default_value_t = LobeArg::KajiyaKay)]
+    pub(crate) lobe: LobeArg,
+    /// Eumelanin concentration, 0 (white) .. 8 (black), 10 at most (chiang lobe; overrides the
+    /// groom's colour and `melanin` attribute).
+    #[arg(long)]
+    pub(crate) melanin: Option<f32>,
+    /// Pheomelanin concentration, 0..10 (red; chiang lobe).
+    #[arg(long)]
+    pub(crate) pheomelanin: Option<f32>,
+    /// Longitudinal roughness β_m of the chiang lobe, 0.02..1.
+    #[arg(long, default_value_t = 0.3)]
+    pub(crate) roughness: f32,
+    /// Azimuthal roughness β_n of the chiang lobe, 0.02..1.
+    #[arg(long, default_value_t = 0.3)]
+    pub(crate) azimuthal_roughness: f32,
+    /// Cuticle scale tilt of the chiang lobe, degrees (-10..10).
+    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    pub(crate) cuticle_tilt: f32,
     /// Multiply strand widths (draws hair thicker than it is; 1 = true width).
     #[arg(long, default_value_t = 1.0)]
     pub(crate) width_scale: f32,
@@ -223,6 +255,14 @@ pub(crate) struct StyleArgs {
     /// other groups pass through untouched.
     #[arg(long = "group", value_name = "NAME")]
     pub(crate) groups: Vec<String>,
+    /// Simulate this many guides (spread evenly over the scalp) and interpolate the other
+    /// strands from them; overrides the recipe's `[guides]`.
+    #[arg(long, value_name = "N")]
+    pub(crate) guides: Option<usize>,
+    /// The groom's scalp or head mesh, a Wavefront OBJ in coif's space (metres, Y up): the
+    /// recipe's `shape = "scalp"` obstacles collide with it and its head frame is fitted to it.
+    #[arg(long, value_name = "OBJ")]
+    pub(crate) scalp: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -247,19 +287,32 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
     #[arg(long, default_value_t = 3.9e9)]
     pub(crate) youngs_modulus: f32,
-    /// Relax to static equilibrium after the run (stops when every vertex is slower than
-    /// --settle-speed m/s, or reports that it did not within --settle-seconds).
+    /// Solve for static equilibrium after the run (elasticity, gravity, contacts), to
+    /// --settle-tolerance or until --settle-seconds of simulated time; the report gives the
+    /// residual reached and whether it converged.
     #[arg(long)]
     pub(crate) settle: bool,
-    #[arg(long, default_value_t = 1e-4)]
-    pub(crate) settle_speed: f32,
+    /// Largest accepted net force and torque, relative to gravity's (1e-5 to 0.5).
+    #[arg(long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
+    pub(crate) settle_tolerance: f32,
     #[arg(long, default_value_t = 30.0)]
     pub(crate) settle_seconds: f32,
+    /// Solve for the rest shape that holds the groom's current shape under gravity (for grooms
+    /// fresh from a DCC tool), instead of taking the shape, or a styled groom's exported
+    /// `rest_darboux`, as the rest shape.
+    #[arg(long)]
+    pub(crate) sag_free: bool,
+    /// Collide with coif's default head (the ellipsoid `coif generate` grows hair on).
+    #[arg(long)]
+    pub(crate) head: bool,
+    /// Exit 1 when the settle does not reach its tolerance (the output is still written).
+    #[arg(long, requires = "settle")]
+    pub(crate) require_converged: bool,
     /// Solver iterations while settling (default: --iterations).
     #[arg(long)]
     pub(crate) settle_iterations: Option<u32>,
@@ -285,9 +338,10 @@ pub(crate) struct ImportArgs {
 }
 
 impl ImportArgs {
-    pub(crate) fn options(&self) -> ImportOptions {
+    pub(crate) fn options(&self) -> coif::Result<ImportOptions> {
+        super::checks::import(self)?;
         let frame = self.frame.map(|f| f.max(0.0) as u32);
-        ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame }
+        Ok(ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame })
     }
 
     pub(crate) fn selection(&self) -> io::usda::Selection {

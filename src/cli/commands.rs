@@ -12,10 +12,14 @@ use coif::{Error, Result};
 use super::args::*;
 
 pub(crate) fn run(cli: Cli) -> Result<()> {
+    if let Some(size) = &cli.max_memory {
+        coif::limits::set_max_memory(coif::limits::parse_size(size)?);
+    }
+    coif::limits::set_max_steps(cli.max_steps);
     match cli.command {
         Command::Generate(args) => run_generate(args),
         Command::Info { file, import, json } => {
-            let loaded = io::read_groom_selected(&file, &import.options(), &import.selection())?;
+            let loaded = io::read_groom_selected(&file, &import.options()?, &import.selection())?;
             let info = GroomInfo::of(&loaded.groom);
             if json {
                 print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
@@ -25,7 +29,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Convert { input, output, import, json, unreal } => {
-            let loaded = io::read_groom_selected(&input, &import.options(), &import.selection())?;
+            let loaded = io::read_groom_selected(&input, &import.options()?, &import.selection())?;
             write_and_report(&output, &loaded.groom, json, &io::ExportOptions { unreal })
         }
         Command::Simulate(args) => run_simulate(args),
@@ -38,9 +42,13 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 
 fn run_style(args: StyleArgs) -> Result<()> {
     use std::io::IsTerminal;
-    let recipe = coif::style::recipe::load(&args.recipe)?;
+    super::checks::style(&args)?;
+    let mut recipe = coif::style::recipe::load(&args.recipe)?;
+    if let Some(count) = args.guides {
+        recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
+    }
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.groom, &args.import.options())?;
+    let loaded = io::read_groom(&args.groom, &args.import.options()?)?;
     let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
     let frames_per_second = args.frames.unwrap_or(0.0);
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
@@ -52,28 +60,27 @@ fn run_style(args: StyleArgs) -> Result<()> {
             args.output.display()
         )));
     }
-    let options = coif::style::StyleOptions { progress, frames_per_second };
+    let scalp = match &args.scalp {
+        Some(path) => {
+            let (points, triangles) = coif::io::obj::read_triangles(path)?;
+            Some(std::sync::Arc::new(coif::interact::mesh_sdf::TriangleMesh { points, triangles }))
+        }
+        None => None,
+    };
+    let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
     let (groom, frames, report) = if args.groups.is_empty() {
         let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
         (styled.groom, styled.frames, styled.report)
     } else {
         style_groups(&loaded.groom, &args.groups, &recipe, &options)?
     };
-    let warnings = io::write_animated(
-        &args.output,
-        &groom,
-        &frames,
-        frames_per_second,
-        &io::ExportOptions::default(),
-    )?;
+    let warnings =
+        io::write_animated(&args.output, &groom, &frames, frames_per_second, &io::ExportOptions::default())?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
     if let Some(settle) = report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
-        eprintln!(
-            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
-            settle.seconds, settle.max_speed
-        );
+        eprintln!("coif: warning: {}", settle_failure(&settle));
     }
     if args.json {
         print_json(json!({ "output": args.output, "report": report, "warnings": warnings }));
@@ -123,8 +130,9 @@ fn style_groups(
 fn run_simulate(args: SimulateArgs) -> Result<()> {
     use coif::sim::driver::{parse_time_step, simulate, SimulateOptions};
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
+    super::checks::simulate(&args)?;
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
     let defaults = SimParams::default();
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
@@ -140,34 +148,69 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         material: coif::sim::Material { youngs_modulus: args.youngs_modulus, ..defaults.material },
         ..defaults
     };
-    let settle = args.settle.then(|| SettleOptions {
-        max_speed: args.settle_speed,
+    let seconds = args.seconds as f64 + if args.settle { args.settle_seconds as f64 } else { 0.0 };
+    coif::limits::check_simulation(
+        &format!("simulating {} vertices for {seconds} s", loaded.groom.vertex_count()),
+        loaded.groom.vertex_count() as f64,
+        0.0,
+        coif::limits::steps_for(seconds, params.dt.into()),
+    )?;
+    let settle = args.settle.then_some(SettleOptions {
+        tolerance: args.settle_tolerance,
         max_seconds: args.settle_seconds,
         iterations: args.settle_iterations,
-        ..SettleOptions::default()
     });
-    let (groom, summary) =
-        simulate(&loaded.groom, &SimulateOptions { params, seconds: args.seconds, settle })?;
-    if let Some(report) = summary.settle.filter(|r| !r.converged) {
-        eprintln!(
-            "coif: warning: settling did not converge within {} s (max speed {} m/s)",
-            report.seconds, report.max_speed
-        );
+    let head = coif::head::Head::default();
+    let colliders = if args.head {
+        vec![coif::interact::obstacles::Shape::Ellipsoid {
+            center: head.center,
+            radii: head.radii,
+            rotation: glam::Quat::IDENTITY,
+        }]
+    } else {
+        Vec::new()
+    };
+    let options =
+        SimulateOptions { params, seconds: args.seconds, settle, sag_free: args.sag_free, colliders };
+    let (groom, summary) = simulate(&loaded.groom, &options)?;
+    let unsettled = summary.settle.filter(|r| !r.converged);
+    if let Some(report) = unsettled {
+        eprintln!("coif: warning: {}", settle_failure(&report));
     }
     if args.json {
         let warnings = io::write_groom(&args.output, &groom)?;
         print_json(
             json!({ "output": args.output, "simulation": summary, "groom": GroomInfo::of(&groom), "warnings": warnings }),
         );
-        Ok(())
     } else {
         eprintln!("simulated {} steps ({} s)", summary.steps, summary.seconds);
-        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())
+        if let Some(settle) = &summary.settle {
+            eprintln!(
+                "settle: {} after {:.2} s, force residual {:.2e}, torque residual {:.2e}",
+                if settle.converged { "converged" } else { "not converged" },
+                settle.seconds,
+                settle.force_residual,
+                settle.torque_residual
+            );
+        }
+        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())?;
     }
+    match unsettled {
+        Some(report) if args.require_converged => Err(Error::NotConverged(settle_failure(&report))),
+        _ => Ok(()),
+    }
+}
+
+fn settle_failure(report: &coif::sim::SettleReport) -> String {
+    format!(
+        "settling did not reach its tolerance {:.1e} within {:.2} s (force residual {:.2e}, torque residual {:.2e})",
+        report.tolerance, report.seconds, report.force_residual, report.torque_residual
+    )
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {
     use coif::render::{self, integrator::Mode, light::Environment, sampler::SamplerKind};
+    super::checks::render(&args)?;
     // Fail on a bad output name before reading or rendering anything.
     render::image::ImageFormat::from_path(&args.output)?;
     let (width, height) = render::parse_resolution(&args.res)?;
@@ -213,6 +256,15 @@ fn run_render(args: RenderArgs) -> Result<()> {
     settings.scene.width_scale = args.width_scale;
     settings.scene.min_pixel_width = args.min_pixel_width;
     settings.scene.color = args.color.as_deref().map(|c| render::parse_vec3(c, "--color")).transpose()?;
+    settings.lobe = match args.lobe {
+        LobeArg::Chiang => render::integrator::Lobe::Chiang,
+        LobeArg::KajiyaKay => render::integrator::Lobe::KajiyaKay,
+    };
+    settings.chiang =
+        render::hair_bsdf::ChiangParams::new(args.roughness, args.azimuthal_roughness, args.cuticle_tilt);
+    if args.melanin.is_some() || args.pheomelanin.is_some() {
+        settings.scene.melanin = Some([args.melanin.unwrap_or(0.0), args.pheomelanin.unwrap_or(0.0)]);
+    }
     settings.key.direction =
         args.light_dir.as_deref().map(|d| render::parse_vec3(d, "--light-dir")).transpose()?;
     settings.key.irradiance *= args.light_intensity;
@@ -220,7 +272,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.environment = Environment::Constant(glam::Vec3::splat(radiance));
     }
 
-    let loaded = io::read_groom(&args.input, &args.import.options())?;
+    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
     let bar = progress_bar();
     let progress = |done: u64, total: u64| {
         if let Some(bar) = &bar {
@@ -377,6 +429,7 @@ fn run_farm(action: FarmAction) -> Result<()> {
 }
 
 fn run_generate(args: GenerateArgs) -> Result<()> {
+    super::checks::generate(&args)?;
     let style = match args.style {
         HairStyle::Straight => Style::Straight,
         HairStyle::Wavy => Style::Wavy { amplitude: args.wave_amplitude, wavelength: args.wavelength },

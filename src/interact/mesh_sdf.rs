@@ -9,6 +9,31 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+/// A triangle mesh in coif's space (metres, Y up): a scalp or head that hair collides with and
+/// that a recipe's head frame is fitted to. Readers of groom files and of OBJ files produce it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleMesh {
+    pub points: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriangleMesh {
+    /// Bakes the mesh's distance field (see [`MeshSdf::bake`]).
+    pub fn bake(&self, cell: f32, band: f32) -> Result<MeshSdf, String> {
+        MeshSdf::bake(&self.points, &self.triangles, cell, band)
+    }
+
+    /// Area-weighted samples of the surface: each triangle's centroid and area (triangles that
+    /// name a missing vertex are skipped; [`Self::bake`] refuses them).
+    pub fn area_samples(&self) -> impl Iterator<Item = (Vec3, f32)> + '_ {
+        self.triangles.iter().filter_map(|t| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|v| self.points.get(v as usize).copied());
+            let (a, b, c) = (a?, b?, c?);
+            Some(((a + b + c) / 3.0, 0.5 * (b - a).cross(c - a).length()))
+        })
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshSdf {
     origin: Vec3,
@@ -42,10 +67,18 @@ impl MeshSdf {
         let margin = Vec3::splat(band + cell);
         let origin = lo - margin;
         let extent = hi + margin - origin;
-        let dims = [0, 1, 2].map(|a| (extent[a] / cell).ceil() as usize + 1);
-        if dims.iter().product::<usize>() > 64 << 20 {
-            return Err(format!("a {}×{}×{} grid is too large; use larger cells", dims[0], dims[1], dims[2]));
+        // Counted in floats first: a huge extent or a tiny cell must not wrap the product.
+        let cells = [0, 1, 2].map(|a| (extent[a] as f64 / cell as f64).ceil() + 1.0);
+        if !cells.iter().all(|c| c.is_finite()) || cells.iter().product::<f64>() > (64 << 20) as f64 {
+            return Err(format!(
+                "a {:.0}×{:.0}×{:.0} grid is too large (at most {} cells); use larger cells",
+                cells[0],
+                cells[1],
+                cells[2],
+                64 << 20
+            ));
         }
+        let dims = cells.map(|c| c as usize);
         let normals = PseudoNormals::new(vertices, triangles);
 
         let count = dims[0] * dims[1] * dims[2];

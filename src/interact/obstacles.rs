@@ -3,11 +3,12 @@
 //! applies to every vertex after each constraint iteration.
 use std::sync::Arc;
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::mesh_sdf::MeshSdf;
+use crate::sim::Hooks;
 
 /// An obstacle's shape. Distances are signed: negative inside the solid.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -17,20 +18,25 @@ pub enum Shape {
         center: Vec3,
         radius: f32,
     },
-    /// An axis-aligned ellipsoid, e.g. the analytic head (`coif::head::Head`).
+    /// An ellipsoid, e.g. the analytic head (`coif::head::Head`): semi-axes `radii` along the
+    /// X, Y, Z axes turned by `rotation`.
     Ellipsoid {
         center: Vec3,
         radii: Vec3,
+        #[serde(default)]
+        rotation: Quat,
     },
     /// The half-space below the plane through `point` with outward `normal` (a floor).
     Plane {
         point: Vec3,
         normal: Vec3,
     },
-    /// An axis-aligned box (a pillow, a table).
+    /// A box (a pillow, a table) along the X, Y, Z axes turned by `rotation`.
     Box {
         center: Vec3,
         half_extents: Vec3,
+        #[serde(default)]
+        rotation: Quat,
     },
     /// A segment `a`–`b` swept by a sphere: a perm rod (curler).
     Capsule {
@@ -52,22 +58,25 @@ impl Shape {
                 let len = d.length();
                 (len - radius, if len > 0.0 { d / len } else { Vec3::Y })
             }
-            Shape::Ellipsoid { center, radii } => {
+            Shape::Ellipsoid { center, radii, rotation } => {
                 // Quílez's first-order distance bound: exact on the surface, tight close to it.
-                let q = p - *center;
+                let q = rotation.inverse() * (p - *center);
                 let k0 = (q / *radii).length();
                 let gradient = q / (*radii * *radii);
                 let k1 = gradient.length();
                 if k1 == 0.0 {
-                    return (-radii.min_element(), Vec3::Y);
+                    return (-radii.min_element(), *rotation * Vec3::Y);
                 }
-                (k0 * (k0 - 1.0) / k1, gradient / k1)
+                (k0 * (k0 - 1.0) / k1, *rotation * (gradient / k1))
             }
             Shape::Plane { point, normal } => {
                 let n = normal.normalize();
                 ((p - *point).dot(n), n)
             }
-            Shape::Box { center, half_extents } => box_distance(p - *center, *half_extents),
+            Shape::Box { center, half_extents, rotation } => {
+                let (d, n) = box_distance(rotation.inverse() * (p - *center), *half_extents);
+                (d, *rotation * n)
+            }
             Shape::Capsule { a, b, radius } => {
                 let ab = *b - *a;
                 let t = ((p - *a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
@@ -85,8 +94,26 @@ impl Shape {
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         match self {
             Shape::Sphere { center, radius } => Some((*center - *radius, *center + *radius)),
-            Shape::Ellipsoid { center, radii } => Some((*center - *radii, *center + *radii)),
-            Shape::Box { center, half_extents } => Some((*center - *half_extents, *center + *half_extents)),
+            Shape::Ellipsoid { center, radii, rotation } => {
+                // Half extent along each world axis: the length of that row of R·diag(radii).
+                let rows = glam::Mat3::from_quat(*rotation).transpose();
+                let half = Vec3::new(
+                    (rows.x_axis * *radii).length(),
+                    (rows.y_axis * *radii).length(),
+                    (rows.z_axis * *radii).length(),
+                );
+                Some((*center - half, *center + half))
+            }
+            Shape::Box { center, half_extents, rotation } => {
+                // The turned box's corners: per world axis, |row of R| · half extents.
+                let rows = glam::Mat3::from_quat(*rotation).transpose();
+                let half = Vec3::new(
+                    rows.x_axis.abs().dot(*half_extents),
+                    rows.y_axis.abs().dot(*half_extents),
+                    rows.z_axis.abs().dot(*half_extents),
+                );
+                Some((*center - half, *center + half))
+            }
             Shape::Capsule { a, b, radius } => Some((a.min(*b) - *radius, a.max(*b) + *radius)),
             Shape::Plane { .. } | Shape::Mesh(_) => None,
         }
@@ -96,12 +123,12 @@ impl Shape {
     pub fn translated(&self, offset: Vec3) -> Shape {
         match self {
             Shape::Sphere { center, radius } => Shape::Sphere { center: *center + offset, radius: *radius },
-            Shape::Ellipsoid { center, radii } => {
-                Shape::Ellipsoid { center: *center + offset, radii: *radii }
+            Shape::Ellipsoid { center, radii, rotation } => {
+                Shape::Ellipsoid { center: *center + offset, radii: *radii, rotation: *rotation }
             }
             Shape::Plane { point, normal } => Shape::Plane { point: *point + offset, normal: *normal },
-            Shape::Box { center, half_extents } => {
-                Shape::Box { center: *center + offset, half_extents: *half_extents }
+            Shape::Box { center, half_extents, rotation } => {
+                Shape::Box { center: *center + offset, half_extents: *half_extents, rotation: *rotation }
             }
             Shape::Capsule { a, b, radius } => {
                 Shape::Capsule { a: *a + offset, b: *b + offset, radius: *radius }
@@ -157,11 +184,11 @@ pub fn resolve_contact(
     radius: f32,
     friction: Friction,
 ) -> Option<Vec3> {
-    if let Shape::Ellipsoid { center, radii } = shape {
+    if let Shape::Ellipsoid { center, radii, rotation } = shape {
         // Cheap rejection: a point on the ellipsoid scaled by k is at least (k − 1)·r_min from
         // it, and most hair is well clear of the head.
         let clear = 1.0 + radius / radii.min_element();
-        if ((p - *center) / *radii).length_squared() > clear * clear {
+        if ((rotation.inverse() * (p - *center)) / *radii).length_squared() > clear * clear {
             return None;
         }
     }
@@ -241,6 +268,40 @@ impl ObstacleCulling {
     }
 }
 
+/// Projects vertices out of the active obstacles after each solver iteration.
+pub struct ContactHooks<'a> {
+    pub shapes: &'a [Shape],
+    pub culling: &'a ObstacleCulling,
+    /// Positions at the start of the step (friction measures the slide from there).
+    pub previous: &'a [Vec3],
+    pub radii: &'a [f32],
+    pub friction: Friction,
+}
+
+impl Hooks for ContactHooks<'_> {
+    fn projects(&self) -> bool {
+        !self.shapes.is_empty()
+    }
+
+    fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
+        for (k, p) in positions.iter_mut().enumerate() {
+            if inverse_masses[k] == 0.0 {
+                continue;
+            }
+            let i = first_vertex + k;
+            let mask = self.culling.mask(strand, *p);
+            for (s, shape) in self.shapes.iter().enumerate() {
+                if !ObstacleCulling::tests(mask, s) {
+                    continue;
+                }
+                if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
+                    *p = q;
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -256,20 +317,48 @@ mod tests {
         assert!((d - 0.2).abs() < 1e-6 && n.abs_diff_eq(Vec3::Z, 1e-6));
         let (d, n) = capsule.distance(Vec3::new(1.5, 0.0, 0.0));
         assert!((d - 0.4).abs() < 1e-6 && n.abs_diff_eq(Vec3::X, 1e-6));
-        let bx = Shape::Box { center: Vec3::ZERO, half_extents: Vec3::new(1.0, 0.5, 2.0) };
+        let bx = Shape::Box {
+            center: Vec3::ZERO,
+            half_extents: Vec3::new(1.0, 0.5, 2.0),
+            rotation: Quat::IDENTITY,
+        };
         let (d, n) = bx.distance(Vec3::new(0.2, 0.4, 0.0));
         assert!((d + 0.1).abs() < 1e-6 && n == Vec3::Y);
         assert!((bx.distance(Vec3::new(2.0, 1.5, 0.0)).0 - 2f32.sqrt()).abs() < 1e-6);
+        // Turned a quarter about X: its Y half extent lies along Z.
+        let rotation = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let turned = Shape::Box { center: Vec3::ZERO, half_extents: Vec3::new(1.0, 0.5, 2.0), rotation };
+        let (d, n) = turned.distance(Vec3::new(0.0, 0.0, 0.7));
+        assert!((d - 0.2).abs() < 1e-6 && n.abs_diff_eq(Vec3::Z, 1e-6), "{d} {n:?}");
+        let (lo, hi) = turned.bounds().unwrap();
+        assert!(
+            lo.abs_diff_eq(Vec3::new(-1.0, -2.0, -0.5), 1e-5)
+                && hi.abs_diff_eq(Vec3::new(1.0, 2.0, 0.5), 1e-5)
+        );
     }
 
     #[test]
     fn ellipsoid_distance_is_exact_on_the_axes_and_zero_on_the_surface() {
-        let e = Shape::Ellipsoid { center: Vec3::ZERO, radii: Vec3::new(0.078, 0.1, 0.095) };
+        let e = Shape::Ellipsoid {
+            center: Vec3::ZERO,
+            radii: Vec3::new(0.078, 0.1, 0.095),
+            rotation: Quat::IDENTITY,
+        };
         let (d, n) = e.distance(Vec3::new(0.0, 0.15, 0.0));
         assert!((d - 0.05).abs() < 1e-6 && n.abs_diff_eq(Vec3::Y, 1e-6));
         let surface = Vec3::new(0.078, 0.1, 0.095) * Vec3::new(0.3, 0.8, -0.2).normalize();
         assert!(e.distance(surface).0.abs() < 1e-6);
         assert!(e.distance(Vec3::new(0.01, 0.0, 0.0)).0 < 0.0);
+        // Turned a quarter about X: the Y semi-axis lies along Z, and the bounds follow.
+        let rotation = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let turned = Shape::Ellipsoid { center: Vec3::X, radii: Vec3::new(0.078, 0.1, 0.095), rotation };
+        let (d, n) = turned.distance(Vec3::new(1.0, 0.0, 0.15));
+        assert!((d - 0.05).abs() < 1e-6 && n.abs_diff_eq(Vec3::Z, 1e-6), "{d} {n:?}");
+        let (lo, hi) = turned.bounds().unwrap();
+        assert!(
+            lo.abs_diff_eq(Vec3::new(0.922, -0.095, -0.1), 1e-5)
+                && hi.abs_diff_eq(Vec3::new(1.078, 0.095, 0.1), 1e-5)
+        );
     }
 
     #[test]

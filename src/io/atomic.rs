@@ -33,16 +33,23 @@ pub fn create_beside(path: &Path) -> Result<BufWriter<NamedTempFile>> {
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     let temp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
+    // Removed by the signal handler if the process is interrupted before `commit`.
+    super::cleanup::track(temp.path());
     Ok(BufWriter::with_capacity(1 << 20, temp))
 }
 
 /// Flushes and fsyncs a file from [`create_beside`], then renames it over `path`.
 pub fn commit(path: &Path, mut writer: BufWriter<NamedTempFile>) -> Result<()> {
-    writer.flush().map_err(|e| Error::io(path, e))?;
-    let temp = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
-    temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    temp.persist(path).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+    let temp_path = writer.get_ref().path().to_path_buf();
+    let result = (|| {
+        writer.flush().map_err(|e| Error::io(path, e))?;
+        let temp = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
+        temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+        temp.persist(path).map_err(|e| Error::io(path, e.error))?;
+        Ok(())
+    })();
+    super::cleanup::untrack(&temp_path);
+    result
 }
 
 /// Writes a whole byte buffer atomically.

@@ -112,6 +112,16 @@ pub fn read(bytes: &[u8], path: &Path) -> Result<Groom> {
         }));
     }
 
+    // Every strand has at least two points, which the file holds: this bounds the strand count
+    // by the file's length even when the header gives no per-strand segment counts.
+    if header.strands as u64 * 2 > header.points as u64 {
+        return Err(bad(format!(
+            "the header's {} strands need at least {} points, it announces {}",
+            header.strands,
+            header.strands as u64 * 2,
+            header.points
+        )));
+    }
     // Sizes are now known to fit in the file, so allocations are bounded by its length.
     let strands = header.strands as usize;
     let mut strand_offsets = Vec::with_capacity(strands + 1);

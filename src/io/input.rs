@@ -22,6 +22,7 @@ impl Deref for Input {
 /// Maps `path` for reading. The file must not be truncated while mapped (writers in coif
 /// replace files by renaming, which leaves a mapped file intact).
 pub fn map_file(path: &Path) -> Result<Input> {
+    check_regular(path)?;
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if len == 0 {
@@ -33,4 +34,45 @@ pub fn map_file(path: &Path) -> Result<Input> {
     // Populating the whole map up front costs one pass instead of a page fault per 4 KiB.
     let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(|e| Error::io(path, e))?;
     Ok(Input { map: Some(map) })
+}
+
+/// Refuses anything but a regular file (or a link to one) before opening it: a directory, a
+/// FIFO (which would block forever) or a device is bad input, not something to read.
+pub fn check_regular(path: &Path) -> Result<()> {
+    let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    let kind = metadata.file_type();
+    if kind.is_file() {
+        return Ok(());
+    }
+    let what = if kind.is_dir() {
+        "a directory"
+    } else {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            if kind.is_fifo() {
+                "a FIFO"
+            } else if kind.is_socket() {
+                "a socket"
+            } else if kind.is_block_device() || kind.is_char_device() {
+                "a device"
+            } else {
+                "not a regular file"
+            }
+        }
+        #[cfg(not(unix))]
+        "not a regular file"
+    };
+    Err(Error::format(path, format!("{what}, not a regular file")))
+}
+
+/// Reads a text file (recipe, manifest, mesh): a regular file, valid UTF-8, else bad input.
+pub fn read_text(path: &Path) -> Result<String> {
+    check_regular(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        Error::format(path, format!("line {line}: not UTF-8 text (invalid byte at offset {at})"))
+    })
 }

@@ -3,11 +3,13 @@
 //! up-axis are converted here, at the edge, so the rest of coif sees metres and Y up.
 pub mod alembic;
 pub mod atomic;
+pub mod cleanup;
 pub mod hair;
 pub mod input;
 pub mod obj;
 pub mod usd_interop;
 pub mod usda;
+pub mod usdc;
 
 use std::path::Path;
 
@@ -25,7 +27,7 @@ pub enum Format {
     Hair,
     /// USD text, read and written by coif itself.
     Usda,
-    /// USD binary (crate), through usd-core.
+    /// USD binary (crate), read and written by coif itself.
     Usdc,
     /// USD zip package, through usd-core.
     Usdz,
@@ -61,7 +63,7 @@ impl Format {
             Some(Format::Hair)
         } else if head.starts_with(usda::MAGIC) {
             Some(Format::Usda)
-        } else if head.starts_with(b"PXR-USDC") {
+        } else if head.starts_with(usdc::MAGIC) {
             Some(Format::Usdc)
         } else if head.starts_with(b"PK\x03\x04") {
             Some(Format::Usdz)
@@ -158,17 +160,55 @@ pub fn read_groom_selected(
                 }
             }
         }
+        Format::Usdc if selection.variants.is_empty() => {
+            match usdc::read_file(path, options, selection.time)? {
+                usdc::ReadOutcome::Groom(groom) => groom,
+                usdc::ReadOutcome::NeedsComposition { .. } => {
+                    usd_interop::read(path, options, selection.time, &[])?
+                }
+            }
+        }
         Format::Usda | Format::Usdc | Format::Usdz => {
             usd_interop::read(path, options, selection.time, &selection.variants)?
         }
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
+    check_contents(&groom, path)?;
     Ok(Loaded { groom, format })
+}
+
+/// What the groom model allows but no job can use: a file without strands, or attribute values
+/// (colours, wetness) that are not finite and would flow into every output.
+fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
+    if groom.strand_count() == 0 {
+        return Err(Error::format(path, "the file holds no strands"));
+    }
+    for attribute in &groom.attributes {
+        if let Some(index) = attribute.data.iter().position(|v| !v.is_finite()) {
+            let element = index / attribute.components.max(1);
+            let (rate, strand) = match attribute.rate {
+                crate::groom::AttributeRate::Strand => ("strand", element),
+                crate::groom::AttributeRate::Vertex => (
+                    "vertex",
+                    groom.strand_offsets.partition_point(|&o| o as usize <= element).saturating_sub(1),
+                ),
+            };
+            return Err(Error::format(
+                path,
+                format!(
+                    "attribute '{}': {rate} {element} (strand {strand}) has a non-finite value {}",
+                    attribute.name, attribute.data[index]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The first bytes of a file, enough to recognise every format's magic.
 fn read_head(path: &Path) -> Result<Vec<u8>> {
     use std::io::Read;
+    input::check_regular(path)?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut head = Vec::with_capacity(16);
     file.take(16).read_to_end(&mut head).map_err(|e| Error::io(path, e))?;
@@ -209,6 +249,12 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
             atomic::write_atomically(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))?;
             Ok(usd_warnings(path, groom))
         }
+        // The native crate writer writes one curve prim; grooms with groups go through usd-core.
+        Format::Usdc if groom.groups.is_empty() => {
+            usda::check_writable(groom, path)?;
+            usdc::write(path, groom)?;
+            Ok(usd_warnings(path, groom))
+        }
         Format::Usdc | Format::Usdz => {
             usda::check_writable(groom, path)?;
             usd_interop::write(path, groom)?;
@@ -240,7 +286,8 @@ pub fn write_animated(
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
-    match Format::from_extension(path)? {
+    let format = Format::from_extension(path)?;
+    match format {
         Format::Hair => Err(Error::Usage(format!(
             "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
             path.display()
@@ -252,6 +299,10 @@ pub fn write_animated(
                 end: frames.len() as f64,
                 per_second: frames_per_second as f64,
             };
+            if format == Format::Usdc && groom.groups.is_empty() {
+                usdc::write_animated(path, groom, frames, times)?;
+                return Ok(usd_warnings(path, groom));
+            }
             usd_interop::write_usd(path, |out| usda::write_animated(groom, frames, times, out, path))?;
             Ok(usd_warnings(path, groom))
         }

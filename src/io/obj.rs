@@ -10,7 +10,13 @@ use crate::error::{Error, Result};
 
 /// The vertices and triangles of every object in an OBJ file.
 pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
+    crate::io::input::check_regular(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_triangles(&bytes, path)
+}
+
+/// [`read_triangles`] on bytes already in memory; `path` names them in errors.
+pub fn parse_triangles(bytes: &[u8], path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,
@@ -18,9 +24,8 @@ pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
         ..Default::default()
     };
     // Material libraries are not read: a mesh obstacle needs only its surface.
-    let (models, _) =
-        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| Error::format(path, format!("not a readable Wavefront OBJ file: {e}")))?;
+    let (models, _) = tobj::load_obj_buf(&mut &bytes[..], &options, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| Error::format(path, format!("not a readable Wavefront OBJ file: {e}")))?;
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
     for model in &models {
@@ -28,11 +33,9 @@ pub fn read_triangles(path: &Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>)> {
         let base = vertices.len() as u32;
         for (k, p) in mesh.positions.chunks_exact(3).enumerate() {
             let v = Vec3::new(p[0], p[1], p[2]);
-            if !v.is_finite() {
-                return Err(Error::format(
-                    path,
-                    format!("object '{}': vertex {} is not finite", model.name, k + 1),
-                ));
+            let key = format!("vertex {}", k + 1);
+            if let Err(message) = crate::validate::vector(&key, v.into(), crate::validate::COORDINATE) {
+                return Err(Error::format(path, format!("object '{}': {message}", model.name)));
             }
             vertices.push(v);
         }

@@ -139,6 +139,7 @@ where
     // The temporary folder sits beside the output so the final rename is atomic.
     let folder =
         tempfile::Builder::new().prefix(".coif-usd.").tempdir_in(dir).map_err(|e| Error::io(path, e))?;
+    let _interrupted = super::cleanup::Tracked::new(folder.path());
     let text = folder.path().join("groom.usda");
     atomic::write_atomically(&text, fill)?;
     let converted = folder.path().join(format!("groom.{extension}"));

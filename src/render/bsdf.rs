@@ -22,6 +22,8 @@ use std::f32::consts::{FRAC_PI_2, PI, TAU};
 
 use glam::Vec3;
 
+use super::hair_bsdf::ChiangHair;
+
 /// Bins of the tabulated specular lobe over δ ∈ [−π/2, π/2].
 const LOBE_BINS: usize = 1024;
 
@@ -261,10 +263,11 @@ impl Lambert {
     }
 }
 
-/// A surface's scattering: hair or diffuse.
+/// A surface's scattering: hair (Kajiya–Kay or Chiang) or diffuse.
 #[derive(Clone, Copy, Debug)]
 pub enum Bsdf<'a> {
     Hair(KajiyaKay<'a>),
+    Chiang(ChiangHair<'a>),
     Diffuse(Lambert),
 }
 
@@ -272,6 +275,7 @@ impl Bsdf<'_> {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
         match self {
             Bsdf::Hair(b) => b.eval(wo, wi),
+            Bsdf::Chiang(b) => b.eval(wo, wi),
             Bsdf::Diffuse(b) => b.eval(wo, wi),
         }
     }
@@ -279,6 +283,7 @@ impl Bsdf<'_> {
     pub fn sample(&self, wo: Vec3, u_lobe: [f32; 2], u: [f32; 2]) -> Option<BsdfSample> {
         match self {
             Bsdf::Hair(b) => b.sample(wo, u_lobe, u),
+            Bsdf::Chiang(b) => b.sample(wo, u_lobe, u),
             Bsdf::Diffuse(b) => b.sample(wo, u),
         }
     }

@@ -1,18 +1,46 @@
 //! The path tracer and the debug views. Each pixel sample follows one path: the camera ray
-//! (traced in packets of eight neighbouring pixels), then at every hit an explicit shadow ray to
-//! the key light and a BSDF-sampled continuation, up to a bounce limit, with Russian roulette
-//! once the path has lost most of its throughput. Escaping rays pick up the environment.
+//! (traced in packets of eight neighbouring pixels), then at every hit next-event estimation
+//! (a shadow ray to the key light and one to the sky) and a BSDF-sampled continuation, up to a
+//! bounce limit. Light found by a shadow ray and light found by an escaping continuation are
+//! weighted by the power heuristic (multiple importance sampling), so sharp hair lobes and small
+//! lights both converge. Russian roulette by throughput starts only after a few bounces: light
+//! in hair travels through several fibres, and cutting those paths early is what made previews
+//! noisy.
 use glam::Vec3;
 
 use super::bsdf::{Bsdf, HairLobes, KajiyaKay, Lambert};
 use super::camera::Camera;
-use super::light::{Environment, KeyLight};
+use super::hair_bsdf::{offset_across_fibre, ChiangHair, ChiangParams, Pigment};
+use super::light::{power_heuristic, Environment, KeyLight};
 use super::sampler::{mix64, Sampler};
 use super::scene::{AttributeView, RenderScene, Surface};
 use crate::embree::{Hit, Ray};
 
-/// Bounces after which Russian roulette may end a path.
-const ROULETTE_AFTER: u32 = 1;
+/// Bounces after which Russian roulette may end a path: the Chiang lobe carries light through
+/// several fibres (TT, TRT), so its paths are kept for three bounces; Kajiya–Kay previews keep
+/// their earlier, cheaper rule (their light is mostly one bounce deep).
+const ROULETTE_AFTER_CHIANG: u32 = 3;
+const ROULETTE_AFTER_KAJIYA_KAY: u32 = 1;
+
+/// Which hair scattering model shades the strands.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Lobe {
+    /// Chiang et al. 2016: R, TT, TRT and residual lobes from a fibre's optics.
+    Chiang,
+    /// Kajiya–Kay diffuse plus two shifted highlights: the preview default (smooth at preview
+    /// sample counts; see README).
+    #[default]
+    KajiyaKay,
+}
+
+impl Lobe {
+    fn roulette_after(self) -> u32 {
+        match self {
+            Lobe::Chiang => ROULETTE_AFTER_CHIANG,
+            Lobe::KajiyaKay => ROULETTE_AFTER_KAJIYA_KAY,
+        }
+    }
+}
 
 /// What a pixel shows.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +62,8 @@ pub struct Integrator<'a> {
     pub key: KeyLight,
     pub environment: Environment,
     pub lobes: &'a HairLobes,
+    pub lobe: Lobe,
+    pub chiang: &'a ChiangParams,
     pub max_depth: u32,
     pub mode: &'a Mode,
     pub attribute: Option<&'a AttributeView>,
@@ -144,13 +174,29 @@ impl Integrator<'_> {
         let mut direction = camera_direction;
         let mut t_near = 0.0;
         let mut hit = first;
+        // Density of the BSDF sample that chose `direction` (none for the camera ray).
+        let mut bsdf_pdf: Option<f32> = None;
         for depth in 0..self.max_depth {
             let seed = ray_id(coin_seed, depth);
             if depth > 0 {
                 hit = self.closest(origin, direction, t_near, seed, rays);
             }
             let Some(h) = hit else {
-                result.radiance += throughput * self.environment.radiance(direction);
+                let sky = self.environment.radiance(direction);
+                result.radiance += throughput
+                    * match bsdf_pdf {
+                        // The camera sees the sky, not the key's disk.
+                        None => sky,
+                        Some(pdf) => {
+                            let sky_weight = if self.sky_light_samples() {
+                                power_heuristic(pdf, self.environment.pdf(direction))
+                            } else {
+                                1.0
+                            };
+                            sky * sky_weight
+                                + self.key.radiance(direction) * power_heuristic(pdf, self.key.pdf())
+                        }
+                    };
                 break;
             };
             let position = origin + direction * h.t;
@@ -164,10 +210,10 @@ impl Integrator<'_> {
             }
             let wo = -direction;
             let (bsdf, spawn, spawn_near) = match surface {
-                Surface::Hair { tangent, color, .. } => {
-                    // Embree ignores a curve's own surface near a ray's origin, so hair rays
-                    // start on the hit point itself.
-                    (Bsdf::Hair(KajiyaKay::new(tangent, color, self.lobes)), position, 0.0)
+                // Embree ignores a curve's own surface near a ray's origin, so hair rays
+                // start on the hit point itself.
+                Surface::Hair { tangent, color, melanin, normal, .. } => {
+                    (self.hair_bsdf(tangent, color, melanin, normal, wo), position, 0.0)
                 }
                 Surface::Diffuse { normal, albedo } => {
                     (Bsdf::Diffuse(Lambert { normal, albedo }), position, self.epsilon)
@@ -177,14 +223,31 @@ impl Integrator<'_> {
                 Surface::Diffuse { normal, .. } => spawn + normal * (self.epsilon * normal.dot(w).signum()),
                 Surface::Hair { .. } => spawn,
             };
+            // The last vertex traces no continuation, so its light samples take all the weight.
+            let last = depth + 1 == self.max_depth;
+            let mis =
+                |light_pdf: f32, bsdf_pdf: f32| if last { 1.0 } else { power_heuristic(light_pdf, bsdf_pdf) };
 
-            // Direct light from the key.
+            // Next-event estimation: the key light, then the sky.
             let (wi, irradiance) = self.key.sample(sampler.get_2d());
-            let (value, _) = bsdf.eval(wo, wi);
+            let (value, pdf) = bsdf.eval(wo, wi);
             if value.max_element() > 0.0
                 && self.unoccluded(offset(wi), wi, spawn_near, seed ^ 0x5bd1_e995, rays)
             {
-                result.radiance += throughput * value * irradiance;
+                result.radiance += throughput * value * irradiance * mis(self.key.pdf(), pdf);
+            }
+            if self.sky_light_samples() {
+                let (wi, sky_pdf) = self.environment.sample(sampler.get_2d());
+                let (value, pdf) = bsdf.eval(wo, wi);
+                if value.max_element() > 0.0
+                    && self.unoccluded(offset(wi), wi, spawn_near, seed ^ 0x2545_f491, rays)
+                {
+                    result.radiance +=
+                        throughput * value * self.environment.radiance(wi) * (mis(sky_pdf, pdf) / sky_pdf);
+                }
+            }
+            if last {
+                break;
             }
 
             // Continue the path.
@@ -192,7 +255,8 @@ impl Integrator<'_> {
             let u_roulette = sampler.get_1d();
             let Some(sample) = bsdf.sample(wo, u_lobe, u) else { break };
             throughput *= sample.weight;
-            if depth + 1 >= ROULETTE_AFTER {
+            bsdf_pdf = Some(sample.pdf);
+            if depth + 1 >= self.lobe.roulette_after() {
                 let survive = throughput.max_element().min(1.0);
                 if u_roulette >= survive {
                     break;
@@ -204,6 +268,40 @@ impl Integrator<'_> {
             t_near = spawn_near;
         }
         result
+    }
+
+    /// Whether paths sample the sky explicitly: worth its shadow ray for the Chiang lobe, whose
+    /// sharp lobes rarely find the sky by themselves; Kajiya–Kay previews keep the cost of
+    /// before (one shadow ray per bounce).
+    fn sky_light_samples(&self) -> bool {
+        self.lobe == Lobe::Chiang
+    }
+
+    /// The hair BSDF at a hit, for the render's lobe.
+    fn hair_bsdf(
+        &self,
+        tangent: Vec3,
+        color: Vec3,
+        melanin: Option<[f32; 2]>,
+        normal: Vec3,
+        wo: Vec3,
+    ) -> Bsdf<'_> {
+        match self.lobe {
+            Lobe::KajiyaKay => Bsdf::Hair(KajiyaKay::new(tangent, color, self.lobes)),
+            Lobe::Chiang => {
+                let pigment = match melanin {
+                    Some([eumelanin, pheomelanin]) => Pigment::Melanin { eumelanin, pheomelanin },
+                    None => Pigment::Color(color),
+                };
+                let h = offset_across_fibre(tangent, normal, wo);
+                Bsdf::Chiang(ChiangHair::new(
+                    tangent,
+                    h,
+                    pigment.sigma_a(self.chiang.azimuthal_roughness()),
+                    self.chiang,
+                ))
+            }
+        }
     }
 
     fn debug(&self, direction: Vec3, first: Option<Hit>) -> SampleResult {

@@ -17,6 +17,7 @@
 //! nothing gets denser, only less aliased); `width_scale` is the explicit "draw it thicker" knob.
 pub mod bsdf;
 pub mod camera;
+pub mod hair_bsdf;
 pub mod image;
 pub mod integrator;
 pub mod light;
@@ -35,8 +36,9 @@ use crate::groom::Groom;
 
 use bsdf::HairLobes;
 use camera::{Camera, CameraSpec, View, DEFAULT_FOV};
+use hair_bsdf::ChiangParams;
 use image::{Aov, Image};
-use integrator::{Integrator, Mode, RayCount};
+use integrator::{Integrator, Lobe, Mode, RayCount};
 use light::{Environment, KeyLight};
 use sampler::{hash, Sampler, SamplerKind};
 use scene::{AttributeView, RenderScene, SceneOptions, WidthFloor};
@@ -90,6 +92,9 @@ pub struct RenderSettings {
     /// Render only this window `(x, y, width, height)` of the full frame (benchmarks).
     pub window: Option<(u32, u32, u32, u32)>,
     pub aovs: AovSet,
+    /// The hair scattering model and the Chiang model's shape parameters.
+    pub lobe: Lobe,
+    pub chiang: ChiangParams,
 }
 
 impl Default for RenderSettings {
@@ -112,6 +117,8 @@ impl Default for RenderSettings {
             time_budget: None,
             window: None,
             aovs: AovSet::default(),
+            lobe: Lobe::default(),
+            chiang: ChiangParams::default(),
         }
     }
 }
@@ -146,6 +153,20 @@ impl RenderSettings {
         }
         if !(self.fov_degrees > 0.5 && self.fov_degrees < 170.0) {
             return bad("--fov must be in (0.5, 170) degrees");
+        }
+        self.chiang.check().map_err(|m| Error::Usage(format!("render: {m}")))?;
+        if let Some(c) = self.scene.color {
+            if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
+                return bad(&format!("--color {c} must have every channel in [0, 1]"));
+            }
+        }
+        if let Some([eumelanin, pheomelanin]) = self.scene.melanin {
+            let (lo, hi) = hair_bsdf::MELANIN_RANGE;
+            for (flag, v) in [("--melanin", eumelanin), ("--pheomelanin", pheomelanin)] {
+                if !(v >= lo && v <= hi) {
+                    return bad(&format!("{flag} {v} is outside [{lo}, {hi}]"));
+                }
+            }
         }
         if let Some((x, y, w, h)) = self.window {
             if w == 0 || h == 0 || x + w > self.width || y + h > self.height {
@@ -268,6 +289,8 @@ pub fn render(
         key,
         environment: settings.environment,
         lobes: &lobes,
+        lobe: settings.lobe,
+        chiang: &settings.chiang,
         max_depth: settings.max_depth,
         mode: &settings.mode,
         attribute: attribute.as_ref(),

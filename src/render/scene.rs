@@ -6,6 +6,7 @@ use crate::embree::{self, CurveType, Device, Hit};
 use crate::error::{Error, Result};
 use crate::groom::{attr, AttributeRate, CurveBasis, Groom};
 use crate::head::Head;
+use crate::render::hair_bsdf::MELANIN_RANGE;
 
 /// Whether to put the analytic head under the hair.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -29,6 +30,8 @@ pub struct SceneOptions {
     pub min_pixel_width: f32,
     /// Hair colour overriding the groom's `color` attribute.
     pub color: Option<Vec3>,
+    /// Eumelanin and pheomelanin concentrations overriding the groom's pigments (Chiang lobe).
+    pub melanin: Option<[f32; 2]>,
     pub head_albedo: Vec3,
     pub floor_albedo: Vec3,
 }
@@ -44,6 +47,7 @@ impl Default for SceneOptions {
             width_scale: 1.0,
             min_pixel_width: 0.0,
             color: None,
+            melanin: None,
             head_albedo: Vec3::new(0.55, 0.45, 0.40),
             floor_albedo: Vec3::splat(0.35),
         }
@@ -56,6 +60,11 @@ pub enum Surface {
     Hair {
         tangent: Vec3,
         color: Vec3,
+        /// Eumelanin and pheomelanin, when the groom or the command line gives them; the Chiang
+        /// lobe prefers them to `color`.
+        melanin: Option<[f32; 2]>,
+        /// Embree's surface normal at the hit (not normalised), for the offset across the fibre.
+        normal: Vec3,
         /// Index of the hit segment's first vertex and the fraction towards the next one, for
         /// per-vertex attributes.
         vertex: u32,
@@ -84,7 +93,8 @@ pub struct RenderScene<'d> {
     points: Vec<[f32; 4]>,
     segments: Vec<Segment>,
     /// Per-vertex hair colour, or per-strand, or one for all.
-    colors: Colors,
+    colors: PerHair<Vec3>,
+    melanin: Option<PerHair<[f32; 2]>>,
     /// Per-vertex opacity when any strand is partly transparent (widened or `transparency`).
     opacity: Option<std::sync::Arc<Vec<f32>>>,
     head: Option<Head>,
@@ -96,10 +106,69 @@ pub struct RenderScene<'d> {
     pub segment_count: usize,
 }
 
-enum Colors {
-    Uniform(Vec3),
-    Strand(Vec<Vec3>),
-    Vertex(Vec<Vec3>),
+/// A hair property: one for all strands, one per strand or one per vertex.
+enum PerHair<T> {
+    Uniform(T),
+    Strand(Vec<T>),
+    Vertex(Vec<T>),
+}
+
+impl<T: Copy> PerHair<T> {
+    /// The value at a hit `fraction` of the way from vertex `a` to vertex `b` of `strand`.
+    fn at(&self, a: u32, b: u32, fraction: f32, strand: u32, lerp: impl Fn(T, T, f32) -> T) -> T {
+        match self {
+            PerHair::Uniform(c) => *c,
+            PerHair::Strand(c) => c[strand as usize],
+            PerHair::Vertex(c) => lerp(c[a as usize], c[b as usize], fraction),
+        }
+    }
+}
+
+/// Names of the groom attributes the hair shading reads: readers map USD `displayColor` and
+/// Alembic `groom_color` to `color`; `melanin` and `pheomelanin` are read as named.
+pub const MELANIN_ATTRIBUTE: &str = "melanin";
+pub const PHEOMELANIN_ATTRIBUTE: &str = "pheomelanin";
+
+/// A groom attribute's first `components` values per element, checked to lie in `range`.
+fn pigment_values(
+    groom: &Groom,
+    name: &str,
+    components: usize,
+    range: (f32, f32),
+) -> Result<Option<(AttributeRate, Vec<f32>)>> {
+    let Some(a) = groom.attribute(name) else { return Ok(None) };
+    if a.components < components {
+        return Err(Error::Usage(format!(
+            "render: groom attribute '{name}' has {} components, expected {components}",
+            a.components
+        )));
+    }
+    let mut values = Vec::with_capacity(a.data.len() / a.components * components);
+    for (element, chunk) in a.data.chunks(a.components).enumerate() {
+        for &v in &chunk[..components] {
+            if !(v >= range.0 && v <= range.1) {
+                let strand = match a.rate {
+                    AttributeRate::Strand => element,
+                    AttributeRate::Vertex => {
+                        groom.strand_offsets.partition_point(|&o| o as usize <= element) - 1
+                    }
+                };
+                return Err(Error::Usage(format!(
+                    "render: groom attribute '{name}' of strand {strand} is {v}, outside [{}, {}]",
+                    range.0, range.1
+                )));
+            }
+            values.push(v);
+        }
+    }
+    Ok(Some((a.rate, values)))
+}
+
+fn per_hair<T>(rate: AttributeRate, values: Vec<T>) -> PerHair<T> {
+    match rate {
+        AttributeRate::Vertex => PerHair::Vertex(values),
+        AttributeRate::Strand => PerHair::Strand(values),
+    }
 }
 
 /// A uniform number in [0, 1) deciding whether ray `ray_id` sees strand `strand`.
@@ -259,16 +328,31 @@ impl<'d> RenderScene<'d> {
         }
         embree.commit()?;
 
-        let colors = match (options.color, groom.attribute(attr::COLOR).filter(|a| a.components >= 3)) {
-            (Some(c), _) => Colors::Uniform(c),
-            (None, Some(a)) => {
-                let values = a.data.chunks(a.components).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-                match a.rate {
-                    AttributeRate::Vertex => Colors::Vertex(values),
-                    AttributeRate::Strand => Colors::Strand(values),
+        let colors = match (options.color, pigment_values(groom, attr::COLOR, 3, (0.0, 1.0))?) {
+            (Some(c), _) => PerHair::Uniform(c),
+            (None, Some((rate, v))) => per_hair(rate, v.chunks(3).map(Vec3::from_slice).collect()),
+            (None, None) => PerHair::Uniform(DEFAULT_HAIR_COLOR),
+        };
+        let melanin = match options.melanin {
+            Some(m) => Some(PerHair::Uniform(m)),
+            // An explicit colour on the command line wins over the groom's melanin.
+            None if options.color.is_some() => None,
+            None => match pigment_values(groom, MELANIN_ATTRIBUTE, 1, MELANIN_RANGE)? {
+                Some((rate, eu)) => {
+                    let pheo = match pigment_values(groom, PHEOMELANIN_ATTRIBUTE, 1, MELANIN_RANGE)? {
+                        Some((r, p)) if r == rate => p,
+                        Some(_) => {
+                            return Err(Error::Usage(format!(
+                                "render: groom attributes '{MELANIN_ATTRIBUTE}' and \
+                                 '{PHEOMELANIN_ATTRIBUTE}' must both be per strand or both per vertex"
+                            )))
+                        }
+                        None => vec![0.0; eu.len()],
+                    };
+                    Some(per_hair(rate, eu.into_iter().zip(pheo).map(|(e, p)| [e, p]).collect()))
                 }
-            }
-            (None, None) => Colors::Uniform(DEFAULT_HAIR_COLOR),
+                None => None,
+            },
         };
 
         Ok(RenderScene {
@@ -280,6 +364,7 @@ impl<'d> RenderScene<'d> {
             points,
             segments,
             colors,
+            melanin,
             opacity,
             head,
             head_albedo: options.head_albedo,
@@ -343,14 +428,16 @@ impl<'d> RenderScene<'d> {
         if self.is_hair(hit) {
             let (a, b, fraction) = self.attribute_vertices(hit);
             let segment = self.segments[hit.primitive as usize];
-            let color = match &self.colors {
-                Colors::Uniform(c) => *c,
-                Colors::Strand(c) => c[segment.strand as usize],
-                Colors::Vertex(c) => c[a as usize].lerp(c[b as usize], fraction),
-            };
+            let strand = segment.strand;
+            let color = self.colors.at(a, b, fraction, strand, Vec3::lerp);
+            let melanin = self.melanin.as_ref().map(|m| {
+                m.at(a, b, fraction, strand, |x, y, f| [x[0] + (y[0] - x[0]) * f, x[1] + (y[1] - x[1]) * f])
+            });
             return Surface::Hair {
                 tangent: self.curve_tangent(hit),
                 color,
+                melanin,
+                normal: hit.normal,
                 vertex: a,
                 fraction,
                 strand: segment.strand,

@@ -1,11 +1,14 @@
 //! `coif simulate`: run a groom for some seconds (optionally settle it), then export the state and
 //! the rest-shape attributes. The library entry the CLI calls; recipes will drive
 //! [`Simulation`] directly.
+use glam::Vec3;
 use serde::Serialize;
 
-use super::{Energy, NoHooks, SettleOptions, SettleReport, SimParams, Simulation};
+use super::settle::settle_with;
+use super::{Energy, SettleOptions, SettleReport, SimParams, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::Groom;
+use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulateOptions {
@@ -14,6 +17,11 @@ pub struct SimulateOptions {
     pub seconds: f32,
     /// Relax to static equilibrium afterwards.
     pub settle: Option<SettleOptions>,
+    /// Solve for the rest shape that holds the groom's current shape under gravity
+    /// (`sim::sag_free`) instead of taking its shape (or its exported `rest_darboux`) as rest.
+    pub sag_free: bool,
+    /// Solid colliders the hair cannot enter (e.g. coif's default head).
+    pub colliders: Vec<Shape>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -21,6 +29,9 @@ pub struct SimulateSummary {
     pub steps: u64,
     pub seconds: f32,
     pub settle: Option<SettleReport>,
+    /// Where the rest shape came from: "shape" (the groom as drawn), "rest_darboux" (a styled
+    /// groom's exported rest state) or "sag_free" (solved to hold the shape under gravity).
+    pub rest: &'static str,
     pub max_speed: f32,
     pub energy: Energy,
 }
@@ -53,19 +64,76 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
             options.seconds
         )));
     }
+    if let Some(settle) = &options.settle {
+        settle.check("--settle-tolerance", "--settle-seconds")?;
+    }
     let mut sim = Simulation::new(groom, options.params.clone())?;
-    let steps = sim.run(options.seconds, &NoHooks);
-    let settle = options.settle.as_ref().map(|settle| sim.settle(settle, &NoHooks));
+    let rest = if options.sag_free {
+        sim.make_sag_free();
+        "sag_free"
+    } else if sim.adopt_rest_state(groom)? {
+        "rest_darboux"
+    } else {
+        "shape"
+    };
+    let mut stepper = Stepper::new(sim, groom, &options.colliders);
+    let steps = (options.seconds / options.params.dt).round().max(0.0) as u64;
+    (0..steps).for_each(|_| stepper.step());
+    let settle = options
+        .settle
+        .as_ref()
+        .map(|settle| settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, settle, || {}));
+    let sim = stepper.sim;
     let mut out = groom.clone();
     sim.write_to_groom(&mut out);
     let summary = SimulateSummary {
         steps: sim.steps_taken(),
         seconds: steps as f32 * options.params.dt,
         settle,
+        rest,
         max_speed: sim.max_speed(),
         energy: sim.energy(),
     };
     Ok((out, summary))
+}
+
+/// The rod solver with contacts against fixed colliders.
+struct Stepper {
+    sim: Simulation,
+    colliders: Vec<Shape>,
+    offsets: Vec<u32>,
+    radii: Vec<f32>,
+    max_radius: f32,
+    previous: Vec<Vec3>,
+    culling: ObstacleCulling,
+}
+
+impl Stepper {
+    fn new(sim: Simulation, groom: &Groom, colliders: &[Shape]) -> Stepper {
+        let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+        Stepper {
+            colliders: colliders.to_vec(),
+            offsets: groom.strand_offsets.clone(),
+            max_radius: radii.iter().copied().fold(0.0, f32::max),
+            radii,
+            previous: sim.rods.positions.clone(),
+            culling: ObstacleCulling::default(),
+            sim,
+        }
+    }
+
+    fn step(&mut self) {
+        self.previous.copy_from_slice(&self.sim.rods.positions);
+        self.culling.update(&self.colliders, &self.offsets, &self.previous, self.max_radius);
+        let hooks = ContactHooks {
+            shapes: &self.colliders,
+            culling: &self.culling,
+            previous: &self.previous,
+            radii: &self.radii,
+            friction: Friction::default(),
+        };
+        self.sim.step_with(&hooks);
+    }
 }
 
 #[cfg(test)]

@@ -67,6 +67,7 @@ pub mod cuticle;
 pub mod driver;
 mod lanes;
 pub mod rod;
+pub mod sag_free;
 pub mod settle;
 pub mod solver;
 

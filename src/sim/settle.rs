@@ -1,22 +1,36 @@
-//! Settling (model.md §6): (a) relax to static equilibrium, stopping when every vertex is slow
-//! enough or reporting that it did not get there; (b) the zero-stress rest curve of each strand,
-//! integrated from its root frame through the bonds' rest Darboux vectors; and export of both,
-//! with the bond rates, as groom attributes.
+//! Settling (model.md §6): (a) a static solve — the equilibrium of elasticity, gravity and
+//! contacts, reached to a stated residual or reported as not reached; (b) the zero-stress rest
+//! curve of each strand, integrated from its root frame through the bonds' rest Darboux vectors;
+//! and export of both, with the bond rates, as groom attributes.
+//!
+//! **The static solve** is dynamic relaxation with kinetic damping: the stepper runs with light
+//! frames (a conditioning choice that changes no static shape), and whenever the kinetic energy
+//! passes a peak every velocity is zeroed, so the groom slides down its potential energy instead
+//! of oscillating about the minimum. The step taken right after a reset starts from rest, so its
+//! displacement is the net force of the configuration: `F_i = m_i·Δx_i/Δt²` (gravity, elasticity,
+//! contacts, hair–hair and water forces, whatever the step includes), and each frame's rotation
+//! is its net torque `τ = θ/(w_q·Δt²)`. The residuals are their norms relative to gravity's: the
+//! weight of each free vertex (`‖m·g‖`) and, per edge, the largest moment gravity can exert on
+//! the strand beyond it (`‖g·Σ_j m_j·|p_j − p_e|‖`), with standard gravity when gravity is off.
+//! The solve is converged when both are at most the tolerance. A state that
+//! cannot get there (a solver limit cycle, contacts that fight each other) is reported with the
+//! residual it reached. The velocities are zero when the solve ends. The solve runs twice: with
+//! light frames, then with the simulation's own frames, so that the result is also at rest for
+//! the stepper that simulates it next.
 use glam::{Quat, Vec3};
 use serde::Serialize;
 
 use super::bonds::BondKind;
-use super::constraints::director3;
+use super::constraints::{darboux_canonical, director3};
 use super::{Hooks, Simulation};
+use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 
-/// When relaxation counts as done.
+/// When the static solve counts as done.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SettleOptions {
-    /// Every vertex slower than this (m/s)…
-    pub max_speed: f32,
-    /// …for this long (seconds), so a turning point of an oscillation does not count.
-    pub quiet_time: f32,
+    /// Largest accepted force and torque residual, relative to gravity's (see the module docs).
+    pub tolerance: f32,
     /// Give up after this many seconds of simulated time.
     pub max_seconds: f32,
     /// Solver iterations while settling (`None`: the simulation's own). Static shapes of stiff,
@@ -26,45 +40,242 @@ pub struct SettleOptions {
 
 impl Default for SettleOptions {
     fn default() -> Self {
-        SettleOptions { max_speed: 1e-4, quiet_time: 0.1, max_seconds: 30.0, iterations: None }
+        SettleOptions { tolerance: DEFAULT_TOLERANCE, max_seconds: 30.0, iterations: None }
     }
 }
 
-/// What relaxation achieved.
+/// Default relative residual: the net force on the groom is a thousandth of its weight.
+pub const DEFAULT_TOLERANCE: f32 = 1e-3;
+
+/// Accepted range of tolerances: below 1e-5 f32 round-off of the positions dominates the
+/// measured residual ([`PROBE_TIME`]), above 0.5 the groom is nowhere near rest.
+pub const TOLERANCE_RANGE: (f32, f32) = (1e-5, 0.5);
+
+/// Accepted range of settle budgets, simulated seconds.
+pub const MAX_SECONDS_RANGE: (f32, f32) = (0.0, 3600.0);
+
+impl SettleOptions {
+    /// Checks the values against their physical ranges; `key` prefixes name where they came from
+    /// (`--settle-` for the CLI, `stage 5 (settle): ` for a recipe).
+    pub fn check(&self, tolerance_key: &str, seconds_key: &str) -> Result<()> {
+        let (lo, hi) = TOLERANCE_RANGE;
+        if !(self.tolerance >= lo && self.tolerance <= hi) {
+            return Err(Error::Usage(format!(
+                "{tolerance_key} = {} is outside the range [{lo:e}, {hi}] (relative force residual)",
+                self.tolerance
+            )));
+        }
+        let (lo, hi) = MAX_SECONDS_RANGE;
+        if !(self.max_seconds > lo && self.max_seconds <= hi) {
+            return Err(Error::Usage(format!(
+                "{seconds_key} = {} is outside the range ({lo}, {hi}] seconds",
+                self.max_seconds
+            )));
+        }
+        if self.iterations.is_some_and(|n| !(1..=1000).contains(&n)) {
+            return Err(Error::Usage(format!(
+                "settle iterations {} must be between 1 and 1000",
+                self.iterations.unwrap_or(0)
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// What the static solve achieved.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SettleReport {
+    /// Both residuals at most the tolerance.
     pub converged: bool,
+    pub tolerance: f32,
+    /// Net force norm relative to the weight's at the last probe (`None`: no probe ran).
+    pub force_residual: f32,
+    /// Net torque norm on the frames relative to gravity's moment over the edges.
+    pub torque_residual: f32,
     pub steps: u64,
     pub seconds: f32,
-    /// Largest vertex speed at the end, m/s.
+    /// Velocity resets (kinetic-energy peaks).
+    pub resets: u64,
+    /// Largest vertex speed at the end, m/s (zero once converged).
     pub max_speed: f32,
 }
 
-impl Simulation {
-    /// Steps until every vertex has stayed below `options.max_speed` for `options.quiet_time`,
-    /// or until `options.max_seconds`; the report says which.
-    pub fn settle(&mut self, options: &SettleOptions, hooks: &dyn Hooks) -> SettleReport {
-        let dt = self.params().dt;
-        let own_iterations = self.params().iterations;
-        if let Some(iterations) = options.iterations.filter(|&n| n >= 1) {
-            self.params.iterations = iterations;
+/// Frame inertia factor while settling ([`super::SimParams::frame_inertia_factor`]): large enough
+/// that every frame's inverse inertia sits at its conditioning cap, the bending compliance
+/// `α/Δt²`. Frames are quasi-static, so their inertia acts as a drag on every bend (`I/Δt` per
+/// edge); heavy frames made released curls creep open for many seconds. Static shapes do not
+/// depend on it.
+const SETTLE_FRAME_INERTIA_FACTOR: f32 = 1e6;
+
+/// Longest run between probes, seconds: a slow creep with no kinetic-energy peak is still
+/// measured.
+const PROBE_INTERVAL: f32 = 0.25;
+
+/// How long a probe runs from rest, seconds: long enough that the displacement of a residual at
+/// the tolerance stands well above f32 round-off of the positions at any time step. One step
+/// from rest moves a vertex by `a·Δt²` (4.7 µm·a/g at Δt = 1/1440 s), while a coordinate near
+/// 0.2 m rounds to ~15 nm: single-step probes could not resolve residuals below ~3e-3 there.
+/// Four steps' worth at 1/360 s resolve ~2e-5 at every Δt.
+const PROBE_TIME: f32 = 4.0 / 360.0;
+
+/// Standard gravity, the residual's scale when gravity is off.
+const STANDARD_GRAVITY: f32 = 9.80665;
+
+/// The static solve over any stepper: `sim` reaches the simulation inside `context`, and `step`
+/// advances the context by one step (the rod solver plus whatever forces and contacts the caller
+/// applies). Calls `tick` after every step (progress bars).
+pub fn settle_with<C>(
+    context: &mut C,
+    sim: impl Fn(&mut C) -> &mut Simulation,
+    mut step: impl FnMut(&mut C),
+    options: &SettleOptions,
+    mut tick: impl FnMut(),
+) -> SettleReport {
+    let s = sim(context);
+    let dt = s.params().dt;
+    let own_iterations = s.params().iterations;
+    let own_frame_factor = s.params().frame_inertia_factor;
+    if let Some(iterations) = options.iterations.filter(|&n| n >= 1) {
+        s.params.iterations = iterations;
+    }
+    let mut report = SettleReport {
+        converged: false,
+        tolerance: options.tolerance,
+        force_residual: f32::INFINITY,
+        torque_residual: f32::INFINITY,
+        steps: 0,
+        seconds: 0.0,
+        resets: 0,
+        max_speed: 0.0,
+    };
+    let max_steps = (options.max_seconds / dt).ceil().max(1.0) as u64;
+    // Light frames get there fast; the simulation's own frames then polish the state into a
+    // rest state of the stepper the groom will be simulated with (with unconverged iterations
+    // the two rest states differ slightly: 3 mm on a curly groom before this second phase).
+    for factor in [SETTLE_FRAME_INERTIA_FACTOR, own_frame_factor] {
+        sim(context).set_frame_inertia_factor(factor).expect("a positive, finite factor");
+        relax(context, &sim, &mut step, &mut tick, options.tolerance, max_steps, &mut report);
+        if !report.converged {
+            break;
         }
-        let max_steps = (options.max_seconds / dt).ceil().max(1.0) as u64;
-        let quiet_steps = (options.quiet_time / dt).ceil().max(1.0) as u64;
-        let mut quiet = 0;
-        let mut steps = 0;
-        let mut speed = self.max_speed();
-        while steps < max_steps {
-            self.step_with(hooks);
-            steps += 1;
-            speed = self.max_speed();
-            quiet = if speed < options.max_speed { quiet + 1 } else { 0 };
-            if quiet >= quiet_steps {
-                break;
+    }
+    let s = sim(context);
+    if report.converged {
+        s.rods.velocities.iter_mut().for_each(|v| *v = Vec3::ZERO);
+    }
+    report.seconds = report.steps as f32 * dt;
+    report.max_speed = s.max_speed();
+    s.params.iterations = own_iterations;
+    s.set_frame_inertia_factor(own_frame_factor).expect("the factor the run started with");
+    report
+}
+
+/// Kinetic damping until a probe reaches `tolerance` or the report counts `max_steps`.
+fn relax<C>(
+    context: &mut C,
+    sim: &impl Fn(&mut C) -> &mut Simulation,
+    step: &mut impl FnMut(&mut C),
+    tick: &mut impl FnMut(),
+    tolerance: f32,
+    max_steps: u64,
+    report: &mut SettleReport,
+) {
+    let dt = sim(context).params().dt;
+    let probe_every = (PROBE_INTERVAL / dt).ceil().max(2.0) as u64;
+    let probe_steps = (PROBE_TIME / dt).round().max(1.0) as u64;
+    report.converged = false;
+    let mut probe: Option<(Vec<Vec3>, Vec<Quat>)> = None;
+    let mut since_reset = 0u64;
+    let mut kinetic = f64::INFINITY;
+    // Start from rest: the first steps are a probe.
+    let mut reset = true;
+    while report.steps < max_steps {
+        if reset {
+            let s = sim(context);
+            s.rods.velocities.iter_mut().for_each(|v| *v = Vec3::ZERO);
+            probe = Some((s.rods.positions.clone(), s.rods.frames.clone()));
+            report.resets += 1;
+            since_reset = 0;
+            kinetic = 0.0;
+        }
+        step(context);
+        tick();
+        report.steps += 1;
+        since_reset += 1;
+        let s = sim(context);
+        if since_reset == probe_steps {
+            if let Some((positions, frames)) = probe.take() {
+                (report.force_residual, report.torque_residual) =
+                    s.residuals(&positions, &frames, probe_steps);
+                if report.force_residual <= tolerance && report.torque_residual <= tolerance {
+                    report.converged = true;
+                    return;
+                }
             }
         }
-        self.params.iterations = own_iterations;
-        SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
+        let now = s.kinetic_energy();
+        reset = since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
+        kinetic = now;
+    }
+}
+
+impl Simulation {
+    /// The static solve with the rod solver and `hooks` as the stepper ([`settle_with`]).
+    pub fn settle(&mut self, options: &SettleOptions, hooks: &dyn Hooks) -> SettleReport {
+        settle_with(self, |s| s, |s| s.step_with(hooks), options, || {})
+    }
+
+    fn kinetic_energy(&self) -> f64 {
+        let r = &self.rods;
+        (0..r.vertex_count())
+            .filter(|&i| !r.kinematic[i])
+            .map(|i| (r.mass[i] * r.mass_scale[i]) as f64 * r.velocities[i].as_dvec3().length_squared())
+            .sum()
+    }
+
+    /// Force and torque residuals of the `steps` steps just taken from rest at `positions`,
+    /// `frames`. Under a constant net acceleration `a`, `k` steps from rest move a vertex by
+    /// `a·Δt²·k(k+1)/2`; quasi-static frames turn by `τ·w_q·Δt²` per step.
+    fn residuals(&self, positions: &[Vec3], frames: &[Quat], steps: u64) -> (f32, f32) {
+        let r = &self.rods;
+        let dt2 = (self.params.dt * self.params.dt) as f64;
+        let k = steps as f64;
+        let (vertex_scale, frame_scale) = (dt2 * k * (k + 1.0) / 2.0, dt2 * k);
+        let g = match self.params.gravity.length() {
+            g if g > 0.0 => g,
+            _ => STANDARD_GRAVITY,
+        } as f64;
+        let (mut force, mut weight, mut torque, mut moment) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        for strand in 0..r.strand_count() {
+            let range = r.strand_range(strand);
+            let mass = |i: usize| (r.mass[i] * r.mass_scale[i]) as f64;
+            for i in range.clone() {
+                if r.kinematic[i] {
+                    continue;
+                }
+                force += (mass(i) * (r.positions[i] - positions[i]).length() as f64 / vertex_scale).powi(2);
+                weight += (mass(i) * g).powi(2);
+            }
+            let edges = range.start..range.end - 1;
+            for (e, (&before, &now)) in
+                frames.iter().zip(&r.frames).enumerate().take(edges.end).skip(edges.start)
+            {
+                let wq = r.frame_inv_inertia[e];
+                if wq <= 0.0 || (r.kinematic[e] && r.kinematic[e + 1]) {
+                    continue;
+                }
+                let turn = darboux_canonical(before, now).length().min(1.0);
+                let angle = 2.0 * (turn as f64).asin();
+                torque += (angle / (wq as f64 * frame_scale)).powi(2);
+                // Gravity's moment on the strand beyond the edge, at most (whatever its direction).
+                let lever: f64 = (e + 1..range.end)
+                    .map(|j| mass(j) * r.positions[j].distance(r.positions[e]) as f64)
+                    .sum();
+                moment += (g * lever).powi(2);
+            }
+        }
+        let ratio = |a: f64, b: f64| if b > 0.0 { (a / b).sqrt() as f32 } else { 0.0 };
+        (ratio(force, weight), ratio(torque, moment))
     }
 
     /// Zero-stress Darboux vector of each edge pair (vertex-indexed; zero at roots and tips): the

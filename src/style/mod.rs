@@ -1,5 +1,9 @@
 //! Styling: recipes (TOML timelines of stages) and, once the simulation core lands, the
 //! driver that runs them on a groom.
+pub mod head_frame;
+pub mod layout;
+pub mod placement;
+pub mod ranges;
 pub mod recipe;
 pub mod run;
 

@@ -12,7 +12,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::error::{Error, Result};
-use crate::interact::mesh_sdf::MeshSdf;
+use crate::interact::mesh_sdf::{MeshSdf, TriangleMesh};
 use crate::interact::water::WaterParams;
 use crate::interact::wetness::WetnessParams;
 
@@ -20,6 +20,12 @@ use crate::interact::wetness::WetnessParams;
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Recipe {
+    /// The coordinates positions are given in, unless an item says otherwise (see [`Frame`]).
+    #[serde(default)]
+    pub frame: Frame,
+    /// Overrides of the fitted head frame.
+    #[serde(default)]
+    pub head: HeadSpec,
     #[serde(default)]
     pub settings: Settings,
     #[serde(default)]
@@ -34,6 +40,9 @@ pub struct Recipe {
     pub obstacles: Vec<Spanned<Obstacle>>,
     #[serde(default)]
     pub rods: Vec<Spanned<Rod>>,
+    /// Simulate only guides and interpolate the other strands (`crate::guides`).
+    #[serde(default)]
+    pub guides: Option<crate::guides::GuideSpec>,
     pub stages: Vec<Spanned<Stage>>,
 }
 
@@ -62,6 +71,10 @@ pub struct Settings {
     pub damping: f32,
     /// Seed for every random choice the recipe makes (masks, droplet placement).
     pub seed: u64,
+    /// Start from a rest shape that holds the groom's shape under gravity (`sim::sag_free`), so
+    /// the style is the only change. Off: the groom's shape, or a styled groom's exported
+    /// `rest_darboux`, is the rest shape.
+    pub sag_free: bool,
 }
 
 impl Default for Settings {
@@ -77,6 +90,7 @@ impl Default for Settings {
             max_segment: None,
             damping: 2.0,
             seed: 1,
+            sag_free: false,
         }
     }
 }
@@ -156,32 +170,79 @@ pub struct WaterSpec {
     pub params: WaterParams,
 }
 
+/// What the coordinates of a position are.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Frame {
+    /// Metres in the groom's own space (Y up).
+    #[default]
+    World,
+    /// The head frame fitted to the groom (`super::head_frame`): head units (the fitted scalp
+    /// sphere's radius) from the head's centre, along (`up × front`, up, front). Lengths (radii,
+    /// half extents, travel, falloff) are in head units too; directions (normals, gravity) along
+    /// the head's axes.
+    Head,
+}
+
+/// The largest distance from the head's centre, and the largest length, a head-frame recipe may
+/// give, in head units: farther is a mistake (metres written as head units, or the reverse).
+pub const MAX_HEAD_UNITS: f32 = 8.0;
+
+/// `[head]`: values that replace the fitted head frame's (world coordinates, metres), and the
+/// mesh obstacle to fit it to.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadSpec {
+    pub center: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    pub front: Option<[f32; 3]>,
+    pub size: Option<f32>,
+    /// A `shape = "mesh"` obstacle that is the scalp: the frame is fitted to it.
+    pub scalp: Option<String>,
+}
+
 /// A solid the hair meets, named so stages can refer to it.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Obstacle {
     /// The analytic head the groom grows on (`coif::head::Head`), optionally moved or resized.
+    /// In the head frame, left without `center` and `radii`, it is the ellipsoid fitted to the
+    /// groom's roots along the head's axes.
     Head {
         name: String,
         center: Option<[f32; 3]>,
         radii: Option<[f32; 3]>,
+        frame: Option<Frame>,
+    },
+    /// The groom's own scalp or head mesh (given to the run with the groom, see
+    /// [`super::StyleOptions::scalp`]), collided through a baked distance field; when the groom
+    /// brings none, the ellipsoid fitted to its roots along the head frame's axes.
+    Scalp {
+        name: String,
+        /// Cell of the baked field, metres (default 2 mm).
+        resolution: Option<f32>,
+        /// Width of the band of exact distances, metres (default 4 cells).
+        band: Option<f32>,
     },
     Sphere {
         name: String,
         center: [f32; 3],
         radius: f32,
+        frame: Option<Frame>,
     },
     /// A floor: the half-space below the plane.
     Plane {
         name: String,
         point: [f32; 3],
         normal: [f32; 3],
+        frame: Option<Frame>,
     },
-    /// An axis-aligned box: a pillow, a table.
+    /// A box along the frame's axes: a pillow, a table.
     Box {
         name: String,
         center: [f32; 3],
         half_extents: [f32; 3],
+        frame: Option<Frame>,
     },
     /// A closed triangle mesh from a Wavefront OBJ file (a scanned head), collided through a
     /// signed distance field baked when the recipe is loaded.
@@ -193,9 +254,11 @@ pub enum Obstacle {
         resolution: Option<f32>,
         /// Width of the band of exact distances around the surface, metres (default 4 cells).
         band: Option<f32>,
-        /// The baked field (filled in by [`load`] and [`parse`]).
+        /// The baked field and the triangles (filled in by [`load`] and [`parse`]).
         #[serde(skip)]
         sdf: Option<Arc<MeshSdf>>,
+        #[serde(skip)]
+        mesh: Option<Arc<TriangleMesh>>,
     },
 }
 
@@ -207,6 +270,7 @@ impl Obstacle {
     pub fn name(&self) -> &str {
         match self {
             Obstacle::Head { name, .. }
+            | Obstacle::Scalp { name, .. }
             | Obstacle::Sphere { name, .. }
             | Obstacle::Plane { name, .. }
             | Obstacle::Box { name, .. }
@@ -224,6 +288,8 @@ pub struct Rod {
     pub a: [f32; 3],
     pub b: [f32; 3],
     pub radius: f32,
+    #[serde(default)]
+    pub frame: Option<Frame>,
 }
 
 /// Which strands a stage acts on.
@@ -268,13 +334,18 @@ impl Region {
     }
 }
 
-/// How a `wrap` stage assigns strands to rods.
+/// Which rods a `wrap` stage winds onto. Each strand goes to the rod nearest to it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Layout {
-    /// Each strand goes to the rod nearest its tip.
+    /// The recipe's `[[rods]]` (those the stage names, or all).
     #[default]
     Nearest,
+    /// Rods laid out over the scalp the roots cover, in rows around the head's up axis from the
+    /// crown down, `spacing` apart, each two spacings long (`super::layout`).
+    Rows,
+    /// Rods laid end to end along a spiral from the crown, its turns `spacing` apart.
+    Spiral,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -284,15 +355,17 @@ pub struct DryerSpec {
     pub target: [f32; 3],
     /// α of S1-17, m/s².
     pub strength: f32,
-    #[serde(default = "default_falloff")]
-    pub falloff: f32,
+    /// Distance from the jet's axis over which the push halves (default 5 cm).
+    #[serde(default)]
+    pub falloff: Option<f32>,
     /// Degrees off the axis beyond which the jet does not reach.
     pub cone_degrees: Option<f32>,
+    #[serde(default)]
+    pub frame: Option<Frame>,
 }
 
-fn default_falloff() -> f32 {
-    0.05
-}
+/// A dryer's falloff when the recipe gives none, metres.
+pub const DEFAULT_FALLOFF: f32 = 0.05;
 
 fn one() -> f32 {
     1.0
@@ -318,6 +391,11 @@ pub enum Stage {
         rods: Vec<String>,
         #[serde(default)]
         layout: Layout,
+        /// Rod diameter and row spacing of a `rows` or `spiral` layout.
+        #[serde(default)]
+        diameter: Option<f32>,
+        #[serde(default)]
+        spacing: Option<f32>,
         #[serde(default)]
         mask: Mask,
     },
@@ -350,6 +428,7 @@ pub enum Stage {
     },
     /// Press an obstacle (a floor, a pillow) into the hair: it moves `travel` metres along
     /// `direction` (default: the plane's normal, or up for a box) over the duration, then holds.
+    /// Both are in the pressed obstacle's frame.
     Press {
         duration: f32,
         obstacle: String,
@@ -364,9 +443,9 @@ pub enum Stage {
     Settle {
         #[serde(default = "default_settle_seconds")]
         max_seconds: f32,
-        /// Stop once no vertex moves faster than this, m/s.
-        #[serde(default = "default_settle_speed")]
-        max_speed: f32,
+        /// Largest accepted net force and torque relative to gravity's (`sim::settle`).
+        #[serde(default = "default_settle_tolerance")]
+        tolerance: f32,
         /// Settle without gravity (to measure the free curl).
         #[serde(default)]
         gravity: Option<bool>,
@@ -381,8 +460,8 @@ fn default_settle_seconds() -> f32 {
     10.0
 }
 
-fn default_settle_speed() -> f32 {
-    1e-3
+fn default_settle_tolerance() -> f32 {
+    crate::sim::settle::DEFAULT_TOLERANCE
 }
 
 impl Stage {
@@ -420,8 +499,7 @@ impl Stage {
 
 /// Reads and checks a recipe file.
 pub fn load(path: &Path) -> Result<Recipe> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse(&text, path)
+    parse(&crate::io::input::read_text(path)?, path)
 }
 
 /// Parses and checks recipe text; `path` names it in errors, and mesh obstacles' files are found
@@ -437,23 +515,34 @@ pub fn parse(text: &str, path: &Path) -> Result<Recipe> {
 /// mesh is bad input: the error names the recipe, its line and the mesh file.
 fn bake_meshes(recipe: &mut Recipe, text: &str, recipe_path: &Path) -> Result<()> {
     let directory = recipe_path.parent().unwrap_or(Path::new(""));
+    let lines = super::ranges::Lines::new(text);
     for obstacle in &mut recipe.obstacles {
-        let line = line_column(text, obstacle.span().start).0;
-        if let Obstacle::Mesh { name, path, resolution, band, sdf } = obstacle.get_mut() {
+        let line = lines.line_column(text, obstacle.span().start).0;
+        if let Obstacle::Mesh { name, path, resolution, band, sdf, mesh } = obstacle.get_mut() {
             let file = directory.join(&*path);
             let fail = |what: String| {
                 Error::format(recipe_path, format!("line {line}: mesh obstacle '{name}': {what}"))
             };
-            let (vertices, triangles) =
+            let (points, triangles) =
                 crate::io::obj::read_triangles(&file).map_err(|e| fail(e.to_string()))?;
-            let cell = resolution.unwrap_or(MESH_RESOLUTION);
-            let band = band.unwrap_or(4.0 * cell);
-            let baked = MeshSdf::bake(&vertices, &triangles, cell, band)
+            let triangles = TriangleMesh { points, triangles };
+            let baked = bake_mesh(&triangles, *resolution, *band)
                 .map_err(|e| fail(format!("{}: {e}", file.display())))?;
             *sdf = Some(Arc::new(baked));
+            *mesh = Some(Arc::new(triangles));
         }
     }
     Ok(())
+}
+
+/// Bakes a mesh obstacle's field with the recipe's resolution and band, or the defaults.
+pub fn bake_mesh(
+    mesh: &TriangleMesh,
+    resolution: Option<f32>,
+    band: Option<f32>,
+) -> std::result::Result<MeshSdf, String> {
+    let cell = resolution.unwrap_or(MESH_RESOLUTION);
+    mesh.bake(cell, band.unwrap_or(4.0 * cell))
 }
 
 /// "line N, column M: what" from a TOML error, on one line.
@@ -469,15 +558,14 @@ fn toml_message(error: &toml::de::Error, text: &str) -> String {
 }
 
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let before = &text[..offset.min(text.len())];
-    let line = before.matches('\n').count() + 1;
-    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-    (line, column)
+    super::ranges::Lines::new(text).line_column(text, offset)
 }
 
 /// Semantic checks the types cannot express; each failure names its line.
 fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
-    let line_of = |span: std::ops::Range<usize>| line_column(text, span.start).0;
+    super::ranges::check_numbers(recipe, text)?;
+    let lines = super::ranges::Lines::new(text);
+    let line_of = |span: std::ops::Range<usize>| lines.line_column(text, span.start).0;
     let settings = &recipe.settings;
     let positive = |value: f32| value.is_finite() && value > 0.0;
     if !positive(settings.dt) || settings.dt > 0.1 {
@@ -504,6 +592,27 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
         return Err("[bonds] influences must be non-negative and not all zero".into());
     }
 
+    if let Some(scalp) = &recipe.head.scalp {
+        if !recipe
+            .obstacles
+            .iter()
+            .any(|o| o.get_ref().name() == scalp && matches!(o.get_ref(), Obstacle::Mesh { .. }))
+        {
+            return Err(format!("[head] scalp = '{scalp}' names no mesh obstacle"));
+        }
+    }
+    let head = &recipe.head;
+    if head.size.is_some_and(|s| !positive(s)) {
+        return Err("[head] size must be a positive length".into());
+    }
+    if [head.up, head.front]
+        .iter()
+        .flatten()
+        .any(|v| Vec3::from(*v).length().is_nan() || Vec3::from(*v).length() <= 1e-6)
+    {
+        return Err("[head] up and front must be non-zero directions".into());
+    }
+
     let mut names: Vec<&str> = Vec::new();
     for obstacle in &recipe.obstacles {
         let line = line_of(obstacle.span());
@@ -512,19 +621,40 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
             return Err(format!("line {line}: a second obstacle or rod named '{name}'"));
         }
         names.push(name);
+        let meshed = |resolution: &Option<f32>, band: &Option<f32>| {
+            resolution.is_some_and(|r| !positive(r))
+                || band.is_some_and(|b| !positive(b) || b < resolution.unwrap_or(MESH_RESOLUTION))
+        };
         let bad = match obstacle.get_ref() {
             Obstacle::Sphere { radius, .. } => !positive(*radius),
             Obstacle::Head { radii: Some(r), .. } => !r.iter().all(|&x| positive(x)),
             Obstacle::Plane { normal, .. } => Vec3::from(*normal).length() < 1e-6,
             Obstacle::Box { half_extents, .. } => !half_extents.iter().all(|&x| positive(x)),
             Obstacle::Head { .. } => false,
-            Obstacle::Mesh { resolution, band, .. } => {
-                resolution.is_some_and(|r| !positive(r))
-                    || band.is_some_and(|b| !positive(b) || b < resolution.unwrap_or(MESH_RESOLUTION))
+            Obstacle::Mesh { resolution, band, .. } | Obstacle::Scalp { resolution, band, .. } => {
+                meshed(resolution, band)
             }
         };
         if bad {
             return Err(format!("line {line}: obstacle '{name}' has a zero or negative size"));
+        }
+        let in_head = |frame: &Option<Frame>| frame.unwrap_or(recipe.frame) == Frame::Head;
+        let what = format!("line {line}: obstacle '{name}'");
+        match obstacle.get_ref() {
+            Obstacle::Head { center, radii, frame, .. } if in_head(frame) => {
+                center.map_or(Ok(()), |c| head_position(&what, "center", c))?;
+                radii.map_or(Ok(()), |r| head_lengths(&what, "radii", &r))?;
+            }
+            Obstacle::Sphere { center, radius, frame, .. } if in_head(frame) => {
+                head_position(&what, "center", *center)?;
+                head_lengths(&what, "radius", &[*radius])?;
+            }
+            Obstacle::Plane { point, frame, .. } if in_head(frame) => head_position(&what, "point", *point)?,
+            Obstacle::Box { center, half_extents, frame, .. } if in_head(frame) => {
+                head_position(&what, "center", *center)?;
+                head_lengths(&what, "half_extents", half_extents)?;
+            }
+            _ => {}
         }
     }
     for rod in &recipe.rods {
@@ -539,6 +669,12 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 "line {line}: rod '{}' needs a positive radius and two distinct ends",
                 r.name
             ));
+        }
+        if r.frame.unwrap_or(recipe.frame) == Frame::Head {
+            let what = format!("line {line}: rod '{}'", r.name);
+            head_position(&what, "a", r.a)?;
+            head_position(&what, "b", r.b)?;
+            head_lengths(&what, "radius", &[r.radius])?;
         }
     }
 
@@ -563,12 +699,39 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                     return fail("amount and mask fraction must be in [0, 1]".into());
                 }
             }
-            Stage::Wrap { rods, mask, .. } => {
+            Stage::Wrap { rods, mask, layout, diameter, spacing, .. } => {
                 if let Some(holder) = held {
                     return fail(format!("the hair is still held by the earlier {holder}; release it first"));
                 }
-                if recipe.rods.is_empty() {
-                    return fail("there are no [[rods]] to wrap onto".into());
+                if *layout == Layout::Nearest {
+                    if recipe.rods.is_empty() {
+                        return fail(
+                            "there are no [[rods]] to wrap onto (or lay them out: layout = \"rows\")".into(),
+                        );
+                    }
+                    if diameter.is_some() || spacing.is_some() {
+                        return fail("diameter and spacing belong to a rows or spiral layout".into());
+                    }
+                } else {
+                    if !rods.is_empty() {
+                        return fail("a rows or spiral layout makes its own rods: leave out rods".into());
+                    }
+                    let (Some(diameter), Some(spacing)) = (diameter, spacing) else {
+                        return fail("a rows or spiral layout needs a diameter and a spacing".into());
+                    };
+                    if !(positive(*diameter) && positive(*spacing) && spacing > diameter) {
+                        return fail(format!(
+                            "diameter {diameter} and spacing {spacing} must be positive, the spacing the larger"
+                        ));
+                    }
+                    if recipe.frame == Frame::Head {
+                        head_lengths(
+                            &format!("line {line}: stage {} (wrap)", index + 1),
+                            "spacing",
+                            &[*spacing],
+                        )
+                        .or_else(fail)?;
+                    }
                 }
                 if let Some(missing) =
                     rods.iter().find(|r| !recipe.rods.iter().any(|x| &x.get_ref().name == *r))
@@ -602,11 +765,17 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                     return fail(format!("heat {heat} must not be negative"));
                 }
                 if let Some(d) = dryer {
-                    if !(d.strength.is_finite() && d.strength >= 0.0 && positive(d.falloff)) {
+                    if !(d.strength.is_finite() && d.strength >= 0.0 && d.falloff.is_none_or(positive)) {
                         return fail("dryer strength must be >= 0 and falloff > 0".into());
                     }
                     if Vec3::from(d.position).distance(Vec3::from(d.target)) < 1e-6 {
                         return fail("dryer position and target must differ".into());
+                    }
+                    if d.frame.unwrap_or(recipe.frame) == Frame::Head {
+                        let what = format!("line {line}: stage {} (dry): dryer", index + 1);
+                        head_position(&what, "position", d.position).or_else(fail)?;
+                        head_position(&what, "target", d.target).or_else(fail)?;
+                        d.falloff.map_or(Ok(()), |f| head_lengths(&what, "falloff", &[f])).or_else(fail)?;
                     }
                 }
             }
@@ -614,12 +783,18 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 if let Some(holder) = held {
                     return fail(format!("the hair is still held by the earlier {holder}; release it first"));
                 }
-                match recipe.obstacles.iter().find(|o| o.get_ref().name() == obstacle) {
+                let frame = match recipe.obstacles.iter().find(|o| o.get_ref().name() == obstacle) {
                     None => return fail(format!("there is no obstacle named '{obstacle}'")),
-                    Some(o) if !matches!(o.get_ref(), Obstacle::Plane { .. } | Obstacle::Box { .. }) => {
-                        return fail(format!("'{obstacle}' is not a plane or box to press onto"))
-                    }
-                    Some(_) => {}
+                    Some(o) => match o.get_ref() {
+                        Obstacle::Plane { frame, .. } | Obstacle::Box { frame, .. } => {
+                            frame.unwrap_or(recipe.frame)
+                        }
+                        _ => return fail(format!("'{obstacle}' is not a plane or box to press onto")),
+                    },
+                };
+                if frame == Frame::Head {
+                    head_lengths(&format!("line {line}: stage {} (press)", index + 1), "travel", &[*travel])
+                        .or_else(fail)?;
                 }
                 if !(travel.is_finite() && *travel >= 0.0) {
                     return fail(format!("travel {travel} must be zero or more metres"));
@@ -635,21 +810,49 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 }
                 held = None;
             }
-            Stage::Settle { max_speed, .. } => {
+            Stage::Settle { max_seconds, tolerance, .. } => {
                 if index != last {
                     return fail("settle must be the last stage".into());
                 }
                 if let Some(holder) = held {
                     return fail(format!("the hair is still held by the earlier {holder}; release it first"));
                 }
-                if !positive(*max_speed) {
-                    return fail(format!("max_speed {max_speed} must be positive"));
+                let options = crate::sim::SettleOptions {
+                    tolerance: *tolerance,
+                    max_seconds: *max_seconds,
+                    iterations: None,
+                };
+                if let Err(e) = options.check("tolerance", "max_seconds") {
+                    return fail(e.to_string());
                 }
             }
             Stage::Process { .. } | Stage::Rinse { reform: None, .. } => {}
         }
     }
     Ok(())
+}
+
+/// A head-frame position must lie within [`MAX_HEAD_UNITS`] of the head's centre.
+fn head_position(what: &str, key: &str, position: [f32; 3]) -> std::result::Result<(), String> {
+    let distance = Vec3::from(position).length();
+    if distance.is_finite() && distance <= MAX_HEAD_UNITS {
+        return Ok(());
+    }
+    Err(format!(
+        "{what}: {key} = {position:?} lies {distance} head units from the head's centre; head-frame \
+         positions are in head units (≈ 0.1 m on an adult head), at most {MAX_HEAD_UNITS} — \
+         metres belong in frame = \"world\""
+    ))
+}
+
+/// Head-frame lengths must be at most [`MAX_HEAD_UNITS`].
+fn head_lengths(what: &str, key: &str, lengths: &[f32]) -> std::result::Result<(), String> {
+    match lengths.iter().find(|l| !(l.is_finite() && l.abs() <= MAX_HEAD_UNITS)) {
+        None => Ok(()),
+        Some(l) => Err(format!(
+            "{what}: {key} {l} is more than {MAX_HEAD_UNITS} head units (≈ 0.1 m each on an adult head)"
+        )),
+    }
 }
 
 fn check_amounts(amounts: &BondAmounts) -> std::result::Result<(), String> {
@@ -760,6 +963,26 @@ kind = "settle"
 
         let peptide = PERM.replace("disulfide = 0.2 }", "peptide = 0.5 }");
         assert!(error_of(&peptide).contains("peptide bonds do not break"));
+
+        // Head-frame recipes: positions and lengths in head units, at most MAX_HEAD_UNITS.
+        let head = format!("frame = \"head\"\n{PERM}");
+        assert!(parse(&head, Path::new("r.toml")).is_ok());
+        let far = head.replace("a = [-0.1, -0.2, 0.1]", "a = [-10.0, -0.2, 0.1]");
+        let e = error_of(&far);
+        assert!(e.contains("line 13") && e.contains("rod 'rod'") && e.contains("head units"), "{e}");
+        let world_rod = far.replace("radius = 0.01", "radius = 0.01\nframe = \"world\"");
+        assert!(parse(&world_rod, Path::new("r.toml")).is_ok(), "a world item may be anywhere");
+        let no_spacing = PERM.replace("duration = 2.0", "duration = 2.0\nlayout = \"rows\"\ndiameter = 0.02");
+        assert!(
+            error_of(&no_spacing).contains("needs a diameter and a spacing"),
+            "{}",
+            error_of(&no_spacing)
+        );
+        let laid = PERM.replace(
+            "duration = 2.0",
+            "duration = 2.0\nlayout = \"spiral\"\ndiameter = 0.02\nspacing = 0.03",
+        );
+        assert!(parse(&laid, Path::new("r.toml")).is_ok());
 
         let unknown_stage = PERM.replace("kind = \"release\"", "kind = \"curl\"");
         assert!(error_of(&unknown_stage).contains("line 33"), "{}", error_of(&unknown_stage));

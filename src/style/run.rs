@@ -6,23 +6,29 @@
 //! Every step is: forces from a snapshot (wind, hair–hair penalty, water) → the rod solver with
 //! obstacle contacts projected each iteration → wetness update (uptake, wicking, evaporation),
 //! whose changes re-form or break hydrogen bonds (S1-16) and change strand mass.
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::recipe::{Mask, Obstacle, Recipe, Stage};
+use super::head_frame::HeadFrame;
+use super::placement::place;
+use super::recipe::{Mask, Recipe, Stage, DEFAULT_FALLOFF};
 use crate::analysis::{curl_radius, mean_curvature, resample_groom};
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
-use crate::head::Head;
 use crate::interact::hair_contacts::HairContacts;
-use crate::interact::obstacles::{resolve_contact, Friction, ObstacleCulling, Shape};
+use crate::interact::mesh_sdf::TriangleMesh;
+use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
-use crate::sim::{BondInfluences, BondKind, Cuticle, Hooks, Material, SettleReport, SimParams, Simulation};
+use crate::sim::settle::settle_with;
+use crate::sim::{
+    BondInfluences, BondKind, Cuticle, Material, SettleOptions, SettleReport, SimParams, Simulation,
+};
 
 /// Options of a styling run that are not part of the recipe.
 #[derive(Clone, Debug, Default)]
@@ -31,6 +37,9 @@ pub struct StyleOptions {
     pub frames_per_second: f32,
     /// Draw a progress bar on stderr (only shown on a terminal).
     pub progress: bool,
+    /// The groom's own scalp or head mesh: `shape = "scalp"` obstacles collide with it and the
+    /// head frame is fitted to it. Readers of groom files that carry a mesh fill it in.
+    pub scalp: Option<Arc<TriangleMesh>>,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -58,14 +67,32 @@ pub struct StageReport {
     /// Mean wetness at the stage's end.
     pub wetness: f32,
     pub settle: Option<SettleReport>,
+    /// Deepest any vertex went inside an active obstacle or rod after any step of the stage,
+    /// metres (0: never inside; a vertex's radius counts).
+    pub max_penetration: f32,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StyleReport {
     pub strands: usize,
+    /// Strands simulated as guides when the rest were interpolated from them (`crate::guides`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guides: Option<usize>,
     pub vertices: usize,
     pub steps: u64,
+    /// The head frame the recipe was placed in, when it needed one.
+    pub head_frame: Option<HeadFrameReport>,
     pub stages: Vec<StageReport>,
+}
+
+/// A fitted head frame as the report shows it (world coordinates, metres).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct HeadFrameReport {
+    pub center: [f32; 3],
+    pub up: [f32; 3],
+    pub front: [f32; 3],
+    /// Metres per head unit.
+    pub size: f32,
 }
 
 /// The outcome of a styling run.
@@ -78,8 +105,17 @@ pub struct Styled {
     pub frames_per_second: f32,
 }
 
-/// Styles a groom with a recipe.
+/// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    crate::limits::check_style(groom, recipe, options.frames_per_second)?;
+    if crate::guides::wanted(groom, recipe) {
+        return crate::guides::style(groom, recipe, options);
+    }
+    style_strands(groom, recipe, options)
+}
+
+/// Styles every strand of a groom with a recipe.
+pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
@@ -92,12 +128,15 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         );
         bar
     });
-    for (index, spanned) in recipe.stages.iter().enumerate() {
+    // The stages placed on this groom (head-frame lengths in metres, layouts as rods).
+    let placed_stages = session.recipe.stages.clone();
+    for (index, spanned) in placed_stages.iter().enumerate() {
         let stage = spanned.get_ref();
         if let Some(bar) = &progress {
             bar.set_message(stage.kind());
         }
         let start = Instant::now();
+        session.penetration = 0.0;
         let steps_before = session.sim.steps_taken();
         let settle = session.run_stage(index, stage, progress.as_ref())?;
         let steps = session.sim.steps_taken() - steps_before;
@@ -108,8 +147,15 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     }
     let report = StyleReport {
         strands: session.groom.strand_count(),
+        guides: None,
         vertices: session.groom.vertex_count(),
         steps: session.sim.steps_taken(),
+        head_frame: session.head_frame.map(|f| HeadFrameReport {
+            center: f.center().to_array(),
+            up: f.up().to_array(),
+            front: f.front().to_array(),
+            size: f.size(),
+        }),
         stages,
     };
     if session.frame_interval.is_some() && session.frames.last() != Some(&session.sim.rods.positions) {
@@ -120,40 +166,6 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     out.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, session.wetness.clone()));
     out.validate()?;
     Ok(Styled { groom: out, report, frames: session.frames, frames_per_second: options.frames_per_second })
-}
-
-/// Projects vertices out of the active obstacles after each solver iteration.
-struct ContactHooks<'a> {
-    shapes: &'a [Shape],
-    culling: &'a ObstacleCulling,
-    /// Positions at the start of the step (friction measures the slide from there).
-    previous: &'a [Vec3],
-    radii: &'a [f32],
-    friction: Friction,
-}
-
-impl Hooks for ContactHooks<'_> {
-    fn projects(&self) -> bool {
-        !self.shapes.is_empty()
-    }
-
-    fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {
-        for (k, p) in positions.iter_mut().enumerate() {
-            if inverse_masses[k] == 0.0 {
-                continue;
-            }
-            let i = first_vertex + k;
-            let mask = self.culling.mask(strand, *p);
-            for (s, shape) in self.shapes.iter().enumerate() {
-                if !ObstacleCulling::tests(mask, s) {
-                    continue;
-                }
-                if let Some(q) = resolve_contact(shape, *p, self.previous[i], self.radii[i], self.friction) {
-                    *p = q;
-                }
-            }
-        }
-    }
 }
 
 /// The helix a strand is wound onto: around `axis` through `origin`, starting at `e1`.
@@ -216,8 +228,9 @@ impl Winding {
     }
 }
 
-struct Session<'r> {
-    recipe: &'r Recipe,
+struct Session {
+    /// The recipe placed on the groom: world coordinates, layouts laid out as rods.
+    recipe: Recipe,
     /// The groom being styled (resampled if the recipe asks), for topology and attributes.
     groom: Groom,
     sim: Simulation,
@@ -251,66 +264,29 @@ struct Session<'r> {
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_interval: Option<u64>,
+    /// Deepest penetration of the current stage so far (metres).
+    penetration: f32,
+    head_frame: Option<HeadFrame>,
 }
 
-impl<'r> Session<'r> {
-    fn new(input: &Groom, recipe: &'r Recipe, options: &StyleOptions) -> Result<Session<'r>> {
-        let settings = &recipe.settings;
-        let groom = match settings.max_segment {
+impl Session {
+    fn new(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Session> {
+        let groom = match recipe.settings.max_segment {
             Some(max) => resample_groom(input, max),
             None => input.clone(),
         };
         groom.validate()?;
-        let b = &recipe.bonds;
-        let params = SimParams {
-            dt: settings.dt,
-            iterations: settings.iterations,
-            gravity: Vec3::from(settings.gravity),
-            damping: settings.damping,
-            material: Material {
-                density: settings.density,
-                youngs_modulus: settings.youngs_modulus,
-                shear_modulus: settings.shear_modulus,
-                cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
-                ..Material::default()
-            },
-            influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
-            ..SimParams::default()
-        };
-        let sim = Simulation::new(&groom, params)?;
-
-        if let Some(Obstacle::Mesh { name, .. }) = recipe
-            .obstacles
-            .iter()
-            .map(|o| o.get_ref())
-            .find(|o| matches!(o, Obstacle::Mesh { sdf: None, .. }))
-        {
-            return Err(Error::Usage(format!(
-                "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
-            )));
+        let placed = place(recipe, &groom, options.scalp.as_deref())?;
+        let recipe = placed.recipe;
+        let settings = &recipe.settings;
+        let mut sim = Simulation::new(&groom, sim_params(&recipe))?;
+        if settings.sag_free {
+            sim.make_sag_free();
+        } else {
+            sim.adopt_rest_state(&groom)?;
         }
-        let mut head = Head::default();
-        let obstacles: Vec<Shape> = recipe
-            .obstacles
-            .iter()
-            .map(|o| match o.get_ref() {
-                Obstacle::Head { center, radii, .. } => {
-                    head.center = center.map_or(head.center, Vec3::from);
-                    head.radii = radii.map_or(head.radii, Vec3::from);
-                    Shape::Ellipsoid { center: head.center, radii: head.radii }
-                }
-                Obstacle::Sphere { center, radius, .. } => {
-                    Shape::Sphere { center: Vec3::from(*center), radius: *radius }
-                }
-                Obstacle::Plane { point, normal, .. } => {
-                    Shape::Plane { point: Vec3::from(*point), normal: Vec3::from(*normal).normalize() }
-                }
-                Obstacle::Box { center, half_extents, .. } => {
-                    Shape::Box { center: Vec3::from(*center), half_extents: Vec3::from(*half_extents) }
-                }
-                Obstacle::Mesh { sdf, .. } => Shape::Mesh(sdf.clone().expect("checked above")),
-            })
-            .collect();
+
+        let obstacles = placed.shapes;
         let rods = recipe
             .rods
             .iter()
@@ -319,8 +295,10 @@ impl<'r> Session<'r> {
                 Shape::Capsule { a: Vec3::from(r.a), b: Vec3::from(r.b), radius: r.radius }
             })
             .collect();
+        // Masks see each root's direction along the head's axes (coif's X side, Y up, Z front).
+        let to_head = placed.mask_rotation.inverse();
         let root_dirs = (0..groom.strand_count())
-            .map(|s| (groom.points[groom.strand_range(s).start] - head.center).normalize_or_zero())
+            .map(|s| (to_head * (groom.strand_points(s)[0] - placed.mask_center)).normalize_or_zero())
             .collect();
         let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
         let n = groom.vertex_count();
@@ -335,6 +313,11 @@ impl<'r> Session<'r> {
         let frame_interval = (options.frames_per_second > 0.0)
             .then(|| ((1.0 / (options.frames_per_second * settings.dt)).round() as u64).max(1));
         let offsets = vec![Vec3::ZERO; obstacles.len()];
+        let friction = Friction {
+            static_friction: recipe.contacts.static_friction,
+            dynamic_friction: recipe.contacts.dynamic_friction,
+        };
+        let wetness_params = recipe.wetness;
         let mut session = Session {
             recipe,
             sim,
@@ -348,15 +331,12 @@ impl<'r> Session<'r> {
             wound: vec![None; groom.strand_count()],
             wetness_before: wetness.clone(),
             wetness,
-            wetness_params: recipe.wetness,
+            wetness_params,
             droplets: Droplets::default(),
             contacts,
             dryer: None,
             heat: 0.0,
-            friction: Friction {
-                static_friction: recipe.contacts.static_friction,
-                dynamic_friction: recipe.contacts.dynamic_friction,
-            },
+            friction,
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             culling: ObstacleCulling::default(),
             previous: vec![Vec3::ZERO; n],
@@ -364,6 +344,8 @@ impl<'r> Session<'r> {
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
             frame_interval,
+            penetration: 0.0,
+            head_frame: placed.frame,
             radii,
             groom,
         };
@@ -414,6 +396,17 @@ impl<'r> Session<'r> {
     fn step(&mut self) {
         let dt = self.sim.params().dt;
         self.compute_forces(dt);
+        self.contact_step();
+        self.update_wetness(dt);
+        if let Some(every) = self.frame_interval {
+            if self.sim.steps_taken() % every == 0 {
+                self.frames.push(self.sim.rods.positions.clone());
+            }
+        }
+    }
+
+    /// The rod solver with the active obstacles' contacts.
+    fn contact_step(&mut self) {
         self.previous.copy_from_slice(&self.sim.rods.positions);
         self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {
@@ -424,12 +417,27 @@ impl<'r> Session<'r> {
             friction: self.friction,
         };
         self.sim.step_with(&hooks);
-        self.update_wetness(dt);
-        if let Some(every) = self.frame_interval {
-            if self.sim.steps_taken() % every == 0 {
-                self.frames.push(self.sim.rods.positions.clone());
-            }
-        }
+        self.penetration = self.penetration.max(self.deepest_penetration());
+    }
+
+    /// How deep the deepest vertex is inside an active obstacle now.
+    fn deepest_penetration(&self) -> f32 {
+        let positions = &self.sim.rods.positions;
+        (0..self.groom.strand_count())
+            .into_par_iter()
+            .map(|strand| {
+                let mut deepest = 0.0f32;
+                for i in self.groom.strand_range(strand) {
+                    let mask = self.culling.mask(strand, positions[i]);
+                    for (k, shape) in self.active.iter().enumerate() {
+                        if ObstacleCulling::tests(mask, k) {
+                            deepest = deepest.max(self.radii[i] - shape.distance(positions[i]).0);
+                        }
+                    }
+                }
+                deepest
+            })
+            .reduce(|| 0.0, f32::max)
     }
 
     /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
@@ -592,7 +600,7 @@ impl<'r> Session<'r> {
                     position: Vec3::from(d.position),
                     target: Vec3::from(d.target),
                     strength: d.strength,
-                    falloff: d.falloff,
+                    falloff: d.falloff.unwrap_or(DEFAULT_FALLOFF),
                     cone_half_angle: d.cone_degrees.map(f32::to_radians),
                     heat: *heat,
                 });
@@ -630,12 +638,14 @@ impl<'r> Session<'r> {
                 self.refresh_obstacles();
                 self.run_steps(steps, progress, |_, _| {});
             }
-            Stage::Settle { max_seconds, max_speed, gravity } => {
+            Stage::Settle { max_seconds, tolerance, gravity } => {
                 if *gravity == Some(false) {
                     let p = self.sim.params().clone();
                     self.sim.set_step_params(p.dt, p.iterations, Vec3::ZERO, p.damping)?;
                 }
-                return Ok(Some(self.settle(*max_seconds, *max_speed, progress)));
+                let options =
+                    SettleOptions { tolerance: *tolerance, max_seconds: *max_seconds, iterations: None };
+                return Ok(Some(self.settle(&options, progress)));
             }
         }
         Ok(None)
@@ -677,46 +687,43 @@ impl<'r> Session<'r> {
         self.run_steps(steps, progress, |s, _| apply(s));
     }
 
-    /// Steps until every vertex stays slower than `max_speed` for 0.1 s, or `max_seconds` pass.
-    ///
-    /// Frames are made as light as the solver's conditioning allows while settling. The frames are
-    /// quasi-static (they restart every step at rest), so their inertia acts as a drag on every
-    /// bend, `I_frame/Δt` per edge: with the default factor it is ~10³× the air damping on a 3 cm
-    /// segment, makes released curls creep open over many seconds whatever the damping or the
-    /// iteration count, and kept the presets from settling. Static shapes do not depend on it.
-    fn settle(
-        &mut self,
-        max_seconds: f32,
-        max_speed: f32,
-        progress: Option<&indicatif::ProgressBar>,
-    ) -> SettleReport {
-        let dt = self.sim.params().dt;
-        let frame_inertia_factor = self.sim.params().frame_inertia_factor;
-        self.sim.set_frame_inertia_factor(SETTLE_FRAME_INERTIA_FACTOR).expect("a positive, finite factor");
-        let max_steps = self.steps_for(max_seconds).max(1);
-        let quiet_steps = (0.1 / dt).ceil() as u64;
-        let (mut quiet, mut steps, mut speed) = (0, 0, self.sim.max_speed());
-        while steps < max_steps && quiet < quiet_steps {
-            self.step();
-            steps += 1;
-            speed = self.sim.max_speed();
-            quiet = if speed < max_speed { quiet + 1 } else { 0 };
-            if let Some(bar) = progress {
-                bar.inc(1);
-            }
-        }
+    /// The static solve (`sim::settle`) with this session's full step: forces, contacts and
+    /// wetness.
+    fn settle(&mut self, options: &SettleOptions, progress: Option<&indicatif::ProgressBar>) -> SettleReport {
+        let budget = self.steps_for(options.max_seconds).max(1);
+        let report = settle_with(
+            self,
+            |s| &mut s.sim,
+            Self::step,
+            options,
+            || {
+                if let Some(bar) = progress {
+                    bar.inc(1);
+                }
+            },
+        );
         if let Some(bar) = progress {
-            bar.inc(max_steps - steps);
+            bar.inc(budget.saturating_sub(report.steps));
         }
-        self.sim.set_frame_inertia_factor(frame_inertia_factor).expect("the factor the run started with");
-        SettleReport { converged: quiet >= quiet_steps, steps, seconds: steps as f32 * dt, max_speed: speed }
+        report
     }
 
-    /// Poses every wound strand at stage time `t ∈ [0, 1]`.
+    /// Poses every wound strand at stage time `t ∈ [0, 1]`. The path from the strand's shape to
+    /// the rod may cross the head or other rods: poses are pushed out of every active obstacle
+    /// and rod (the finished helix lies on its own rod's surface, where the push is zero).
     fn drive(&mut self, windings: &[Winding], t: f32) {
+        let solids = &self.active;
         for w in windings {
             for (k, vertex) in (w.first..w.end).enumerate() {
-                self.sim.attach(vertex, w.pose(k, t));
+                let mut target = w.pose(k, t);
+                for shape in solids {
+                    let (distance, normal) = shape.distance(target);
+                    let depth = self.radii[vertex] - distance;
+                    if depth > 0.0 {
+                        target += normal * depth;
+                    }
+                }
+                self.sim.attach(vertex, target);
             }
         }
     }
@@ -741,11 +748,15 @@ impl<'r> Session<'r> {
             let Some((_, r, mut first)) = best else { continue };
             let Shape::Capsule { a, b, radius } = self.rods[r] else { unreachable!("rods are capsules") };
             let axis = (b - a).normalize();
-            let on_rod = |v: usize| {
-                let along = (positions[v] - a).dot(axis).clamp(0.0, a.distance(b));
-                let foot = a + axis * along;
-                foot + (positions[v] - foot).normalize_or_zero() * (radius + self.radii[v])
+            // Feet on the rod's cylinder, and directions away from its axis (not from a foot on
+            // an end cap, which would tilt the helix into the cap).
+            let length = a.distance(b);
+            let foot = |p: Vec3| a + axis * (p - a).dot(axis).clamp(0.0, length);
+            let away = |p: Vec3| {
+                let d = p - a;
+                (d - axis * d.dot(axis)).try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector())
             };
+            let on_rod = |v: usize| foot(positions[v]) + away(positions[v]) * (radius + self.radii[v]);
             // The free part between root and rod must reach the rod: start winding further
             // along the strand until its rest length spans the gap (else the vertices between
             // a pinned root and a held winding are pulled apart and shake).
@@ -761,14 +772,13 @@ impl<'r> Session<'r> {
                 continue; // only the tip reaches the rod: nothing to wind
             }
             let winding_radius = radius + self.radii[first];
-            let along = (positions[first] - a).dot(axis).clamp(0.0, a.distance(b));
-            let outward = positions[first] - (a + axis * along);
-            let e1 = outward.try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector());
+            let along = (positions[first] - a).dot(axis).clamp(0.0, length);
+            let e1 = away(positions[first]);
             let e2 = axis.cross(e1);
             // Wind the way the strand already heads, and advance along the rod towards its middle.
             let heading = positions[first + 1] - positions[first];
             let turn = if heading.dot(e2) >= 0.0 { 1.0 } else { -1.0 };
-            let advance = if along < 0.5 * a.distance(b) { 1.0 } else { -1.0 };
+            let advance = if along < 0.5 * length { 1.0 } else { -1.0 };
             // Turns a few hair widths apart: a tight, nearly planar curl.
             let pitch = 8.0 * self.radii[first];
             let helix = Helix {
@@ -865,14 +875,38 @@ impl<'r> Session<'r> {
                 peptide: mean(BondKind::Peptide),
             },
             wetness: self.wetness.iter().sum::<f32>() / self.wetness.len().max(1) as f32,
+            max_penetration: self.penetration,
             settle,
         }
     }
 }
 
-/// Frame inertia factor while settling ([`SimParams::frame_inertia_factor`]): large enough that
-/// every frame's inverse inertia sits at its conditioning cap, the bending compliance `α/Δt²`.
-const SETTLE_FRAME_INERTIA_FACTOR: f32 = 1e6;
+/// The simulation settings a recipe asks for (also for simulating its output again).
+pub fn sim_params(recipe: &Recipe) -> SimParams {
+    let settings = &recipe.settings;
+    let b = &recipe.bonds;
+    SimParams {
+        dt: settings.dt,
+        iterations: settings.iterations,
+        gravity: Vec3::from(settings.gravity),
+        damping: settings.damping,
+        material: Material {
+            density: settings.density,
+            youngs_modulus: settings.youngs_modulus,
+            shear_modulus: settings.shear_modulus,
+            cuticle: Cuticle { peel_per_metre: settings.cuticle_peel_per_metre, ..Cuticle::default() },
+            ..Material::default()
+        },
+        influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
+        ..SimParams::default()
+    }
+}
+
+/// The recipe's obstacles as collider shapes at rest (no pressing offsets, no rods), placed on
+/// `groom` exactly as a styling run places them (head frame, the groom's scalp).
+pub fn obstacle_shapes(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<Vec<Shape>> {
+    Ok(place(recipe, groom, scalp)?.shapes)
+}
 
 fn smoothstep(t: f32) -> f32 {
     let t = t.clamp(0.0, 1.0);

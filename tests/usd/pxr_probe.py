@@ -3,6 +3,7 @@
   pxr_probe.py dump STAGE [--time T]     curves, primvars, metadata, extents, validation findings
   pxr_probe.py author-transformed OUT    nested Xforms, cm units, Z up, two curve prims, samples
   pxr_probe.py author-composed DIR       a stage that references a layer with a variant set
+  pxr_probe.py export IN OUT             IN saved by pxr in OUT's format (e.g. .usda to .usdc)
 """
 import json
 import sys
@@ -175,5 +176,8 @@ if __name__ == "__main__":
         author_transformed(target)
     elif command == "author-composed":
         author_composed(target)
+    elif command == "export":
+        if not Sdf.Layer.FindOrOpen(target).Export(sys.argv[3]):
+            sys.exit(f"pxr could not export {target}")
     else:
         sys.exit(f"unknown command {command}")

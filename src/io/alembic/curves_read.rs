@@ -520,6 +520,7 @@ fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
     // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
     let next_id = a.strand_ids.iter().max().map_or(0, |m| m.wrapping_add(1));
     b.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
-    a.append(&b).map_err(|e| OgawaError(format!("{path}: does not fit the curves objects before it: {e}")))?;
+    a.append(&b)
+        .map_err(|e| OgawaError(format!("{path}: does not fit the curves objects before it: {e}")))?;
     Ok(a)
 }

@@ -198,24 +198,26 @@ impl<W: Write + Seek> CurvesWriter<W> {
         })
     }
 
-    /// Adds the next frame. Its topology, basis and attribute layout must match the first.
-    pub fn write_frame(&mut self, groom: &Groom) -> Result<(), String> {
+    /// Adds the next frame. Its topology, basis and attribute layout must match the first (an
+    /// `InvalidInput` error when not; any other error is the stream's).
+    pub fn write_frame(&mut self, groom: &Groom) -> io::Result<()> {
+        let invalid = |message: String| Err(io::Error::new(io::ErrorKind::InvalidInput, message));
         if groom.strand_offsets != self.strand_offsets || groom.basis != self.basis {
-            return Err(format!(
+            return invalid(format!(
                 "frame {} changes the strand layout; Alembic frames share one topology",
                 self.frames
             ));
         }
         if layout(groom) != self.attribute_layout {
-            return Err(format!("frame {} has different attributes from the first frame", self.frames));
+            return invalid(format!("frame {} has different attributes from the first frame", self.frames));
         }
         if !self.animated && self.frames > 0 {
-            return Err("a static Alembic file holds one frame".into());
+            return invalid("a static Alembic file holds one frame".into());
         }
         if self.objects[0].properties.velocities.is_none() {
             // Nothing needs the next frame: write this one now, without keeping a copy.
             self.frames += 1;
-            return self.write_sample(groom, None).map_err(|e| e.to_string());
+            return self.write_sample(groom, None);
         }
         if let Some(pending) = self.pending.take() {
             let velocities = velocities(
@@ -224,7 +226,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
                 Some(&groom.points),
                 self.frames_per_second,
             );
-            self.write_sample(&pending, velocities.as_deref()).map_err(|e| e.to_string())?;
+            self.write_sample(&pending, velocities.as_deref())?;
             self.previous_points = Some(pending.points);
         }
         self.pending = Some(groom.clone());
@@ -252,15 +254,19 @@ impl<W: Write + Seek> CurvesWriter<W> {
             let group = groom.group(self.objects[k].group).into_owned();
             part.attributes.retain(|a| group.carries(&a.name));
             part.set_single_group(group);
-            let part_velocities: Option<Vec<Vec3>> = velocities.map(|v| {
-                strands.iter().flat_map(|&s| v[groom.strand_range(s)].iter().copied()).collect()
-            });
+            let part_velocities: Option<Vec<Vec3>> = velocities
+                .map(|v| strands.iter().flat_map(|&s| v[groom.strand_range(s)].iter().copied()).collect());
             self.write_object_sample(k, &part, part_velocities.as_deref())?;
         }
         Ok(())
     }
 
-    fn write_object_sample(&mut self, object: usize, groom: &Groom, velocities: Option<&[Vec3]>) -> io::Result<()> {
+    fn write_object_sample(
+        &mut self,
+        object: usize,
+        groom: &Groom,
+        velocities: Option<&[Vec3]>,
+    ) -> io::Result<()> {
         let scale = self.scale;
         let points: Cow<[Vec3]> = if scale == 1.0 {
             Cow::Borrowed(&groom.points)
@@ -305,7 +311,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
 /// Writes a static groom (one sample).
 pub fn write_static<W: Write + Seek>(out: W, groom: &Groom, options: &AlembicWriteOptions) -> io::Result<W> {
     let mut writer = CurvesWriter::new(out, groom, options, false)?;
-    writer.write_frame(groom).map_err(io::Error::other)?;
+    writer.write_frame(groom)?;
     writer.finish()
 }
 

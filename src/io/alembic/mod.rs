@@ -97,9 +97,11 @@ impl AnimationWriter {
 
     pub fn write_frame(&mut self, groom: &Groom) -> Result<()> {
         groom.validate()?;
-        self.writer
-            .write_frame(groom)
-            .map_err(|message| Error::Usage(format!("{}: {message}", self.path.display())))
+        self.writer.write_frame(groom).map_err(|e| match e.kind() {
+            std::io::ErrorKind::InvalidInput => Error::Usage(format!("{}: {e}", self.path.display())),
+            // A full disk or a failing device is the environment, not the input.
+            _ => Error::io(&self.path, e),
+        })
     }
 
     pub fn finish(self) -> Result<()> {

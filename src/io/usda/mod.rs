@@ -21,6 +21,10 @@ use crate::groom::Groom;
 use crate::io::ImportOptions;
 
 pub use writer::{check_writable, unsupported, write, write_animated, TimeCodes, DEFAULT_PRIM_PATH};
+// The crate-file module writes the same stage and reads into the same layer model.
+pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, Prim, Value};
+pub(crate) use reader::groom_from_layer;
+pub(crate) use writer::{curve_type_and_basis, extent, plan_primvars, PrimvarData};
 
 /// First bytes of every `.usda` file.
 pub const MAGIC: &[u8] = b"#usda";

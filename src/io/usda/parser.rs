@@ -167,11 +167,17 @@ enum Meta {
 pub struct Parser<'a> {
     lexer: Lexer<'a>,
     time: Option<f64>,
+    /// Prims and bracketed values open around the current position: bounded by
+    /// [`MAX_NESTING`], so no file can overflow the stack of this recursive-descent parser.
+    depth: usize,
 }
+
+/// Nesting of prims and of bracketed values a layer may have (real stages nest a few dozen).
+pub const MAX_NESTING: usize = 1000;
 
 /// Parses a whole layer. `time` selects which time samples are kept.
 pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer> {
-    let mut parser = Parser { lexer: Lexer::new(input), time };
+    let mut parser = Parser { lexer: Lexer::new(input), time, depth: 0 };
     let result = parser.layer();
     if let Some(error) = parser.lexer.take_read_error() {
         return Err(ParseError::Io(error));
@@ -267,8 +273,23 @@ impl Parser<'_> {
         }
     }
 
+    /// Runs `inner` one nesting level deeper, refusing more than [`MAX_NESTING`] levels.
+    fn nested<T>(&mut self, inner: impl FnOnce(&mut Self) -> ParseResult<T>) -> ParseResult<T> {
+        if self.depth >= MAX_NESTING {
+            return Err(self.syntax(format!("prims or values nested deeper than {MAX_NESTING} levels")));
+        }
+        self.depth += 1;
+        let result = inner(self);
+        self.depth -= 1;
+        result
+    }
+
     /// Skips any value: number, word, string, path, asset, list, tuple or dictionary.
     fn skip_value(&mut self) -> ParseResult<()> {
+        self.nested(Self::skip_value_inner)
+    }
+
+    fn skip_value_inner(&mut self) -> ParseResult<()> {
         match self.lexer.next_byte() {
             Some(b'"' | b'\'') => {
                 self.lexer.string()?;
@@ -323,6 +344,10 @@ impl Parser<'_> {
 
     /// After `def`/`over`/`class`: `[Type] "name" [( metadata )] { body }`.
     fn prim(&mut self, specifier: &str) -> ParseResult<Prim> {
+        self.nested(|parser| parser.prim_inner(specifier))
+    }
+
+    fn prim_inner(&mut self, specifier: &str) -> ParseResult<Prim> {
         let line = self.lexer.line;
         let mut prim = Prim { line, defined: specifier == "def", active: true, ..Default::default() };
         if self.lexer.at_identifier() {
@@ -680,7 +705,7 @@ impl Parser<'_> {
         let mut count = 0;
         loop {
             if self.lexer.next_byte() == Some(b'(') {
-                count += self.tuple(read)?;
+                count += self.nested(|parser| parser.tuple(read))?;
             } else {
                 read(&mut self.lexer)?;
                 count += 1;
@@ -719,9 +744,11 @@ fn vertex_hint(prim: &Prim) -> usize {
 }
 
 /// Attributes whose values the groom reader uses; others are checked for syntax and dropped.
-fn wanted(name: &str) -> bool {
-    matches!(name, "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "purpose" | "xformOpOrder")
-        || name.starts_with("primvars:")
+pub fn wanted(name: &str) -> bool {
+    matches!(
+        name,
+        "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "purpose" | "xformOpOrder"
+    ) || name.starts_with("primvars:")
         || name.starts_with("xformOp:")
 }
 

@@ -125,18 +125,17 @@ impl Walker<'_> {
             }
             (other, _) => return Err(at_prim(prim.line, format!("unknown curve type \"{other}\""))),
         };
-        let wrap = match wrap.as_str() {
-            "nonperiodic" => CurveWrap::Nonperiodic,
-            "pinned" => CurveWrap::Pinned,
-            "periodic" => {
-                return Err(at_prim(
+        let wrap =
+            match wrap.as_str() {
+                "nonperiodic" => CurveWrap::Nonperiodic,
+                "pinned" => CurveWrap::Pinned,
+                "periodic" => return Err(at_prim(
                     prim.line,
                     "wrap \"periodic\" (closed curves) is not supported: coif cannot simulate closed strands"
                         .into(),
-                ))
-            }
-            other => return Err(at_prim(prim.line, format!("unknown wrap \"{other}\""))),
-        };
+                )),
+                other => return Err(at_prim(prim.line, format!("unknown wrap \"{other}\""))),
+            };
         let pinned = wrap == CurveWrap::Pinned;
         let purpose = token(prim, "purpose", "default")?;
         let purpose = (purpose != "default").then_some(purpose);
@@ -145,6 +144,17 @@ impl Walker<'_> {
             return Ok(None);
         };
         let points_line = points_attr.line;
+        // A time before the first sample is a frame the animation never reached (0 when it starts
+        // at 1): refused, not clamped. After the last sample the last value holds, as USD itself
+        // (and pxr) defines it: a shot often runs past a groom's final sample.
+        if let (Some(at), Some(first)) = (time, points_attr.samples.iter().map(|s| s.0).reduce(f64::min)) {
+            if at < first {
+                return Err(at_prim(
+                    points_line,
+                    format!("time {at} is before the first time sample of 'points' ({first})"),
+                ));
+            }
+        }
         let points = match take_value(points_attr, time) {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,
@@ -262,7 +272,9 @@ impl Walker<'_> {
                 _ => {
                     let groom_name = names::attribute_for_primvar(&name);
                     let kind = attribute_kind(&type_name, &groom_name, components);
-                    curves.attributes.push(GroomAttribute::new(groom_name, rate, components, data).with_kind(kind));
+                    curves
+                        .attributes
+                        .push(GroomAttribute::new(groom_name, rate, components, data).with_kind(kind));
                 }
             }
         }
@@ -635,7 +647,10 @@ fn merge(found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
         match &mut merged {
             None => merged = Some(groom),
             Some(acc) => acc.append(&groom).map_err(|e| {
-                Error::format(path, format!("line {line}: prim <{prim_path}> does not fit the prims before it: {e}"))
+                Error::format(
+                    path,
+                    format!("line {line}: prim <{prim_path}> does not fit the prims before it: {e}"),
+                )
             })?,
         }
     }
@@ -660,9 +675,9 @@ impl Curves {
         groom.widths = self.widths;
         groom.root_uvs = self.root_uvs;
         // Houdini marks guide curves by the prim's purpose rather than a per-strand flag.
-        groom.guides = self.guides.or_else(|| {
-            (self.purpose.as_deref() == Some("guide")).then(|| vec![true; self.counts.len()])
-        });
+        groom.guides = self
+            .guides
+            .or_else(|| (self.purpose.as_deref() == Some("guide")).then(|| vec![true; self.counts.len()]));
         for attribute in self.attributes {
             groom.set_attribute(attribute);
         }

@@ -25,17 +25,25 @@ pub struct TimeCodes {
 }
 
 /// One primvar as it will be written.
-struct Primvar<'a> {
-    usd_type: &'static str,
-    name: String,
-    interpolation: &'static str,
-    data: PrimvarData<'a>,
+pub(crate) struct Primvar<'a> {
+    pub usd_type: &'static str,
+    pub name: String,
+    pub interpolation: &'static str,
+    pub data: PrimvarData<'a>,
 }
 
-enum PrimvarData<'a> {
-    Floats { values: &'a [f32], components: usize },
+pub(crate) enum PrimvarData<'a> {
+    Floats {
+        values: &'a [f32],
+        components: usize,
+    },
     UVs(&'a [[f32; 2]]),
     Ints(Vec<i64>),
+    /// Integer tuples kept as floats in the groom model (`groom_closest_guides`: int3).
+    IntTuples {
+        values: &'a [f32],
+        components: usize,
+    },
 }
 
 /// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
@@ -68,7 +76,7 @@ pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
 
 /// What the writer renames or drops, as warnings for the user.
 pub fn unsupported(groom: &Groom) -> Vec<String> {
-    let mut warnings = plan_primvars(groom, &CurveGroup::default()).1;
+    let mut warnings = plan_primvars(groom).1;
     warnings.sort();
     warnings.dedup();
     warnings
@@ -88,7 +96,11 @@ pub fn write_animated(
     out: &mut dyn Write,
     path: &Path,
 ) -> Result<()> {
-    if !(times.start.is_finite() && times.end.is_finite() && times.start <= times.end && times.per_second > 0.0) {
+    if !(times.start.is_finite()
+        && times.end.is_finite()
+        && times.start <= times.end
+        && times.per_second > 0.0)
+    {
         return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
     }
     if frames.is_empty() {
@@ -132,7 +144,11 @@ type Animation<'f> = Option<(TimeCodes, &'f [Vec<Vec3>])>;
 
 /// Stage metadata and one prim tree: each group's curves at its own path (coif's default
 /// `/Groom/Strands` for a groom without groups), Xforms above them.
-fn write_stage(groom: &Groom, out: &mut (impl Write + ?Sized), animation: Animation<'_>) -> std::io::Result<()> {
+fn write_stage(
+    groom: &Groom,
+    out: &mut (impl Write + ?Sized),
+    animation: Animation<'_>,
+) -> std::io::Result<()> {
     let parts = groom.split_groups().map_err(std::io::Error::other)?;
     let mut roots = Vec::new();
     for (k, (_, group, _)) in parts.iter().enumerate() {
@@ -212,12 +228,7 @@ fn write_curves(
     animation: Animation<'_>,
 ) -> std::io::Result<()> {
     let mut head = String::new();
-    let (curve_type, basis) = match group.basis {
-        CurveBasis::Linear => ("linear", None),
-        CurveBasis::Bezier => ("cubic", Some("bezier")),
-        CurveBasis::BSpline => ("cubic", Some("bspline")),
-        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-    };
+    let (curve_type, basis) = curve_type_and_basis(group.basis);
     if let Some(basis) = basis {
         head.push_str(&format!("{indent}uniform token basis = \"{basis}\"\n"));
     }
@@ -239,7 +250,7 @@ fn write_curves(
     write_floats(out, &groom.widths)?;
     write_label(out, &format!(" (\n{indent}    interpolation = \"vertex\"\n{indent})\n"))?;
 
-    for primvar in plan_primvars(groom, group).0 {
+    for primvar in plan_group_primvars(groom, group).0 {
         write_label(out, &format!("{indent}{} primvars:{} = ", primvar.usd_type, primvar.name))?;
         match &primvar.data {
             PrimvarData::Floats { values, components: 1 } => write_floats(out, values)?,
@@ -251,8 +262,22 @@ fn write_curves(
             PrimvarData::Ints(values) => write_array(out, values, |buf, &v| {
                 buf.extend_from_slice(itoa::Buffer::new().format(v).as_bytes())
             })?,
+            PrimvarData::IntTuples { values, components } => {
+                let tuples: Vec<&[f32]> = values.chunks_exact(*components).collect();
+                write_array(out, &tuples, |buf, t| {
+                    let text: Vec<String> = t.iter().map(|&v| (v.round() as i64).to_string()).collect();
+                    let text = text.join(", ");
+                    match t.len() {
+                        1 => buf.extend_from_slice(text.as_bytes()),
+                        _ => buf.extend_from_slice(format!("({text})").as_bytes()),
+                    }
+                })?
+            }
         }
-        write_label(out, &format!(" (\n{indent}    interpolation = \"{}\"\n{indent})\n", primvar.interpolation))?;
+        write_label(
+            out,
+            &format!(" (\n{indent}    interpolation = \"{}\"\n{indent})\n", primvar.interpolation),
+        )?;
     }
 
     let half_width = groom.widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5;
@@ -301,8 +326,23 @@ fn write_label(out: &mut (impl Write + ?Sized), text: &str) -> std::io::Result<(
     out.write_all(text.as_bytes())
 }
 
-/// The primvars a groom becomes, and warnings for attributes renamed or dropped.
-fn plan_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>, Vec<String>) {
+/// USD's `type` and `basis` tokens for a curve basis.
+pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&'static str>) {
+    match basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::BSpline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+    }
+}
+
+/// The primvars of a groom without groups (the crate-file writer's one prim).
+pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
+    plan_group_primvars(groom, &CurveGroup::default())
+}
+
+/// The primvars a group's strands become, and warnings for attributes renamed or dropped.
+fn plan_group_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
     // Names the reader gives a meaning of their own are never taken by attributes.
@@ -347,7 +387,14 @@ fn plan_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>,
                 attribute.name
             ));
         }
-        let usd_type = usd_type(attribute.kind, &attribute.name, attribute.components);
+        let integer = attribute.name == crate::guides::CLOSEST_GUIDES;
+        let usd_type = match (integer, attribute.components) {
+            (true, 1) => "int[]",
+            (true, 2) => "int2[]",
+            (true, 3) => "int3[]",
+            (true, _) => "int4[]",
+            (false, _) => usd_type(attribute.kind, &attribute.name, attribute.components),
+        };
         let interpolation = match attribute.rate {
             AttributeRate::Vertex => "vertex",
             AttributeRate::Strand => "uniform",
@@ -358,6 +405,9 @@ fn plan_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>,
             name,
             interpolation,
             data: match attribute.kind {
+                _ if integer => {
+                    PrimvarData::IntTuples { values: &attribute.data, components: attribute.components }
+                }
                 AttributeKind::Int | AttributeKind::Bool => {
                     PrimvarData::Ints(attribute.data.iter().map(|&v| v as i64).collect())
                 }
@@ -405,6 +455,13 @@ fn valid_name(name: &str) -> String {
         })
         .collect();
     segments.join(":")
+}
+
+/// Points' bounds grown by half the widest width: the extent USD expects on curves.
+pub(crate) fn extent(points: &[Vec3], widths: &[f32]) -> Option<[Vec3; 2]> {
+    let (lo, hi) = bounds(points)?;
+    let half = Vec3::splat(widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5);
+    Some([lo - half, hi + half])
 }
 
 fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {

@@ -1,0 +1,81 @@
+//! Every number a flag carries, checked (through `coif::validate`) before a command reads or
+//! computes anything: a refusal names the flag, the value and the accepted range (exit code 2).
+use coif::validate::{flag, flag_direction, flag_vector, Range, COORDINATE, FRACTION, SECONDS};
+use coif::Result;
+
+use super::args::{GenerateArgs, ImportArgs, RenderArgs, SimulateArgs, StyleArgs};
+
+const RATE: Range = Range::closed(0.0, 1e4);
+
+/// Also run by `ImportArgs::options`, so every command that reads a groom checks these.
+pub(crate) fn import(args: &ImportArgs) -> Result<()> {
+    if let Some(units) = args.units {
+        flag("--units", units, Range::above(0.0, 1e6))?;
+    }
+    if let Some(frame) = args.frame {
+        flag("--frame", frame, Range::closed(0.0, u32::MAX as f64))?;
+    }
+    Ok(())
+}
+
+pub(crate) fn style(args: &StyleArgs) -> Result<()> {
+    if let Some(fps) = args.frames {
+        flag("--frames", fps, Range::closed(0.0, 1e4))?;
+    }
+    Ok(())
+}
+
+pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
+    flag("--seconds", args.seconds, SECONDS)?;
+    flag("--gravity", args.gravity, COORDINATE)?;
+    flag("--iterations", args.iterations, Range::closed(1.0, 1000.0))?;
+    flag("--damping", args.damping, RATE)?;
+    if args.influences.len() != 4 {
+        return Err(coif::Error::Usage(format!(
+            "--influences takes 4 values (hydrogen,ionic,disulfide,peptide), got {}",
+            args.influences.len()
+        )));
+    }
+    for (name, value) in ["hydrogen", "ionic", "disulfide", "peptide"].iter().zip(&args.influences) {
+        flag(&format!("--influences {name}"), *value, Range::closed(0.0, 1e3))?;
+    }
+    flag("--youngs-modulus", args.youngs_modulus, Range::above(0.0, 1e12))?;
+    // The settle's own budget range (`sim::settle::MAX_SECONDS_RANGE`), one source for both.
+    let (_, max_settle) = coif::sim::settle::MAX_SECONDS_RANGE;
+    flag("--settle-seconds", args.settle_seconds, Range::above(0.0, max_settle as f64))?;
+    if let Some(iterations) = args.settle_iterations {
+        flag("--settle-iterations", iterations, Range::closed(1.0, 1000.0))?;
+    }
+    Ok(())
+}
+
+pub(crate) fn render(args: &RenderArgs) -> Result<()> {
+    flag("--spp", args.spp, Range::closed(1.0, 1e6))?;
+    flag("--fov", args.fov, Range::open(0.0, 180.0))?;
+    flag("--width-scale", args.width_scale, Range::above(0.0, 1e4))?;
+    flag("--min-pixel-width", args.min_pixel_width, Range::closed(0.0, 1e3))?;
+    flag("--max-depth", args.max_depth, Range::closed(0.0, 1e3))?;
+    flag("--exposure", args.exposure, Range::closed(-40.0, 40.0))?;
+    flag("--light-intensity", args.light_intensity, Range::closed(0.0, 1e6))?;
+    if let Some(radiance) = args.environment {
+        flag("--environment", radiance, Range::closed(0.0, 1e6))?;
+    }
+    if let Some(color) = &args.color {
+        flag_vector("--color", coif::render::parse_vec3(color, "--color")?.into(), FRACTION)?;
+    }
+    if let Some(direction) = &args.light_dir {
+        flag_direction("--light-dir", coif::render::parse_vec3(direction, "--light-dir")?.into())?;
+    }
+    Ok(())
+}
+
+pub(crate) fn generate(args: &GenerateArgs) -> Result<()> {
+    let vertices = args.strands as f64 * args.vertices as f64;
+    coif::limits::check_memory(
+        &format!("--strands {} × --vertices {}", args.strands, args.vertices),
+        vertices * coif::limits::GROOM_BYTES_PER_VERTEX,
+    )?;
+    flag("--length", args.length, Range::above(0.0, 100.0))?;
+    flag("--length-variation", args.length_variation, Range::below(0.0, 1.0))?;
+    Ok(())
+}

@@ -1,0 +1,340 @@
+//! Production scale: simulate a few thousand guides and interpolate the rendered strands (the
+//! children) from them, as Houdini, Maya/XGen, Ornatrix and Unreal do.
+//!
+//! Guides are the groom's own (its per-strand guide flag) or chosen by the recipe's `[guides]`
+//! section, spread evenly over the scalp by farthest-point sampling of the roots. The recipe
+//! styles the guides with everything it does (rods, wetness, bonds, contacts, colliders); each
+//! child is then bound to up to three guides by root distance ([`binding`]) and carried in their
+//! frames ([`deform`]), pushed out of the recipe's colliders, and given interpolated rest shapes,
+//! bond rates and wetness. The output flags the guides and gives children Unreal's
+//! `groom_closest_guides` / `groom_guide_weights`.
+pub mod binding;
+pub mod deform;
+pub mod select;
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use crate::analysis::resample_groom;
+use crate::error::{Error, Result};
+use crate::groom::{Attribute, AttributeRate, Groom};
+use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::style::recipe::Recipe;
+use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled};
+use binding::{Binding, GUIDES_PER_CHILD};
+use deform::{Children, Curves};
+
+/// Per strand, the indices (among the guides, in strand order) of a child's guides: int×3.
+pub const CLOSEST_GUIDES: &str = "groom_closest_guides";
+/// Per strand, the weights of those guides: float×3, summing to 1.
+pub const GUIDE_WEIGHTS: &str = "groom_guide_weights";
+
+/// The recipe's `[guides]` section: how many strands to simulate as guides.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GuideSpec {
+    /// Number of guides.
+    pub count: Option<usize>,
+    /// Guides as a fraction of the strands (Unreal's default is 0.1).
+    pub fraction: Option<f32>,
+    /// How far (metres) a child's root may be from its nearest guide's; default four times the
+    /// median spacing of the guides.
+    pub reach: Option<f32>,
+}
+
+impl GuideSpec {
+    /// The number of guides for a groom of `strands` strands; zero or more than the strands is an
+    /// error with the numbers.
+    pub fn count_for(&self, strands: usize) -> Result<usize> {
+        let count = match (self.count, self.fraction) {
+            (Some(_), Some(_)) => {
+                return Err(Error::Usage("[guides]: give count or fraction, not both".into()))
+            }
+            (Some(n), None) => n,
+            (None, Some(f)) if f.is_finite() && f > 0.0 && f <= 1.0 => {
+                ((f * strands as f32).round() as usize).max(1)
+            }
+            (None, Some(f)) => {
+                return Err(Error::Usage(format!("[guides] fraction = {f}: must be in (0, 1]")))
+            }
+            (None, None) => return Err(Error::Usage("[guides]: give count or fraction".into())),
+        };
+        if count == 0 || count > strands {
+            return Err(Error::Usage(format!(
+                "[guides] asks for {count} guides, but the groom has {strands} strands (1 to {strands} allowed)"
+            )));
+        }
+        Ok(count)
+    }
+}
+
+/// Whether styling goes through guides: the recipe asks for them, or the groom brings both
+/// guides and children.
+pub fn wanted(groom: &Groom, recipe: &Recipe) -> bool {
+    recipe.guides.is_some()
+        || groom.guides.as_ref().is_some_and(|g| g.iter().any(|&x| x) && g.iter().any(|&x| !x))
+}
+
+/// Styles the guides of a groom with a recipe and interpolates the children from them.
+pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    let groom = match recipe.settings.max_segment {
+        Some(max) => resample_groom(input, max),
+        None => input.clone(),
+    };
+    groom.validate()?;
+    let strands = groom.strand_count();
+    let roots: Vec<Vec3> = (0..strands).map(|s| groom.points[groom.strand_range(s).start]).collect();
+    let flags = match &recipe.guides {
+        Some(spec) => {
+            let mut flags = vec![false; strands];
+            for g in select::farthest_points(&roots, spec.count_for(strands)?) {
+                flags[g] = true;
+            }
+            flags
+        }
+        None => groom.guides.clone().ok_or_else(|| Error::Usage("the groom has no guides".into()))?,
+    };
+    let guide_ids: Vec<usize> = (0..strands).filter(|&s| flags[s]).collect();
+    let child_ids: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
+    let guide_roots: Vec<Vec3> = guide_ids.iter().map(|&g| roots[g]).collect();
+    let child_roots: Vec<Vec3> = child_ids.iter().map(|&c| roots[c]).collect();
+    let bindings = match (&recipe.guides, file_bindings(&groom, &child_ids)) {
+        (None, Some(bindings)) => {
+            binding::check(&bindings, &child_ids, guide_ids.len())?;
+            bindings
+        }
+        _ => {
+            let reach =
+                recipe.guides.and_then(|g| g.reach).unwrap_or_else(|| binding::default_reach(&guide_roots));
+            let shape = |s: &usize| binding::shape_of(groom.strand_points(*s));
+            let guide_shapes: Vec<binding::Shape> = guide_ids.iter().map(shape).collect();
+            let child_shapes: Vec<binding::Shape> = child_ids.iter().map(shape).collect();
+            binding::bind(&child_roots, &child_shapes, &child_ids, &guide_roots, &guide_shapes, reach)?
+        }
+    };
+
+    let guides = subset(&groom, &guide_ids);
+    let children = subset(&groom, &child_ids);
+    let mut guide_recipe = recipe.clone();
+    guide_recipe.settings.max_segment = None; // resampled above, with the children
+    guide_recipe.guides = None;
+    let styled = style_strands(&guides, &guide_recipe, options)?;
+
+    let before = Curves::new(guides.points.clone(), guides.strand_offsets.clone(), None);
+    let posed = |points: Vec<Vec3>| {
+        let roots = before.carried_root_frames(&points);
+        Curves::new(points, guides.strand_offsets.clone(), Some(&roots))
+    };
+    let bound = Children { points: &children.points, offsets: &children.strand_offsets, bindings: &bindings };
+    let after = posed(styled.groom.points.clone());
+    let shapes = obstacle_shapes(recipe, &guides, options.scalp.as_deref())?;
+    let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+    let mut child_points = deform::deform(&bound, &before, &after);
+    push_out(&mut child_points, &children.strand_offsets, &radii, &shapes);
+
+    // The styled guides' per-vertex attributes, carried to the children.
+    let mut child_attributes = Vec::new();
+    for attribute in styled.groom.attributes.iter().filter(|a| a.rate == AttributeRate::Vertex) {
+        let data = if attribute.name == "rest" && attribute.components == 3 {
+            let rest: Vec<Vec3> = attribute.data.chunks_exact(3).map(Vec3::from_slice).collect();
+            deform::deform(&bound, &before, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
+        } else {
+            deform::blend_attribute(&bound, &after, &attribute.data, attribute.components)
+        };
+        child_attributes.push(Attribute::new(
+            attribute.name.clone(),
+            AttributeRate::Vertex,
+            attribute.components,
+            data,
+        ));
+    }
+
+    let mut out = groom.clone();
+    scatter_points(&mut out, &guide_ids, &styled.groom.points);
+    scatter_points(&mut out, &child_ids, &child_points);
+    for guide_attribute in styled.groom.attributes.iter().filter(|a| a.rate == AttributeRate::Vertex) {
+        let child_attribute =
+            child_attributes.iter().find(|a| a.name == guide_attribute.name).expect("blended above");
+        out.set_attribute(merge_vertex_attribute(
+            &groom,
+            &guide_ids,
+            guide_attribute,
+            &child_ids,
+            child_attribute,
+        ));
+    }
+    let (closest, weights) = binding_attributes(strands, &guide_ids, &child_ids, &bindings);
+    out.set_attribute(closest);
+    out.set_attribute(weights);
+    out.guides = Some(flags);
+    out.validate()?;
+
+    let frames = styled
+        .frames
+        .into_iter()
+        .map(|frame| {
+            let mut points = deform::deform(&bound, &before, &posed(frame.clone()));
+            push_out(&mut points, &children.strand_offsets, &radii, &shapes);
+            let mut all = out.points.clone();
+            scatter(&mut all, &out, &guide_ids, &frame);
+            scatter(&mut all, &out, &child_ids, &points);
+            all
+        })
+        .collect();
+    let mut report = styled.report;
+    report.strands = out.strand_count();
+    report.vertices = out.vertex_count();
+    report.guides = Some(guide_ids.len());
+    Ok(Styled { groom: out, report, frames, frames_per_second: styled.frames_per_second })
+}
+
+/// The bindings a file brought as `groom_closest_guides` / `groom_guide_weights` (per strand,
+/// three components each), for the children.
+fn file_bindings(groom: &Groom, children: &[usize]) -> Option<Vec<Binding>> {
+    let per_strand = |name| {
+        groom.attribute(name).filter(|a| a.rate == AttributeRate::Strand && a.components == GUIDES_PER_CHILD)
+    };
+    let (closest, weights) = (per_strand(CLOSEST_GUIDES)?, per_strand(GUIDE_WEIGHTS)?);
+    Some(
+        children
+            .iter()
+            .map(|&c| {
+                let at = |data: &[f32], k: usize| data[c * GUIDES_PER_CHILD + k];
+                Binding {
+                    // Out-of-range or negative indices saturate and are reported by the check.
+                    guides: std::array::from_fn(|k| {
+                        at(&closest.data, k).max(0.0).min(u32::MAX as f32) as u32
+                    }),
+                    weights: std::array::from_fn(|k| at(&weights.data, k)),
+                }
+            })
+            .collect(),
+    )
+}
+
+/// The bindings as per-strand attributes: guides name themselves with weight 1.
+fn binding_attributes(
+    strands: usize,
+    guides: &[usize],
+    children: &[usize],
+    bindings: &[Binding],
+) -> (Attribute, Attribute) {
+    let mut closest = vec![0.0; strands * GUIDES_PER_CHILD];
+    let mut weights = vec![0.0; strands * GUIDES_PER_CHILD];
+    for (index, &g) in guides.iter().enumerate() {
+        closest[g * GUIDES_PER_CHILD..][..GUIDES_PER_CHILD].fill(index as f32);
+        weights[g * GUIDES_PER_CHILD] = 1.0;
+    }
+    for (b, &c) in bindings.iter().zip(children) {
+        for k in 0..GUIDES_PER_CHILD {
+            closest[c * GUIDES_PER_CHILD + k] = b.guides[k] as f32;
+            weights[c * GUIDES_PER_CHILD + k] = b.weights[k];
+        }
+    }
+    (
+        Attribute::new(CLOSEST_GUIDES, AttributeRate::Strand, GUIDES_PER_CHILD, closest),
+        Attribute::new(GUIDE_WEIGHTS, AttributeRate::Strand, GUIDES_PER_CHILD, weights),
+    )
+}
+
+/// The strands `which` of a groom (points, widths, ids, UVs and attributes), in that order.
+fn subset(groom: &Groom, which: &[usize]) -> Groom {
+    let mut out = Groom {
+        strand_offsets: vec![0],
+        basis: groom.basis,
+        root_uvs: groom.root_uvs.as_ref().map(|uvs| which.iter().map(|&s| uvs[s]).collect()),
+        ..Default::default()
+    };
+    for &s in which {
+        let range = groom.strand_range(s);
+        out.points.extend_from_slice(&groom.points[range.clone()]);
+        out.widths.extend_from_slice(&groom.widths[range]);
+        out.strand_offsets.push(out.points.len() as u32);
+        out.strand_ids.push(groom.strand_ids[s]);
+    }
+    for attribute in &groom.attributes {
+        let c = attribute.components;
+        let data = which
+            .iter()
+            .flat_map(|&s| {
+                let range = match attribute.rate {
+                    AttributeRate::Vertex => groom.strand_range(s),
+                    AttributeRate::Strand => s..s + 1,
+                };
+                attribute.data[range.start * c..range.end * c].iter().copied()
+            })
+            .collect();
+        out.set_attribute(Attribute::new(attribute.name.clone(), attribute.rate, c, data));
+    }
+    out
+}
+
+/// Writes a subset's points back into the full groom's strands `which`.
+fn scatter_points(groom: &mut Groom, which: &[usize], points: &[Vec3]) {
+    let mut all = std::mem::take(&mut groom.points);
+    scatter(&mut all, groom, which, points);
+    groom.points = all;
+}
+
+fn scatter(all: &mut [Vec3], groom: &Groom, which: &[usize], points: &[Vec3]) {
+    let mut at = 0;
+    for &s in which {
+        let range = groom.strand_range(s);
+        let n = range.len();
+        all[range].copy_from_slice(&points[at..at + n]);
+        at += n;
+    }
+}
+
+/// A per-vertex attribute of the full groom from its guides' and children's parts.
+fn merge_vertex_attribute(
+    groom: &Groom,
+    guides: &[usize],
+    guide_part: &Attribute,
+    children: &[usize],
+    child_part: &Attribute,
+) -> Attribute {
+    let c = guide_part.components;
+    let mut data = vec![0.0; groom.vertex_count() * c];
+    for (which, part) in [(guides, guide_part), (children, child_part)] {
+        let mut at = 0;
+        for &s in which {
+            let range = groom.strand_range(s);
+            let n = range.len() * c;
+            data[range.start * c..range.end * c].copy_from_slice(&part.data[at..at + n]);
+            at += n;
+        }
+    }
+    Attribute::new(guide_part.name.clone(), AttributeRate::Vertex, c, data)
+}
+
+/// Moves children out of the recipe's colliders, root to tip: each edge keeps its deformed
+/// direction from the (possibly pushed) vertex before it, is pushed out, and is brought back to
+/// its length, so a child that meets the head slides over it instead of folding into a stack of
+/// pushed vertices. Roots stay.
+fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape]) {
+    use rayon::prelude::*;
+    let still = Friction { static_friction: 0.0, dynamic_friction: 0.0 };
+    let outside = |mut p: Vec3, radius: f32| {
+        for shape in shapes {
+            if let Some(q) = resolve_contact(shape, p, p, radius, still) {
+                p = q;
+            }
+        }
+        p
+    };
+    let mut strands = deform::split_mut(points, offsets);
+    strands.par_iter_mut().enumerate().for_each(|(s, strand)| {
+        let first = offsets[s] as usize;
+        let mut previous_deformed = strand[0];
+        for k in 1..strand.len() {
+            let deformed = strand[k];
+            let edge = deformed - previous_deformed;
+            previous_deformed = deformed;
+            let radius = radii[first + k];
+            let pushed = outside(strand[k - 1] + edge, radius);
+            let direction = (pushed - strand[k - 1]).try_normalize().unwrap_or(edge.normalize_or_zero());
+            strand[k] = outside(strand[k - 1] + direction * edge.length(), radius);
+        }
+    });
+}

@@ -1,0 +1,251 @@
+//! The crate format's two compressions: LZ4 blocks with a chunk-count byte in front (USD's
+//! "fast compression"), and the integer coding that turns runs of integers into deltas from the
+//! previous value, the most common delta stored once and the others in 1, 2 or 4 bytes (2, 4 or
+//! 8 for 64-bit integers), selected by 2-bit codes. Decoders check every size against the bytes
+//! they are given and never allocate more than the input can expand to.
+
+/// Largest input of one LZ4 chunk (`LZ4_MAX_INPUT_SIZE`).
+const LZ4_MAX_INPUT: usize = 0x7E00_0000;
+
+/// LZ4 cannot expand data by more than this factor (one length byte per 255 output bytes).
+const LZ4_MAX_RATIO: usize = 255;
+
+/// LZ4-compresses `input` in USD's framing: a 0 byte then one block, or for inputs over
+/// [`LZ4_MAX_INPUT`] the chunk count then `i32` size + block per chunk.
+pub fn lz4_compress(input: &[u8]) -> Vec<u8> {
+    if input.len() <= LZ4_MAX_INPUT {
+        let mut out = vec![0u8; 1 + lz4_flex::block::get_maximum_output_size(input.len())];
+        let n = lz4_flex::block::compress_into(input, &mut out[1..]).expect("output sized by the bound");
+        out.truncate(1 + n);
+        return out;
+    }
+    let chunks: Vec<&[u8]> = input.chunks(LZ4_MAX_INPUT).collect();
+    let mut out = vec![chunks.len() as u8];
+    for chunk in chunks {
+        let block = lz4_flex::block::compress(chunk);
+        out.extend_from_slice(&(block.len() as i32).to_le_bytes());
+        out.extend_from_slice(&block);
+    }
+    out
+}
+
+/// Undoes [`lz4_compress`] into at most `max_output` bytes; the error says what is wrong.
+pub fn lz4_decompress(input: &[u8], max_output: usize) -> Result<Vec<u8>, String> {
+    let (&chunks, mut rest) = input.split_first().ok_or("empty compressed block")?;
+    let blocks: Vec<&[u8]> = if chunks == 0 {
+        vec![rest]
+    } else {
+        let mut blocks = Vec::with_capacity(chunks as usize);
+        for chunk in 0..chunks {
+            if rest.len() < 4 {
+                return Err(format!("LZ4 chunk {chunk} of {chunks} is cut short"));
+            }
+            let size = i32::from_le_bytes(rest[..4].try_into().unwrap());
+            let size = usize::try_from(size)
+                .ok()
+                .filter(|&s| s <= rest.len() - 4)
+                .ok_or_else(|| format!("LZ4 chunk {chunk} claims {size} bytes, more than remain"))?;
+            blocks.push(&rest[4..4 + size]);
+            rest = &rest[4 + size..];
+        }
+        blocks
+    };
+    let possible: usize = blocks.iter().map(|b| b.len().saturating_mul(LZ4_MAX_RATIO)).sum();
+    let mut out = vec![0u8; max_output.min(possible)];
+    let mut filled = 0;
+    for block in blocks {
+        filled += lz4_flex::block::decompress_into(block, &mut out[filled..])
+            .map_err(|e| format!("bad LZ4 data ({e})"))?;
+    }
+    out.truncate(filled);
+    Ok(out)
+}
+
+/// An integer type the integer coding handles.
+pub trait CodedInt: Copy {
+    /// 4 or 8.
+    const BYTES: usize;
+    fn to_i64(self) -> i64;
+    fn from_i64(value: i64) -> Self;
+}
+
+macro_rules! coded_int {
+    ($($t:ty => $bytes:expr),*) => {$(
+        impl CodedInt for $t {
+            const BYTES: usize = $bytes;
+            fn to_i64(self) -> i64 {
+                self as i64
+            }
+            fn from_i64(value: i64) -> Self {
+                value as $t
+            }
+        }
+    )*};
+}
+coded_int!(i32 => 4, u32 => 4, i64 => 8, u64 => 8);
+
+/// Bytes the integer coding of `count` integers can take at most.
+pub fn max_coded_size<T: CodedInt>(count: usize) -> usize {
+    if count == 0 {
+        0
+    } else {
+        T::BYTES + count.div_ceil(4) + T::BYTES * count
+    }
+}
+
+/// Integer-codes `values` (wrapping deltas, as USD does), then LZ4-compresses the result.
+pub fn compress_ints<T: CodedInt>(values: &[T]) -> Vec<u8> {
+    lz4_compress(&encode_ints(values))
+}
+
+fn encode_ints<T: CodedInt>(values: &[T]) -> Vec<u8> {
+    if values.is_empty() {
+        return Vec::new();
+    }
+    let wide = T::BYTES == 8;
+    let mut deltas = Vec::with_capacity(values.len());
+    let mut previous = 0i64;
+    for v in values {
+        let v = v.to_i64();
+        // 32-bit deltas wrap in 32 bits, as the decoder's sums do.
+        let delta =
+            if wide { v.wrapping_sub(previous) } else { (v as i32).wrapping_sub(previous as i32) as i64 };
+        deltas.push(delta);
+        previous = v;
+    }
+    let common = most_common(&deltas);
+    let code = |d: i64| -> u8 {
+        let fits = |bits: u32| d >= -(1i64 << (bits - 1)) && d < (1i64 << (bits - 1));
+        match (d == common, wide) {
+            (true, _) => 0,
+            (false, false) if fits(8) => 1,
+            (false, false) if fits(16) => 2,
+            (false, true) if fits(16) => 1,
+            (false, true) if fits(32) => 2,
+            _ => 3,
+        }
+    };
+    let mut out = Vec::with_capacity(max_coded_size::<T>(values.len()));
+    out.extend_from_slice(&common.to_le_bytes()[..T::BYTES]);
+    let codes_at = out.len();
+    out.resize(codes_at + values.len().div_ceil(4), 0);
+    for (i, &d) in deltas.iter().enumerate() {
+        let c = code(d);
+        out[codes_at + i / 4] |= c << (2 * (i % 4));
+        let width = code_width(c, wide);
+        out.extend_from_slice(&d.to_le_bytes()[..width]);
+    }
+    out
+}
+
+/// Bytes a delta with 2-bit code `code` takes (0 for the common delta).
+fn code_width(code: u8, wide: bool) -> usize {
+    match (code, wide) {
+        (0, _) => 0,
+        (1, false) => 1,
+        (1, true) | (2, false) => 2,
+        (2, true) | (3, false) => 4,
+        _ => 8,
+    }
+}
+
+/// The most frequent delta; ties go to the smaller value so output is deterministic.
+fn most_common(deltas: &[i64]) -> i64 {
+    let mut sorted = deltas.to_vec();
+    sorted.sort_unstable();
+    let (mut best, mut best_count) = (sorted[0], 0);
+    for run in sorted.chunk_by(|a, b| a == b) {
+        if run.len() > best_count {
+            (best, best_count) = (run[0], run.len());
+        }
+    }
+    best
+}
+
+/// Undoes [`compress_ints`] for exactly `count` integers.
+pub fn decompress_ints<T: CodedInt>(input: &[u8], count: usize) -> Result<Vec<T>, String> {
+    if count == 0 {
+        return Ok(Vec::new());
+    }
+    // Each integer takes at least its 2-bit code, so the count is bounded by what LZ4 can give.
+    let possible = input.len().saturating_mul(LZ4_MAX_RATIO);
+    if count.div_ceil(4) > possible {
+        return Err(format!("{count} integers cannot come from {} compressed bytes", input.len()));
+    }
+    let coded = lz4_decompress(input, max_coded_size::<T>(count))?;
+    decode_ints(&coded, count)
+}
+
+fn decode_ints<T: CodedInt>(coded: &[u8], count: usize) -> Result<Vec<T>, String> {
+    let wide = T::BYTES == 8;
+    let codes_len = count.div_ceil(4);
+    if coded.len() < T::BYTES + codes_len {
+        return Err(format!("integer codes for {count} values are cut short"));
+    }
+    let common = if wide {
+        i64::from_le_bytes(coded[..8].try_into().unwrap())
+    } else {
+        i32::from_le_bytes(coded[..4].try_into().unwrap()) as i64
+    };
+    let codes = &coded[T::BYTES..T::BYTES + codes_len];
+    let mut data = &coded[T::BYTES + codes_len..];
+    let mut out = Vec::with_capacity(count);
+    let mut previous = 0i64;
+    for i in 0..count {
+        let c = (codes[i / 4] >> (2 * (i % 4))) & 3;
+        let width = code_width(c, wide);
+        let delta = if width == 0 {
+            common
+        } else {
+            let bytes = data.get(..width).ok_or("integer data is cut short")?;
+            data = &data[width..];
+            let mut buf = [0u8; 8];
+            buf[..width].copy_from_slice(bytes);
+            // Sign-extend from `width` bytes.
+            let shift = 64 - 8 * width as u32;
+            (i64::from_le_bytes(buf) << shift) >> shift
+        };
+        previous = if wide {
+            previous.wrapping_add(delta)
+        } else {
+            (previous as i32).wrapping_add(delta as i32) as i64
+        };
+        out.push(T::from_i64(previous));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn integers_round_trip_through_every_code_width() {
+        let values: Vec<i32> =
+            vec![0, 1, 2, 3, 3, 3, 100, -100, 40_000, -40_000, i32::MAX, i32::MIN, 7, 7, 7, 7, 8];
+        let packed = compress_ints(&values);
+        assert_eq!(decompress_ints::<i32>(&packed, values.len()).unwrap(), values);
+        let wide: Vec<i64> = vec![0, 1, i64::MAX, i64::MIN, 1 << 40, -(1 << 20), 5, 5];
+        assert_eq!(decompress_ints::<i64>(&compress_ints(&wide), wide.len()).unwrap(), wide);
+        let unsigned: Vec<u32> = vec![u32::MAX, 0, 1, u32::MAX];
+        assert_eq!(decompress_ints::<u32>(&compress_ints(&unsigned), 4).unwrap(), unsigned);
+    }
+
+    #[test]
+    fn a_known_coding_decodes_as_documented() {
+        // common delta 1 (i32), codes: 0 (common), 1 (i8 delta 5), 0, 0.
+        let coded = [1, 0, 0, 0, 0b0000_0100, 5];
+        assert_eq!(decode_ints::<i32>(&coded, 4).unwrap(), vec![1, 6, 7, 8]);
+    }
+
+    #[test]
+    fn bad_input_is_an_error_not_a_panic() {
+        let packed = compress_ints(&[1i32, 5, 9, 300, 70_000]);
+        for cut in 0..packed.len() {
+            let _ = decompress_ints::<i32>(&packed[..cut], 5);
+        }
+        assert!(decompress_ints::<i32>(&packed, 1 << 40).is_err(), "huge count");
+        assert!(lz4_decompress(&[3, 0xff, 0xff, 0xff, 0x7f], 100).is_err(), "chunk beyond the end");
+        assert!(lz4_decompress(&[0, 0xf0], 100).is_err());
+    }
+}

@@ -1,0 +1,109 @@
+//! USD crate files (`.usdc`), read and written natively: no Python on the path of a user.
+//!
+//! Why our own module and not the `openusd` crate: 0.7/0.8 declare Rust 1.96 (these machines
+//! have 1.95); 0.6.0 builds here and has a crate writer, but it is a 100k-line general USD
+//! library (anyhow, logos, strum, derive_more, regex-lite…) whose reader indexes tables with
+//! unchecked file data, `todo!()`s on chunked LZ4 and old versions, and sizes buffers from
+//! counts in the file — a hostile file can panic it or make it allocate at will, and its values
+//! go through a generic value enum (a copy of every array). coif needs a small, validated subset
+//! that writes straight from the groom's arrays, like the Ogawa module.
+//!
+//! # Format (facts from USD's `crateFile.cpp` / `integerCoding.cpp`; all little-endian)
+//!
+//! - **Bootstrap** (88 bytes at 0): `PXR-USDC`, version bytes major/minor/patch (+5 unused),
+//!   `u64` offset of the table of contents, 8 reserved `u64`.
+//! - **TOC**: `u64` section count, then per section a 16-byte NUL-padded name, `u64` start and
+//!   `u64` size. Sections: `TOKENS`, `STRINGS`, `FIELDS`, `FIELDSETS`, `PATHS`, `SPECS`.
+//! - **TOKENS**: `u64` count, `u64` raw size, `u64` compressed size, LZ4 block of NUL-terminated
+//!   strings. **STRINGS**: `u64` count, `u32` token index each.
+//! - **FIELDS**: `u64` count, compressed `u32` token indices (the field names), then `u64` size +
+//!   LZ4 block of one `u64` value representation per field.
+//! - **FIELDSETS**: `u64` count, compressed `u32` field indices, each set ended by `u32::MAX`.
+//! - **PATHS**: `u64` path count, `u64` node count, three compressed arrays over the path tree in
+//!   depth-first order: path index, element token (negative: a property), jump (-2 no child or
+//!   next sibling, -1 child only, 0 next sibling only, n > 0 child next and sibling n ahead).
+//! - **SPECS**: `u64` count, three compressed `u32` arrays: path, field set, spec type.
+//! - "Compressed" integers: `u64` size, then LZ4 of the integer coding: the most common delta
+//!   (`i32`/`i64`), 2-bit codes per value (common, 8/16/32-bit delta; 16/32/64 for 64-bit),
+//!   then the deltas. LZ4 framing: a byte 0 and one block, or n chunks each `i32` size + block.
+//! - **Value representation** (`u64`): bit 63 array, 62 inline, 61 compressed, bits 48–55 type,
+//!   48-bit payload. Inline: scalars of up to 4 bytes, doubles a float holds exactly, tokens and
+//!   strings by index, vectors of small integers as `i8` components, matrices by an `i8`
+//!   diagonal. Otherwise the payload is an offset: arrays are `u64` count + elements (version
+//!   ≥ 0.7), int arrays of 16+ compressed, float arrays compressed as integers (`'i'`) or a lookup
+//!   table (`'t'`); time samples are an `i64` jump to the times' representation (a double
+//!   vector: `u64` count + `f64`s) followed by an `i64` jump to `u64` count + value reps.
+//!
+//! The writer emits version 0.8.0 (what usd-core writes); the reader accepts 0.4.0 to 0.12.x.
+//! Reading builds the same layer model as the `.usda` parser, so both formats give the same
+//! groom; a layer with composition arcs is handed to usd-core to flatten, as for `.usda`.
+mod compress;
+mod decode;
+mod encode;
+mod format;
+mod write;
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+use crate::io::{atomic, usda, ImportOptions};
+
+pub use decode::ReadOutcome;
+pub use format::MAGIC;
+
+/// Writes one groom as a crate file, atomically.
+pub fn write(path: &Path, groom: &Groom) -> Result<()> {
+    write_with(path, groom, None)
+}
+
+/// Writes a groom whose points move: frame `k` at time code `times.start + k`.
+pub fn write_animated(
+    path: &Path,
+    groom: &Groom,
+    frames: &[Vec<Vec3>],
+    times: usda::TimeCodes,
+) -> Result<()> {
+    if !(times.start.is_finite()
+        && times.end.is_finite()
+        && times.start <= times.end
+        && times.per_second > 0.0)
+    {
+        return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
+    }
+    if let Some((k, frame)) = frames.iter().enumerate().find(|(_, f)| f.len() != groom.vertex_count()) {
+        return Err(Error::Usage(format!(
+            "{}: frame {k} has {} points; the groom has {} (topology must stay constant)",
+            path.display(),
+            frame.len(),
+            groom.vertex_count()
+        )));
+    }
+    write_with(path, groom, Some(&write::Animation { frames, times }))
+}
+
+fn write_with(path: &Path, groom: &Groom, animation: Option<&write::Animation>) -> Result<()> {
+    let out = atomic::create_beside(path)?;
+    let out = write::encode(groom, animation, out).map_err(|e| Error::io(path, e))?;
+    atomic::commit(path, out)
+}
+
+/// Reads crate-file bytes into a groom (metres, Y up), or says it needs composition.
+pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
+    decode::read(bytes, None, path, options, time)
+}
+
+/// Reads a crate file: the structure through a map, large arrays straight from the file.
+pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    // SAFETY: read-only map; every offset is checked against its length, and coif replaces
+    // files by renaming, never truncating them in place (as for `input::map_file`).
+    let empty = file.metadata().map_err(|e| Error::io(path, e))?.len() == 0;
+    if empty {
+        return decode::read(&[], None, path, options, time);
+    }
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
+    decode::read(&map, Some(&file), path, options, time)
+}

@@ -1,0 +1,192 @@
+//! Resource limits, checked before anything is allocated or simulated: a job estimates the memory
+//! and the work its inputs imply (vertices after resampling, droplets, steps) and is refused with
+//! the figure when it would exceed them, instead of aborting on an allocation or running for a
+//! week on a farm node.
+//!
+//! The memory limit defaults to half the machine's RAM (`--max-memory` changes it); the step
+//! budget bounds simulated steps and vertex-steps. Estimates are deliberately generous per item
+//! and only have to be right to a small factor: they catch inputs that are off by orders of
+//! magnitude (`droplets = 1e12`, `max_segment = 1e-9`, `dt = 1e-30`).
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+
+/// Bytes the simulation holds per vertex (positions, velocities, frames, rest shape, bonds,
+/// wetness, contact lists and scratch): a generous estimate, not yet measured.
+pub const SIM_BYTES_PER_VERTEX: f64 = 512.0;
+/// Bytes per water droplet (position, velocity, its list of touched vertices).
+pub const DROPLET_BYTES: f64 = 128.0;
+/// Bytes a groom holds per vertex (point, width and a few attributes).
+pub const GROOM_BYTES_PER_VERTEX: f64 = 64.0;
+/// Simulated steps one run may take, whatever the groom's size.
+pub const DEFAULT_MAX_STEPS: u64 = 10_000_000;
+/// Vertex-steps (vertices × steps) one run may take: about a day of a 2-core node.
+pub const DEFAULT_MAX_WORK: f64 = 1e13;
+
+static MAX_MEMORY: AtomicU64 = AtomicU64::new(0);
+static MAX_STEPS: AtomicU64 = AtomicU64::new(DEFAULT_MAX_STEPS);
+
+/// Sets the memory limit in bytes for this process (0 restores the default).
+pub fn set_max_memory(bytes: u64) {
+    MAX_MEMORY.store(bytes, Ordering::Relaxed);
+}
+
+/// Sets the step budget for this process.
+pub fn set_max_steps(steps: u64) {
+    MAX_STEPS.store(steps.max(1), Ordering::Relaxed);
+}
+
+/// The memory limit: `--max-memory`, else half the machine's RAM (8 GiB when unknown).
+pub fn max_memory() -> u64 {
+    match MAX_MEMORY.load(Ordering::Relaxed) {
+        0 => total_ram().map_or(8 << 30, |ram| ram / 2),
+        set => set,
+    }
+}
+
+pub fn max_steps() -> u64 {
+    MAX_STEPS.load(Ordering::Relaxed)
+}
+
+fn total_ram() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Parses a size like `8G`, `512M`, `1.5GiB` or a plain byte count.
+pub fn parse_size(text: &str) -> Result<u64> {
+    let bad = || Error::Usage(format!("--max-memory '{text}' is not a size like 8G, 512M or 1073741824"));
+    let trimmed = text.trim();
+    let split = trimmed.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(trimmed.len());
+    let (number, unit) = trimmed.split_at(split);
+    let value: f64 = number.parse().map_err(|_| bad())?;
+    let scale = match unit.trim().to_ascii_uppercase().trim_end_matches("IB").trim_end_matches('B') {
+        "" => 1.0,
+        "K" => 1024.0,
+        "M" => 1024.0 * 1024.0,
+        "G" => 1024.0 * 1024.0 * 1024.0,
+        "T" => 1024.0 * 1024.0 * 1024.0 * 1024.0,
+        _ => return Err(bad()),
+    };
+    let bytes = value * scale;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(bad());
+    }
+    Ok(bytes as u64)
+}
+
+fn gigabytes(bytes: f64) -> String {
+    format!("{:.3} GB", bytes / 1e9)
+}
+
+/// Refuses `bytes` of `what` over the memory limit.
+pub fn check_memory(what: &str, bytes: f64) -> Result<()> {
+    let limit = max_memory() as f64;
+    if bytes.is_nan() || bytes > limit {
+        return Err(Error::Usage(format!(
+            "{what} needs about {} of memory, over the limit of {} (--max-memory)",
+            gigabytes(bytes),
+            gigabytes(limit)
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses a run of `steps` steps over `vertices` vertices beyond the step budget.
+pub fn check_steps(what: &str, steps: f64, vertices: f64) -> Result<()> {
+    let max = max_steps() as f64;
+    if steps.is_nan() || steps > max {
+        return Err(Error::Usage(format!(
+            "{what} takes {steps:.3e} simulation steps, over the budget of {max:.0} (--max-steps)"
+        )));
+    }
+    let work = steps * vertices;
+    if work > DEFAULT_MAX_WORK {
+        return Err(Error::Usage(format!(
+            "{what} takes {steps:.3e} steps of {vertices:.0} vertices ({work:.3e} vertex-steps), over the \
+             budget of {DEFAULT_MAX_WORK:.0e}"
+        )));
+    }
+    Ok(())
+}
+
+/// Steps a run of `seconds` takes at time step `dt` (as a float: it may be astronomically many).
+pub fn steps_for(seconds: f64, dt: f64) -> f64 {
+    (seconds / dt).ceil().max(0.0)
+}
+
+/// Vertices `groom` has after resampling so no segment is longer than `max_segment`, computed
+/// without resampling.
+pub fn vertices_after_resampling(groom: &Groom, max_segment: Option<f32>) -> f64 {
+    let Some(max) = max_segment else {
+        return groom.vertex_count() as f64;
+    };
+    let max = max as f64;
+    let mut total = 0.0;
+    for s in 0..groom.strand_count() {
+        let points = &groom.points[groom.strand_range(s)];
+        let length: f64 = points.windows(2).map(|w| w[0].distance(w[1]) as f64).sum();
+        total += (length / max).ceil().max(1.0) + 1.0;
+    }
+    total
+}
+
+/// A simulation of `vertices` vertices (and `droplets` droplets) for `steps` steps.
+pub fn check_simulation(what: &str, vertices: f64, droplets: f64, steps: f64) -> Result<()> {
+    check_memory(what, vertices * SIM_BYTES_PER_VERTEX + droplets * DROPLET_BYTES)?;
+    check_steps(what, steps, vertices + droplets)
+}
+
+/// Styling `groom` with `recipe`: the resampled groom, its droplets, every stage's steps, and
+/// the recorded frames when `frames_per_second` is positive.
+pub fn check_style(groom: &Groom, recipe: &crate::style::Recipe, frames_per_second: f32) -> Result<()> {
+    let settings = &recipe.settings;
+    let vertices = vertices_after_resampling(groom, settings.max_segment);
+    let droplets = recipe.water.as_ref().map_or(0.0, |w| w.droplets as f64);
+    let seconds: f64 = recipe.stages.iter().map(|s| s.get_ref().duration() as f64).sum();
+    let steps: f64 =
+        recipe.stages.iter().map(|s| steps_for(s.get_ref().duration().into(), settings.dt.into())).sum();
+    let frames = (seconds * frames_per_second as f64).ceil() + 2.0;
+    let frame_bytes = if frames_per_second > 0.0 { frames * vertices * 12.0 } else { 0.0 };
+    let what = format!("styling {vertices:.0} vertices with {droplets:.0} droplets for {seconds} s");
+    check_memory(&what, vertices * SIM_BYTES_PER_VERTEX + droplets * DROPLET_BYTES + frame_bytes)?;
+    check_steps(&what, steps, vertices + droplets)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(parse_size("8G").unwrap(), 8 << 30);
+        assert_eq!(parse_size("512MiB").unwrap(), 512 << 20);
+        assert_eq!(parse_size("1000").unwrap(), 1000);
+        assert!(parse_size("lots").is_err() && parse_size("-1G").is_err() && parse_size("0").is_err());
+    }
+
+    #[test]
+    fn astronomical_runs_are_refused_with_their_figures() {
+        let e = check_steps("style", steps_for(1e9, 1.0 / 360.0), 100.0).unwrap_err().to_string();
+        assert!(e.contains("3.600e11") && e.contains("budget"), "{e}");
+        let e = check_memory("water", 1e12 * DROPLET_BYTES).unwrap_err().to_string();
+        assert!(e.contains("128000.000 GB"), "{e}");
+        assert!(check_steps("tiny", 10.0, 10.0).is_ok());
+    }
+
+    #[test]
+    fn resampled_vertices_are_counted_without_resampling() {
+        let groom = crate::generate::generate(&crate::generate::GenerateParams {
+            strands: 3,
+            vertices_per_strand: 5,
+            ..Default::default()
+        })
+        .unwrap();
+        let resampled = crate::analysis::resample_groom(&groom, 0.01);
+        let estimate = vertices_after_resampling(&groom, Some(0.01));
+        assert!((estimate - resampled.vertex_count() as f64).abs() <= 3.0, "{estimate}");
+    }
+}

@@ -1,0 +1,116 @@
+//! Grooms that hold their shape when a simulation starts.
+//!
+//! * **Styled grooms** carry their zero-stress shape (`rest_darboux`, Ω0 per edge pair) and
+//!   bond rates (`bond_*`). [`Simulation::adopt_rest_state`] makes every bond kind remember Ω0:
+//!   with all kinds equal, S1-15's zero-stress shape is Ω0 at any rates, and the bend–twist
+//!   constraint `C = (1 − β)·(Ω − Ω0)` is exactly the one the styled groom was settled with, so
+//!   its settled shape is again an equilibrium.
+//! * **Grooms fresh from a DCC tool** are drawn as they should look under gravity.
+//!   [`Simulation::make_sag_free`] solves for the rest shape that holds the current shape in
+//!   static equilibrium (Hsu et al. 2023, "Sag-free initialization for strand-based hybrid hair
+//!   simulation"). With stretch–shear hard, the strand beyond vertex `i` is a rigid body hinged
+//!   at `p_i` by the bend–twist pair `i`; turning it by a small world rotation `δθ` changes
+//!   `Ω_i = Im(q̄_{i−1}⊗q_i)` by `J·δθ_loc`, `J = ½(w·I − [Ω]×)` (`δθ_loc` in frame `i−1`,
+//!   `w` the real part), and gravity does work `δθ·M_i`, `M_i = Σ_{j>i} (p_j − p_i) × m_j·g`.
+//!   Equilibrium is `Jᵀ·(C/α) = M_loc`, so `C = α ⊙ J⁻ᵀ·M_loc` and
+//!   `Ω0 = Ω − C/(1 − β)`. The stretch is hard, so rest lengths stay.
+//!
+//!   The stepper's own static shape equals this energy minimum only where its iterations
+//!   converge: straight strands hold to ~0.4 mm, while 1 cm curls cut in 1 cm segments sag by
+//!   centimetres at 5 iterations (Gauss–Seidel bending is too soft there); a converged strand
+//!   solve removes that.
+use glam::{Mat3, Vec3};
+
+use super::bonds::{BondKind, Bonds};
+use super::Simulation;
+use crate::error::{Error, Result};
+use crate::groom::{AttributeRate, Groom};
+
+/// The attribute that carries the zero-stress Darboux vectors (written by `write_to_groom`).
+pub const REST_DARBOUX: &str = "rest_darboux";
+
+impl Simulation {
+    /// Uses the groom's exported zero-stress shape (`rest_darboux`) as every bond kind's memory,
+    /// keeping the bond rates. Returns whether the groom had one. `groom` must be the groom the
+    /// simulation was built from.
+    pub fn adopt_rest_state(&mut self, groom: &Groom) -> Result<bool> {
+        let Some(attribute) = groom.attribute(REST_DARBOUX) else { return Ok(false) };
+        if attribute.rate != AttributeRate::Vertex
+            || attribute.components != 3
+            || attribute.data.len() != 3 * self.rods.vertex_count()
+        {
+            return Err(Error::Usage(format!(
+                "attribute '{REST_DARBOUX}' must be three floats per vertex to give the rest shape"
+            )));
+        }
+        if let Some(i) = attribute.data.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Usage(format!("attribute '{REST_DARBOUX}': vertex {} is not finite", i / 3)));
+        }
+        let shape: Vec<Vec3> = attribute
+            .data
+            .chunks_exact(3)
+            .enumerate()
+            .map(|(i, c)| if self.rods.is_pair_centre(i) { Vec3::new(c[0], c[1], c[2]) } else { Vec3::ZERO })
+            .collect();
+        self.remember_shape(&shape);
+        Ok(true)
+    }
+
+    /// Makes the current shape the static equilibrium under gravity by solving for the rest
+    /// Darboux vectors (module docs). Pairs whose bonds are all broken cannot hold anything and
+    /// keep following the shape.
+    pub fn make_sag_free(&mut self) {
+        let r = &self.rods;
+        let g = self.params.gravity;
+        let mut shape: Vec<Vec3> = (0..r.vertex_count()).map(|i| r.darboux_at(i)).collect();
+        for strand in 0..r.strand_count() {
+            let range = r.strand_range(strand);
+            // Walking from the tip: weight beyond `i` and its first moment, so
+            // M_i = (Σ m_j p_j − p_i Σ m_j) × g.
+            let (mut mass, mut moment) = (0.0f64, glam::DVec3::ZERO);
+            for i in (range.start + 1..range.end).rev() {
+                let bonded = self.bonded_fraction(i);
+                if r.is_pair_centre(i) && bonded > 1e-6 {
+                    let p = r.positions[i].as_dvec3();
+                    let torque = ((moment - p * mass).cross(g.as_dvec3())).as_vec3();
+                    let frame = r.frames[i - 1];
+                    let relative = frame.conjugate() * r.frames[i];
+                    let (w, omega) = if relative.w < 0.0 {
+                        (-relative.w, -relative.xyz())
+                    } else {
+                        (relative.w, relative.xyz())
+                    };
+                    let local = frame.conjugate() * torque;
+                    // Jᵀ = ½(w·I + [Ω]×).
+                    let jt = Mat3::from_cols(
+                        Vec3::new(w, omega.z, -omega.y),
+                        Vec3::new(-omega.z, w, omega.x),
+                        Vec3::new(omega.y, -omega.x, w),
+                    ) * 0.5;
+                    let stress = jt.inverse() * local;
+                    shape[i] = omega - r.compliance[i] * stress / bonded;
+                }
+                let m = (r.mass[i] * r.mass_scale[i]) as f64;
+                mass += m;
+                moment += r.positions[i].as_dvec3() * m;
+            }
+        }
+        self.remember_shape(&shape);
+    }
+
+    /// `1 − β`: the influence-weighted share of intact bonds at a pair.
+    fn bonded_fraction(&self, pair: usize) -> f32 {
+        let f = self.bonds.influences().0;
+        let intact: f32 = BondKind::ALL.iter().map(|&k| f[k as usize] * self.bonds.rate(k, pair)).sum();
+        intact / self.bonds.influences().total()
+    }
+
+    /// Every bond kind remembers `shape`; rates stay.
+    fn remember_shape(&mut self, shape: &[Vec3]) {
+        let rates: Vec<Vec<f32>> = BondKind::ALL.iter().map(|&k| self.bonds.rates(k).to_vec()).collect();
+        self.bonds = Bonds::new(self.bonds.influences(), shape);
+        for (kind, rates) in BondKind::ALL.into_iter().zip(rates) {
+            self.set_bond_rates_with(kind, |v| rates[v]);
+        }
+    }
+}

@@ -1,0 +1,273 @@
+//! Puts a recipe on a groom: fits the head frame when the recipe needs one, turns every
+//! head-frame position, length and direction into world coordinates, lays out rods for `rows`
+//! and `spiral` wraps, and makes the obstacles' collision shapes — the scalp from the groom's
+//! own mesh when it brings one. What comes out is a recipe in world coordinates the run can use
+//! as it is.
+use std::sync::Arc;
+
+use glam::{Quat, Vec3};
+use toml::Spanned;
+
+use super::head_frame::{Ellipsoid, FrameOverrides, HeadFrame};
+use super::layout::lay_out;
+use super::recipe::{bake_mesh, Frame, Layout, Obstacle, Recipe, Rod, Stage};
+use crate::error::{Error, Result};
+use crate::groom::Groom;
+use crate::head::Head;
+use crate::interact::mesh_sdf::TriangleMesh;
+use crate::interact::obstacles::Shape;
+
+/// A recipe placed on one groom.
+pub struct Placed {
+    /// The recipe in world coordinates (every `frame` is `world`, layouts are rods).
+    pub recipe: Recipe,
+    /// One collision shape per obstacle, in the recipe's order.
+    pub shapes: Vec<Shape>,
+    /// The head frame, when the recipe needed one.
+    pub frame: Option<HeadFrame>,
+    /// Where masks' regions are measured from: the head's centre and the rotation from coif's
+    /// head axes (X side, Y up, Z front) to the head's.
+    pub mask_center: Vec3,
+    pub mask_rotation: Quat,
+}
+
+/// Whether anything in the recipe is given in, or laid out on, the head frame.
+pub fn needs_frame(recipe: &Recipe) -> bool {
+    let head = |f: &Option<Frame>| f.unwrap_or(recipe.frame) == Frame::Head;
+    recipe.frame == Frame::Head
+        || recipe.rods.iter().any(|r| head(&r.get_ref().frame))
+        || recipe.obstacles.iter().any(|o| match o.get_ref() {
+            Obstacle::Head { frame, .. }
+            | Obstacle::Sphere { frame, .. }
+            | Obstacle::Plane { frame, .. }
+            | Obstacle::Box { frame, .. } => head(frame),
+            Obstacle::Scalp { .. } => true,
+            Obstacle::Mesh { .. } => false,
+        })
+        || recipe.stages.iter().any(|s| match s.get_ref() {
+            Stage::Wrap { layout, .. } => *layout != Layout::Nearest,
+            Stage::Dry { dryer: Some(d), .. } => head(&d.frame),
+            _ => false,
+        })
+}
+
+/// Places `recipe` on `groom` (already resampled), whose scalp or head mesh is `scalp` if it
+/// has one.
+pub fn place(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<Placed> {
+    let roots: Vec<Vec3> = (0..groom.strand_count()).map(|s| groom.strand_points(s)[0]).collect();
+    let frame = if needs_frame(recipe) { Some(fit_frame(recipe, groom, scalp)?) } else { None };
+    let mut out = recipe.clone();
+    let world = |f: &mut Option<Frame>| f.replace(Frame::World).unwrap_or(recipe.frame);
+    // Converters for items in the head frame (identity for world items).
+    let point = |f: Frame, p: [f32; 3]| match (f, &frame) {
+        (Frame::Head, Some(fr)) => fr.point(Vec3::from(p)).to_array(),
+        _ => p,
+    };
+    let direction = |f: Frame, d: [f32; 3]| match (f, &frame) {
+        (Frame::Head, Some(fr)) => fr.direction(Vec3::from(d)).to_array(),
+        _ => d,
+    };
+    let length = |f: Frame, l: f32| match (f, &frame) {
+        (Frame::Head, Some(fr)) => l * fr.size(),
+        _ => l,
+    };
+
+    if recipe.frame == Frame::Head {
+        out.settings.gravity = direction(Frame::Head, recipe.settings.gravity);
+    }
+    for rod in &mut out.rods {
+        let rod = rod.get_mut();
+        let f = world(&mut rod.frame);
+        (rod.a, rod.b, rod.radius) = (point(f, rod.a), point(f, rod.b), length(f, rod.radius));
+    }
+    // Which frame each obstacle was in, for the stages that press them.
+    let mut obstacle_frames = Vec::new();
+    let mut shapes = Vec::new();
+    for obstacle in &mut out.obstacles {
+        let (f, shape) = match obstacle.get_mut() {
+            Obstacle::Head { center, radii, frame: item, .. } => {
+                let f = world(item);
+                let shape = match (f, &frame) {
+                    (Frame::Head, Some(fr)) if center.is_none() && radii.is_none() => {
+                        fitted_head(fr, &roots)?
+                    }
+                    (Frame::Head, Some(fr)) => {
+                        // Along the head's axes; what is left out comes from the fitted head.
+                        let fitted = fr.fit_ellipsoid(&roots);
+                        let c = center.map(Vec3::from).or(fitted.map(|e| e.center)).unwrap_or(Vec3::ZERO);
+                        let r = radii.map(Vec3::from).or(fitted.map(|e| e.radii)).unwrap_or(Vec3::ONE);
+                        Shape::Ellipsoid {
+                            center: fr.point(c),
+                            radii: r * fr.size(),
+                            rotation: fr.rotation(),
+                        }
+                    }
+                    _ => {
+                        let head = Head::default();
+                        Shape::Ellipsoid {
+                            center: center.map_or(head.center, Vec3::from),
+                            radii: radii.map_or(head.radii, Vec3::from),
+                            rotation: Quat::IDENTITY,
+                        }
+                    }
+                };
+                (f, shape)
+            }
+            Obstacle::Scalp { name, resolution, band } => {
+                let shape = match scalp {
+                    Some(mesh) => {
+                        Shape::Mesh(Arc::new(bake_mesh(mesh, *resolution, *band).map_err(|e| {
+                            Error::Usage(format!("scalp obstacle '{name}': the groom's scalp mesh: {e}"))
+                        })?))
+                    }
+                    None => fitted_head(frame.as_ref().expect("a scalp needs the frame"), &roots)?,
+                };
+                (Frame::World, shape)
+            }
+            Obstacle::Sphere { center, radius, frame: item, .. } => {
+                let f = world(item);
+                (*center, *radius) = (point(f, *center), length(f, *radius));
+                (f, Shape::Sphere { center: Vec3::from(*center), radius: *radius })
+            }
+            Obstacle::Plane { point: p, normal, frame: item, .. } => {
+                let f = world(item);
+                (*p, *normal) = (point(f, *p), direction(f, *normal));
+                (f, Shape::Plane { point: Vec3::from(*p), normal: Vec3::from(*normal).normalize() })
+            }
+            Obstacle::Box { center, half_extents, frame: item, .. } => {
+                let f = world(item);
+                let rotation = match (f, &frame) {
+                    (Frame::Head, Some(fr)) => fr.rotation(),
+                    _ => Quat::IDENTITY,
+                };
+                *center = point(f, *center);
+                *half_extents = half_extents.map(|h| length(f, h));
+                let shape = Shape::Box {
+                    center: Vec3::from(*center),
+                    half_extents: Vec3::from(*half_extents),
+                    rotation,
+                };
+                (f, shape)
+            }
+            Obstacle::Mesh { name, sdf, .. } => {
+                let sdf = sdf.clone().ok_or_else(|| {
+                    Error::Usage(format!(
+                        "mesh obstacle '{name}' has no baked field: load the recipe with coif::style::recipe::load"
+                    ))
+                })?;
+                (Frame::World, Shape::Mesh(sdf))
+            }
+        };
+        obstacle_frames.push(f);
+        shapes.push(shape);
+    }
+
+    let mut laid = Vec::new();
+    for (index, stage) in out.stages.iter_mut().enumerate() {
+        let span = stage.span();
+        match stage.get_mut() {
+            Stage::Dry { dryer: Some(d), .. } => {
+                let f = world(&mut d.frame);
+                (d.position, d.target) = (point(f, d.position), point(f, d.target));
+                d.falloff = d.falloff.map(|l| length(f, l));
+            }
+            Stage::Press { obstacle, travel, direction: d, .. } => {
+                let which = recipe.obstacles.iter().position(|o| o.get_ref().name() == obstacle);
+                let f = which.map_or(Frame::World, |w| obstacle_frames[w]);
+                *travel = length(f, *travel);
+                *d = d.map(|d| direction(f, d));
+                // A box pressed with no direction moves along its frame's up.
+                if d.is_none() && matches!(which.map(|w| &shapes[w]), Some(Shape::Box { .. })) {
+                    *d = Some(direction(f, [0.0, 1.0, 0.0]));
+                }
+            }
+            Stage::Wrap { rods, layout, diameter, spacing, .. } if *layout != Layout::Nearest => {
+                let fr = frame.as_ref().expect("a layout needs the frame");
+                let (diameter, spacing) = (
+                    length(recipe.frame, diameter.expect("checked")),
+                    length(recipe.frame, spacing.expect("checked")),
+                );
+                let made = lay_out(fr, &roots, *layout, diameter, spacing);
+                if made.is_empty() {
+                    return Err(Error::Usage(format!(
+                        "stage {} (wrap): the {layout:?} layout found no scalp to put rods on",
+                        index + 1
+                    )));
+                }
+                for (k, rod) in made.into_iter().enumerate() {
+                    let name = format!("stage{}_rod{k}", index + 1);
+                    rods.push(name.clone());
+                    let rod = Rod {
+                        name,
+                        a: rod.a.to_array(),
+                        b: rod.b.to_array(),
+                        radius: rod.radius,
+                        frame: None,
+                    };
+                    laid.push(Spanned::new(span.clone(), rod));
+                }
+                *layout = Layout::Nearest;
+            }
+            _ => {}
+        }
+    }
+    out.rods.extend(laid);
+    out.frame = Frame::World;
+
+    let (mask_center, mask_rotation) = match (&frame, recipe.frame) {
+        (Some(fr), Frame::Head) => (fr.center(), fr.rotation()),
+        // As before head frames: the (last) analytic head obstacle's centre, coif's axes.
+        _ => {
+            let center = recipe
+                .obstacles
+                .iter()
+                .filter_map(|o| match o.get_ref() {
+                    Obstacle::Head { center, frame: None | Some(Frame::World), .. } => {
+                        Some(center.map_or(Head::default().center, Vec3::from))
+                    }
+                    _ => None,
+                })
+                .next_back()
+                .unwrap_or(Head::default().center);
+            (center, Quat::IDENTITY)
+        }
+    };
+    Ok(Placed { recipe: out, shapes, frame, mask_center, mask_rotation })
+}
+
+fn fit_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<HeadFrame> {
+    let head = &recipe.head;
+    let named = head.scalp.as_ref().and_then(|name| {
+        recipe.obstacles.iter().find_map(|o| match o.get_ref() {
+            Obstacle::Mesh { name: n, mesh, .. } if n == name => mesh.clone(),
+            _ => None,
+        })
+    });
+    let overrides = FrameOverrides {
+        center: head.center.map(Vec3::from),
+        up: head.up.map(Vec3::from),
+        front: head.front.map(Vec3::from),
+        size: head.size,
+    };
+    HeadFrame::fit(groom, named.as_deref().or(scalp), &overrides).map_err(|e| {
+        Error::Usage(format!(
+            "the recipe is written in the head frame, but {e}; give the head in the recipe's [head] table \
+             (center, up, front, size)"
+        ))
+    })
+}
+
+/// The head as the ellipsoid fitted to the roots (a sphere of the frame's size when the roots do
+/// not determine one).
+fn fitted_head(frame: &HeadFrame, roots: &[Vec3]) -> Result<Shape> {
+    let e = frame.fit_ellipsoid(roots).unwrap_or(Ellipsoid {
+        center: Vec3::ZERO,
+        radii: Vec3::ONE,
+        rotation: Quat::IDENTITY,
+    });
+    Ok(Shape::Ellipsoid {
+        center: frame.point(e.center),
+        radii: e.radii * frame.size(),
+        rotation: frame.rotation() * e.rotation,
+    })
+}

@@ -1,0 +1,144 @@
+//! One validation layer for numbers that come from outside: recipes, manifests, command-line
+//! flags and file headers. Every such number is checked here to be finite and inside a
+//! documented range before anything uses it, and a refusal names the key, the value and the
+//! range ("[water] r_max = -1 must be in (0, 0.5]"), so a farm log says what to fix.
+//!
+//! Callers add where the number came from (a recipe line, a flag); the check itself is shared.
+use std::fmt;
+
+use crate::error::{Error, Result};
+
+/// An interval of accepted values; either end may be open or unbounded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Range {
+    min: f64,
+    max: f64,
+    min_open: bool,
+    max_open: bool,
+}
+
+impl Range {
+    /// `[min, max]`.
+    pub const fn closed(min: f64, max: f64) -> Range {
+        Range { min, max, min_open: false, max_open: false }
+    }
+
+    /// `(min, max]`: above `min`, at most `max`.
+    pub const fn above(min: f64, max: f64) -> Range {
+        Range { min, max, min_open: true, max_open: false }
+    }
+
+    /// `(min, max)`.
+    pub const fn open(min: f64, max: f64) -> Range {
+        Range { min, max, min_open: true, max_open: true }
+    }
+
+    /// `[min, max)`.
+    pub const fn below(min: f64, max: f64) -> Range {
+        Range { min, max, min_open: false, max_open: true }
+    }
+
+    pub fn contains(&self, value: f64) -> bool {
+        let low = if self.min_open { value > self.min } else { value >= self.min };
+        let high = if self.max_open { value < self.max } else { value <= self.max };
+        value.is_finite() && low && high
+    }
+}
+
+/// Fractions and rates of a whole: `[0, 1]`.
+pub const FRACTION: Range = Range::closed(0.0, 1.0);
+/// Coordinates, metres: a groom, obstacle or light anywhere within a kilometre of the origin.
+pub const COORDINATE: Range = Range::closed(-1e3, 1e3);
+/// Simulated seconds a stage or a run may last (the step budget bounds the total work).
+pub const SECONDS: Range = Range::closed(0.0, 1e5);
+
+impl fmt::Display for Range {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let open = if self.min_open { '(' } else { '[' };
+        let close = if self.max_open { ')' } else { ']' };
+        write!(f, "{open}{}, {}{close}", shortest(self.min), shortest(self.max))
+    }
+}
+
+/// A number as written: an `f32` widened to `f64` prints as the `f32` (0.001, not
+/// 0.0010000000474974513).
+fn shortest(value: f64) -> String {
+    let narrow = value as f32;
+    if narrow as f64 == value {
+        narrow.to_string()
+    } else {
+        value.to_string()
+    }
+}
+
+/// Checks one number; the message names the key, the value and the range.
+pub fn number(key: &str, value: impl Into<f64>, range: Range) -> std::result::Result<(), String> {
+    let value = value.into();
+    if range.contains(value) {
+        Ok(())
+    } else {
+        Err(format!("{key} = {} must be a finite number in {range}", shortest(value)))
+    }
+}
+
+/// Checks every component of a vector against `range`.
+pub fn vector(key: &str, value: [f32; 3], range: Range) -> std::result::Result<(), String> {
+    match value.iter().position(|&c| !range.contains(c as f64)) {
+        None => Ok(()),
+        Some(_) => Err(format!(
+            "{key} = [{}, {}, {}] must have finite components in {range}",
+            value[0], value[1], value[2]
+        )),
+    }
+}
+
+/// Checks a direction: finite components within `range` and not (nearly) zero length.
+pub fn direction(key: &str, value: [f32; 3]) -> std::result::Result<(), String> {
+    vector(key, value, Range::closed(-1e6, 1e6))?;
+    let length = glam::Vec3::from(value).length();
+    if length < 1e-6 {
+        return Err(format!(
+            "{key} = [{}, {}, {}] is not a direction (zero length)",
+            value[0], value[1], value[2]
+        ));
+    }
+    Ok(())
+}
+
+/// [`number`] for a command-line flag: a usage error (exit code 2).
+pub fn flag(key: &str, value: impl Into<f64>, range: Range) -> Result<()> {
+    number(key, value, range).map_err(Error::Usage)
+}
+
+/// [`vector`] for a command-line flag.
+pub fn flag_vector(key: &str, value: [f32; 3], range: Range) -> Result<()> {
+    vector(key, value, range).map_err(Error::Usage)
+}
+
+/// [`direction`] for a command-line flag.
+pub fn flag_direction(key: &str, value: [f32; 3]) -> Result<()> {
+    direction(key, value).map_err(Error::Usage)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_refuse_non_finite_and_respect_open_ends() {
+        let positive = Range::above(0.0, 1.0);
+        assert!(!positive.contains(0.0) && positive.contains(1.0) && !positive.contains(f64::NAN));
+        assert!(!Range::below(0.0, 1.0).contains(1.0) && Range::below(0.0, 1.0).contains(0.0));
+        assert!(!FRACTION.contains(f64::INFINITY) && !FRACTION.contains(-1e-9));
+    }
+
+    #[test]
+    fn refusals_name_key_value_and_range() {
+        let e = number("[water] r_max", -1.0, Range::above(0.0, 0.5)).unwrap_err();
+        assert!(e.contains("[water] r_max") && e.contains("-1") && e.contains("(0, 0.5]"), "{e}");
+        let e = number("--exposure", f32::NAN, Range::closed(-30.0, 30.0)).unwrap_err();
+        assert!(e.contains("NaN") && e.contains("[-30, 30]"), "{e}");
+        assert!(direction("normal", [0.0; 3]).unwrap_err().contains("zero length"));
+        assert!(vector("center", [0.0, f32::INFINITY, 0.0], COORDINATE).unwrap_err().contains("inf"));
+    }
+}

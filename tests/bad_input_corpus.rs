@@ -1,0 +1,633 @@
+//! A corpus of crafted bad inputs run through the `coif` binary: recipe keys out of range (NaN,
+//! infinities, negatives, zero), NaN vectors, astronomical work, CLI flags, truncated and
+//! bit-flipped `.hair`, `.usda` and `.abc` files, broken meshes and manifests, directories, FIFOs
+//! and undecodable text. Every case must exit with its code (2: bad input), name its culprit on
+//! stderr (key, flag, file or line), and leave nothing behind: no output, no temporary file.
+//! Cases run in parallel threads, each in its own folder; each fails before any real work.
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+use std::sync::Mutex;
+
+use common::{coif, path_str, stderr};
+
+struct Case {
+    name: String,
+    /// Files written into the case's folder before running (name, bytes).
+    files: Vec<(String, Vec<u8>)>,
+    args: Vec<String>,
+    code: i32,
+    /// Substrings stderr must contain.
+    names: Vec<String>,
+}
+
+fn case(name: &str, files: Vec<(&str, Vec<u8>)>, args: &[&str], code: i32, names: &[&str]) -> Case {
+    Case {
+        name: name.to_string(),
+        files: files.into_iter().map(|(n, b)| (n.to_string(), b)).collect(),
+        args: args.iter().map(|a| a.to_string()).collect(),
+        code,
+        names: names.iter().map(|n| n.to_string()).collect(),
+    }
+}
+
+/// A minimal valid recipe: one process stage.
+const BASE: &str = "[settings]\ndt = 0.0027777778\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
+
+struct Inputs {
+    hair: Vec<u8>,
+    usda: Vec<u8>,
+    abc: Vec<u8>,
+}
+
+fn inputs() -> Inputs {
+    let dir = tempfile::tempdir().unwrap();
+    let hair = dir.path().join("g.hair");
+    let made = coif(&["generate", "-o", path_str(&hair), "--strands", "6", "--vertices", "6"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let read = |ext: &str| {
+        let out = dir.path().join(format!("g.{ext}"));
+        if ext != "hair" {
+            let converted = coif(&["convert", path_str(&hair), path_str(&out)]);
+            assert!(converted.status.success(), "{}", stderr(&converted));
+        }
+        std::fs::read(out).unwrap()
+    };
+    Inputs { hair: read("hair"), usda: read("usda"), abc: read("abc") }
+}
+
+fn style_case(name: &str, recipe: &str, hair: &[u8], names: &[&str]) -> Case {
+    case(
+        name,
+        vec![("r.toml", recipe.as_bytes().to_vec()), ("g.hair", hair.to_vec())],
+        &["style", "r.toml", "--groom", "g.hair", "-o", "out.usda"],
+        2,
+        names,
+    )
+}
+
+fn recipe_cases(hair: &[u8]) -> Vec<Case> {
+    let mut cases = Vec::new();
+    // (table, key, bad values): every number a plain table holds.
+    let keys: &[(&str, &str, &[&str])] = &[
+        ("settings", "dt", &["nan", "inf", "-1", "0", "1e-30", "1"]),
+        ("settings", "youngs_modulus", &["nan", "0", "-inf"]),
+        ("settings", "shear_modulus", &["nan", "-1"]),
+        ("settings", "density", &["inf", "0"]),
+        ("settings", "cuticle_peel_per_metre", &["nan", "-1", "inf"]),
+        ("settings", "max_segment", &["nan", "1e-9", "-0.01", "inf"]),
+        ("settings", "damping", &["nan", "-2", "inf"]),
+        ("bonds", "hydrogen", &["nan", "-1", "inf"]),
+        ("bonds", "peptide", &["nan", "1e9"]),
+        ("contacts", "hair_stiffness", &["nan", "-1", "inf", "1e9"]),
+        ("contacts", "sample_spacing", &["nan", "0", "1e-30"]),
+        ("contacts", "static_friction", &["nan", "-1", "inf"]),
+        ("contacts", "dynamic_friction", &["nan", "-0.5", "inf"]),
+        ("wetness", "diffusion", &["nan", "-1", "inf"]),
+        ("wetness", "evaporation", &["nan", "-1", "inf"]),
+        ("wetness", "airflow_drying", &["nan", "-1", "inf"]),
+        ("wetness", "mass_gain", &["nan", "-1", "inf"]),
+    ];
+    for (table, key, values) in keys {
+        for value in *values {
+            let recipe =
+                format!("[{table}]\n{key} = {value}\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n");
+            cases.push(style_case(
+                &format!("[{table}] {key} = {value}"),
+                &recipe,
+                hair,
+                &["r.toml", "line 2", key],
+            ));
+        }
+    }
+    let water: &[(&str, &str)] = &[
+        ("r_min", "nan"),
+        ("r_min", "-1"),
+        ("r_min", "0"),
+        ("r_max", "nan"),
+        ("r_max", "-1"),
+        ("r_max", "0"),
+        ("r_max", "0.0005"),
+        ("hair_pull", "nan"),
+        ("hair_pull", "inf"),
+        ("droplet_pull", "-1"),
+        ("droplet_damping", "nan"),
+        ("uptake", "-1"),
+    ];
+    for (key, value) in water {
+        let recipe = format!(
+            "[water]\ndroplets = 10\n{key} = {value}\n\n[[stages]]\nkind = \"wet\"\nduration = 0.01\n"
+        );
+        cases.push(style_case(&format!("[water] {key} = {value}"), &recipe, hair, &["line 3", key]));
+    }
+    cases.push(style_case(
+        "droplets = 1e12",
+        "[water]\ndroplets = 1000000000000\n\n[[stages]]\nkind = \"wet\"\nduration = 0.01\n",
+        hair,
+        &["1000000000000 droplets", "--max-memory"],
+    ));
+    // Obstacles, rods and stages: vectors with NaN and infinities.
+    let tables: &[(&str, &str, &str)] = &[
+        (
+            "sphere center",
+            "[[obstacles]]\nshape = \"sphere\"\nname = \"s\"\ncenter = [nan, 0, 0]\nradius = 0.1\n",
+            "center",
+        ),
+        (
+            "sphere center inf",
+            "[[obstacles]]\nshape = \"sphere\"\nname = \"s\"\ncenter = [0, inf, 0]\nradius = 0.1\n",
+            "center",
+        ),
+        (
+            "sphere radius",
+            "[[obstacles]]\nshape = \"sphere\"\nname = \"s\"\ncenter = [0, 0, 0]\nradius = nan\n",
+            "radius",
+        ),
+        ("head center", "[[obstacles]]\nshape = \"head\"\nname = \"h\"\ncenter = [0, 0, -inf]\n", "center"),
+        ("head radii", "[[obstacles]]\nshape = \"head\"\nname = \"h\"\nradii = [0.1, nan, 0.1]\n", "radii"),
+        (
+            "plane point",
+            "[[obstacles]]\nshape = \"plane\"\nname = \"p\"\npoint = [nan, 0, 0]\nnormal = [0, 1, 0]\n",
+            "point",
+        ),
+        (
+            "plane normal nan",
+            "[[obstacles]]\nshape = \"plane\"\nname = \"p\"\npoint = [0, 0, 0]\nnormal = [0, nan, 0]\n",
+            "normal",
+        ),
+        (
+            "plane normal inf",
+            "[[obstacles]]\nshape = \"plane\"\nname = \"p\"\npoint = [0, 0, 0]\nnormal = [inf, 1, 0]\n",
+            "normal",
+        ),
+        (
+            "plane normal zero",
+            "[[obstacles]]\nshape = \"plane\"\nname = \"p\"\npoint = [0, 0, 0]\nnormal = [0, 0, 0]\n",
+            "normal",
+        ),
+        (
+            "box center",
+            "[[obstacles]]\nshape = \"box\"\nname = \"b\"\ncenter = [0, nan, 0]\nhalf_extents = [1, 1, 1]\n",
+            "center",
+        ),
+        (
+            "box half_extents",
+            "[[obstacles]]\nshape = \"box\"\nname = \"b\"\ncenter = [0, 0, 0]\nhalf_extents = [1, inf, 1]\n",
+            "half_extents",
+        ),
+        ("rod a nan", "[[rods]]\nname = \"r\"\na = [nan, 0, 0]\nb = [1, 0, 0]\nradius = 0.01\n", "rod 'r'"),
+        ("rod b inf", "[[rods]]\nname = \"r\"\na = [0, 0, 0]\nb = [inf, 0, 0]\nradius = 0.01\n", "rod 'r'"),
+        ("rod radius", "[[rods]]\nname = \"r\"\na = [0, 0, 0]\nb = [1, 0, 0]\nradius = nan\n", "radius"),
+        ("gravity", "[settings]\ngravity = [0, nan, 0]\n", "gravity"),
+        ("gravity inf", "[settings]\ngravity = [0, -inf, 0]\n", "gravity"),
+    ];
+    for (name, table, culprit) in tables {
+        let recipe = format!("{table}\n[[stages]]\nkind = \"process\"\nduration = 0.01\n");
+        cases.push(style_case(name, &recipe, hair, &[culprit]));
+    }
+    let stages: &[(&str, &str, &str)] = &[
+        ("duration 1e9", "kind = \"process\"\nduration = 1e9", "duration"),
+        ("duration nan", "kind = \"process\"\nduration = nan", "duration"),
+        ("duration -1", "kind = \"process\"\nduration = -1", "duration"),
+        ("duration inf", "kind = \"wet\"\nduration = inf", "duration"),
+        ("wet amount", "kind = \"wet\"\nduration = 1\namount = nan", "amount"),
+        ("mask fraction", "kind = \"wet\"\nduration = 1\nmask = { fraction = nan }", "fraction"),
+        ("heat", "kind = \"dry\"\nduration = 1\nheat = -1", "heat"),
+        ("heat nan", "kind = \"dry\"\nduration = 1\nheat = nan", "heat"),
+        ("dryer position", "kind = \"dry\"\nduration = 1\ndryer = { position = [nan, 0, 0], target = [0, 0, 0], strength = 1 }", "dryer position"),
+        ("dryer target", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, inf, 0], strength = 1 }", "dryer target"),
+        ("dryer strength", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = nan }", "dryer strength"),
+        ("dryer falloff", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = 1, falloff = 0 }", "dryer falloff"),
+        ("cone nan", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = 1, cone_degrees = nan }", "cone_degrees"),
+        ("cone -1", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = 1, cone_degrees = -1 }", "cone_degrees"),
+        ("cone 400", "kind = \"dry\"\nduration = 1\ndryer = { position = [1, 0, 0], target = [0, 0, 0], strength = 1, cone_degrees = 400 }", "cone_degrees"),
+        ("settle max_seconds", "kind = \"settle\"\nmax_seconds = 1e30", "max_seconds"),
+        ("settle tolerance", "kind = \"settle\"\ntolerance = nan", "tolerance"),
+        ("lotion nan", "kind = \"lotion\"\nduration = 1\nbreak = { ionic = nan }", "ionic"),
+    ];
+    for (name, stage, culprit) in stages {
+        let recipe = format!("[[stages]]\n{stage}\n");
+        cases.push(style_case(name, &recipe, hair, &["line 1", culprit]));
+    }
+    let press = "[[obstacles]]\nshape = \"plane\"\nname = \"floor\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\n\n[[stages]]\nkind = \"press\"\nduration = 1\nobstacle = \"floor\"\n";
+    for (name, extra, culprit) in [
+        ("press direction nan", "direction = [0, nan, 0]\n", "direction"),
+        ("press direction inf", "direction = [inf, 0, 0]\n", "direction"),
+        ("press direction zero", "direction = [0, 0, 0]\n", "direction"),
+        ("press travel", "travel = nan\n", "travel"),
+    ] {
+        cases.push(style_case(name, &format!("{press}{extra}"), hair, &["line 7", culprit]));
+    }
+    // Astronomical work: refused with the figure, before running.
+    cases.push(style_case(
+        "50,000 stages",
+        &"[[stages]]\nkind = \"process\"\nduration = 0\n".repeat(50_000),
+        hair,
+        &["50000 stages"],
+    ));
+    cases.push(style_case(
+        "1e5 s at dt 1e-5",
+        "[settings]\ndt = 1e-5\n\n[[stages]]\nkind = \"process\"\nduration = 1e5\n",
+        hair,
+        &["simulation steps", "--max-steps"],
+    ));
+    // Text that is not a recipe.
+    cases.push(style_case("not UTF-8", "", hair, &["r.toml", "UTF-8"]));
+    cases.last_mut().unwrap().files[0].1 = b"[settings]\ndt = 0.1\n\xff\xfe\n".to_vec();
+    cases.push(style_case("binary recipe", "", hair, &["r.toml"]));
+    cases.last_mut().unwrap().files[0].1 = hair.to_vec();
+    cases.push(style_case("unknown key", &format!("{BASE}\n[bogus]\nx = 1\n"), hair, &["r.toml", "bogus"]));
+    cases.push(style_case("wrong type", "[settings]\ndt = \"fast\"\n", hair, &["r.toml", "line 2"]));
+    cases.push(style_case("no stages", "[settings]\ndt = 0.001\n", hair, &["r.toml", "stages"]));
+    cases
+}
+
+fn mesh_cases(hair: &[u8]) -> Vec<Case> {
+    let cube = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+    let recipe = |extra: &str| {
+        format!("[[obstacles]]\nshape = \"mesh\"\nname = \"m\"\npath = \"m.obj\"\n{extra}\n[[stages]]\nkind = \"process\"\nduration = 0.01\n")
+    };
+    let mesh_case = |name: &str, obj: &str, extra: &str, culprit: &[&str]| {
+        let mut c = style_case(name, &recipe(extra), hair, culprit);
+        c.files.push(("m.obj".into(), obj.as_bytes().to_vec()));
+        c
+    };
+    vec![
+        mesh_case("mesh vertex 1e30", &cube.replace("v 1 0 0", "v 1e30 0 0"), "", &["m.obj", "vertex 2"]),
+        mesh_case("mesh vertex nan", &cube.replace("v 1 0 0", "v nan 0 0"), "", &["m.obj", "vertex 2"]),
+        mesh_case("mesh resolution 1e-30", cube, "resolution = 1e-30", &["line 1", "resolution"]),
+        mesh_case("mesh resolution nan", cube, "resolution = nan", &["line 1", "resolution"]),
+        mesh_case("mesh band 1e30", cube, "band = 1e30", &["line 1", "band"]),
+        mesh_case("mesh band nan", cube, "band = nan", &["line 1", "band"]),
+        mesh_case("mesh face index", &cube.replace("f 2 3 4", "f 2 3 9"), "", &["m.obj"]),
+        mesh_case("mesh no faces", "v 0 0 0\n", "", &["m.obj", "no triangles"]),
+        mesh_case("mesh binary", "\u{0}\u{1}\u{2}garbage", "", &["m.obj"]),
+    ]
+}
+
+fn cli_cases(hair: &[u8]) -> Vec<Case> {
+    let g = || vec![("g.hair", hair.to_vec())];
+    let mut cases = Vec::new();
+    let simulate: &[(&[&str], &str)] = &[
+        (&["--seconds", "1e9"], "--seconds"),
+        (&["--seconds", "nan"], "--seconds"),
+        (&["--dt", "1e-30"], "simulation steps"),
+        (&["--dt", "nan"], "time step"),
+        (&["--settle", "--settle-seconds", "1e30"], "--settle-seconds"),
+        (&["--settle", "--settle-tolerance", "nan"], "--settle-tolerance"),
+        (&["--settle", "--settle-iterations", "0"], "--settle-iterations"),
+        (&["--youngs-modulus", "0"], "--youngs-modulus = 0"),
+        (&["--youngs-modulus", "nan"], "--youngs-modulus"),
+        (&["--gravity", "nan"], "--gravity"),
+        (&["--damping", "inf"], "--damping"),
+        (&["--influences", "nan,1,1,1"], "--influences hydrogen"),
+        (&["--influences", "1,1,1"], "--influences"),
+        (&["--iterations", "0"], "--iterations"),
+        (&["--frame", "nan"], "--frame"),
+        (&["--frame=-5"], "--frame"),
+        (&["--units", "0"], "--units"),
+    ];
+    for (flags, culprit) in simulate {
+        let mut args = vec!["simulate", "g.hair", "out.hair"];
+        args.extend(flags.iter());
+        cases.push(case(&format!("simulate {flags:?}"), g(), &args, 2, &[culprit]));
+    }
+    let render: &[(&[&str], &str)] = &[
+        (&["--exposure", "nan"], "--exposure"),
+        (&["--light-intensity=-1"], "--light-intensity"),
+        (&["--environment", "nan"], "--environment"),
+        (&["--environment=-1"], "--environment"),
+        (&["--color=-1,0,0"], "--color"),
+        (&["--color", "2,0,0"], "--color"),
+        (&["--light-dir", "0,0,0"], "--light-dir"),
+        (&["--light-dir", "nan,1,0"], "--light-dir"),
+        (&["--fov", "0"], "--fov"),
+        (&["--width-scale", "nan"], "--width-scale"),
+        (&["--spp", "0"], "--spp"),
+    ];
+    for (flags, culprit) in render {
+        let mut args = vec!["render", "g.hair", "-o", "out.png"];
+        args.extend(flags.iter());
+        cases.push(case(&format!("render {flags:?}"), g(), &args, 2, &[culprit]));
+    }
+    cases.push(case(
+        "generate 5e7 x 1e4",
+        vec![],
+        &["generate", "-o", "out.hair", "--strands", "50000000", "--vertices", "10000"],
+        2,
+        &["--strands 50000000", "--max-memory"],
+    ));
+    cases.push(case(
+        "max-memory",
+        g(),
+        &["convert", "g.hair", "out.usda", "--max-memory", "lots"],
+        2,
+        &["--max-memory"],
+    ));
+    cases.push(case("info --frame nan", g(), &["info", "g.hair", "--frame", "nan"], 2, &["--frame"]));
+    cases
+}
+
+/// Truncations, header bit flips and wrong types of each groom format, read by `convert`.
+fn file_cases(inputs: &Inputs) -> Vec<Case> {
+    let mut cases = Vec::new();
+    let convert = |name: String, file: &str, bytes: Vec<u8>, names: &[&str]| {
+        case(&name, vec![(file, bytes)], &["convert", file, "out.usda"], 2, names)
+    };
+    let hair = &inputs.hair;
+    for cut in [0, 3, 4, 40, 127, 128, 129, 200, hair.len() / 2, hair.len() - 1] {
+        cases.push(convert(format!(".hair cut at {cut}"), "in.hair", hair[..cut].to_vec(), &["in.hair"]));
+    }
+    let with_u32 = |offset: usize, value: u32| {
+        let mut bytes = hair.clone();
+        bytes[offset..offset + 4].copy_from_slice(&value.to_le_bytes());
+        bytes
+    };
+    for (name, bytes) in [
+        ("strands 0xffffffff", with_u32(4, u32::MAX)),
+        ("strands 0", with_u32(4, 0)),
+        ("points 0xffffffff", with_u32(8, u32::MAX)),
+        ("points 0", with_u32(8, 0)),
+        ("unknown flags", with_u32(12, 0xff00)),
+        ("no points flag", with_u32(12, 0)),
+        ("bad signature", with_u32(0, 0x52494148 ^ 1)),
+    ] {
+        cases.push(convert(format!(".hair {name}"), "in.hair", bytes, &["in.hair"]));
+    }
+    let mut nan_point = hair.clone();
+    let data = nan_point.len() - 6 * 6 * 12;
+    let _ = data;
+    let first_point =
+        128 + if u32::from_le_bytes(hair[12..16].try_into().unwrap()) & 1 != 0 { 12 } else { 0 };
+    nan_point[first_point..first_point + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    cases.push(convert(".hair NaN point".into(), "in.hair", nan_point, &["in.hair", "strand 0"]));
+    cases.push(convert(".hair is text".into(), "in.hair", b"HAIR but not really".to_vec(), &["in.hair"]));
+
+    let usda = &inputs.usda;
+    for cut in [9, usda.len() / 4, usda.len() / 2, usda.len() * 3 / 4, usda.len() - 3] {
+        cases.push(convert(format!(".usda cut at {cut}"), "in.usda", usda[..cut].to_vec(), &["in.usda"]));
+    }
+    let text = String::from_utf8(usda.clone()).unwrap();
+    for (name, bad) in [
+        ("points nan", text.replacen("points = [(", "points = [(nan, ", 1)),
+        ("counts negative", text.replacen("curveVertexCounts = [", "curveVertexCounts = [-6, ", 1)),
+        ("deep prims", format!("#usda 1.0\n{}", "def Xform \"a\" {\n".repeat(20_000))),
+        (
+            "deep closed prims",
+            format!("#usda 1.0\n{}{}", "def \"a\" {\n".repeat(20_000), "}\n".repeat(20_000)),
+        ),
+        ("deep values", format!("#usda 1.0\ndef \"a\" (\n x = {}\n)\n{{}}\n", "[".repeat(20_000))),
+        ("unclosed", "#usda 1.0\ndef BasisCurves \"c\" {\n".to_string()),
+        ("garbage", "#usda 1.0\n@@@\n".to_string()),
+    ] {
+        cases.push(convert(format!(".usda {name}"), "in.usda", bad.into_bytes(), &["in.usda", "line"]));
+    }
+    cases.push(convert(".usda not UTF-8".into(), "in.usda", b"#usda 1.0\n\xff\xfe".to_vec(), &["in.usda"]));
+
+    let abc = &inputs.abc;
+    for cut in [0, 8, 16, 32, abc.len() / 4, abc.len() / 2, abc.len() - 8, abc.len() - 1] {
+        cases.push(convert(format!(".abc cut at {cut}"), "in.abc", abc[..cut].to_vec(), &["in.abc"]));
+    }
+    for (name, offset) in [("magic", 0usize), ("version", 5), ("root offset", 8), ("root offset high", 15)] {
+        let mut bytes = abc.clone();
+        bytes[offset] ^= 0xff;
+        cases.push(convert(format!(".abc flip {name}"), "in.abc", bytes, &["in.abc"]));
+    }
+    cases.push(case(
+        ".abc frame beyond",
+        vec![("in.abc", abc.clone())],
+        &["convert", "in.abc", "out.usda", "--frame", "7"],
+        2,
+        &["in.abc"],
+    ));
+    cases.push(case(
+        ".usda frame outside",
+        vec![("in.usda", animated_usda().into_bytes())],
+        &["convert", "in.usda", "out.hair", "--frame", "0"],
+        2,
+        &["in.usda", "time 0"],
+    ));
+    cases
+}
+
+/// A two-sample animated curves layer (time codes 1 and 2).
+fn animated_usda() -> String {
+    "#usda 1.0\ndef BasisCurves \"c\" {\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2]\n  \
+     point3f[] points.timeSamples = {\n    1: [(0, 0, 0), (0, 1, 0)],\n    2: [(0, 0, 0), (0, 2, 0)],\n  }\n}\n"
+        .to_string()
+}
+
+fn manifest_cases(hair: &[u8]) -> Vec<Case> {
+    let files = |manifest: &str| {
+        vec![
+            ("m.toml", manifest.as_bytes().to_vec()),
+            ("r.toml", BASE.as_bytes().to_vec()),
+            ("g.hair", hair.to_vec()),
+        ]
+    };
+    let head = "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = [\"out/{name}.usda\"]\n\n";
+    let mut cases = Vec::new();
+    for name in ["..", "../../escape", "a/../../b", "a/b", ".", ""] {
+        let manifest = format!("{head}[[tasks]]\nname = \"{name}\"\n");
+        cases.push(case(
+            &format!("task name {name:?}"),
+            files(&manifest),
+            &["farm", "status", "m.toml"],
+            2,
+            &["m.toml", "line 6"],
+        ));
+        let wedge = format!(
+            "{head}[[wedges]]\nname = \"{name}\"\nparameters = {{ \"settings.damping\" = [1.0, 2.0] }}\n"
+        );
+        cases.push(case(
+            &format!("wedge name {name:?}"),
+            files(&wedge),
+            &["farm", "status", "m.toml"],
+            2,
+            &["m.toml", "line 6"],
+        ));
+    }
+    cases.push(case(
+        "output climbs out",
+        files("[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = [\"../{name}.usda\"]\n\n[[tasks]]\nname = \"t\"\n"),
+        &["farm", "status", "m.toml"],
+        2,
+        &["m.toml", "'..'"],
+    ));
+    let values: Vec<String> = (0..16).map(|v| format!("{v}.0")).collect();
+    let parameters: Vec<String> =
+        (0..16).map(|k| format!("\"stages.{k}.duration\" = [{}]", values.join(", "))).collect();
+    cases.push(case(
+        "wedge 2^64",
+        files(&format!("{head}[[wedges]]\nname = \"w\"\nparameters = {{ {} }}\n", parameters.join(", "))),
+        &["farm", "status", "m.toml"],
+        2,
+        &["m.toml", "18446744073709551616 tasks"],
+    ));
+    cases.push(case(
+        "manifest not UTF-8",
+        vec![("m.toml", b"[defaults]\n\xff".to_vec())],
+        &["batch", "m.toml"],
+        2,
+        &["m.toml", "UTF-8"],
+    ));
+    cases.push(case(
+        "manifest unknown key",
+        files("bogus = 1\n"),
+        &["batch", "m.toml"],
+        2,
+        &["m.toml", "bogus"],
+    ));
+    cases.push(case("manifest no tasks", files(head), &["batch", "m.toml"], 2, &["m.toml"]));
+    cases
+}
+
+/// Directories given as files: refused up front as bad input.
+fn directory_cases(hair: &[u8]) -> Vec<Case> {
+    let g = || vec![("g.hair", hair.to_vec()), ("r.toml", BASE.as_bytes().to_vec())];
+    vec![
+        case("groom is a directory", g(), &["convert", ".", "out.usda"], 2, &["directory"]),
+        case(
+            "recipe is a directory",
+            g(),
+            &["style", ".", "--groom", "g.hair", "-o", "out.usda"],
+            2,
+            &["directory"],
+        ),
+        case("manifest is a directory", g(), &["batch", "."], 2, &["directory"]),
+        case("groom is /dev/null", g(), &["convert", "/dev/null", "out.usda"], 2, &["/dev/null", "device"]),
+    ]
+}
+
+/// Runs one case in a fresh folder; returns a failure description, if any.
+fn run(case: &Case) -> Option<String> {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in &case.files {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    let output = Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(&case.args)
+        .current_dir(dir.path())
+        .output()
+        .expect("the coif binary runs");
+    let err = stderr(&output);
+    let mut problems = Vec::new();
+    if output.status.code() != Some(case.code) {
+        problems.push(format!("exit {:?}, expected {}", output.status.code(), case.code));
+    }
+    if err.contains("panicked") {
+        problems.push("panicked".into());
+    }
+    for name in &case.names {
+        if !err.contains(name.as_str()) {
+            problems.push(format!("stderr does not name {name:?}"));
+        }
+    }
+    let mut expected: Vec<String> = case.files.iter().map(|(n, _)| n.clone()).collect();
+    expected.sort();
+    let left = listing(dir.path());
+    if left != expected {
+        problems.push(format!("left behind: {left:?}"));
+    }
+    (!problems.is_empty()).then(|| format!("{}: {} — stderr: {}", case.name, problems.join("; "), err.trim()))
+}
+
+fn listing(dir: &Path) -> Vec<String> {
+    common::dir_listing(dir)
+}
+
+#[test]
+fn every_bad_input_exits_2_names_its_culprit_and_leaves_nothing() {
+    let inputs = inputs();
+    let mut cases = recipe_cases(&inputs.hair);
+    cases.extend(mesh_cases(&inputs.hair));
+    cases.extend(cli_cases(&inputs.hair));
+    cases.extend(file_cases(&inputs));
+    cases.extend(manifest_cases(&inputs.hair));
+    cases.extend(directory_cases(&inputs.hair));
+    assert!(cases.len() >= 150, "only {} cases", cases.len());
+
+    let next = Mutex::new(cases.iter());
+    let failures = Mutex::new(Vec::new());
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get()).clamp(2, 8);
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let Some(case) = next.lock().unwrap().next() else { break };
+                if let Some(failure) = run(case) {
+                    failures.lock().unwrap().push(failure);
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap();
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases failed:\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
+/// A FIFO given as groom, recipe, manifest or mesh is refused at once instead of blocking.
+#[cfg(unix)]
+#[test]
+fn fifos_are_refused_without_blocking() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs");
+    assert!(made.success());
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(
+        &recipe,
+        format!("[[obstacles]]\nshape = \"mesh\"\nname = \"m\"\npath = \"pipe\"\n\n{BASE}"),
+    )
+    .unwrap();
+    let hair = inputs().hair;
+    let groom = dir.path().join("g.hair");
+    std::fs::write(&groom, hair).unwrap();
+    let (f, r, g) = (path_str(&fifo), path_str(&recipe), path_str(&groom));
+    for args in [
+        vec!["info", f],
+        vec!["style", f, "--groom", g, "-o", "o.usda"],
+        vec!["batch", f],
+        vec!["style", r, "--groom", g, "-o", "o.usda"],
+    ] {
+        let output = coif(&args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {}", stderr(&output));
+        assert!(stderr(&output).contains("FIFO"), "{args:?}: {}", stderr(&output));
+    }
+}
+
+/// SIGTERM and SIGINT during a write remove the temporary file and exit 143 and 130.
+#[cfg(unix)]
+#[test]
+fn signals_remove_the_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("big.hair");
+    let made = coif(&["generate", "-o", path_str(&groom), "--strands", "100000", "--vertices", "32"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    for (signal, code) in [("TERM", 143), ("INT", 130)] {
+        let out = dir.path().join("big.usda");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(["convert", path_str(&groom), path_str(&out)])
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        // Wait until the temporary output exists, then interrupt.
+        let temporary = || listing(dir.path()).into_iter().any(|n| n.starts_with(".big.usda."));
+        let start = std::time::Instant::now();
+        while !temporary() && start.elapsed().as_secs() < 60 {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        assert!(temporary(), "the temporary output never appeared");
+        let killed =
+            Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status().unwrap();
+        assert!(killed.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(code), "SIG{signal}");
+        assert_eq!(listing(dir.path()), vec!["big.hair".to_string()], "SIG{signal}");
+    }
+}

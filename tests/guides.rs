@@ -1,0 +1,231 @@
+//! Production scale through guides: a generated full head whose guides are permed on the
+//! full-head rods and whose children are interpolated from them. The children must curl like
+//! their guides, keep their roots, stay out of the head and not collapse onto their guides.
+use std::path::Path;
+use std::sync::OnceLock;
+
+use coif::analysis::curl_radius;
+use coif::generate::{generate, GenerateParams};
+use coif::groom::{AttributeRate, Groom};
+use coif::guides::{CLOSEST_GUIDES, GUIDE_WEIGHTS};
+use coif::head::Head;
+use coif::style::{recipe, style, Recipe, StyleOptions, Styled};
+
+mod common;
+
+const STRANDS: usize = 3000;
+const GUIDES: usize = 150;
+
+fn unstyled() -> &'static Groom {
+    static GROOM: OnceLock<Groom> = OnceLock::new();
+    GROOM.get_or_init(|| {
+        generate(&GenerateParams {
+            strands: STRANDS,
+            vertices_per_strand: 32,
+            length: 0.24,
+            seed: 21,
+            ..GenerateParams::default()
+        })
+        .unwrap()
+    })
+}
+
+/// The production perm preset with guides.
+fn perm() -> Recipe {
+    let text = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
+    let text = format!("{text}\n[guides]\ncount = {GUIDES}\n");
+    recipe::parse(&text, Path::new("grooms/recipes/perm_full_head.toml")).unwrap()
+}
+
+fn permed() -> &'static Styled {
+    static STYLED: OnceLock<Styled> = OnceLock::new();
+    STYLED.get_or_init(|| style(unstyled(), &perm(), &StyleOptions::default()).unwrap())
+}
+
+fn flags(groom: &Groom) -> &[bool] {
+    groom.guides.as_deref().expect("the output flags guides")
+}
+
+fn median(mut values: Vec<f32>) -> f32 {
+    values.sort_by(f32::total_cmp);
+    values[values.len() / 2]
+}
+
+/// Curl radius of the part of a strand the rods wound (from 40 % of its length to the tip).
+fn curl(groom: &Groom, strand: usize) -> Option<f32> {
+    let p = groom.strand_points(strand);
+    curl_radius(&p[p.len() * 2 / 5..])
+}
+
+#[test]
+fn children_curl_like_their_guides_and_keep_their_roots() {
+    let styled = permed();
+    let groom = &styled.groom;
+    let flags = flags(groom);
+    assert_eq!(styled.report.guides, Some(GUIDES));
+    assert_eq!(flags.iter().filter(|&&g| g).count(), GUIDES);
+    assert_eq!(groom.strand_count(), STRANDS);
+    let radii = |guide: bool| -> Vec<f32> {
+        (0..STRANDS).filter(|&s| flags[s] == guide).filter_map(|s| curl(groom, s)).collect()
+    };
+    let (guides, children) = (median(radii(true)), median(radii(false)));
+    eprintln!("median curl radius: guides {:.2} cm, children {:.2} cm", guides * 100.0, children * 100.0);
+    // The rods (1 cm) leave curls of about rod radius / set fraction.
+    assert!(guides > 0.008 && guides < 0.03, "guides did not curl: {guides}");
+    assert!((children / guides - 1.0).abs() < 0.05, "children {children} vs guides {guides}");
+    let mut stretch = 0.0f32;
+    for (s, &guide) in flags.iter().enumerate() {
+        assert_eq!(groom.strand_points(s)[0], unstyled().strand_points(s)[0], "strand {s}'s root moved");
+        if !guide {
+            stretch = stretch.max((groom.strand_length(s) / unstyled().strand_length(s) - 1.0).abs());
+        }
+    }
+    // Interpolation keeps every edge's length; only pushing vertices out of the head changes it.
+    eprintln!("largest change of a child's length: {:.2} %", stretch * 100.0);
+    assert!(stretch < 0.03, "a child's length changed by {stretch}");
+}
+
+#[test]
+fn no_child_vertex_is_inside_the_head() {
+    let groom = &permed().groom;
+    let head = Head::default();
+    let flags = flags(groom);
+    let inside: Vec<(usize, f32)> = (0..STRANDS)
+        .filter(|&s| !flags[s])
+        // Roots grow from the skin itself (implicit value 1 within rounding) and do not move.
+        .flat_map(|s| groom.strand_points(s)[1..].iter().map(move |p| (s, head.implicit(*p))))
+        .filter(|&(_, v)| v < 1.0)
+        .collect();
+    assert!(inside.is_empty(), "{} child vertices inside the head, e.g. {:?}", inside.len(), &inside[..1]);
+}
+
+#[test]
+fn children_of_one_guide_do_not_collapse_onto_it() {
+    let styled = &permed().groom;
+    let closest = styled.attribute(CLOSEST_GUIDES).unwrap();
+    let flags = flags(styled);
+    let children: Vec<usize> = (0..STRANDS).filter(|&s| !flags[s]).collect();
+    // Each child and its nearest (by root) fellow child of the same first guide.
+    let root = |s: usize| unstyled().strand_points(s)[0];
+    let mid = |g: &Groom, s: usize| g.strand_points(s)[g.strand_range(s).len() / 2];
+    let (mut before, mut after, mut pairs) = (0.0, 0.0, 0);
+    for &c in &children {
+        let guide = closest.data[c * 3];
+        let neighbour = children
+            .iter()
+            .copied()
+            .filter(|&o| o != c && closest.data[o * 3] == guide)
+            .min_by(|&a, &b| root(a).distance(root(c)).total_cmp(&root(b).distance(root(c))));
+        if let Some(n) = neighbour {
+            before += mid(unstyled(), c).distance(mid(unstyled(), n));
+            after += mid(styled, c).distance(mid(styled, n));
+            pairs += 1;
+        }
+    }
+    let (before, after) = (before / pairs as f32, after / pairs as f32);
+    eprintln!("neighbouring children at mid-length: {before:.4} m apart unstyled, {after:.4} m styled");
+    assert!(pairs > children.len() / 2);
+    assert!(after >= 0.5 * before, "children collapsed: {after} vs {before} before styling");
+}
+
+#[test]
+fn children_carry_rest_shape_bonds_wetness_and_bindings() {
+    let groom = &permed().groom;
+    groom.validate().unwrap();
+    for name in ["rest", "rest_darboux", "bond_hydrogen", "bond_disulfide", "wetness"] {
+        let a = groom.attribute(name).unwrap_or_else(|| panic!("no {name}"));
+        assert_eq!(a.rate, AttributeRate::Vertex);
+        assert!(a.data.iter().all(|v| v.is_finite()), "{name}");
+    }
+    // The perm set 67 % of the disulfide bonds on the rods, in children as in guides: rates are
+    // carried, not left at the unstyled 1.
+    let flags = flags(groom);
+    let bonds = groom.attribute("bond_disulfide").unwrap();
+    let mean = |guide: bool| {
+        let v: Vec<f32> = (0..STRANDS)
+            .filter(|&s| flags[s] == guide)
+            .flat_map(|s| bonds.data[groom.strand_range(s)].iter().copied())
+            .collect();
+        v.iter().sum::<f32>() / v.len() as f32
+    };
+    assert!((mean(true) - mean(false)).abs() < 0.02, "{} vs {}", mean(true), mean(false));
+    let weights = groom.attribute(GUIDE_WEIGHTS).unwrap();
+    let closest = groom.attribute(CLOSEST_GUIDES).unwrap();
+    for s in 0..STRANDS {
+        let w = &weights.data[s * 3..s * 3 + 3];
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-4, "strand {s}: {w:?}");
+        assert!(closest.data[s * 3..s * 3 + 3].iter().all(|&g| g >= 0.0 && (g as usize) < GUIDES));
+    }
+}
+
+#[test]
+fn the_same_at_any_thread_count() {
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let styled = one.install(|| style(unstyled(), &perm(), &StyleOptions::default()).unwrap());
+    assert!(styled.groom == permed().groom, "1 thread and the default pool differ");
+}
+
+#[test]
+fn a_files_guides_are_simulated_and_its_weights_used_or_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("permed.usda");
+    coif::io::write_groom(&path, &permed().groom).unwrap();
+    let file = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
+    assert_eq!(file.guides, permed().groom.guides);
+    assert_eq!(file.attribute(CLOSEST_GUIDES), permed().groom.attribute(CLOSEST_GUIDES));
+    assert_eq!(file.attribute(GUIDE_WEIGHTS), permed().groom.attribute(GUIDE_WEIGHTS));
+
+    // No [guides] in the recipe: the file's guides are simulated, its bindings kept.
+    let short = recipe::parse(
+        "[[obstacles]]\nname = \"head\"\nshape = \"head\"\n[[stages]]\nkind = \"process\"\nduration = 0.02\n",
+        Path::new("short.toml"),
+    )
+    .unwrap();
+    let again = style(&file, &short, &StyleOptions::default()).unwrap();
+    assert_eq!(again.report.guides, Some(GUIDES));
+    assert_eq!(again.groom.attribute(GUIDE_WEIGHTS), file.attribute(GUIDE_WEIGHTS));
+
+    let child = (0..STRANDS).find(|&s| !file.guides.as_ref().unwrap()[s]).unwrap();
+    let mut bad = file.clone();
+    bad.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3] += 0.5;
+    let err = style(&bad, &short, &StyleOptions::default()).err().unwrap();
+    assert_eq!(err.exit_code(), 2);
+    assert!(err.to_string().contains(&format!("strand {child}")), "{err}");
+    let mut bad = file.clone();
+    bad.attribute_mut(CLOSEST_GUIDES).unwrap().data[child * 3] = GUIDES as f32;
+    let err = style(&bad, &short, &StyleOptions::default()).err().unwrap();
+    assert!(
+        err.to_string().contains(&format!("strand {child}")) && err.to_string().contains("150 guides"),
+        "{err}"
+    );
+}
+
+#[test]
+fn impossible_guide_counts_and_reach_exit_2_with_the_numbers() {
+    let groom = unstyled();
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("head.hair");
+    coif::io::write_groom(&input, groom).unwrap();
+    let out = dir.path().join("out.usda");
+    for (count, expected) in [("0", "0 guides"), ("3001", "3001 guides, but the groom has 3000 strands")] {
+        let output = common::coif(&[
+            "style",
+            "grooms/recipes/perm_full_head.toml",
+            "--groom",
+            common::path_str(&input),
+            "-o",
+            common::path_str(&out),
+            "--guides",
+            count,
+        ]);
+        assert_eq!(output.status.code(), Some(2));
+        assert!(common::stderr(&output).contains(expected), "{}", common::stderr(&output));
+    }
+    assert!(!out.exists());
+    let text = "[guides]\ncount = 10\nreach = 0.001\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
+    let err = style(groom, &recipe::parse(text, Path::new("r.toml")).unwrap(), &StyleOptions::default())
+        .err()
+        .unwrap();
+    assert_eq!(err.exit_code(), 2);
+    assert!(err.to_string().contains("beyond the reach of 0.0010 m (10 guides for 2990 children)"), "{err}");
+}

@@ -1,0 +1,43 @@
+//! Collisions at every step: no vertex of any preset goes more than 1 mm inside an active obstacle
+//! or rod after any step of any stage — including while strands are wound onto rods around the
+//! head (`wrap`: before, every strand of perm scene 3 went through the head, up to 76 mm deep) and
+//! wound past a rod's end (water set: 18.5 mm into the curlers' end caps).
+use std::path::Path;
+
+use coif::style::{recipe, style, StyleOptions};
+use coif::Groom;
+
+/// Every `step`-th strand of a groom: the presets' recipes on a few strands.
+fn thin(groom: &Groom, step: usize) -> Groom {
+    let strands: Vec<Vec<glam::Vec3>> =
+        (0..groom.strand_count()).step_by(step).map(|s| groom.strand_points(s).to_vec()).collect();
+    Groom::from_strands(&strands, groom.widths[0])
+}
+
+#[test]
+fn no_vertex_goes_inside_a_collider_at_any_step_of_any_preset() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut failures = Vec::new();
+    for (preset, groom, step) in [
+        ("perm_scene3", "seed_100x48cm.hair", 5),
+        ("water_set", "seed_200x24cm.hair", 10),
+        ("bedhead_scene1", "seed_200x24cm.hair", 10),
+        ("blowdry_scene2", "seed_200x24cm.hair", 10),
+    ] {
+        let recipe = recipe::load(&root.join(format!("grooms/recipes/{preset}.toml"))).unwrap();
+        let input =
+            coif::io::read_groom(&root.join("grooms").join(groom), &Default::default()).unwrap().groom;
+        let styled = style(&thin(&input, step), &recipe, &StyleOptions::default()).unwrap();
+        for stage in &styled.report.stages {
+            eprintln!("{preset} {}: deepest {:.3} mm", stage.kind, stage.max_penetration * 1e3);
+            if stage.max_penetration > 1e-3 {
+                failures.push(format!(
+                    "{preset} {}: {:.2} mm inside",
+                    stage.kind,
+                    stage.max_penetration * 1e3
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
