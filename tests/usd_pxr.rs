@@ -184,7 +184,7 @@ fn animation_writer_rejects_changed_topology_no_frames_and_bad_times() {
     assert!(matches!(write(&changed, times), Err(coif::Error::Usage(_))));
     assert!(matches!(write(&[], times), Err(coif::Error::Usage(_))));
     let backwards = TimeCodes { start: 2.0, end: 1.0, per_second: 24.0 };
-    assert!(matches!(write(&[groom.points.clone()], backwards), Err(coif::Error::Usage(_))));
+    assert!(matches!(write(std::slice::from_ref(&groom.points), backwards), Err(coif::Error::Usage(_))));
     write(&[groom.points.clone(), groom.points.clone()], times).unwrap();
 }
 

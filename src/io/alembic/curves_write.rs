@@ -176,8 +176,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
                 name,
                 part,
                 (*group, several),
-                options.unreal,
-                animated && options.velocities,
+                (options.unreal, animated && options.velocities),
                 time_sampling,
             );
             let strands = several.then(|| first.group_strands(*group));
@@ -376,8 +375,7 @@ fn add_curves<W: Write + Seek>(
     name: &str,
     groom: &Groom,
     (group, several_groups): (usize, bool),
-    unreal: bool,
-    with_velocities: bool,
+    (unreal, with_velocities): (bool, bool),
     ts: u32,
 ) -> CurveProperties {
     let object_metadata = MetaData::new()

@@ -328,7 +328,7 @@ fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKi
         _ => AttributeKind::Float,
     };
     let written_as_float = super::writer::usd_type(AttributeKind::Float, name, components);
-    if written_as_float.trim_end_matches("[]") == type_name.replace('h', "f").replace('d', "f") {
+    if written_as_float.trim_end_matches("[]") == type_name {
         AttributeKind::Float
     } else {
         kind
