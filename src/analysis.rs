@@ -93,6 +93,8 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
         root_uvs: groom.root_uvs.clone(),
         guides: groom.guides.clone(),
         basis: groom.basis,
+        groups: groom.groups.clone(),
+        group_ids: groom.group_ids.clone(),
         ..Default::default()
     };
     let vertex_attributes: Vec<&Attribute> =

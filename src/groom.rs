@@ -6,6 +6,8 @@ use std::ops::Range;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+pub use crate::groups::{CurveGroup, CurveWrap};
+
 /// Canonical names of the attributes coif itself reads or writes. Format modules map them to
 /// their own conventions (`displayColor` in USD, `groom_color` in Alembic…).
 pub mod attr {
@@ -34,6 +36,26 @@ pub enum AttributeRate {
     Strand,
 }
 
+/// What an attribute's numbers are, when a file said more than "floats" (a USD value type or
+/// role), so writers give the same type back and conversions move directions with the points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AttributeKind {
+    /// Plain numbers (the writer picks the type it always has for the name).
+    #[default]
+    Float,
+    Int,
+    Bool,
+    /// Positions: transformed like the points.
+    Point,
+    /// Unit directions: rotated with the points and kept unit length.
+    Normal,
+    /// Directions or velocities: rotated and scaled with the points.
+    Vector,
+    Color,
+    TexCoord,
+}
+
 /// A named float attribute with 1–4 components per element (bond rates, wetness, rest positions…).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attribute {
@@ -41,11 +63,17 @@ pub struct Attribute {
     pub rate: AttributeRate,
     pub components: usize,
     pub data: Vec<f32>,
+    pub kind: AttributeKind,
 }
 
 impl Attribute {
     pub fn new(name: impl Into<String>, rate: AttributeRate, components: usize, data: Vec<f32>) -> Self {
-        Attribute { name: name.into(), rate, components, data }
+        Attribute { name: name.into(), rate, components, data, kind: AttributeKind::Float }
+    }
+
+    pub fn with_kind(mut self, kind: AttributeKind) -> Self {
+        self.kind = kind;
+        self
     }
 
     /// Number of elements (vertices or strands) the data covers.
@@ -94,7 +122,13 @@ pub struct Groom {
     pub root_uvs: Option<Vec<[f32; 2]>>,
     /// Per-strand guide flag, when the groom distinguishes guides from rendered strands.
     pub guides: Option<Vec<bool>>,
+    /// The basis of a groom without a group table; with one, the first group's (each group
+    /// has its own, see [`crate::groups`]).
     pub basis: CurveBasis,
+    /// Named curve groups (one per curve prim / curves object); empty: one unnamed group.
+    pub groups: Vec<CurveGroup>,
+    /// Per-strand index into `groups`; empty when `groups` is.
+    pub group_ids: Vec<u32>,
     /// Named attributes, sorted by name (use [`Groom::set_attribute`] to add one).
     pub attributes: Vec<Attribute>,
 }
@@ -194,6 +228,7 @@ impl Groom {
         if let Some(guides) = &self.guides {
             check_len("guide flags", strands, guides.len())?;
         }
+        crate::groups::validate(self)?;
         for strand in 0..strands {
             let range = self.strand_range(strand);
             let points = &self.points[range.clone()];

@@ -48,6 +48,16 @@ pub struct GroomInfo {
     pub root_uvs: bool,
     pub guides: usize,
     pub attributes: Vec<AttributeInfo>,
+    /// Named curve groups (empty for a groom of one unnamed group).
+    pub groups: Vec<GroupInfo>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GroupInfo {
+    pub name: String,
+    pub basis: CurveBasis,
+    pub wrap: crate::groom::CurveWrap,
+    pub strands: usize,
 }
 
 impl GroomInfo {
@@ -66,6 +76,17 @@ impl GroomInfo {
                 .attributes
                 .iter()
                 .map(|a| AttributeInfo { name: a.name.clone(), rate: a.rate, components: a.components })
+                .collect(),
+            groups: groom
+                .groups
+                .iter()
+                .enumerate()
+                .map(|(g, group)| GroupInfo {
+                    name: group.name.clone(),
+                    basis: group.basis,
+                    wrap: group.wrap,
+                    strands: groom.group_ids.iter().filter(|&&id| id as usize == g).count(),
+                })
                 .collect(),
         }
     }
@@ -95,6 +116,9 @@ impl std::fmt::Display for GroomInfo {
         writeln!(f, "root UVs     {}", if self.root_uvs { "yes" } else { "no" })?;
         if self.guides > 0 {
             writeln!(f, "guides       {}", self.guides)?;
+        }
+        for g in &self.groups {
+            writeln!(f, "group        {} ({} strands, {:?} {:?})", g.name, g.strands, g.basis, g.wrap)?;
         }
         for a in &self.attributes {
             writeln!(

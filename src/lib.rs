@@ -10,6 +10,7 @@ pub mod embree;
 pub mod error;
 pub mod generate;
 pub mod groom;
+pub mod groups;
 pub mod guides;
 pub mod head;
 pub mod info;

@@ -7,7 +7,7 @@ use common::usd::*;
 use common::*;
 
 use coif::groom::{AttributeRate, CurveBasis, Groom};
-use coif::io::usda::{AnimationWriter, TimeCodes};
+use coif::io::usda::{write_animated, TimeCodes};
 use glam::Vec3;
 use serde_json::Value;
 
@@ -133,11 +133,8 @@ fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
     };
     let times = TimeCodes { start: 1.0, end: 3.0, per_second: 24.0 };
     coif::io::atomic::write_atomically(&path, |w| {
-        let mut writer = AnimationWriter::begin(w, &groom, times, &path)?;
-        for t in [1.0, 2.0, 3.0] {
-            writer.frame(t, &frame(t))?;
-        }
-        writer.finish().map(|_| ())
+        let frames: Vec<Vec<Vec3>> = [1.0, 2.0, 3.0].map(frame).to_vec();
+        write_animated(&groom, &frames, times, w, &path)
     })
     .unwrap();
 
@@ -165,11 +162,8 @@ fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
     // The same animation as a crate file, through usd-core.
     let binary = dir.path().join("anim.usdc");
     coif::io::usd_interop::write_usd(&binary, |w| {
-        let mut writer = AnimationWriter::begin(w, &groom, times, &binary)?;
-        for t in [1.0, 2.0, 3.0] {
-            writer.frame(t, &frame(t))?;
-        }
-        writer.finish().map(|_| ())
+        let frames: Vec<Vec<Vec3>> = [1.0, 2.0, 3.0].map(frame).to_vec();
+        write_animated(&groom, &frames, times, w, &binary)
     })
     .unwrap();
     assert_eq!(
@@ -181,14 +175,17 @@ fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
 }
 
 #[test]
-fn animation_writer_rejects_changed_topology_and_backwards_time() {
+fn animation_writer_rejects_changed_topology_no_frames_and_bad_times() {
     let groom = rich_groom(CurveBasis::Linear);
     let times = TimeCodes { start: 1.0, end: 2.0, per_second: 24.0 };
     let path = std::path::Path::new("unused.usda");
-    let mut writer = AnimationWriter::begin(Vec::new(), &groom, times, path).unwrap();
-    assert!(matches!(writer.frame(1.0, &groom.points[1..]), Err(coif::Error::Usage(_))));
-    writer.frame(1.0, &groom.points).unwrap();
-    assert!(matches!(writer.frame(1.0, &groom.points), Err(coif::Error::Usage(_))));
+    let write = |frames: &[Vec<Vec3>], times| write_animated(&groom, frames, times, &mut Vec::new(), path);
+    let changed = [groom.points.clone(), groom.points[1..].to_vec()];
+    assert!(matches!(write(&changed, times), Err(coif::Error::Usage(_))));
+    assert!(matches!(write(&[], times), Err(coif::Error::Usage(_))));
+    let backwards = TimeCodes { start: 2.0, end: 1.0, per_second: 24.0 };
+    assert!(matches!(write(std::slice::from_ref(&groom.points), backwards), Err(coif::Error::Usage(_))));
+    write(&[groom.points.clone(), groom.points.clone()], times).unwrap();
 }
 
 #[test]

@@ -251,6 +251,10 @@ pub(crate) struct StyleArgs {
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
+    /// Style only this curve group (a prim or object path, or its last name); repeatable. The
+    /// other groups pass through untouched.
+    #[arg(long = "group", value_name = "NAME")]
+    pub(crate) groups: Vec<String>,
     /// Simulate this many guides (spread evenly over the scalp) and interpolate the other
     /// strands from them; overrides the recipe's `[guides]`.
     #[arg(long, value_name = "N")]

@@ -68,24 +68,24 @@ fn run_style(args: StyleArgs) -> Result<()> {
         None => None,
     };
     let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
-    let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
-    let warnings = io::write_animated(
-        &args.output,
-        &styled.groom,
-        &styled.frames,
-        frames_per_second,
-        &io::ExportOptions::default(),
-    )?;
+    let (groom, frames, report) = if args.groups.is_empty() {
+        let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
+        (styled.groom, styled.frames, styled.report)
+    } else {
+        style_groups(&loaded.groom, &args.groups, &recipe, &options)?
+    };
+    let warnings =
+        io::write_animated(&args.output, &groom, &frames, frames_per_second, &io::ExportOptions::default())?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
-    if let Some(settle) = styled.report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
+    if let Some(settle) = report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
         eprintln!("coif: warning: {}", settle_failure(&settle));
     }
     if args.json {
-        print_json(json!({ "output": args.output, "report": styled.report, "warnings": warnings }));
+        print_json(json!({ "output": args.output, "report": report, "warnings": warnings }));
     } else {
-        for stage in &styled.report.stages {
+        for stage in &report.stages {
             let curl = stage.curl_radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
             let b = &stage.bond_rates;
             eprintln!(
@@ -105,6 +105,26 @@ fn run_style(args: StyleArgs) -> Result<()> {
         eprintln!("wrote {}", args.output.display());
     }
     Ok(())
+}
+
+/// Styles the groups named by `--group` and puts them back among the untouched ones (frames
+/// too: the other groups stand still in every frame).
+fn style_groups(
+    groom: &coif::Groom,
+    names: &[String],
+    recipe: &coif::style::recipe::Recipe,
+    options: &coif::style::StyleOptions,
+) -> Result<(coif::Groom, Vec<Vec<glam::Vec3>>, coif::style::StyleReport)> {
+    let (selected, selection) = groom.select_groups(names).map_err(Error::Usage)?;
+    let styled = coif::style::style(&selected, recipe, options)?;
+    let merged = groom.merge_back(&selection, &styled.groom)?;
+    let mut frames = Vec::with_capacity(styled.frames.len());
+    let mut frame = styled.groom.clone();
+    for points in styled.frames {
+        frame.points = points;
+        frames.push(groom.merge_back(&selection, &frame)?.points);
+    }
+    Ok((merged, frames, styled.report))
 }
 
 fn run_simulate(args: SimulateArgs) -> Result<()> {

@@ -249,12 +249,13 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
             atomic::write_atomically(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))?;
             Ok(usd_warnings(path, groom))
         }
-        Format::Usdc => {
+        // The native crate writer writes one curve prim; grooms with groups go through usd-core.
+        Format::Usdc if groom.groups.is_empty() => {
             usda::check_writable(groom, path)?;
             usdc::write(path, groom)?;
             Ok(usd_warnings(path, groom))
         }
-        Format::Usdz => {
+        Format::Usdc | Format::Usdz => {
             usda::check_writable(groom, path)?;
             usd_interop::write(path, groom)?;
             Ok(usd_warnings(path, groom))
@@ -298,17 +299,11 @@ pub fn write_animated(
                 end: frames.len() as f64,
                 per_second: frames_per_second as f64,
             };
-            if format == Format::Usdc {
+            if format == Format::Usdc && groom.groups.is_empty() {
                 usdc::write_animated(path, groom, frames, times)?;
                 return Ok(usd_warnings(path, groom));
             }
-            usd_interop::write_usd(path, |out| {
-                let mut writer = usda::AnimationWriter::begin(out, groom, times, path)?;
-                for (k, points) in frames.iter().enumerate() {
-                    writer.frame(k as f64 + 1.0, points)?;
-                }
-                writer.finish().map(|_| ())
-            })?;
+            usd_interop::write_usd(path, |out| usda::write_animated(groom, frames, times, out, path))?;
             Ok(usd_warnings(path, groom))
         }
         Format::Alembic => {

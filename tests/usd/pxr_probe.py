@@ -47,6 +47,8 @@ def dump(path, time=None):
             "type": curves.GetTypeAttr().Get(),
             "basis": curves.GetBasisAttr().Get(),
             "wrap": curves.GetWrapAttr().Get(),
+            "purpose": UsdGeom.Imageable(prim).GetPurposeAttr().Get(),
+            "segmentEnds": curves.ComputeVaryingDataSize(code),
             "counts": list(curves.GetCurveVertexCountsAttr().Get(code)),
             "points": floats(points),
             "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points),

@@ -9,7 +9,7 @@ use super::archive_read::{Archive, Compound, Object, Property, Sampled};
 use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::{Pod, TimeSampling};
-use crate::groom::{attr, Attribute, AttributeRate, CurveBasis, Groom};
+use crate::groom::{attr, Attribute, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 
 fn fail<T>(message: impl Into<String>) -> OgawaResult<T> {
     Err(OgawaError(message.into()))
@@ -109,7 +109,9 @@ impl<'a> CurvesArchive<'a> {
                 Some(acc) => merge(acc, groom, &object.path)?,
             });
         }
-        Ok(merged.expect("at least one curves object"))
+        let mut groom = merged.expect("at least one curves object");
+        groom.drop_default_group_named(super::curves_write::DEFAULT_OBJECT_NAME);
+        Ok(groom)
     }
 
     /// Every frame, in order; refuses files that would expand far beyond their size.
@@ -222,6 +224,8 @@ impl<'a> CurvesArchive<'a> {
                 epic::GUIDE => {
                     groom.guides = Some(param.to_strands(&groom).iter().map(|&v| v != 0.0).collect())
                 }
+                // One value for the whole object: the object is the group (coif writes that).
+                epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
                     let canonical = match name {
                         epic::COLOR => attr::COLOR.to_string(),
@@ -243,6 +247,7 @@ impl<'a> CurvesArchive<'a> {
                 }
             }
         }
+        groom.set_single_group(CurveGroup::new(path.clone(), basis, CurveWrap::Nonperiodic));
         Ok(groom)
     }
 
@@ -510,52 +515,12 @@ fn find<'o, 'a>(top: &'o Object<'a>, path: &str) -> Option<&'o Object<'a>> {
     Some(object)
 }
 
-/// Appends `b`'s strands to `a`, filling data one side lacks; the bases must agree.
+/// Appends `b`'s strands (one more curves object, its own group) to `a`.
 fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
-    if a.basis != b.basis {
-        return fail(format!("{path}: its curve basis differs from the other curves objects"));
-    }
-    let (a_strands, b_strands) = (a.strand_count(), b.strand_count());
-    let (a_vertices, b_vertices) = (a.vertex_count(), b.vertex_count());
-    let base = a_vertices as u32;
-    a.points.extend_from_slice(&b.points);
-    a.strand_offsets.extend(b.strand_offsets[1..].iter().map(|o| o + base));
-    a.widths.extend_from_slice(&b.widths);
     // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
     let next_id = a.strand_ids.iter().max().map_or(0, |m| m.wrapping_add(1));
-    a.strand_ids.extend(b.strand_ids.iter().map(|id| id.wrapping_add(next_id)));
-    a.root_uvs = match (a.root_uvs.take(), b.root_uvs.take()) {
-        (None, None) => None,
-        (x, y) => {
-            Some([x.unwrap_or(vec![[0.0; 2]; a_strands]), y.unwrap_or(vec![[0.0; 2]; b_strands])].concat())
-        }
-    };
-    a.guides = match (a.guides.take(), b.guides.take()) {
-        (None, None) => None,
-        (x, y) => Some([x.unwrap_or(vec![false; a_strands]), y.unwrap_or(vec![false; b_strands])].concat()),
-    };
-    let mut names: Vec<String> = a.attributes.iter().chain(&b.attributes).map(|x| x.name.clone()).collect();
-    names.sort();
-    names.dedup();
-    for name in names {
-        let (x, y) = (a.attribute(&name).cloned(), b.attribute(&name).cloned());
-        let (rate, components) = match (&x, &y) {
-            (Some(x), Some(y)) if (x.rate, x.components) != (y.rate, y.components) => {
-                return fail(format!(
-                    "{path}: attribute '{name}' differs in rate or size from other curves objects"
-                ))
-            }
-            (Some(x), _) => (x.rate, x.components),
-            (None, Some(y)) => (y.rate, y.components),
-            (None, None) => unreachable!("name came from one of them"),
-        };
-        let count = |strands, vertices| if rate == AttributeRate::Vertex { vertices } else { strands };
-        let mut data =
-            x.map(|x| x.data).unwrap_or_else(|| vec![0.0; count(a_strands, a_vertices) * components]);
-        data.extend(
-            y.map(|y| y.data).unwrap_or_else(|| vec![0.0; count(b_strands, b_vertices) * components]),
-        );
-        a.set_attribute(Attribute::new(name, rate, components, data));
-    }
+    b.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
+    a.append(&b)
+        .map_err(|e| OgawaError(format!("{path}: does not fit the curves objects before it: {e}")))?;
     Ok(a)
 }

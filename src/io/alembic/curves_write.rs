@@ -12,11 +12,13 @@ use rayon::prelude::*;
 use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
-use crate::groom::{attr, AttributeRate, CurveBasis, Groom};
+use crate::groom::{attr, AttributeRate, CurveBasis, CurveWrap, Groom};
 
 pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
 pub const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
 const GEOM_BASE: &str = "AbcGeom_GeomBase_v1";
+/// The curves object of a groom without groups.
+pub const DEFAULT_OBJECT_NAME: &str = "curves";
 
 /// Epic's groom attribute names, and the spec version coif follows in Unreal mode.
 pub mod epic {
@@ -61,7 +63,7 @@ impl Default for AlembicWriteOptions {
             xform: None,
             frames_per_second: 24.0,
             application: format!("coif {}", env!("CARGO_PKG_VERSION")),
-            object_name: "curves".into(),
+            object_name: DEFAULT_OBJECT_NAME.into(),
             velocities: true,
         }
     }
@@ -86,7 +88,17 @@ enum ParamSource {
     StrandIds,
     Guides,
     RootUvs,
+    /// Epic's `groom_group_id`: the group's index, one per strand.
+    GroupId(u32),
     Attribute(String),
+}
+
+/// The curves object of one group: its properties, the group's index and, when the groom has
+/// several groups, the group's strands.
+struct GroupObject {
+    properties: CurveProperties,
+    group: usize,
+    strands: Option<Vec<usize>>,
 }
 
 /// Writes curves samples into an Alembic stream: one sample for a static groom, or one per
@@ -94,7 +106,8 @@ enum ParamSource {
 /// its neighbours, so each frame is written when the next one arrives (or at `finish`).
 pub struct CurvesWriter<W: Write + Seek> {
     archive: ArchiveWriter<W>,
-    properties: CurveProperties,
+    /// One curves object per curve group.
+    objects: Vec<GroupObject>,
     animated: bool,
     scale: f32,
     frames_per_second: f64,
@@ -130,18 +143,48 @@ impl<W: Write + Seek> CurvesWriter<W> {
         if let Some(matrix) = options.xform {
             parent = add_xform(&mut archive, parent, "xform", Some(matrix))?;
         }
-        let properties = add_curves(
-            &mut archive,
-            parent,
-            &options.object_name,
-            first,
-            options.unreal,
-            animated && options.velocities,
-            time_sampling,
-        );
+        let parts = first.split_groups().map_err(io::Error::other)?;
+        let several = parts.len() > 1;
+        let mut xforms: Vec<(String, ObjectId)> = Vec::new();
+        let mut objects = Vec::with_capacity(parts.len());
+        for (group, curve_group, part) in &parts {
+            // A group's path becomes Xforms above a curves object named after its last part.
+            let components: Vec<&str> = curve_group.name.split('/').filter(|c| !c.is_empty()).collect();
+            let (object_parent, name) = match components.split_last() {
+                None => (parent, options.object_name.as_str()),
+                Some((last, above)) => {
+                    let mut at = parent;
+                    let mut path = String::new();
+                    for component in above {
+                        path.push('/');
+                        path.push_str(component);
+                        at = match xforms.iter().find(|(p, _)| *p == path) {
+                            Some((_, id)) => *id,
+                            None => {
+                                let id = add_xform(&mut archive, at, component, None)?;
+                                xforms.push((path.clone(), id));
+                                id
+                            }
+                        };
+                    }
+                    (at, *last)
+                }
+            };
+            let properties = add_curves(
+                &mut archive,
+                object_parent,
+                name,
+                part,
+                (*group, several),
+                (options.unreal, animated && options.velocities),
+                time_sampling,
+            );
+            let strands = several.then(|| first.group_strands(*group));
+            objects.push(GroupObject { properties, group: *group, strands });
+        }
         Ok(CurvesWriter {
             archive,
-            properties,
+            objects,
             animated,
             scale: if options.unreal { epic::UNITS_PER_METRE } else { 1.0 },
             frames_per_second: options.frames_per_second,
@@ -170,7 +213,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
         if !self.animated && self.frames > 0 {
             return invalid("a static Alembic file holds one frame".into());
         }
-        if self.properties.velocities.is_none() {
+        if self.objects[0].properties.velocities.is_none() {
             // Nothing needs the next frame: write this one now, without keeping a copy.
             self.frames += 1;
             return self.write_sample(groom, None);
@@ -201,22 +244,46 @@ impl<W: Write + Seek> CurvesWriter<W> {
     }
 
     fn write_sample(&mut self, groom: &Groom, velocities: Option<&[Vec3]>) -> io::Result<()> {
+        for k in 0..self.objects.len() {
+            let Some(strands) = &self.objects[k].strands else {
+                self.write_object_sample(k, groom, velocities)?;
+                continue;
+            };
+            let mut part = crate::groups::assemble(&[(groom, strands)]).map_err(io::Error::other)?;
+            let group = groom.group(self.objects[k].group).into_owned();
+            part.attributes.retain(|a| group.carries(&a.name));
+            part.set_single_group(group);
+            let part_velocities: Option<Vec<Vec3>> = velocities
+                .map(|v| strands.iter().flat_map(|&s| v[groom.strand_range(s)].iter().copied()).collect());
+            self.write_object_sample(k, &part, part_velocities.as_deref())?;
+        }
+        Ok(())
+    }
+
+    fn write_object_sample(
+        &mut self,
+        object: usize,
+        groom: &Groom,
+        velocities: Option<&[Vec3]>,
+    ) -> io::Result<()> {
         let scale = self.scale;
         let points: Cow<[Vec3]> = if scale == 1.0 {
             Cow::Borrowed(&groom.points)
         } else {
             Cow::Owned(groom.points.iter().map(|p| *p * scale).collect())
         };
-        let p = &self.properties;
+        let p = &self.objects[object].properties;
         let counts: Vec<i32> = groom.vertex_counts().map(|c| c as i32).collect();
         let velocities: Vec<Vec3> = velocities.unwrap_or(&[]).iter().map(|v| *v * scale).collect();
+        let mut basis = basis_bytes(groom.basis);
+        basis[1] = (groom.group(0).wrap == CurveWrap::Periodic) as u8;
         // Samples in the order the C++ writer sets them (.arbGeomParams members before the
         // optional schema properties), so files match it byte for byte.
         let mut samples: Vec<(PropertyId, Cow<[u8]>, u64)> = vec![
             (p.bounds, Cow::Owned(bounds_bytes(&points)), 1),
             (p.positions, Cow::Borrowed(bytemuck::cast_slice(&points)), points.len() as u64),
             (p.vertex_counts, Cow::Borrowed(bytemuck::cast_slice(&counts)), counts.len() as u64),
-            (p.basis, Cow::Owned(basis_bytes(groom.basis).to_vec()), 1),
+            (p.basis, Cow::Owned(basis.to_vec()), 1),
         ];
         for (id, source) in &p.params {
             let (bytes, elements) = param_bytes(groom, source, scale);
@@ -307,8 +374,8 @@ fn add_curves<W: Write + Seek>(
     parent: ObjectId,
     name: &str,
     groom: &Groom,
-    unreal: bool,
-    with_velocities: bool,
+    (group, several_groups): (usize, bool),
+    (unreal, with_velocities): (bool, bool),
     ts: u32,
 ) -> CurveProperties {
     let object_metadata = MetaData::new()
@@ -336,6 +403,9 @@ fn add_curves<W: Write + Seek>(
     if groom.guides.is_some() {
         sources.push((epic::GUIDE.to_string(), ParamSource::Guides));
     }
+    if unreal || several_groups {
+        sources.push((epic::GROUP_ID.to_string(), ParamSource::GroupId(group as u32)));
+    }
     if unreal && groom.root_uvs.is_some() {
         sources.push((epic::ROOT_UV.to_string(), ParamSource::RootUvs));
     }
@@ -354,7 +424,9 @@ fn add_curves<W: Write + Seek>(
         for (name, source) in sources {
             let (pod, extent, rate, interp) = match &source {
                 ParamSource::Widths => (Pod::F32, 1, AttributeRate::Vertex, ""),
-                ParamSource::StrandIds | ParamSource::Guides => (Pod::I32, 1, AttributeRate::Strand, ""),
+                ParamSource::StrandIds | ParamSource::Guides | ParamSource::GroupId(_) => {
+                    (Pod::I32, 1, AttributeRate::Strand, "")
+                }
                 ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
                 ParamSource::Attribute(a) => {
                     let a = groom.attribute(a).expect("listed from the groom");
@@ -466,6 +538,10 @@ fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'
         ParamSource::Guides => {
             let guides = groom.guides.as_deref().unwrap_or(&[]);
             (Cow::Owned(guides.iter().flat_map(|&g| (g as i32).to_le_bytes()).collect()), guides.len() as u64)
+        }
+        ParamSource::GroupId(group) => {
+            let count = groom.strand_count();
+            (Cow::Owned(group.to_le_bytes().repeat(count)), count as u64)
         }
         ParamSource::RootUvs => {
             let uvs = groom.root_uvs.as_deref().unwrap_or(&[]);

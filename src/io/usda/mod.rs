@@ -2,8 +2,8 @@
 //! conventions: an `Xform` holding `BasisCurves`, widths and primvars with explicit
 //! interpolation, `extent`, stage metadata, time-sampled points for animation.
 //!
-//! Writing: [`write`] for one groom, [`AnimationWriter`] for time-sampled points with constant
-//! topology. Reading: [`read`] parses a layer (streaming, never the whole file in memory) and
+//! Writing: [`write`] for one groom, [`write_animated`] for time-sampled points with constant
+//! topology; one `BasisCurves` prim per curve group. Reading: [`read`] parses a layer (streaming, never the whole file in memory) and
 //! builds one groom from all its curve prims; a layer that needs composition (references,
 //! variants…) is reported as [`ReadOutcome::NeedsComposition`] so the caller can flatten it
 //! through usd-core first.
@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 use crate::groom::Groom;
 use crate::io::ImportOptions;
 
-pub use writer::{check_writable, unsupported, write, AnimationWriter, TimeCodes};
+pub use writer::{check_writable, unsupported, write, write_animated, TimeCodes, DEFAULT_PRIM_PATH};
 // The crate-file module writes the same stage and reads into the same layer model.
 pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, Prim, Value};
 pub(crate) use reader::groom_from_layer;

@@ -745,8 +745,10 @@ fn vertex_hint(prim: &Prim) -> usize {
 
 /// Attributes whose values the groom reader uses; others are checked for syntax and dropped.
 pub fn wanted(name: &str) -> bool {
-    matches!(name, "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "xformOpOrder")
-        || name.starts_with("primvars:")
+    matches!(
+        name,
+        "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "purpose" | "xformOpOrder"
+    ) || name.starts_with("primvars:")
         || name.starts_with("xformOp:")
 }
 

@@ -8,7 +8,9 @@ use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 use super::parser::{Attribute, Layer, Prim, Value};
 use super::{names, DEFAULT_WIDTH};
 use crate::error::{Error, Result};
-use crate::groom::{Attribute as GroomAttribute, AttributeRate, CurveBasis, Groom};
+use crate::groom::{
+    Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
+};
 use crate::io::{ImportOptions, UpAxis};
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
@@ -19,6 +21,8 @@ struct Curves {
     path: String,
     line: u32,
     basis: CurveBasis,
+    wrap: CurveWrap,
+    purpose: Option<String>,
     counts: Vec<u32>,
     points: Vec<Vec3>,
     widths: Vec<f32>,
@@ -121,13 +125,20 @@ impl Walker<'_> {
             }
             (other, _) => return Err(at_prim(prim.line, format!("unknown curve type \"{other}\""))),
         };
-        if wrap == "periodic" {
-            return Err(at_prim(
-                prim.line,
-                "periodic (closed) curves are not hair strands; coif reads nonperiodic curves".into(),
-            ));
-        }
-        let pinned = wrap == "pinned";
+        let wrap =
+            match wrap.as_str() {
+                "nonperiodic" => CurveWrap::Nonperiodic,
+                "pinned" => CurveWrap::Pinned,
+                "periodic" => return Err(at_prim(
+                    prim.line,
+                    "wrap \"periodic\" (closed curves) is not supported: coif cannot simulate closed strands"
+                        .into(),
+                )),
+                other => return Err(at_prim(prim.line, format!("unknown wrap \"{other}\""))),
+            };
+        let pinned = wrap == CurveWrap::Pinned;
+        let purpose = token(prim, "purpose", "default")?;
+        let purpose = (purpose != "default").then_some(purpose);
 
         let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
             return Ok(None);
@@ -199,6 +210,8 @@ impl Walker<'_> {
             path: prim_path.to_string(),
             line: prim.line,
             basis,
+            wrap,
+            purpose,
             counts: counts.clone(),
             points,
             widths: Vec::new(),
@@ -221,6 +234,7 @@ impl Walker<'_> {
                 .map(|v| v.to_f64());
             let attr = prim.attributes.iter_mut().find(|a| a.name == format!("primvars:{name}")).unwrap();
             let line = attr.line;
+            let type_name = attr.type_name.trim_end_matches("[]").to_string();
             let interpolation = attr.interpolation.clone().unwrap_or_else(|| "constant".into());
             let (kind_components, element_size) =
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
@@ -257,7 +271,10 @@ impl Walker<'_> {
                 }
                 _ => {
                     let groom_name = names::attribute_for_primvar(&name);
-                    curves.attributes.push(GroomAttribute::new(groom_name, rate, components, data));
+                    let kind = attribute_kind(&type_name, &groom_name, components);
+                    curves
+                        .attributes
+                        .push(GroomAttribute::new(groom_name, rate, components, data).with_kind(kind));
                 }
             }
         }
@@ -268,12 +285,19 @@ impl Walker<'_> {
             let width_scale = to_coif.determinant().abs().cbrt() as f32;
             let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
             curves.points.iter_mut().for_each(|p| *p = transform(*p));
-            for attribute in
-                curves.attributes.iter_mut().filter(|a| a.name == names::REST && a.components == 3)
-            {
+            let linear = glam::DMat3::from_mat4(to_coif);
+            for attribute in curves.attributes.iter_mut().filter(|a| a.components == 3) {
+                let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(attribute) {
+                    Some(AttributeKind::Point) => Box::new(transform),
+                    Some(AttributeKind::Normal) => {
+                        let normal_matrix = linear.inverse().transpose();
+                        Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
+                    }
+                    Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
+                    None => continue,
+                };
                 for c in attribute.data.chunks_exact_mut(3) {
-                    let p = transform(Vec3::from_slice(c));
-                    c.copy_from_slice(&p.to_array());
+                    c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
                 }
             }
             curves.widths = match widths {
@@ -287,6 +311,48 @@ impl Walker<'_> {
             curves.widths = widths.unwrap_or_else(|| vec![DEFAULT_WIDTH; curves.points.len()]);
         }
         Ok(Some(curves))
+    }
+}
+
+/// The kind a primvar's USD type gives an attribute; plain floats when the type is the one
+/// coif's writer would choose for that name anyway, so what coif writes reads back unchanged.
+fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKind {
+    let kind = match type_name {
+        "int" | "uint" | "int64" | "uint64" | "uchar" => AttributeKind::Int,
+        "bool" => AttributeKind::Bool,
+        t if t.starts_with("point3") => AttributeKind::Point,
+        t if t.starts_with("normal3") => AttributeKind::Normal,
+        t if t.starts_with("vector3") => AttributeKind::Vector,
+        t if t.starts_with("color") => AttributeKind::Color,
+        t if t.starts_with("texCoord") => AttributeKind::TexCoord,
+        _ => AttributeKind::Float,
+    };
+    let written_as_float = super::writer::usd_type(AttributeKind::Float, name, components);
+    if written_as_float.trim_end_matches("[]") == type_name {
+        AttributeKind::Float
+    } else {
+        kind
+    }
+}
+
+/// How a 3-vector attribute follows the points from file space to coif's: by its kind, or for
+/// plain float3 data by its name (Blender's `surface_normal`, velocities…); `None`: not at all.
+fn direction_kind(attribute: &GroomAttribute) -> Option<AttributeKind> {
+    match attribute.kind {
+        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(attribute.kind),
+        AttributeKind::Float => {
+            let name = attribute.name.to_ascii_lowercase();
+            if name == names::REST {
+                Some(AttributeKind::Point)
+            } else if name == "n" || name.contains("normal") {
+                Some(AttributeKind::Normal)
+            } else if name == "v" || name.starts_with("velocit") {
+                Some(AttributeKind::Vector)
+            } else {
+                None
+            }
+        }
+        _ => None,
     }
 }
 
@@ -564,102 +630,62 @@ fn xform_op(name: &str, v: &[f64]) -> std::result::Result<DMat4, String> {
     })
 }
 
-/// One groom from all curve prims. Attributes the prims do not all carry are dropped; guide
-/// flags default to "not a guide"; strand ids are renumbered unless every prim has them.
-fn merge(mut found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
+/// One groom from all curve prims, one group per prim. Strand ids are renumbered unless every
+/// prim has them; a lone prim named as coif writes it gets no group table.
+fn merge(found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
     if found.is_empty() {
         return Err(Error::format(
             path,
             format!("line {lines}: the stage ends without a BasisCurves prim with points"),
         ));
     }
-    if let Some(other) = found.iter().find(|c| c.basis != found[0].basis) {
-        return Err(Error::format(
-            path,
-            format!(
-                "line {}: prim <{}> has {:?} curves but <{}> (line {}) has {:?}; coif needs one curve basis per groom",
-                other.line, other.path, other.basis, found[0].path, found[0].line, found[0].basis
-            ),
-        ));
-    }
-    let basis = found[0].basis;
-    let mut groom = Groom { basis, strand_offsets: vec![0], ..Default::default() };
-    if found.len() == 1 {
-        let curves = found.pop().unwrap();
-        let mut offset = 0u32;
-        groom.strand_offsets.extend(curves.counts.iter().map(|&c| {
-            offset += c;
-            offset
-        }));
-        groom.strand_ids = curves.strand_ids.unwrap_or_else(|| (0..curves.counts.len() as u32).collect());
-        groom.points = curves.points;
-        groom.widths = curves.widths;
-        groom.root_uvs = curves.root_uvs;
-        groom.guides = curves.guides;
-        for attribute in curves.attributes {
-            groom.set_attribute(attribute);
-        }
-        return Ok(groom);
-    }
     let all_ids = found.iter().all(|c| c.strand_ids.is_some());
-    let all_uvs = found.iter().all(|c| c.root_uvs.is_some());
-    let any_guides = found.iter().any(|c| c.guides.is_some());
-    let mut root_uvs = Vec::new();
-    let mut guides = Vec::new();
-    for curves in &found {
-        let base = groom.points.len() as u32;
-        groom.strand_offsets.extend(curves.counts.iter().scan(base, |offset, &c| {
-            *offset += c;
-            Some(*offset)
-        }));
-        groom.points.extend_from_slice(&curves.points);
-        groom.widths.extend_from_slice(&curves.widths);
-        if all_ids {
-            groom.strand_ids.extend_from_slice(curves.strand_ids.as_ref().unwrap());
-        }
-        if all_uvs {
-            root_uvs.extend_from_slice(curves.root_uvs.as_ref().unwrap());
-        }
-        if any_guides {
-            match &curves.guides {
-                Some(g) => guides.extend_from_slice(g),
-                None => guides.extend(std::iter::repeat_n(false, curves.counts.len())),
-            }
+    let mut merged: Option<Groom> = None;
+    for curves in found {
+        let (prim_path, line) = (curves.path.clone(), curves.line);
+        let groom = curves.into_groom();
+        match &mut merged {
+            None => merged = Some(groom),
+            Some(acc) => acc.append(&groom).map_err(|e| {
+                Error::format(
+                    path,
+                    format!("line {line}: prim <{prim_path}> does not fit the prims before it: {e}"),
+                )
+            })?,
         }
     }
+    let mut groom = merged.expect("at least one prim");
     if !all_ids {
         groom.strand_ids = (0..groom.strand_count() as u32).collect();
     }
-    groom.root_uvs = all_uvs.then_some(root_uvs);
-    groom.guides = any_guides.then_some(guides);
-    // Attributes every prim carries with the same component count; per-strand ones become
-    // per-vertex where the prims disagree on the rate.
-    for first in &found[0].attributes {
-        let parts: Option<Vec<(&Curves, &GroomAttribute)>> = found
-            .iter()
-            .map(|c| {
-                c.attributes
-                    .iter()
-                    .find(|a| a.name == first.name && a.components == first.components)
-                    .map(|a| (c, a))
-            })
-            .collect();
-        let Some(parts) = parts else { continue };
-        let rate =
-            if parts.iter().all(|(_, a)| a.rate == first.rate) { first.rate } else { AttributeRate::Vertex };
-        let mut data = Vec::new();
-        for (curves, attribute) in parts {
-            if attribute.rate == rate {
-                data.extend_from_slice(&attribute.data);
-            } else {
-                let layout =
-                    Layout { counts: &curves.counts, points: curves.points.len(), basis, pinned: false };
-                data.extend(layout.to_vertex(attribute.rate, attribute.components, attribute.data.clone()));
-            }
-        }
-        groom.set_attribute(GroomAttribute::new(first.name.clone(), rate, first.components, data));
-    }
+    groom.drop_default_group(super::writer::DEFAULT_PRIM_PATH);
     Ok(groom)
+}
+
+impl Curves {
+    fn into_groom(self) -> Groom {
+        let mut groom = Groom { strand_offsets: vec![0], ..Default::default() };
+        let mut offset = 0u32;
+        groom.strand_offsets.extend(self.counts.iter().map(|&c| {
+            offset += c;
+            offset
+        }));
+        groom.strand_ids = self.strand_ids.unwrap_or_else(|| (0..self.counts.len() as u32).collect());
+        groom.points = self.points;
+        groom.widths = self.widths;
+        groom.root_uvs = self.root_uvs;
+        // Houdini marks guide curves by the prim's purpose rather than a per-strand flag.
+        groom.guides = self
+            .guides
+            .or_else(|| (self.purpose.as_deref() == Some("guide")).then(|| vec![true; self.counts.len()]));
+        for attribute in self.attributes {
+            groom.set_attribute(attribute);
+        }
+        let mut group = CurveGroup::new(self.path, self.basis, self.wrap);
+        group.purpose = self.purpose;
+        groom.set_single_group(group);
+        groom
+    }
 }
 
 #[cfg(test)]

@@ -1,4 +1,5 @@
-//! Writes a groom as a USD text stage: `/Groom` (Xform) with one `BasisCurves` prim `Strands`.
+//! Writes a groom as a USD text stage: one `BasisCurves` prim per curve group at the group's
+//! path (`/Groom/Strands` for a groom without groups), `Xform`s above.
 //! Large arrays are formatted in fixed-size chunks on all threads and written in order, so the
 //! output is the same at any thread count and memory stays bounded. Floats are written in their
 //! shortest form that reads back to the same `f32`.
@@ -10,7 +11,7 @@ use rayon::prelude::*;
 
 use super::names;
 use crate::error::{Error, Result};
-use crate::groom::{AttributeRate, CurveBasis, Groom};
+use crate::groom::{AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 
 /// Array elements formatted per task.
 const CHUNK: usize = 16 * 1024;
@@ -45,22 +46,28 @@ pub(crate) enum PrimvarData<'a> {
     },
 }
 
+/// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
+pub const DEFAULT_PRIM_PATH: &str = "/Groom/Strands";
+
 /// Checks what `.usda` cannot store: cubic strands with too few control points for their basis.
 pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
-    if groom.basis == CurveBasis::Linear {
+    if groom.groups.is_empty() && groom.basis == CurveBasis::Linear {
         return Ok(());
     }
     for (strand, count) in groom.vertex_counts().enumerate() {
-        let valid = match groom.basis {
-            CurveBasis::Bezier => count >= 4 && (count - 1) % 3 == 0,
+        let group = groom.group(groom.group_of(strand));
+        let valid = match (group.basis, group.wrap) {
+            (CurveBasis::Linear, _) => true,
+            (CurveBasis::Bezier, _) => count >= 4 && (count - 1) % 3 == 0,
+            (_, CurveWrap::Pinned) => count >= 2,
             _ => count >= 4,
         };
         if !valid {
-            let rule = if groom.basis == CurveBasis::Bezier { "3k + 1 (at least 4)" } else { "at least 4" };
+            let rule = if group.basis == CurveBasis::Bezier { "3k + 1 (at least 4)" } else { "at least 4" };
             return Err(Error::Usage(format!(
                 "{}: strand {strand} has {count} control points; {:?} curves in USD need {rule}",
                 path.display(),
-                groom.basis
+                group.basis
             )));
         }
     }
@@ -69,158 +76,182 @@ pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
 
 /// What the writer renames or drops, as warnings for the user.
 pub fn unsupported(groom: &Groom) -> Vec<String> {
-    plan_primvars(groom).1
+    let mut warnings = plan_primvars(groom).1;
+    warnings.sort();
+    warnings.dedup();
+    warnings
 }
 
 /// Writes a groom as one stage with default (untimed) values.
 pub fn write(groom: &Groom, out: &mut dyn Write) -> std::io::Result<()> {
-    write_head(groom, out, None)?;
-    write_label(out, "        point3f[] points = ")?;
-    write_vec3s(out, &groom.points)?;
-    out.write_all(b"\n")?;
-    if let Some(extent) = extent(&groom.points, &groom.widths) {
-        write_label(out, "        float3[] extent = ")?;
-        write_vec3s(out, &extent)?;
-        out.write_all(b"\n")?;
-    }
-    write_tail(out)
+    write_stage(groom, out, None)
 }
 
-/// Streams an animated stage: everything but the points is written once from the groom given to
-/// [`AnimationWriter::begin`]; each [`AnimationWriter::frame`] appends one time sample of the
-/// points (same topology). Extents per frame follow the points at [`AnimationWriter::finish`].
-pub struct AnimationWriter<W: Write> {
-    out: W,
-    path: std::path::PathBuf,
-    vertices: usize,
-    half_width: f32,
-    extents: Vec<(f64, [Vec3; 2])>,
+/// Writes a groom whose points move: `frames[k]` holds every point at time code
+/// `times.start + k` (same topology as `groom`, whose other data is written once).
+pub fn write_animated(
+    groom: &Groom,
+    frames: &[Vec<Vec3>],
+    times: TimeCodes,
+    out: &mut dyn Write,
+    path: &Path,
+) -> Result<()> {
+    if !(times.start.is_finite()
+        && times.end.is_finite()
+        && times.start <= times.end
+        && times.per_second > 0.0)
+    {
+        return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
+    }
+    if frames.is_empty() {
+        return Err(Error::Usage(format!("{}: an animated stage needs at least one frame", path.display())));
+    }
+    if let Some(k) = frames.iter().position(|f| f.len() != groom.vertex_count()) {
+        return Err(Error::Usage(format!(
+            "{}: frame {k} has {} points; the groom has {} (topology must stay constant)",
+            path.display(),
+            frames[k].len(),
+            groom.vertex_count()
+        )));
+    }
+    write_stage(groom, out, Some((times, frames))).map_err(|e| Error::io(path, e))
 }
 
-impl<W: Write> AnimationWriter<W> {
-    /// Writes the stage up to the points; `path` names the output in errors.
-    pub fn begin(mut out: W, groom: &Groom, times: TimeCodes, path: &Path) -> Result<Self> {
-        if !(times.start.is_finite()
-            && times.end.is_finite()
-            && times.start <= times.end
-            && times.per_second > 0.0)
-        {
-            return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
-        }
-        write_head(groom, &mut out, Some(times)).map_err(|e| Error::io(path, e))?;
-        write_label(&mut out, "        point3f[] points.timeSamples = {\n")
-            .map_err(|e| Error::io(path, e))?;
-        Ok(AnimationWriter {
-            out,
-            path: path.to_path_buf(),
-            vertices: groom.vertex_count(),
-            half_width: groom.widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5,
-            extents: Vec::new(),
-        })
-    }
+/// A prim in the tree the groups' paths make: an Xform, or the curves of one group.
+struct Node {
+    name: String,
+    part: Option<usize>,
+    children: Vec<Node>,
+}
 
-    /// Appends the points at `time` (time codes must increase from frame to frame).
-    pub fn frame(&mut self, time: f64, points: &[Vec3]) -> Result<()> {
-        if points.len() != self.vertices {
-            return Err(Error::Usage(format!(
-                "{}: frame at time {time} has {} points; the groom has {} (topology must stay constant)",
-                self.path.display(),
-                points.len(),
-                self.vertices
-            )));
+fn insert(nodes: &mut Vec<Node>, components: &[String], part: usize) {
+    let Some((first, rest)) = components.split_first() else { return };
+    let index = match nodes.iter().position(|n| n.name == *first) {
+        Some(i) => i,
+        None => {
+            nodes.push(Node { name: first.clone(), part: None, children: Vec::new() });
+            nodes.len() - 1
         }
-        if !time.is_finite() || self.extents.last().is_some_and(|&(last, _)| time <= last) {
-            return Err(Error::Usage(format!(
-                "{}: time {time} does not follow the previous frame",
-                self.path.display()
-            )));
-        }
-        let io = |e| Error::io(&self.path, e);
-        let mut label = String::from("            ");
-        push_f64(&mut label, time);
-        label.push_str(": ");
-        write_label(&mut self.out, &label).map_err(io)?;
-        write_vec3s(&mut self.out, points).map_err(io)?;
-        self.out.write_all(b",\n").map_err(io)?;
-        if let Some((lo, hi)) = bounds(points) {
-            self.extents.push((time, [lo - Vec3::splat(self.half_width), hi + Vec3::splat(self.half_width)]));
-        }
-        Ok(())
-    }
-
-    /// Closes the stage and returns the output.
-    pub fn finish(mut self) -> Result<W> {
-        if self.extents.is_empty() && self.vertices > 0 {
-            return Err(Error::Usage(format!(
-                "{}: an animated stage needs at least one frame",
-                self.path.display()
-            )));
-        }
-        let path = self.path.clone();
-        let io = |e| Error::io(&path, e);
-        self.out.write_all(b"        }\n").map_err(io)?;
-        if !self.extents.is_empty() {
-            self.out.write_all(b"        float3[] extent.timeSamples = {\n").map_err(io)?;
-            for (time, extent) in &self.extents {
-                let mut label = String::from("            ");
-                push_f64(&mut label, *time);
-                label.push_str(": ");
-                write_label(&mut self.out, &label).map_err(io)?;
-                write_vec3s(&mut self.out, extent).map_err(io)?;
-                self.out.write_all(b",\n").map_err(io)?;
-            }
-            self.out.write_all(b"        }\n").map_err(io)?;
-        }
-        write_tail(&mut self.out).map_err(io)?;
-        Ok(self.out)
+    };
+    if rest.is_empty() {
+        nodes[index].part = Some(part);
+    } else {
+        insert(&mut nodes[index].children, rest, part);
     }
 }
 
-fn write_label(out: &mut (impl Write + ?Sized), text: &str) -> std::io::Result<()> {
-    out.write_all(text.as_bytes())
-}
+type Animation<'f> = Option<(TimeCodes, &'f [Vec<Vec3>])>;
 
-/// Stage metadata, the Xform, and the curve prim's topology, widths and primvars.
-fn write_head(
+/// Stage metadata and one prim tree: each group's curves at its own path (coif's default
+/// `/Groom/Strands` for a groom without groups), Xforms above them.
+fn write_stage(
     groom: &Groom,
     out: &mut (impl Write + ?Sized),
-    times: Option<TimeCodes>,
+    animation: Animation<'_>,
 ) -> std::io::Result<()> {
+    let parts = groom.split_groups().map_err(std::io::Error::other)?;
+    let mut roots = Vec::new();
+    for (k, (_, group, _)) in parts.iter().enumerate() {
+        let path = if group.name.is_empty() { DEFAULT_PRIM_PATH } else { group.name.as_str() };
+        let components: Vec<String> = path.split('/').filter(|c| !c.is_empty()).map(valid_name).collect();
+        insert(&mut roots, &components, k);
+    }
     let mut head = String::new();
-    head.push_str("#usda 1.0\n(\n    defaultPrim = \"Groom\"\n");
+    head.push_str("#usda 1.0\n(\n    defaultPrim = \"");
+    head.push_str(&roots[0].name);
+    head.push_str("\"\n");
     head.push_str(concat!("    doc = \"Written by coif ", env!("CARGO_PKG_VERSION"), "\"\n"));
-    if let Some(t) = times {
+    if let Some((t, _)) = animation {
         head.push_str("    endTimeCode = ");
         push_f64(&mut head, t.end);
         head.push('\n');
     }
     head.push_str("    metersPerUnit = 1\n");
-    if let Some(t) = times {
+    if let Some((t, _)) = animation {
         head.push_str("    startTimeCode = ");
         push_f64(&mut head, t.start);
         head.push_str("\n    timeCodesPerSecond = ");
         push_f64(&mut head, t.per_second);
         head.push('\n');
     }
-    head.push_str(
-        "    upAxis = \"Y\"\n)\n\ndef Xform \"Groom\"\n{\n    def BasisCurves \"Strands\"\n    {\n",
-    );
-    let (curve_type, basis) = curve_type_and_basis(groom.basis);
-    if let Some(basis) = basis {
-        head.push_str(&format!("        uniform token basis = \"{basis}\"\n"));
+    head.push_str("    upAxis = \"Y\"\n)\n\n");
+    out.write_all(head.as_bytes())?;
+    for node in &roots {
+        write_node(groom, &parts, node, out, 0, animation)?;
     }
-    head.push_str(&format!("        uniform token type = \"{curve_type}\"\n"));
-    head.push_str("        uniform token wrap = \"nonperiodic\"\n");
-    head.push_str("        int[] curveVertexCounts = ");
+    Ok(())
+}
+
+fn write_node(
+    groom: &Groom,
+    parts: &[(usize, CurveGroup, std::borrow::Cow<'_, Groom>)],
+    node: &Node,
+    out: &mut (impl Write + ?Sized),
+    depth: usize,
+    animation: Animation<'_>,
+) -> std::io::Result<()> {
+    let indent = "    ".repeat(depth);
+    let kind = if node.part.is_some() { "BasisCurves" } else { "Xform" };
+    out.write_all(format!("{indent}def {kind} \"{}\"\n{indent}{{\n", node.name).as_bytes())?;
+    if let Some(k) = node.part {
+        let (index, group, part) = &parts[k];
+        let frames = match animation {
+            None => None,
+            Some((times, frames)) if parts.len() == 1 => Some((times, std::borrow::Cow::Borrowed(frames))),
+            Some((times, frames)) => {
+                let strands = groom.group_strands(*index);
+                let gathered: Vec<Vec<Vec3>> = frames
+                    .iter()
+                    .map(|f| strands.iter().flat_map(|&s| f[groom.strand_range(s)].iter().copied()).collect())
+                    .collect();
+                Some((times, std::borrow::Cow::Owned(gathered)))
+            }
+        };
+        write_curves(part, group, out, &format!("{indent}    "), frames.as_ref().map(|(t, f)| (*t, &f[..])))?;
+    }
+    for child in &node.children {
+        write_node(groom, parts, child, out, depth + 1, animation)?;
+    }
+    out.write_all(format!("{indent}}}\n").as_bytes())?;
+    if depth == 0 {
+        out.write_all(b"\n")?;
+    }
+    Ok(())
+}
+
+/// One `BasisCurves` prim's properties (the group's strands only).
+fn write_curves(
+    groom: &Groom,
+    group: &CurveGroup,
+    out: &mut (impl Write + ?Sized),
+    indent: &str,
+    animation: Animation<'_>,
+) -> std::io::Result<()> {
+    let mut head = String::new();
+    let (curve_type, basis) = curve_type_and_basis(group.basis);
+    if let Some(basis) = basis {
+        head.push_str(&format!("{indent}uniform token basis = \"{basis}\"\n"));
+    }
+    if let Some(purpose) = &group.purpose {
+        head.push_str(&format!("{indent}uniform token purpose = \"{purpose}\"\n"));
+    }
+    let wrap = match group.wrap {
+        CurveWrap::Nonperiodic => "nonperiodic",
+        CurveWrap::Pinned => "pinned",
+        CurveWrap::Periodic => "periodic",
+    };
+    head.push_str(&format!("{indent}uniform token type = \"{curve_type}\"\n"));
+    head.push_str(&format!("{indent}uniform token wrap = \"{wrap}\"\n"));
+    head.push_str(&format!("{indent}int[] curveVertexCounts = "));
     out.write_all(head.as_bytes())?;
     let counts: Vec<u32> = groom.vertex_counts().map(|c| c as u32).collect();
     write_array(out, &counts, |buf, &c| buf.extend_from_slice(itoa::Buffer::new().format(c).as_bytes()))?;
-    out.write_all(b"\n        float[] widths = ")?;
+    write_label(out, &format!("\n{indent}float[] widths = "))?;
     write_floats(out, &groom.widths)?;
-    out.write_all(b" (\n            interpolation = \"vertex\"\n        )\n")?;
+    write_label(out, &format!(" (\n{indent}    interpolation = \"vertex\"\n{indent})\n"))?;
 
-    for primvar in plan_primvars(groom).0 {
-        write_label(out, &format!("        {} primvars:{} = ", primvar.usd_type, primvar.name))?;
+    for primvar in plan_group_primvars(groom, group).0 {
+        write_label(out, &format!("{indent}{} primvars:{} = ", primvar.usd_type, primvar.name))?;
         match &primvar.data {
             PrimvarData::Floats { values, components: 1 } => write_floats(out, values)?,
             PrimvarData::Floats { values, components } => {
@@ -245,10 +276,54 @@ fn write_head(
         }
         write_label(
             out,
-            &format!(" (\n            interpolation = \"{}\"\n        )\n", primvar.interpolation),
+            &format!(" (\n{indent}    interpolation = \"{}\"\n{indent})\n", primvar.interpolation),
         )?;
     }
+
+    let half_width = groom.widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5;
+    let grown = |(lo, hi): (Vec3, Vec3)| [lo - Vec3::splat(half_width), hi + Vec3::splat(half_width)];
+    match animation {
+        None => {
+            write_label(out, &format!("{indent}point3f[] points = "))?;
+            write_vec3s(out, &groom.points)?;
+            out.write_all(b"\n")?;
+            if let Some(extent) = bounds(&groom.points).map(grown) {
+                write_label(out, &format!("{indent}float3[] extent = "))?;
+                write_vec3s(out, &extent)?;
+                out.write_all(b"\n")?;
+            }
+        }
+        Some((times, frames)) => {
+            let time = |k: usize| times.start + k as f64;
+            write_label(out, &format!("{indent}point3f[] points.timeSamples = {{\n"))?;
+            for (k, points) in frames.iter().enumerate() {
+                let mut label = format!("{indent}    ");
+                push_f64(&mut label, time(k));
+                label.push_str(": ");
+                write_label(out, &label)?;
+                write_vec3s(out, points)?;
+                out.write_all(b",\n")?;
+            }
+            write_label(out, &format!("{indent}}}\n"))?;
+            if !groom.points.is_empty() {
+                write_label(out, &format!("{indent}float3[] extent.timeSamples = {{\n"))?;
+                for (k, points) in frames.iter().enumerate() {
+                    let mut label = format!("{indent}    ");
+                    push_f64(&mut label, time(k));
+                    label.push_str(": ");
+                    write_label(out, &label)?;
+                    write_vec3s(out, &bounds(points).map(grown).unwrap_or_default())?;
+                    out.write_all(b",\n")?;
+                }
+                write_label(out, &format!("{indent}}}\n"))?;
+            }
+        }
+    }
     Ok(())
+}
+
+fn write_label(out: &mut (impl Write + ?Sized), text: &str) -> std::io::Result<()> {
+    out.write_all(text.as_bytes())
 }
 
 /// USD's `type` and `basis` tokens for a curve basis.
@@ -261,12 +336,13 @@ pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&
     }
 }
 
-fn write_tail(out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {
-    out.write_all(b"    }\n}\n\n")
+/// The primvars of a groom without groups (the crate-file writer's one prim).
+pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
+    plan_group_primvars(groom, &CurveGroup::default())
 }
 
-/// The primvars a groom becomes, and warnings for attributes renamed or dropped.
-pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
+/// The primvars a group's strands become, and warnings for attributes renamed or dropped.
+fn plan_group_primvars<'g>(groom: &'g Groom, group: &CurveGroup) -> (Vec<Primvar<'g>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
     // Names the reader gives a meaning of their own are never taken by attributes.
@@ -293,7 +369,7 @@ pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
             data: PrimvarData::UVs(uvs),
         });
     }
-    for attribute in &groom.attributes {
+    for attribute in groom.attributes.iter().filter(|a| group.carries(&a.name)) {
         let wanted = names::primvar_for_attribute(&attribute.name);
         let name = valid_name(wanted);
         // A primvar that reads back as another attribute would not round-trip (`displayColor`
@@ -312,17 +388,12 @@ pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
             ));
         }
         let integer = attribute.name == crate::guides::CLOSEST_GUIDES;
-        let usd_type = match (attribute.name.as_str(), attribute.components) {
-            (_, 1) if integer => "int[]",
-            (_, 2) if integer => "int2[]",
-            (_, 3) if integer => "int3[]",
-            (_, _) if integer => "int4[]",
-            (crate::groom::attr::COLOR, 3) => "color3f[]",
-            (names::REST, 3) => "point3f[]",
-            (_, 1) => "float[]",
-            (_, 2) => "float2[]",
-            (_, 3) => "float3[]",
-            _ => "float4[]",
+        let usd_type = match (integer, attribute.components) {
+            (true, 1) => "int[]",
+            (true, 2) => "int2[]",
+            (true, 3) => "int3[]",
+            (true, _) => "int4[]",
+            (false, _) => usd_type(attribute.kind, &attribute.name, attribute.components),
         };
         let interpolation = match attribute.rate {
             AttributeRate::Vertex => "vertex",
@@ -333,14 +404,39 @@ pub(crate) fn plan_primvars(groom: &Groom) -> (Vec<Primvar<'_>>, Vec<String>) {
             usd_type,
             name,
             interpolation,
-            data: if integer {
-                PrimvarData::IntTuples { values: &attribute.data, components: attribute.components }
-            } else {
-                PrimvarData::Floats { values: &attribute.data, components: attribute.components }
+            data: match attribute.kind {
+                _ if integer => {
+                    PrimvarData::IntTuples { values: &attribute.data, components: attribute.components }
+                }
+                AttributeKind::Int | AttributeKind::Bool => {
+                    PrimvarData::Ints(attribute.data.iter().map(|&v| v as i64).collect())
+                }
+                _ => PrimvarData::Floats { values: &attribute.data, components: attribute.components },
             },
         });
     }
     (primvars, warnings)
+}
+
+/// The USD array type an attribute is written as: its kind's, or for plain floats the type coif
+/// always gives that name (the reader maps that type back to plain floats).
+pub(super) fn usd_type(kind: AttributeKind, name: &str, components: usize) -> &'static str {
+    const FLOATS: [&str; 4] = ["float[]", "float2[]", "float3[]", "float4[]"];
+    let by_size = |types: [&'static str; 4]| types[components.clamp(1, 4) - 1];
+    match kind {
+        AttributeKind::Int if components == 1 => "int[]",
+        AttributeKind::Bool if components == 1 => "bool[]",
+        AttributeKind::Point if components == 3 => "point3f[]",
+        AttributeKind::Normal if components == 3 => "normal3f[]",
+        AttributeKind::Vector if components == 3 => "vector3f[]",
+        AttributeKind::Color if components >= 3 => by_size(["", "", "color3f[]", "color4f[]"]),
+        AttributeKind::TexCoord if components >= 2 => by_size(["", "texCoord2f[]", "texCoord3f[]", ""]),
+        _ => match (name, components) {
+            (crate::groom::attr::COLOR, 3) => "color3f[]",
+            (names::REST, 3) => "point3f[]",
+            _ => by_size(FLOATS),
+        },
+    }
 }
 
 /// A USD property name (identifier segments joined by ':') made from any attribute name.

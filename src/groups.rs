@@ -1,0 +1,408 @@
+//! Curve groups: a production groom is several named sets of curves (guides and children, one
+//! per curve prim or Alembic curves object), each with its own basis and wrap. The groom keeps
+//! one struct-of-arrays for all strands; `Groom::groups` is the group table and
+//! `Groom::group_ids` each strand's index into it. A groom with an empty table is one unnamed
+//! group of `Groom::basis`, nonperiodic (what coif's own generator makes).
+//!
+//! Every way of combining strands — readers appending prims, `--group` selecting some groups and
+//! putting the styled ones back — goes through one function, [`assemble`].
+use std::borrow::Cow;
+
+use serde::{Deserialize, Serialize};
+
+use crate::groom::{Attribute, AttributeRate, CurveBasis, Groom, GroomError};
+
+/// How a curve's ends behave (USD `wrap`; Alembic's periodicity byte).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CurveWrap {
+    /// Open curve; a cubic basis does not reach its end points (USD `nonperiodic`).
+    #[default]
+    Nonperiodic,
+    /// Open curve whose cubic segments are extended to pass through the end points (USD
+    /// `pinned`, what Blender writes for Catmull-Rom).
+    Pinned,
+    /// Closed curve. Read and written back, but never simulated.
+    Periodic,
+}
+
+/// One named set of curves sharing a basis.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CurveGroup {
+    /// Where the curves came from: the prim path in USD, the object path in Alembic.
+    pub name: String,
+    pub basis: CurveBasis,
+    pub wrap: CurveWrap,
+    /// USD `purpose` (`"guide"` for Houdini's guide curves), when authored.
+    pub purpose: Option<String>,
+    /// Groom attributes this group does not carry (the groom pads them with zeros for its
+    /// strands; writers leave them out of this group's prim).
+    pub missing: Vec<String>,
+}
+
+impl CurveGroup {
+    pub fn new(name: impl Into<String>, basis: CurveBasis, wrap: CurveWrap) -> Self {
+        CurveGroup { name: name.into(), basis, wrap, ..Default::default() }
+    }
+
+    /// Whether the group carries attribute `name`.
+    pub fn carries(&self, name: &str) -> bool {
+        !self.missing.iter().any(|m| m == name)
+    }
+}
+
+/// The strands `--group` selected, to put back after styling with [`Groom::merge_back`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupSelection {
+    /// The selected strands' indices in the whole groom, in order.
+    pub strands: Vec<usize>,
+}
+
+impl Groom {
+    /// Number of groups (at least one for a groom with strands).
+    pub fn group_count(&self) -> usize {
+        self.groups.len().max(1)
+    }
+
+    /// The group strand `strand` belongs to.
+    pub fn group_of(&self, strand: usize) -> usize {
+        self.group_ids.get(strand).map_or(0, |&g| g as usize)
+    }
+
+    /// Group `index` (the implicit one for a groom without a group table).
+    pub fn group(&self, index: usize) -> Cow<'_, CurveGroup> {
+        match self.groups.get(index) {
+            Some(group) => Cow::Borrowed(group),
+            None => Cow::Owned(CurveGroup::new("", self.basis, CurveWrap::Nonperiodic)),
+        }
+    }
+
+    /// Makes every strand part of the one group `group` (a reader naming a single prim).
+    pub fn set_single_group(&mut self, group: CurveGroup) {
+        self.basis = group.basis;
+        self.groups = vec![group];
+        self.group_ids = vec![0; self.strand_count()];
+    }
+
+    /// Drops a one-group table that says nothing a writer would not write by default (the
+    /// group named `default_name`, nonperiodic, no purpose, every attribute carried), so a file
+    /// coif wrote reads back as the groom it was written from.
+    pub fn drop_default_group(&mut self, default_name: &str) {
+        if let [group] = self.groups.as_slice() {
+            let plain = CurveGroup::new(default_name, group.basis, CurveWrap::Nonperiodic);
+            if *group == plain {
+                self.groups.clear();
+                self.group_ids.clear();
+            }
+        }
+    }
+
+    /// [`Groom::drop_default_group`] for formats whose default group sits at any depth (an
+    /// Alembic curves object named `object_name` under optional Xforms).
+    pub fn drop_default_group_named(&mut self, object_name: &str) {
+        if let [group] = self.groups.as_slice() {
+            if group.name.rsplit('/').next() == Some(object_name) {
+                let name = group.name.clone();
+                self.drop_default_group(&name);
+            }
+        }
+    }
+
+    /// Strand indices of group `group`, in order.
+    pub fn group_strands(&self, group: usize) -> Vec<usize> {
+        if self.groups.len() <= 1 {
+            return if group == 0 { (0..self.strand_count()).collect() } else { Vec::new() };
+        }
+        (0..self.strand_count()).filter(|&s| self.group_of(s) == group).collect()
+    }
+
+    /// Appends `other`'s strands and groups (a reader adding the next prim). Attributes one
+    /// side lacks are padded with zeros and recorded as missing from that side's groups.
+    pub fn append(&mut self, other: &Groom) -> Result<(), GroomError> {
+        let ours: Vec<usize> = (0..self.strand_count()).collect();
+        let theirs: Vec<usize> = (0..other.strand_count()).collect();
+        *self = assemble(&[(&*self, &ours), (other, &theirs)])?;
+        Ok(())
+    }
+
+    /// One groom per group, each with a one-entry group table and only the attributes its group
+    /// carries. A groom of one group is borrowed, not copied.
+    /// Each entry: the group's index, the group, and its strands.
+    pub fn split_groups(&self) -> Result<Vec<(usize, CurveGroup, Cow<'_, Groom>)>, GroomError> {
+        if self.groups.len() <= 1 {
+            let group = self.group(0).into_owned();
+            if group.missing.is_empty() {
+                return Ok(vec![(0, group, Cow::Borrowed(self))]);
+            }
+        }
+        let mut parts = Vec::with_capacity(self.group_count());
+        for g in 0..self.group_count() {
+            let strands = self.group_strands(g);
+            if strands.is_empty() {
+                continue;
+            }
+            let mut part = assemble(&[(self, &strands)])?;
+            let group = self.group(g).into_owned();
+            part.attributes.retain(|a| group.carries(&a.name));
+            let mut table_entry = group.clone();
+            table_entry.missing.clear();
+            part.set_single_group(table_entry);
+            parts.push((g, group, Cow::Owned(part)));
+        }
+        Ok(parts)
+    }
+
+    /// The strands of the groups named `names` as a groom of their own, and where they came
+    /// from. An unknown name is an error listing the groups there are.
+    pub fn select_groups(&self, names: &[String]) -> Result<(Groom, GroupSelection), String> {
+        let mut wanted = Vec::new();
+        for name in names {
+            let found = (0..self.group_count()).find(|&g| {
+                let group = self.group(g);
+                group.name == *name || group.name.rsplit('/').next() == Some(name.as_str())
+            });
+            match found {
+                Some(g) => wanted.push(g),
+                None => {
+                    let known: Vec<String> =
+                        (0..self.group_count()).map(|g| format!("'{}'", self.group(g).name)).collect();
+                    return Err(format!(
+                        "the groom has no group named '{name}'; its groups are {}",
+                        known.join(", ")
+                    ));
+                }
+            }
+        }
+        let strands: Vec<usize> =
+            (0..self.strand_count()).filter(|&s| wanted.contains(&self.group_of(s))).collect();
+        let selected = assemble(&[(self, &strands)]).map_err(|e| e.to_string())?;
+        Ok((selected, GroupSelection { strands }))
+    }
+
+    /// The whole groom again, with the selected strands replaced by `styled` (the styled
+    /// selection: same strands in the same order; vertex counts may differ). Attributes styling
+    /// added are recorded as missing from the groups that were not styled.
+    pub fn merge_back(&self, selection: &GroupSelection, styled: &Groom) -> Result<Groom, GroomError> {
+        if styled.strand_count() != selection.strands.len() {
+            return Err(GroomError::Length {
+                what: "styled strands".into(),
+                expected: selection.strands.len(),
+                found: styled.strand_count(),
+            });
+        }
+        // Runs of consecutive strands from the same source, in the original order.
+        let mut runs: Vec<(bool, Vec<usize>)> = Vec::new();
+        let mut next_styled = 0;
+        for strand in 0..self.strand_count() {
+            let from_styled = selection.strands.get(next_styled) == Some(&strand);
+            let index = if from_styled {
+                next_styled += 1;
+                next_styled - 1
+            } else {
+                strand
+            };
+            match runs.last_mut() {
+                Some((source, list)) if *source == from_styled => list.push(index),
+                _ => runs.push((from_styled, vec![index])),
+            }
+        }
+        let parts: Vec<(&Groom, &[usize])> = runs
+            .iter()
+            .map(|(from_styled, list)| (if *from_styled { styled } else { self }, list.as_slice()))
+            .collect();
+        assemble(&parts)
+    }
+}
+
+/// A groom made of the listed strands of several grooms, in order. Group tables are merged by
+/// group (equal name, basis, wrap and purpose); per-strand data missing from a source is filled
+/// (ids renumbered only if some source has none, root UVs zero, not a guide); an attribute a
+/// source lacks is zero for its strands and recorded in its groups' `missing`; per-strand and
+/// per-vertex versions of one attribute become per-vertex.
+pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
+    let mut out = Groom { strand_offsets: vec![0], ..Default::default() };
+    // The output group of each source group, per part.
+    let mut group_maps: Vec<Vec<u32>> = Vec::with_capacity(parts.len());
+    for (groom, _) in parts {
+        let mut map = Vec::with_capacity(groom.group_count());
+        for g in 0..groom.group_count() {
+            let mut group = groom.group(g).into_owned();
+            group.missing.clear();
+            let index = match out.groups.iter().position(|o| {
+                o.name == group.name
+                    && o.basis == group.basis
+                    && o.wrap == group.wrap
+                    && o.purpose == group.purpose
+            }) {
+                Some(i) => i,
+                None => {
+                    out.groups.push(group);
+                    out.groups.len() - 1
+                }
+            };
+            map.push(index as u32);
+        }
+        group_maps.push(map);
+    }
+    let any_uvs = parts.iter().any(|(g, _)| g.root_uvs.is_some());
+    let any_guides = parts.iter().any(|(g, _)| g.guides.is_some());
+    let (mut uvs, mut guides) = (Vec::new(), Vec::new());
+    for ((groom, strands), map) in parts.iter().zip(&group_maps) {
+        for &s in strands.iter() {
+            let range = groom.strand_range(s);
+            out.points.extend_from_slice(&groom.points[range.clone()]);
+            out.widths.extend_from_slice(&groom.widths[range]);
+            out.strand_offsets.push(out.points.len() as u32);
+            out.strand_ids.push(groom.strand_ids.get(s).copied().unwrap_or(s as u32));
+            out.group_ids.push(map[groom.group_of(s)]);
+            if any_uvs {
+                uvs.push(groom.root_uvs.as_ref().map_or([0.0; 2], |u| u[s]));
+            }
+            if any_guides {
+                guides.push(groom.guides.as_ref().is_some_and(|g| g[s]));
+            }
+        }
+    }
+    out.root_uvs = any_uvs.then_some(uvs);
+    out.guides = any_guides.then_some(guides);
+
+    let mut names: Vec<&str> =
+        parts.iter().flat_map(|(g, _)| g.attributes.iter().map(|a| a.name.as_str())).collect();
+    names.sort_unstable();
+    names.dedup();
+    for name in names {
+        let found: Vec<&Attribute> = parts.iter().filter_map(|(g, _)| g.attribute(name)).collect();
+        let components = found[0].components;
+        if let Some(other) = found.iter().find(|a| a.components != components) {
+            return Err(GroomError::AttributeComponents {
+                name: name.to_string(),
+                components: other.components,
+            });
+        }
+        let rate = if found.iter().all(|a| a.rate == AttributeRate::Strand) {
+            AttributeRate::Strand
+        } else {
+            AttributeRate::Vertex
+        };
+        let mut data = Vec::new();
+        let mut carried = vec![false; out.groups.len()];
+        for ((groom, strands), map) in parts.iter().zip(&group_maps) {
+            let attribute = groom.attribute(name);
+            for &s in strands.iter() {
+                let group = groom.group(groom.group_of(s));
+                let count = match rate {
+                    AttributeRate::Strand => 1,
+                    AttributeRate::Vertex => groom.strand_range(s).len(),
+                };
+                match attribute {
+                    Some(a) if group.carries(name) => {
+                        carried[map[groom.group_of(s)] as usize] = true;
+                        match a.rate {
+                            AttributeRate::Strand => {
+                                let value = &a.data[s * components..(s + 1) * components];
+                                (0..count).for_each(|_| data.extend_from_slice(value));
+                            }
+                            AttributeRate::Vertex => {
+                                let r = groom.strand_range(s);
+                                data.extend_from_slice(&a.data[r.start * components..r.end * components]);
+                            }
+                        }
+                    }
+                    _ => data.extend(std::iter::repeat_n(0.0, count * components)),
+                }
+            }
+        }
+        for (group, carried) in out.groups.iter_mut().zip(carried) {
+            if !carried {
+                group.missing.push(name.to_string());
+            }
+        }
+        out.attributes.push(Attribute::new(name, rate, components, data).with_kind(found[0].kind));
+    }
+    if let Some(first) = out.groups.first() {
+        out.basis = first.basis;
+    }
+    out.drop_default_group("");
+    // Groups no strand uses (a selection) stay, so group ids keep their meaning.
+    Ok(out)
+}
+
+/// Checks the group table against the strands.
+pub(crate) fn validate(groom: &Groom) -> Result<(), GroomError> {
+    if groom.groups.is_empty() {
+        if !groom.group_ids.is_empty() {
+            return Err(GroomError::Length {
+                what: "group ids".into(),
+                expected: 0,
+                found: groom.group_ids.len(),
+            });
+        }
+        return Ok(());
+    }
+    if groom.group_ids.len() != groom.strand_count() {
+        return Err(GroomError::Length {
+            what: "group ids".into(),
+            expected: groom.strand_count(),
+            found: groom.group_ids.len(),
+        });
+    }
+    if let Some(strand) = groom.group_ids.iter().position(|&g| g as usize >= groom.groups.len()) {
+        return Err(GroomError::BadOffsets(format!(
+            "strand {strand} names group {} but the groom has {}",
+            groom.group_ids[strand],
+            groom.groups.len()
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    fn prim(name: &str, basis: CurveBasis, strands: usize, with_rest: bool) -> Groom {
+        let lines: Vec<Vec<Vec3>> =
+            (0..strands).map(|s| (0..4).map(|i| Vec3::new(s as f32, i as f32, 0.0)).collect()).collect();
+        let mut groom = Groom::from_strands(&lines, 1e-4);
+        if with_rest {
+            let data = groom.points.iter().flat_map(|p| p.to_array()).collect();
+            groom.set_attribute(Attribute::new("rest", AttributeRate::Vertex, 3, data));
+        }
+        groom.set_single_group(CurveGroup::new(name, basis, CurveWrap::Pinned));
+        groom
+    }
+
+    #[test]
+    fn append_split_round_trip_keeps_groups_and_missing_attributes() {
+        let guides = prim("/Groom/Guides", CurveBasis::CatmullRom, 2, true);
+        let children = prim("/Groom/Hair", CurveBasis::Linear, 3, false);
+        let mut groom = guides.clone();
+        groom.append(&children).unwrap();
+        groom.validate().unwrap();
+        assert_eq!(groom.strand_count(), 5);
+        assert_eq!(groom.group_ids, vec![0, 0, 1, 1, 1]);
+        assert_eq!(groom.groups[1].missing, vec!["rest".to_string()]);
+        let parts = groom.split_groups().unwrap();
+        assert_eq!(parts.len(), 2);
+        assert_eq!(*parts[0].2, guides);
+        assert_eq!(*parts[1].2, children);
+    }
+
+    #[test]
+    fn selection_merges_back_in_place() {
+        let mut groom = prim("/A", CurveBasis::Linear, 2, false);
+        groom.append(&prim("/B", CurveBasis::BSpline, 2, false)).unwrap();
+        let (mut selected, selection) = groom.select_groups(&["B".into()]).unwrap();
+        assert_eq!(selection.strands, vec![2, 3]);
+        selected.points.iter_mut().for_each(|p| p.z += 1.0);
+        selected.set_attribute(Attribute::new("wetness", AttributeRate::Strand, 1, vec![1.0, 1.0]));
+        let merged = groom.merge_back(&selection, &selected).unwrap();
+        merged.validate().unwrap();
+        assert_eq!(merged.strand_points(0), groom.strand_points(0), "group A untouched");
+        assert_eq!(merged.strand_points(2)[0].z, 1.0);
+        assert_eq!(merged.groups[0].missing, vec!["wetness".to_string()]);
+        assert!(groom.select_groups(&["C".into()]).unwrap_err().contains("'/A', '/B'"));
+    }
+}

@@ -1,0 +1,194 @@
+//! Grooms of several curve groups (guides and children with different bases, as Houdini and
+//! Blender write them): exact counts per group on import, and `coif convert` round trips that
+//! pxr sees as the same prims, bases, wraps, segment counts, points and widths.
+mod common;
+use common::usd::*;
+use common::*;
+
+use coif::groom::{CurveBasis, CurveWrap, Groom};
+use coif::io::{read_groom, ImportOptions};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn houdini_groom() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/houdini_groom.usda")
+}
+
+fn read(path: &Path) -> Groom {
+    read_groom(path, &ImportOptions::default()).unwrap().groom
+}
+
+/// (name, basis, wrap, strands, vertices) per group.
+fn group_summary(groom: &Groom) -> Vec<(String, CurveBasis, CurveWrap, usize, usize)> {
+    (0..groom.group_count())
+        .map(|g| {
+            let group = groom.group(g);
+            let strands = groom.group_strands(g);
+            let vertices = strands.iter().map(|&s| groom.strand_range(s).len()).sum();
+            (group.name.clone(), group.basis, group.wrap, strands.len(), vertices)
+        })
+        .collect()
+}
+
+#[test]
+fn houdini_style_stage_imports_with_exact_counts_per_group() {
+    let groom = read(&houdini_groom());
+    // Counts as authored by scripts/make_test_grooms_pxr.py.
+    assert_eq!(
+        group_summary(&groom),
+        vec![
+            ("/groom/guides".into(), CurveBasis::CatmullRom, CurveWrap::Pinned, 3, 18),
+            ("/groom/hair".into(), CurveBasis::Linear, CurveWrap::Nonperiodic, 6, 34),
+            ("/groom/fuzz".into(), CurveBasis::BSpline, CurveWrap::Nonperiodic, 2, 11),
+        ]
+    );
+    assert_eq!(groom.group(0).purpose.as_deref(), Some("guide"));
+    let guides: Vec<bool> = groom.guides.clone().unwrap();
+    assert_eq!(guides, [vec![true; 3], vec![false; 8]].concat(), "purpose = guide marks the guides");
+    // rest only on the guides, guide_curve_index only on the children.
+    assert!(groom.group(0).carries("rest") && !groom.group(1).carries("rest"));
+    assert!(groom.group(1).carries("guide_curve_index") && !groom.group(2).carries("guide_curve_index"));
+    // Centimetres and the /groom translate (150 cm up) applied.
+    let root = groom.strand_points(0)[0];
+    assert!((root - glam::Vec3::new(0.0, 1.5, 0.0)).length() < 1e-6, "{root}");
+}
+
+fn curves_by_path(dump: &Value) -> Vec<(String, &Value)> {
+    dump["curves"].as_array().unwrap().iter().map(|c| (c["path"].as_str().unwrap().to_string(), c)).collect()
+}
+
+/// Per-vertex widths from pxr's widths and their interpolation (constant or per vertex here).
+fn vertex_widths(curves: &Value) -> Vec<f32> {
+    let widths = f32s(&curves["widths"]);
+    let vertices = f32s(&curves["points"]).len() / 3;
+    match curves["widthsInterpolation"].as_str().unwrap() {
+        "constant" => vec![widths[0]; vertices],
+        _ => {
+            assert_eq!(widths.len(), vertices, "linear varying and vertex widths have one per point");
+            widths
+        }
+    }
+}
+
+#[test]
+fn unstyled_convert_round_trip_is_exact_in_pxr_and_in_coif() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.usda");
+    let result = coif(&["convert", path_str(&houdini_groom()), path_str(&out)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+
+    let (source, written) = (pxr_dump(&houdini_groom(), None), pxr_dump(&out, None));
+    assert_eq!(written["validationErrors"], serde_json::json!([]), "UsdValidation reports errors");
+    let source_mpu = source["metersPerUnit"].as_f64().unwrap() as f32;
+    let (source_curves, written_curves) = (curves_by_path(&source), curves_by_path(&written));
+    assert_eq!(
+        source_curves.iter().map(|c| &c.0).collect::<Vec<_>>(),
+        written_curves.iter().map(|c| &c.0).collect::<Vec<_>>(),
+        "the same prims at the same paths"
+    );
+    for ((path, a), (_, b)) in source_curves.iter().zip(&written_curves) {
+        for key in ["type", "basis", "wrap", "purpose", "counts", "segmentEnds"] {
+            assert_eq!(a[key], b[key], "{path}: {key}");
+        }
+        for (name, primvar) in a["primvars"].as_object().unwrap() {
+            let written = &b["primvars"][name];
+            assert_eq!(primvar["type"], written["type"], "{path}: primvar {name} keeps its type and role");
+            if primvar["interpolation"] == "uniform" {
+                assert_eq!(primvar["interpolation"], written["interpolation"], "{path}: primvar {name}");
+            }
+        }
+        let (pa, pb) = (f32s(&a["world_points"]), f32s(&b["world_points"]));
+        assert_eq!(pa.len(), pb.len());
+        for (x, y) in pa.iter().zip(&pb) {
+            assert!((x * source_mpu - y).abs() <= 1e-6, "{path}: point {x} cm vs {y} m");
+        }
+        for (x, y) in vertex_widths(a).iter().zip(vertex_widths(b)) {
+            assert!((x * source_mpu - y).abs() <= 1e-9, "{path}: width {x} cm vs {y} m");
+        }
+    }
+    let rest = |dump: &Value| f32s(&dump["curves"][0]["primvars"]["rest"]["values"]);
+    let (rest_source, rest_written) = (rest(&source), rest(&written));
+    assert_eq!(rest_source.len(), rest_written.len());
+    for (k, (x, y)) in rest_source.iter().zip(&rest_written).enumerate() {
+        // rest is a position: centimetres and the /groom translate apply as to the points.
+        let expected = x * source_mpu + if k % 3 == 1 { 1.5 } else { 0.0 };
+        assert!((expected - y).abs() <= 1e-6, "rest {k}: {expected} vs {y}");
+    }
+    assert!(
+        written["curves"][2]["primvars"].get("rest").is_none(),
+        "a primvar one prim lacks is not invented for it"
+    );
+
+    // coif reads back the groom it read, group for group, and writing again changes nothing.
+    let (first, second) = (read(&houdini_groom()), read(&out));
+    assert_eq!(first, second);
+    let again = dir.path().join("again.usda");
+    assert!(coif(&["convert", path_str(&out), path_str(&again)]).status.success());
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+}
+
+#[test]
+fn alembic_round_trip_keeps_objects_bases_and_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let abc = dir.path().join("groups.abc");
+    let result = coif(&["convert", path_str(&houdini_groom()), path_str(&abc)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let (source, back) = (read(&houdini_groom()), read(&abc));
+    let summary = |g: &Groom| {
+        group_summary(g).into_iter().map(|(name, basis, _, s, v)| (name, basis, s, v)).collect::<Vec<_>>()
+    };
+    assert_eq!(summary(&back), summary(&source));
+    assert_eq!(back.points, source.points);
+    assert_eq!(back.widths, source.widths);
+    assert_eq!(back.guides, source.guides);
+}
+
+#[test]
+fn a_periodic_prim_exits_2_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("closed.usda");
+    std::fs::write(
+        &path,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"Open\"\n{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0)]\n}\ndef BasisCurves \"Ring\"\n{\n    uniform token type = \"linear\"\n    uniform token wrap = \"periodic\"\n    int[] curveVertexCounts = [3]\n    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n}\n",
+    )
+    .unwrap();
+    let out = coif(&["info", path_str(&path)]);
+    assert_eq!(out.status.code(), Some(2));
+    let message = stderr(&out);
+    assert!(message.contains("</Ring>") && message.contains("periodic"), "{message}");
+}
+
+#[test]
+fn directions_rotate_with_the_points_from_z_up() {
+    // Blender-style Z-up stage: a normal3f primvar and a plain float3 `surface_normal`.
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("zup.usda");
+    let normals = [[0.0f32, 0.0, 1.0], [0.0, 0.6, 0.8], [1.0, 0.0, 0.0]];
+    let text_normals: Vec<String> =
+        normals.iter().map(|n| format!("({}, {}, {})", n[0], n[1], n[2])).collect();
+    std::fs::write(
+        &source,
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Z\"\n)\ndef BasisCurves \"Hair\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2, 2, 2]\n    point3f[] points = [(0, 0, 0), (0, 0, 1), (1, 0, 0), (1, 0, 1), (2, 0, 0), (2, 1, 1)]\n    normal3f[] primvars:N = [{0}] (\n        interpolation = \"uniform\"\n    )\n    float3[] primvars:surface_normal = [{0}] (\n        interpolation = \"uniform\"\n    )\n}}\n",
+            text_normals.join(", ")
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("yup.usda");
+    let result = coif(&["convert", path_str(&source), path_str(&out)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let written = pxr_dump(&out, None);
+    assert_eq!(written["upAxis"], "Y");
+    for name in ["N", "surface_normal"] {
+        let values = f32s(&written["curves"][0]["primvars"][name]["values"]);
+        // Z up to Y up: (x, y, z) -> (x, z, -y).
+        let mean_dot: f32 = normals
+            .iter()
+            .zip(values.chunks_exact(3))
+            .map(|(n, w)| n[0] * w[0] + n[2] * w[1] - n[1] * w[2])
+            .sum::<f32>()
+            / normals.len() as f32;
+        assert!(mean_dot >= 0.999, "{name}: mean dot with the rotated source {mean_dot}");
+    }
+    assert_eq!(written["curves"][0]["primvars"]["N"]["type"], "normal3f[]");
+}
