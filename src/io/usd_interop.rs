@@ -111,17 +111,11 @@ pub fn write(path: &Path, groom: &Groom) -> Result<()> {
 /// `.usdc`/`.usdz` through usd-core. Atomic either way. For animated output:
 ///
 /// ```no_run
-/// # use coif::io::{usd_interop, usda::{AnimationWriter, TimeCodes}};
+/// # use coif::io::{usd_interop, usda::{self, TimeCodes}};
 /// # let (groom, path) = (coif::Groom::default(), std::path::Path::new("out.usdc"));
-/// # let frames: Vec<(f64, Vec<glam::Vec3>)> = Vec::new();
+/// # let frames: Vec<Vec<glam::Vec3>> = Vec::new();
 /// let times = TimeCodes { start: 1.0, end: frames.len() as f64, per_second: 24.0 };
-/// usd_interop::write_usd(path, |w| {
-///     let mut writer = AnimationWriter::begin(w, &groom, times, path)?;
-///     for (time, points) in &frames {
-///         writer.frame(*time, points)?;
-///     }
-///     writer.finish().map(|_| ())
-/// })?;
+/// usd_interop::write_usd(path, |w| usda::write_animated(&groom, &frames, times, w, path))?;
 /// # Ok::<(), coif::Error>(())
 /// ```
 pub fn write_usd<F>(path: &Path, fill: F) -> Result<()>
