@@ -146,34 +146,23 @@ fn pxr_sees_multi_group_usdc_exactly_as_usda_and_coif_reads_it_back() {
 }
 
 #[test]
-fn animated_multi_group_usdc_matches_animated_usda_in_pxr() {
+fn animated_usdc_has_the_time_samples_and_metadata_of_animated_usda() {
     let dir = tempfile::tempdir().unwrap();
-    let groom = interleaved_groups_groom();
-    let frames: Vec<Vec<Vec3>> =
-        (1..=2).map(|f| groom.points.iter().map(|p| *p * (1.0 + 0.1 * f as f32)).collect()).collect();
-    let (text, binary) = (dir.path().join("anim.usda"), dir.path().join("anim.usdc"));
-    for path in [&text, &binary] {
-        coif::io::write_animated(path, &groom, &frames, 24.0, &Default::default()).unwrap();
-    }
-    for time in [Some(1.0), Some(1.5), Some(2.0)] {
-        let (from_text, from_binary) = (pxr_dump(&text, time), pxr_dump(&binary, time));
-        assert_eq!(from_binary["validationErrors"], serde_json::json!([]), "time {time:?}");
-        assert_eq!(from_text, from_binary, "time {time:?}");
+    // One curve prim, and several groups (interleaved strands, three bases).
+    for groom in [rich_groom(CurveBasis::CatmullRom), interleaved_groups_groom()] {
+        animated_usdc_matches_animated_usda(&groom, dir.path());
     }
 }
 
-#[test]
-fn animated_usdc_has_the_time_samples_and_metadata_of_animated_usda() {
-    let dir = tempfile::tempdir().unwrap();
-    let groom = rich_groom(CurveBasis::CatmullRom);
+fn animated_usdc_matches_animated_usda(groom: &Groom, dir: &Path) {
     let frames: Vec<Vec<Vec3>> = (1..=3)
         .map(|f| {
             groom.points.iter().map(|p| *p + Vec3::new(0.01 * f as f32, -0.003 * f as f32, 0.0)).collect()
         })
         .collect();
-    let (text, binary) = (dir.path().join("anim.usda"), dir.path().join("anim.usdc"));
+    let (text, binary) = (dir.join("anim.usda"), dir.join("anim.usdc"));
     for path in [&text, &binary] {
-        coif::io::write_animated(path, &groom, &frames, 30.0, &Default::default()).unwrap();
+        coif::io::write_animated(path, groom, &frames, 30.0, &Default::default()).unwrap();
     }
     for time in [Some(1.0), Some(2.5), Some(3.0)] {
         let (from_text, from_binary) = (pxr_dump(&text, time), pxr_dump(&binary, time));
@@ -199,7 +188,7 @@ fn animated_usdc_has_the_time_samples_and_metadata_of_animated_usda() {
     assert_eq!(earliest(&binary), earliest(&text), "without a time, the earliest sample");
     let times = TimeCodes { start: 1.0, end: 2.0, per_second: 24.0 };
     let bad =
-        coif::io::usdc::write_animated(&binary, &groom, &[groom.points[1..].to_vec()], times).unwrap_err();
+        coif::io::usdc::write_animated(&binary, groom, &[groom.points[1..].to_vec()], times).unwrap_err();
     assert!(matches!(bad, coif::Error::Usage(_)), "{bad}");
 }
 
@@ -380,4 +369,35 @@ fn no_python_is_started_for_usdc() {
     run(&["convert", path_str(&houdini), path_str(&direct)]);
     assert_eq!(std::fs::read(&f).unwrap(), std::fs::read(&direct).unwrap(), "same groups through .usdc");
     assert_eq!(std::fs::read(&d).unwrap(), std::fs::read(&e).unwrap());
+}
+
+#[test]
+fn composed_crate_files_exit_2_naming_the_arc_without_python() {
+    let dir = tempfile::tempdir().unwrap();
+    probe(&["author-composed", path_str(dir.path())]);
+    let (stage, payload) = (dir.path().join("stage.usdc"), dir.path().join("payload.usdc"));
+    pxr_export(&dir.path().join("stage.usda"), &stage);
+    pxr_export(&dir.path().join("payload.usda"), &payload);
+    let plain = dir.path().join("plain.usdc");
+    coif::io::write_groom(&plain, &rich_groom(CurveBasis::Linear)).unwrap();
+    let out = dir.path().join("out.usda");
+    for (args, named) in [
+        (vec!["convert", path_str(&stage), path_str(&out)], "'references'"),
+        (vec!["convert", path_str(&payload), path_str(&out)], "'variant"),
+        (
+            vec!["convert", "--variant", "length=long", path_str(&plain), path_str(&out)],
+            "--variant length=long",
+        ),
+    ] {
+        let result = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(&args)
+            .env("COIF_PYTHON", "/nonexistent/python")
+            .env("COIF_PIPELINE", "/nonexistent")
+            .output()
+            .unwrap();
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {}", stderr(&result));
+        let message = stderr(&result);
+        assert!(message.contains(named) && message.contains(".usdc"), "{args:?}: {message}");
+        assert!(!out.exists(), "no output for {args:?}");
+    }
 }

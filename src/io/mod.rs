@@ -161,17 +161,27 @@ pub fn read_groom_selected(
                 }
             }
         }
-        Format::Usdc if selection.variants.is_empty() => {
+        // Crate files never start Python: what needs composition is refused, naming it.
+        Format::Usdc => {
+            let flatten =
+                "flatten it first (pipeline/usd_interop.py flatten IN OUT.usda [--variant SET=NAME])";
+            if let Some(variant) = selection.variants.first() {
+                return Err(Error::Usage(format!(
+                    "{}: --variant {variant} needs composition, which coif does not do for crate files; {flatten}",
+                    path.display()
+                )));
+            }
             match usdc::read_file(path, options, selection.time)? {
                 usdc::ReadOutcome::Groom(groom) => groom,
-                usdc::ReadOutcome::NeedsComposition { .. } => {
-                    usd_interop::read(path, options, selection.time, &[])?
+                usdc::ReadOutcome::NeedsComposition { what } => {
+                    return Err(Error::Usage(format!(
+                        "{}: the layer uses '{what}' (composition), which coif does not resolve in crate files; {flatten}",
+                        path.display()
+                    )))
                 }
             }
         }
-        Format::Usda | Format::Usdc | Format::Usdz => {
-            usd_interop::read(path, options, selection.time, &selection.variants)?
-        }
+        Format::Usda | Format::Usdz => usd_interop::read(path, options, selection.time, &selection.variants)?,
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;

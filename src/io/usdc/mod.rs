@@ -36,7 +36,9 @@
 //!
 //! The writer emits version 0.8.0 (what usd-core writes); the reader accepts 0.4.0 to 0.12.x.
 //! Reading builds the same layer model as the `.usda` parser, so both formats give the same
-//! groom; a layer with composition arcs is handed to usd-core to flatten, as for `.usda`.
+//! groom. Composition (references, payloads, inherits, specializes, sublayers, variants) is not
+//! resolved: such a layer, or a `--variant`, is refused with exit 2 naming the arc — no Python is
+//! ever started for a crate file.
 mod compress;
 mod decode;
 mod encode;
