@@ -287,7 +287,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = coif::sim::BondInfluences::SCENE_3.0)]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
     #[arg(long, default_value_t = 3.9e9)]
