@@ -25,6 +25,7 @@ use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape}
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
+use crate::progress::{Progress, ProgressMode};
 use crate::sim::settle::settle_with;
 use crate::sim::{
     BondInfluences, BondKind, Cuticle, Material, SettleOptions, SettleReport, SimParams, Simulation,
@@ -35,8 +36,8 @@ use crate::sim::{
 pub struct StyleOptions {
     /// Capture the groom this many times per simulated second (0: only the result).
     pub frames_per_second: f32,
-    /// Draw a progress bar on stderr (only shown on a terminal).
-    pub progress: bool,
+    /// How to report progress on stderr.
+    pub progress: ProgressMode,
     /// The groom's own scalp or head mesh: `shape = "scalp"` obstacles collide with it and the
     /// head frame is fitted to it. Readers of groom files that carry a mesh fill it in.
     pub scalp: Option<Arc<TriangleMesh>>,
@@ -119,32 +120,20 @@ pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptio
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
-    let progress = options.progress.then(|| {
-        let bar = indicatif::ProgressBar::new(total_steps);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} steps ({eta})")
-                .expect("a valid template")
-                .progress_chars("=> "),
-        );
-        bar
-    });
+    let progress = Progress::new(options.progress, "style", total_steps);
     // The stages placed on this groom (head-frame lengths in metres, layouts as rods).
     let placed_stages = session.recipe.stages.clone();
     for (index, spanned) in placed_stages.iter().enumerate() {
         let stage = spanned.get_ref();
-        if let Some(bar) = &progress {
-            bar.set_message(stage.kind());
-        }
+        progress.set_message(&format!("stage {}/{} {}", index + 1, placed_stages.len(), stage.kind()));
         let start = Instant::now();
         session.penetration = 0.0;
         let steps_before = session.sim.steps_taken();
-        let settle = session.run_stage(index, stage, progress.as_ref())?;
+        let settle = session.run_stage(index, stage, &progress)?;
         let steps = session.sim.steps_taken() - steps_before;
         stages.push(session.stage_report(index, stage, steps, start.elapsed().as_secs_f64(), settle));
     }
-    if let Some(bar) = progress {
-        bar.finish_and_clear();
-    }
+    progress.finish();
     let report = StyleReport {
         strands: session.groom.strand_count(),
         guides: None,
@@ -515,18 +504,11 @@ impl Session {
         }
     }
 
-    fn run_steps(
-        &mut self,
-        steps: u64,
-        progress: Option<&indicatif::ProgressBar>,
-        mut each: impl FnMut(&mut Self, u64),
-    ) {
+    fn run_steps(&mut self, steps: u64, progress: &Progress, mut each: impl FnMut(&mut Self, u64)) {
         for k in 0..steps {
             each(self, k);
             self.step();
-            if let Some(bar) = progress {
-                bar.inc(1);
-            }
+            progress.inc(1);
         }
     }
 
@@ -534,7 +516,7 @@ impl Session {
         &mut self,
         index: usize,
         stage: &Stage,
-        progress: Option<&indicatif::ProgressBar>,
+        progress: &Progress,
     ) -> Result<Option<SettleReport>> {
         let steps = self.steps_for(stage.duration());
         match stage {
@@ -657,7 +639,7 @@ impl Session {
     fn chemistry(
         &mut self,
         steps: u64,
-        progress: Option<&indicatif::ProgressBar>,
+        progress: &Progress,
         amounts: &super::recipe::BondAmounts,
         sign: f32,
         vertices: Option<&[bool]>,
@@ -691,22 +673,10 @@ impl Session {
 
     /// The static solve (`sim::settle`) with this session's full step: forces, contacts and
     /// wetness.
-    fn settle(&mut self, options: &SettleOptions, progress: Option<&indicatif::ProgressBar>) -> SettleReport {
+    fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> SettleReport {
         let budget = self.steps_for(options.max_seconds).max(1);
-        let report = settle_with(
-            self,
-            |s| &mut s.sim,
-            Self::step,
-            options,
-            || {
-                if let Some(bar) = progress {
-                    bar.inc(1);
-                }
-            },
-        );
-        if let Some(bar) = progress {
-            bar.inc(budget.saturating_sub(report.steps));
-        }
+        let report = settle_with(self, |s| &mut s.sim, Self::step, options, || progress.inc(1));
+        progress.inc(budget.saturating_sub(report.steps));
         report
     }
 
