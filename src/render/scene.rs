@@ -322,9 +322,10 @@ impl<'d> RenderScene<'d> {
             return Err(Error::Usage("render: the groom has no strands to render".into()));
         }
         if options.floor {
-            let extent = (hi - lo).max_element().max(1e-3);
-            let size = options.floor_size.map_or(50.0 * extent, |s| 0.5 * s);
-            let y = options.floor_height.unwrap_or(lo.y - 5e-3 * extent);
+            // Half the edge: by default a horizon for any view, just below the hair and head.
+            let default_size = 50.0 * (hi - lo).max_element().max(1e-3);
+            let size = options.floor_size.map_or(default_size, |s| 0.5 * s);
+            let y = options.floor_height.unwrap_or(lo.y - 1e-4 * default_size);
             let c = 0.5 * (lo + hi);
             let vertices = [
                 Vec3::new(c.x - size, y, c.z - size),
