@@ -193,30 +193,34 @@ class Mitsuba:
         return pixels[..., :3], None, seconds
 
 
-def measure(renderer, reference, window, spps, runs):
-    rows = []
+def measure(renderers, window, spps, runs):
+    """Median time and errors per renderer and sample count. The renderers take turns on every
+    seed, so a change of the machine's load hits both alike."""
+    rows = {r.name: [] for r, _ in renderers}
     for spp in spps:
-        errors_full, errors_window, seconds = [], [], []
+        samples = {r.name: ([], [], []) for r, _ in renderers}
         for seed in range(1, runs + 1):
-            image, _, s = renderer.render(spp, seed)
-            errors_full.append(relative_rmse(image, reference))
-            errors_window.append(relative_rmse(image, reference, window))
-            seconds.append(s)
-        rows.append(
-            {
+            for renderer, reference in renderers:
+                image, _, seconds = renderer.render(spp, seed)
+                full, in_window, times = samples[renderer.name]
+                full.append(relative_rmse(image, reference))
+                in_window.append(relative_rmse(image, reference, window))
+                times.append(seconds)
+        for renderer, _ in renderers:
+            full, in_window, times = samples[renderer.name]
+            row = {
                 "spp": spp,
-                "seconds": float(np.median(seconds)),
-                "rrmse_full": float(np.median(errors_full)),
-                "rrmse_window": float(np.median(errors_window)),
+                "seconds": float(np.median(times)),
+                "rrmse_full": float(np.median(full)),
+                "rrmse_window": float(np.median(in_window)),
                 "load": load()[0],
             }
-        )
-        r = rows[-1]
-        print(
-            f"  {renderer.name:32s} {spp:5d} spp  {r['seconds']:8.3f} s  rRMSE full {r['rrmse_full']:.4f}"
-            f"  window {r['rrmse_window']:.4f}  (load {r['load']:.1f})",
-            flush=True,
-        )
+            rows[renderer.name].append(row)
+            print(
+                f"  {renderer.name:32s} {spp:5d} spp  {row['seconds']:8.3f} s  rRMSE full {row['rrmse_full']:.4f}"
+                f"  window {row['rrmse_window']:.4f}  (load {row['load']:.1f})",
+                flush=True,
+            )
     return rows
 
 
@@ -275,9 +279,7 @@ def main():
     np.save(os.path.join(args.out, "coif_reference.npy"), coif_reference)
     np.save(os.path.join(args.out, "mitsuba_reference.npy"), mitsuba_reference)
 
-    results = {}
-    for renderer, reference in [(coif, coif_reference), (mitsuba, mitsuba_reference)]:
-        results[renderer.name] = measure(renderer, reference, window, spps, args.runs)
+    results = measure([(coif, coif_reference), (mitsuba, mitsuba_reference)], window, spps, args.runs)
 
     coif_rows = results[coif.name]
     summary = {}
