@@ -76,6 +76,14 @@ clean:
 	rm -rf out
 
 # USD export/import: native .usda vs usd-core's .usdc (100,000 x 32 groom; medians of 3 runs).
+# Optional: coif's Chiang lobe against Mitsuba 3's hair BSDF at equal noise (installs Mitsuba into
+# .deps/mitsuba-venv; never part of `make test`). BENCH_PEERS_ARGS passes options, e.g. --runs 5.
+.PHONY: bench-peers
+bench-peers: setup
+	bash scripts/peers_setup.sh
+	$(CARGO) build --release --locked
+	.deps/mitsuba-venv/bin/python scripts/bench_peers.py --coif target/release/coif --out out/bench-peers $(BENCH_PEERS_ARGS)
+
 .PHONY: bench-usd
 bench-usd: setup
 	$(CARGO) bench --locked --bench usd

@@ -235,6 +235,23 @@ pub(crate) struct RenderArgs {
     /// Leave out the floor.
     #[arg(long)]
     pub(crate) no_floor: bool,
+    /// Floor height (world Y, metres; default: just below the hair and head).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) floor_height: Option<f32>,
+    /// Floor edge length, metres (default: a horizon for any view).
+    #[arg(long)]
+    pub(crate) floor_size: Option<f32>,
+    /// Floor albedo, linear r,g,b in [0, 1].
+    #[arg(long)]
+    pub(crate) floor_albedo: Option<String>,
+    /// The shot's camera, lights and floor: a scene file (.toml) or a USD stage (.usda, .usdc)
+    /// with a UsdGeom Camera and UsdLux distant, rect and dome lights. Flags given explicitly
+    /// override it.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) scene: Option<PathBuf>,
+    /// The camera prim to use when the --scene stage has several, e.g. /shot/cam.
+    #[arg(long, value_name = "PRIM")]
+    pub(crate) scene_camera: Option<String>,
     /// Bounce limit of a path.
     #[arg(long, default_value_t = 8)]
     pub(crate) max_depth: u32,

@@ -66,6 +66,15 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if let Some(direction) = &args.light_dir {
         flag_direction("--light-dir", coif::render::parse_vec3(direction, "--light-dir")?.into())?;
     }
+    if let Some(height) = args.floor_height {
+        flag("--floor-height", height, COORDINATE)?;
+    }
+    if let Some(size) = args.floor_size {
+        flag("--floor-size", size, Range::above(0.0, 1e4))?;
+    }
+    if let Some(albedo) = &args.floor_albedo {
+        flag_vector("--floor-albedo", coif::render::parse_vec3(albedo, "--floor-albedo")?.into(), FRACTION)?;
+    }
     Ok(())
 }
 

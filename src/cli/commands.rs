@@ -268,8 +268,33 @@ fn run_render(args: RenderArgs) -> Result<()> {
     settings.key.direction =
         args.light_dir.as_deref().map(|d| render::parse_vec3(d, "--light-dir")).transpose()?;
     settings.key.irradiance *= args.light_intensity;
+    // The shot first; flags given explicitly override its parts.
+    if let Some(scene) = &args.scene {
+        let shot =
+            render::shot::Shot::load(scene, args.scene_camera.as_deref(), width as f32 / height as f32)?;
+        if shot.lights.is_some() && args.light_dir.is_some() {
+            return Err(Error::Usage(format!(
+                "--light-dir moves the default key light, but {} gives the lights",
+                scene.display()
+            )));
+        }
+        shot.apply(&mut settings);
+        if let Some(camera) = &args.camera {
+            settings.camera = Some(camera.parse()?);
+        }
+        if args.no_floor {
+            settings.scene.floor = false;
+        }
+    } else if args.scene_camera.is_some() {
+        return Err(Error::Usage("--scene-camera needs --scene".into()));
+    }
     if let Some(radiance) = args.environment {
         settings.environment = Environment::Constant(glam::Vec3::splat(radiance));
+    }
+    settings.scene.floor_height = args.floor_height.or(settings.scene.floor_height);
+    settings.scene.floor_size = args.floor_size.or(settings.scene.floor_size);
+    if let Some(albedo) = &args.floor_albedo {
+        settings.scene.floor_albedo = render::parse_vec3(albedo, "--floor-albedo")?;
     }
 
     let loaded = io::read_groom(&args.input, &args.import.options()?)?;

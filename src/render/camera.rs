@@ -40,6 +40,8 @@ impl View {
 pub struct CameraSpec {
     pub position: Vec3,
     pub target: Vec3,
+    /// The image's up direction (default: world +Y, or −Z looking straight up or down).
+    pub up: Option<Vec3>,
     pub fov_degrees: Option<f32>,
 }
 
@@ -70,7 +72,7 @@ impl FromStr for CameraSpec {
                 )));
             }
         }
-        Ok(CameraSpec { position, target, fov_degrees })
+        Ok(CameraSpec { position, target, up: None, fov_degrees })
     }
 }
 
@@ -90,10 +92,23 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// A camera at `position` looking at `target` with the given vertical field of view.
-    pub fn look_at(position: Vec3, target: Vec3, fov_y_degrees: f32, width: u32, height: u32) -> Camera {
+    /// A camera at `position` looking at `target` with the given vertical field of view; `up`
+    /// (default +Y) sets the roll.
+    pub fn look_at(
+        position: Vec3,
+        target: Vec3,
+        up: Option<Vec3>,
+        fov_y_degrees: f32,
+        width: u32,
+        height: u32,
+    ) -> Camera {
         let forward = (target - position).normalize();
-        let hint = if forward.cross(Vec3::Y).length_squared() < 1e-6 { Vec3::NEG_Z } else { Vec3::Y };
+        let usable = |hint: Vec3| forward.cross(hint).length_squared() > 1e-6 * hint.length_squared();
+        let hint = match up {
+            Some(up) if usable(up) => up,
+            _ if usable(Vec3::Y) => Vec3::Y,
+            _ => Vec3::NEG_Z,
+        };
         Camera::with_up(position, forward, hint, fov_y_degrees, width, height)
     }
 
@@ -196,7 +211,7 @@ mod tests {
 
     #[test]
     fn centre_pixel_looks_at_the_target_and_up_is_up() {
-        let camera = Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, 40.0, 100, 100);
+        let camera = Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, None, 40.0, 100, 100);
         assert!((camera.direction(50.0, 50.0) - Vec3::NEG_Z).length() < 1e-6);
         assert!(camera.direction(50.0, 0.0).y > 0.0, "the top row looks up");
         assert!(camera.direction(100.0, 50.0).x > 0.0, "the right column looks right");

@@ -11,7 +11,7 @@ use glam::Vec3;
 use super::bsdf::{Bsdf, HairLobes, KajiyaKay, Lambert};
 use super::camera::Camera;
 use super::hair_bsdf::{offset_across_fibre, ChiangHair, ChiangParams, Pigment};
-use super::light::{power_heuristic, Environment, KeyLight};
+use super::light::{power_heuristic, Environment, Light};
 use super::sampler::{mix64, Sampler};
 use super::scene::{AttributeView, RenderScene, Surface};
 use crate::embree::{Hit, Ray};
@@ -59,8 +59,11 @@ pub enum Mode {
 pub struct Integrator<'a> {
     pub scene: &'a RenderScene<'a>,
     pub camera: Camera,
-    pub key: KeyLight,
+    /// Lights sampled explicitly at every bounce (the key light by default).
+    pub lights: &'a [Light],
     pub environment: Environment,
+    /// Direction the debug views shade from (towards a light).
+    pub debug_light: Vec3,
     pub lobes: &'a HairLobes,
     pub lobe: Lobe,
     pub chiang: &'a ChiangParams,
@@ -125,23 +128,18 @@ impl Integrator<'_> {
         })
     }
 
-    /// Whether the direction from `origin` reaches the sky unblocked.
+    /// Whether the segment from `origin` along `direction` is unblocked between `t_near` and
+    /// `t_far`.
     fn unoccluded(
         &self,
         origin: Vec3,
         direction: Vec3,
-        t_near: f32,
+        (t_near, t_far): (f32, f32),
         ray_id: u32,
         rays: &mut RayCount,
     ) -> bool {
         rays.0 += 1;
-        !self.scene.embree().occluded_ray(&Ray {
-            origin,
-            direction,
-            t_near,
-            t_far: f32::INFINITY,
-            id: ray_id,
-        })
+        !self.scene.embree().occluded_ray(&Ray { origin, direction, t_near, t_far, id: ray_id })
     }
 
     /// A sample through pixel `(px, py)`: the camera ray's direction and its first hit (given
@@ -180,6 +178,16 @@ impl Integrator<'_> {
             let seed = ray_id(coin_seed, depth);
             if depth > 0 {
                 hit = self.closest(origin, direction, t_near, seed, rays);
+                // Area lights are not in the ray-tracing scene: a continuation finds one when it
+                // meets it before the next surface.
+                if let Some(pdf) = bsdf_pdf {
+                    let t_hit = hit.map_or(f32::INFINITY, |h| h.t);
+                    for light in self.lights {
+                        if let Some((radiance, light_pdf)) = light.area_hit(origin, direction, t_hit) {
+                            result.radiance += throughput * radiance * power_heuristic(pdf, light_pdf);
+                        }
+                    }
+                }
             }
             let Some(h) = hit else {
                 let sky = self.environment.radiance(direction);
@@ -193,8 +201,13 @@ impl Integrator<'_> {
                             } else {
                                 1.0
                             };
-                            sky * sky_weight
-                                + self.key.radiance(direction) * power_heuristic(pdf, self.key.pdf())
+                            let mut distant = Vec3::ZERO;
+                            for light in self.lights {
+                                if let Light::Distant(key) = light {
+                                    distant += key.radiance(direction) * power_heuristic(pdf, key.pdf());
+                                }
+                            }
+                            sky * sky_weight + distant
                         }
                     };
                 break;
@@ -228,19 +241,29 @@ impl Integrator<'_> {
             let mis =
                 |light_pdf: f32, bsdf_pdf: f32| if last { 1.0 } else { power_heuristic(light_pdf, bsdf_pdf) };
 
-            // Next-event estimation: the key light, then the sky.
-            let (wi, irradiance) = self.key.sample(sampler.get_2d());
-            let (value, pdf) = bsdf.eval(wo, wi);
-            if value.max_element() > 0.0
-                && self.unoccluded(offset(wi), wi, spawn_near, seed ^ 0x5bd1_e995, rays)
-            {
-                result.radiance += throughput * value * irradiance * mis(self.key.pdf(), pdf);
+            // Next-event estimation: each light, then the sky.
+            for (index, light) in self.lights.iter().enumerate() {
+                let sample = light.sample(spawn, sampler.get_2d());
+                if sample.weight.max_element() <= 0.0 {
+                    continue;
+                }
+                let (value, pdf) = bsdf.eval(wo, sample.direction);
+                // Stop short of an area light's surface (its own plane would not block, but the
+                // margin keeps rounding from finding geometry behind it).
+                let reach = (spawn_near, sample.distance * (1.0 - 1e-4));
+                let shadow_id = seed ^ 0x5bd1_e995u32.wrapping_add(0x9e37_79b9u32.wrapping_mul(index as u32));
+                if value.max_element() > 0.0
+                    && self.unoccluded(offset(sample.direction), sample.direction, reach, shadow_id, rays)
+                {
+                    result.radiance += throughput * value * sample.weight * mis(sample.pdf, pdf);
+                }
             }
             if self.sky_light_samples() {
                 let (wi, sky_pdf) = self.environment.sample(sampler.get_2d());
                 let (value, pdf) = bsdf.eval(wo, wi);
+                let reach = (spawn_near, f32::INFINITY);
                 if value.max_element() > 0.0
-                    && self.unoccluded(offset(wi), wi, spawn_near, seed ^ 0x2545_f491, rays)
+                    && self.unoccluded(offset(wi), wi, reach, seed ^ 0x2545_f491, rays)
                 {
                     result.radiance +=
                         throughput * value * self.environment.radiance(wi) * (mis(sky_pdf, pdf) / sky_pdf);
@@ -274,7 +297,7 @@ impl Integrator<'_> {
     /// sharp lobes rarely find the sky by themselves; Kajiya–Kay previews keep the cost of
     /// before (one shadow ray per bounce).
     fn sky_light_samples(&self) -> bool {
-        self.lobe == Lobe::Chiang
+        self.lobe == Lobe::Chiang && !self.environment.is_black()
     }
 
     /// The hair BSDF at a hit, for the render's lobe.
@@ -314,7 +337,7 @@ impl Integrator<'_> {
         };
         let position = self.camera.position + direction * h.t;
         let surface = self.scene.surface(&h, position, direction);
-        let light = self.key.direction;
+        let light = self.debug_light;
         let (colour, tangent) = match (self.mode, surface) {
             (Mode::Depth, s) => {
                 let (near, far) = self.depth_range;

@@ -23,6 +23,7 @@ pub mod integrator;
 pub mod light;
 pub mod sampler;
 pub mod scene;
+pub mod shot;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -39,7 +40,7 @@ use camera::{Camera, CameraSpec, View, DEFAULT_FOV};
 use hair_bsdf::ChiangParams;
 use image::{Aov, Image};
 use integrator::{Integrator, Lobe, Mode, RayCount};
-use light::{Environment, KeyLight};
+use light::{Environment, KeyLight, Light};
 use sampler::{hash, Sampler, SamplerKind};
 use scene::{AttributeView, RenderScene, SceneOptions, WidthFloor};
 
@@ -85,6 +86,8 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     pub seed: u64,
     pub key: KeySettings,
+    /// The lights of the user's shot, replacing the key light (`None`: the key light).
+    pub lights: Option<Vec<Light>>,
     pub environment: Environment,
     /// Exposure in stops applied to the beauty image.
     pub exposure: f32,
@@ -112,6 +115,7 @@ impl Default for RenderSettings {
             sampler: SamplerKind::Sobol,
             seed: 0,
             key: KeySettings::default(),
+            lights: None,
             environment: Environment::default(),
             exposure: 0.0,
             time_budget: None,
@@ -195,6 +199,7 @@ fn make_camera(settings: &RenderSettings, bounds: (Vec3, Vec3)) -> Camera {
         Some(spec) => Camera::look_at(
             spec.position,
             spec.target,
+            spec.up,
             spec.fov_degrees.unwrap_or(settings.fov_degrees),
             settings.width,
             settings.height,
@@ -251,7 +256,18 @@ pub fn render(
     let key_direction = settings.key.direction.unwrap_or_else(|| {
         (camera.right() * -0.55 + camera.up() * 0.8 - camera.forward() * 0.45).normalize()
     });
-    let key = KeyLight::new(key_direction, settings.key.irradiance, settings.key.angular_radius_degrees);
+    let lights = match &settings.lights {
+        Some(lights) => lights.clone(),
+        None => vec![Light::Distant(KeyLight::new(
+            key_direction,
+            settings.key.irradiance,
+            settings.key.angular_radius_degrees,
+        ))],
+    };
+    let debug_light = lights
+        .iter()
+        .find_map(|l| if let Light::Distant(key) = l { Some(key.direction) } else { None })
+        .unwrap_or(key_direction);
 
     let attribute = match &settings.mode {
         Mode::Attribute { name, .. } => Some(AttributeView::from_groom(groom, name)?),
@@ -286,8 +302,9 @@ pub fn render(
     let integrator = Integrator {
         scene: &scene,
         camera,
-        key,
+        lights: &lights,
         environment: settings.environment,
+        debug_light,
         lobes: &lobes,
         lobe: settings.lobe,
         chiang: &settings.chiang,

@@ -34,6 +34,11 @@ pub struct SceneOptions {
     pub melanin: Option<[f32; 2]>,
     pub head_albedo: Vec3,
     pub floor_albedo: Vec3,
+    /// Height (world Y, metres) of the floor (default: just below the hair and head).
+    pub floor_height: Option<f32>,
+    /// Edge length of the square floor, metres, centred under the groom (default: 100 times
+    /// the groom's size, a horizon for any view).
+    pub floor_size: Option<f32>,
 }
 
 /// Hair colour when neither the groom nor the command line gives one: a medium brown.
@@ -50,6 +55,8 @@ impl Default for SceneOptions {
             melanin: None,
             head_albedo: Vec3::new(0.55, 0.45, 0.40),
             floor_albedo: Vec3::splat(0.35),
+            floor_height: None,
+            floor_size: None,
         }
     }
 }
@@ -315,8 +322,10 @@ impl<'d> RenderScene<'d> {
             return Err(Error::Usage("render: the groom has no strands to render".into()));
         }
         if options.floor {
-            let size = 50.0 * (hi - lo).max_element().max(1e-3);
-            let y = lo.y - 1e-4 * size;
+            // Half the edge: by default a horizon for any view, just below the hair and head.
+            let default_size = 50.0 * (hi - lo).max_element().max(1e-3);
+            let size = options.floor_size.map_or(default_size, |s| 0.5 * s);
+            let y = options.floor_height.unwrap_or(lo.y - 1e-4 * default_size);
             let c = 0.5 * (lo + hi);
             let vertices = [
                 Vec3::new(c.x - size, y, c.z - size),

@@ -547,7 +547,7 @@ pub fn bake_mesh(
 }
 
 /// "line N, column M: what" from a TOML error, on one line.
-fn toml_message(error: &toml::de::Error, text: &str) -> String {
+pub(crate) fn toml_message(error: &toml::de::Error, text: &str) -> String {
     let what = error.message().trim();
     match error.span() {
         Some(span) => {

@@ -25,7 +25,7 @@ pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_P
 pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
 pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, Prim, Value};
-pub(crate) use reader::groom_from_layer;
+pub(crate) use reader::{groom_from_layer, local_transform, stage_transform, value_at};
 
 /// First bytes of every `.usda` file.
 pub const MAGIC: &[u8] = b"#usda";
@@ -105,14 +105,34 @@ pub fn read(
     reader::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom)
 }
 
+/// Parses a `.usda` file into the layer model (for the prims a render reads besides curves:
+/// cameras and lights). A layer that needs composition is an error naming the arc.
+pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<Layer> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    match parser::parse(file, time) {
+        Ok(layer) => Ok(layer),
+        Err(parser::ParseError::Syntax(e)) => {
+            Err(Error::format(path, format!("line {}: {}", e.line, e.message)))
+        }
+        Err(parser::ParseError::Io(e)) => Err(Error::io(path, e)),
+        Err(parser::ParseError::Composition { line, what }) => Err(needs_composition(path, line, &what)),
+    }
+}
+
+fn needs_composition(path: &Path, line: u32, what: &str) -> Error {
+    Error::format(
+        path,
+        format!(
+            "line {line}: '{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"
+        ),
+    )
+}
+
 /// Reads a `.usda` file that must not need composition.
 pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<Groom> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     match read(file, path, options, time)? {
         ReadOutcome::Groom(groom) => Ok(groom),
-        ReadOutcome::NeedsComposition { line, what } => Err(Error::format(
-            path,
-            format!("line {line}: '{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"),
-        )),
+        ReadOutcome::NeedsComposition { line, what } => Err(needs_composition(path, line, &what)),
     }
 }

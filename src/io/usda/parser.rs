@@ -743,13 +743,29 @@ fn vertex_hint(prim: &Prim) -> usize {
     }
 }
 
-/// Attributes whose values the groom reader uses; others are checked for syntax and dropped.
+/// Attributes whose values coif uses (the groom's curves, and the cameras and lights a render
+/// reads: `UsdGeom.Camera` lens attributes, `UsdLux` `inputs:`); others are checked for syntax and
+/// dropped.
 pub fn wanted(name: &str) -> bool {
     matches!(
         name,
-        "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "purpose" | "xformOpOrder"
+        "curveVertexCounts"
+            | "points"
+            | "widths"
+            | "type"
+            | "basis"
+            | "wrap"
+            | "purpose"
+            | "xformOpOrder"
+            | "projection"
+            | "focalLength"
+            | "horizontalAperture"
+            | "verticalAperture"
+            | "horizontalApertureOffset"
+            | "verticalApertureOffset"
     ) || name.starts_with("primvars:")
         || name.starts_with("xformOp:")
+        || name.starts_with("inputs:")
 }
 
 /// Keeps, among all samples offered, the ones value resolution at `requested` needs: with no

@@ -32,13 +32,10 @@ struct Curves {
     attributes: Vec<GroomAttribute>,
 }
 
-/// Builds the groom a layer describes, at `time` (see [`value_at`]).
-pub fn groom_from_layer(
-    layer: Layer,
-    path: &Path,
-    options: &ImportOptions,
-    time: Option<f64>,
-) -> Result<Groom> {
+/// The transform from a layer's space to coif's (metres, Y up), applied after each prim's world
+/// transform: rotate Z up to Y up, then scale to metres. `options` apply where the layer does
+/// not say.
+pub(crate) fn stage_transform(layer: &Layer, path: &Path, options: &ImportOptions) -> Result<DMat4> {
     let meters_per_unit = match layer.meters_per_unit {
         Some(m) if m.is_finite() && m > 0.0 => m,
         Some(m) => {
@@ -54,12 +51,22 @@ pub fn groom_from_layer(
         }
         None => options.up_axis.unwrap_or_default(),
     };
-    // Applied after each prim's world transform: rotate Z up to Y up, then scale to metres.
     let mut stage = DMat4::from_scale(DVec3::splat(meters_per_unit));
     if up_axis == UpAxis::Z {
         stage *=
             DMat4::from_cols(DVec3::X.extend(0.0), DVec3::NEG_Z.extend(0.0), DVec3::Y.extend(0.0), DVec4::W);
     }
+    Ok(stage)
+}
+
+/// Builds the groom a layer describes, at `time` (see [`value_at`]).
+pub fn groom_from_layer(
+    layer: Layer,
+    path: &Path,
+    options: &ImportOptions,
+    time: Option<f64>,
+) -> Result<Groom> {
+    let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
     let mut walker = Walker { path, time, stage, found: Vec::new() };
     for prim in layer.prims {
@@ -532,7 +539,7 @@ fn lerp(a: &Value, b: &Value, t: f64) -> Value {
 }
 
 /// A prim's local transform from its `xformOpOrder`, and whether it resets the parent stack.
-fn local_transform(prim: &Prim, time: Option<f64>) -> std::result::Result<(DMat4, bool), String> {
+pub(crate) fn local_transform(prim: &Prim, time: Option<f64>) -> std::result::Result<(DMat4, bool), String> {
     let Some(order) = prim.attribute("xformOpOrder").and_then(|a| value_at(a, time)) else {
         return Ok((DMat4::IDENTITY, false));
     };

@@ -66,6 +66,17 @@ pub fn read(
     usda::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom).map_err(unline)
 }
 
+/// The layer model of crate-file bytes (cameras and lights for a render), or the composition
+/// arc that stops a native read.
+pub(crate) fn read_layer(
+    bytes: &[u8],
+    path: &Path,
+    time: Option<f64>,
+) -> Result<std::result::Result<Layer, String>> {
+    let bad = |message: String| Error::format(path, format!("crate file: {message}"));
+    Crate::parse(bytes).map_err(bad)?.layer(time).map_err(bad)
+}
+
 /// A path: its parent path (`None` for the pseudo-root), its last element, whether a property.
 #[derive(Clone, Copy, Debug)]
 struct PathEntry {

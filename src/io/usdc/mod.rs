@@ -84,6 +84,17 @@ pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64
     decode::read(bytes, None, path, options, time)
 }
 
+/// The layer model of a crate file, for the cameras and lights a render reads.
+pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<usda::Layer> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode::read_layer(&bytes, path, time)?.map_err(|what| {
+        Error::format(
+            path,
+            format!("'{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"),
+        )
+    })
+}
+
 /// Reads a crate file: the structure through a map, large arrays straight from the file.
 pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
