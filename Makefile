@@ -45,28 +45,26 @@ check-blender: setup
 
 # Fuzzing (cargo-fuzz, installed by scripts/fuzz_setup.sh if missing; libFuzzer needs nightly
 # flags, which RUSTC_BOOTSTRAP=1 unlocks on the stable toolchain). `make fuzz` runs every target
-# for FUZZ_RUNS executions from its seeds in fuzz/seeds/TARGET, with memory and time limits;
-# `make fuzz-smoke` runs 10^5 each. A crash leaves its input in fuzz/artifacts/TARGET.
-FUZZ_TARGETS := hair_reader usda_reader alembic_reader obj_reader recipe manifest
+# for FUZZ_RUNS executions, one after the other, from its seeds in fuzz/seeds/TARGET plus the
+# corpus it grew before (fuzz/corpus/TARGET, not in git), with memory and time limits;
+# `make fuzz-smoke` runs 10^5 each. A crash leaves its input in fuzz/artifacts/TARGET and stops.
+FUZZ_TARGETS := hair_reader usda_reader usdc_reader alembic_reader obj_reader recipe manifest
 FUZZ_RUNS ?= 10000000
+FUZZ_FLAGS = -runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10
 .PHONY: fuzz fuzz-smoke
 fuzz:
 	bash scripts/fuzz_setup.sh
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz build
 	set -e; for target in $(FUZZ_TARGETS); do \
 		mkdir -p fuzz/corpus/$$target; \
-		(cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run $$target corpus/$$target seeds/$$target -- \
-			-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10); \
+		(cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run $$target corpus/$$target seeds/$$target -- $(FUZZ_FLAGS)); \
 	done
 fuzz-smoke:
 	$(MAKE) fuzz FUZZ_RUNS=100000
 fuzz-alembic:
 	$(MAKE) fuzz FUZZ_TARGETS=alembic_reader
-# The same for the crate-file (.usdc) reader, from the seeds in fuzz/seeds-usdc.
 fuzz-usdc:
-	command -v cargo-fuzz >/dev/null || $(CARGO) install cargo-fuzz --locked
-	mkdir -p fuzz/corpus/usdc_reader
-	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run usdc_reader corpus/usdc_reader seeds-usdc -- \
-		-runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -timeout=10
+	$(MAKE) fuzz FUZZ_TARGETS=usdc_reader
 # Re-renders the renderer's golden images in tests/golden/ (view them before committing).
 golden: setup
 	COIF_UPDATE_GOLDEN=1 $(CARGO) test --locked --test render_golden canonical_scenes

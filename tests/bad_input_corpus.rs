@@ -500,6 +500,31 @@ fn directory_cases(hair: &[u8]) -> Vec<Case> {
     ]
 }
 
+/// Inputs the fuzz targets (fuzz/) found crashing a reader, kept in tests/data/fuzz: each must
+/// now be refused with exit 2 naming the file. A groom format is opened by `coif info`; an OBJ
+/// as a recipe's mesh obstacle.
+fn fuzz_found_cases(hair: &[u8]) -> Vec<Case> {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz");
+    let mut cases = Vec::new();
+    for entry in std::fs::read_dir(folder).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_str().unwrap().to_string();
+        let bytes = std::fs::read(&path).unwrap();
+        let case_name = format!("fuzz-found {name}");
+        if name.ends_with(".obj") {
+            let recipe =
+                format!("[[obstacles]]\nshape = \"mesh\"\nname = \"m\"\npath = \"{name}\"\n\n{BASE}");
+            let files =
+                vec![(name.as_str(), bytes), ("r.toml", recipe.into_bytes()), ("g.hair", hair.to_vec())];
+            let args = ["style", "r.toml", "--groom", "g.hair", "-o", "out.usda"];
+            cases.push(case(&case_name, files, &args, 2, &[&name]));
+        } else {
+            cases.push(case(&case_name, vec![(name.as_str(), bytes)], &["info", &name], 2, &[&name]));
+        }
+    }
+    cases
+}
+
 /// Runs one case in a fresh folder; returns a failure description, if any.
 fn run(case: &Case) -> Option<String> {
     let dir = tempfile::tempdir().unwrap();
@@ -546,6 +571,7 @@ fn every_bad_input_exits_2_names_its_culprit_and_leaves_nothing() {
     cases.extend(file_cases(&inputs));
     cases.extend(manifest_cases(&inputs.hair));
     cases.extend(directory_cases(&inputs.hair));
+    cases.extend(fuzz_found_cases(&inputs.hair));
     assert!(cases.len() >= 150, "only {} cases", cases.len());
 
     let next = Mutex::new(cases.iter());
@@ -630,4 +656,41 @@ fn signals_remove_the_temporary_file() {
         assert_eq!(status.code(), Some(code), "SIG{signal}");
         assert_eq!(listing(dir.path()), vec!["big.hair".to_string()], "SIG{signal}");
     }
+}
+
+/// SIGTERM while usd-core converts a `.usdz` export removes the `.coif-usd.*` folder beside the
+/// output (and the converter's files in it) and exits 143.
+#[cfg(unix)]
+#[test]
+fn sigterm_during_a_usd_core_export_removes_the_temporary_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("big.hair");
+    let made = coif(&["generate", "-o", path_str(&groom), "--strands", "50000", "--vertices", "16"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let out = dir.path().join("big.usdz");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(["convert", path_str(&groom), path_str(&out)])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Interrupt once coif's `.usda` is complete inside the folder, that is while usd-core runs.
+    let converting = || {
+        listing(dir.path())
+            .iter()
+            .filter(|n| n.starts_with(".coif-usd."))
+            .any(|n| dir.path().join(n).join("groom.usda").is_file())
+    };
+    let start = std::time::Instant::now();
+    while !converting() && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    assert!(converting(), "the export never reached usd-core");
+    let killed = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(143));
+    assert_eq!(listing(dir.path()), vec!["big.hair".to_string()]);
+    // usd-core, if still running, must not bring the folder or the output back.
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    assert_eq!(listing(dir.path()), vec!["big.hair".to_string()]);
 }

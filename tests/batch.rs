@@ -229,3 +229,127 @@ fn a_wedge_through_a_real_slurm_matches_a_local_batch() {
         |dir: &Path| outputs(dir).into_iter().filter(|(n, _)| !n.ends_with("sheet.png")).collect::<Vec<_>>();
     assert!(tasks_only(farm.path()) == tasks_only(local.path()), "Slurm and local outputs differ");
 }
+
+/// The 200-task wedge of the interruption test: a tiny groom, tasks of a few tenths of a second.
+const WEDGE_200: &str = r#"
+[defaults]
+groom = "groom.hair"
+recipe = "quick.toml"
+outputs = ["out/{name}/groom.usda", "out/{name}/groom.abc"]
+[[wedges]]
+name = "k"
+parameters = { "bonds.hydrogen" = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0], "stages.0.duration" = [0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07, 0.08, 0.09, 0.1, 0.11, 0.12, 0.13, 0.14, 0.15, 0.16, 0.17, 0.18, 0.19, 0.2] }
+"#;
+
+const QUICK_RECIPE: &str = r#"
+[[stages]]
+kind = "wet"
+duration = 0.05
+[[stages]]
+kind = "dry"
+duration = 0.05
+"#;
+
+fn small_job(manifest: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("groom.hair");
+    let out =
+        coif(&["generate", "-o", path_str(&groom), "--strands", "6", "--vertices", "6", "--length", "0.1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::write(dir.path().join("quick.toml"), QUICK_RECIPE).unwrap();
+    std::fs::write(dir.path().join("m.toml"), manifest).unwrap();
+    dir
+}
+
+/// Process ids of every live `coif batch … --task I` process of the job in `dir` (found by the
+/// manifest path on their command line, so tasks whose parent died are found too).
+#[cfg(target_os = "linux")]
+fn task_processes(dir: &Path) -> Vec<i32> {
+    let manifest = dir.join("m.toml");
+    let needle = manifest.as_os_str().as_encoded_bytes();
+    let mut pids = Vec::new();
+    for entry in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Some(pid) = entry.file_name().to_str().and_then(|n| n.parse::<i32>().ok()) else { continue };
+        let Ok(cmdline) = std::fs::read(entry.path().join("cmdline")) else { continue };
+        let args: Vec<&[u8]> = cmdline.split(|&b| b == 0).collect();
+        // A zombie has an empty command line: it is dead already.
+        if args.contains(&needle) && args.contains(&b"--task".as_slice()) {
+            pids.push(pid);
+        }
+    }
+    pids
+}
+
+/// A tiny deterministic generator (xorshift64*): the kill schedule is the same on every run.
+struct Schedule(u64);
+
+impl Schedule {
+    fn below(&mut self, n: u64) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n
+    }
+}
+
+/// 200 tasks, interrupted again and again: tasks killed at random (SIGKILL, which leaves
+/// temporaries, and SIGTERM, which removes them), then the batch process itself killed with
+/// SIGKILL while tasks run — its tasks must die with it — and resumed. The resumed batch ends
+/// with exactly the bytes of an uninterrupted one and no temporary file anywhere.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_batch_killed_at_random_resumes_to_the_bytes_of_an_uninterrupted_run() {
+    let clean = small_job(WEDGE_200);
+    let report = batch(clean.path(), "2");
+    assert_eq!(report["done"], 200, "{}", report["failed"]);
+
+    let killed = small_job(WEDGE_200);
+    let manifest = killed.path().join("m.toml");
+    let mut schedule = Schedule(0x9e37_79b9_7f4a_7c15);
+    let (mut tasks_killed, mut orphans_checked) = (0, 0);
+    for _round in 0..5 {
+        let mut parent = Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(["batch", path_str(&manifest), "--jobs", "2"])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let round_ends = Instant::now() + Duration::from_millis(400 + schedule.below(800));
+        while Instant::now() < round_ends {
+            std::thread::sleep(Duration::from_millis(20 + schedule.below(150)));
+            let tasks = task_processes(killed.path());
+            if tasks.is_empty() {
+                continue;
+            }
+            let victim = tasks[schedule.below(tasks.len() as u64) as usize];
+            let signal = if schedule.below(2) == 0 { libc::SIGKILL } else { libc::SIGTERM };
+            // SAFETY: kill(2) with a pid we just read; at worst it is gone (ESRCH).
+            if unsafe { libc::kill(victim, signal) } == 0 {
+                tasks_killed += 1;
+            }
+        }
+        let running = task_processes(killed.path());
+        parent.kill().unwrap(); // SIGKILL: no handler runs in the parent
+        parent.wait().unwrap();
+        orphans_checked += running.len();
+        let deadline = Instant::now() + Duration::from_secs(20);
+        while !task_processes(killed.path()).is_empty() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert_eq!(task_processes(killed.path()), Vec::<i32>::new(), "tasks outlived their batch process");
+    }
+    assert!(
+        tasks_killed >= 5 && orphans_checked >= 1,
+        "{tasks_killed} tasks killed, {orphans_checked} orphaned"
+    );
+
+    let resumed = batch(killed.path(), "2");
+    let (done, skipped) = (resumed["done"].as_u64().unwrap(), resumed["skipped"].as_u64().unwrap());
+    assert_eq!((done + skipped, resumed["failed"].as_u64()), (200, Some(0)), "{}", resumed["failed"]);
+    assert!(done > 0 && skipped > 0, "{done} re-run, {skipped} skipped: the kills did not interrupt");
+    let (a, b) = (outputs(killed.path()), outputs(clean.path()));
+    let leftovers: Vec<&String> = a.iter().map(|(n, _)| n).filter(|n| n.ends_with(".tmp")).collect();
+    assert!(leftovers.is_empty(), "temporaries remain: {leftovers:?}");
+    assert_eq!(a.len(), 400);
+    assert!(a == b, "the resumed batch differs from an uninterrupted run");
+}

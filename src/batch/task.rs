@@ -91,6 +91,8 @@ pub fn run(task: &Task) -> Result<Outcome> {
         return Ok(Outcome::Skipped);
     }
     let recipe = recipe::parse(&effective, &task.recipe)?;
+    // A task killed half-way may have left temporaries of any output or of its sidecar.
+    remove_stale_temporaries(&sidecar);
     for output in &outputs {
         remove_stale_temporaries(output);
         if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {

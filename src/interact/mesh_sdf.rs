@@ -11,6 +11,10 @@ use glam::Vec3;
 
 /// A triangle mesh in coif's space (metres, Y up): a scalp or head that hair collides with and
 /// that a recipe's head frame is fitted to. Readers of groom files and of OBJ files produce it.
+/// At most this many cell visits (triangle-to-cell distance tests) in one bake: a few minutes
+/// at the worst; a 1,000,000-triangle head at 2 mm cells and an 8 mm band needs about 1.3e9.
+pub const MAX_BAKE_VISITS: f64 = 2e9;
+
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
     pub points: Vec<Vec3>,
@@ -79,6 +83,28 @@ impl MeshSdf {
             ));
         }
         let dims = cells.map(|c| c as usize);
+        // The cells each triangle's banded box covers, clamped to the grid (inclusive).
+        let cell_box = |[a, b, c]: [Vec3; 3]| {
+            let lo = ((a.min(b).min(c) - Vec3::splat(band) - origin) / cell).floor().max(Vec3::ZERO);
+            let hi = ((a.max(b).max(c) + Vec3::splat(band) - origin) / cell).ceil();
+            let hi = [0, 1, 2].map(|a| (hi[a] as usize).min(dims[a] - 1));
+            ([lo.x as usize, lo.y as usize, lo.z as usize], hi)
+        };
+        // The grid's size alone does not bound the work: many large triangles each visit most
+        // of it. Count the visits first (cheap) and refuse a bake that would run for hours.
+        let visits: f64 = triangles
+            .iter()
+            .map(|tri| {
+                let (lo, hi) = cell_box(tri.map(|v| vertices[v as usize]));
+                (0..3).map(|a| (hi[a] + 1).saturating_sub(lo[a]) as f64).product::<f64>()
+            })
+            .sum();
+        if visits > MAX_BAKE_VISITS {
+            return Err(format!(
+                "baking would visit {visits:.3e} cells (at most {MAX_BAKE_VISITS:.0e}): the triangles \
+                 are too large for cells of {cell} m; use larger cells or a smaller band"
+            ));
+        }
         let normals = PseudoNormals::new(vertices, triangles);
 
         let count = dims[0] * dims[1] * dims[2];
@@ -86,11 +112,10 @@ impl MeshSdf {
         let mut sign = vec![0i8; count];
         for (t, tri) in triangles.iter().enumerate() {
             let [a, b, c] = tri.map(|v| vertices[v as usize]);
-            let lo = ((a.min(b).min(c) - Vec3::splat(band) - origin) / cell).floor().max(Vec3::ZERO);
-            let hi = ((a.max(b).max(c) + Vec3::splat(band) - origin) / cell).ceil();
-            for z in lo.z as usize..=(hi.z as usize).min(dims[2] - 1) {
-                for y in lo.y as usize..=(hi.y as usize).min(dims[1] - 1) {
-                    for x in lo.x as usize..=(hi.x as usize).min(dims[0] - 1) {
+            let (lo, hi) = cell_box([a, b, c]);
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
                         let p = origin + Vec3::new(x as f32, y as f32, z as f32) * cell;
                         let (closest, feature) = closest_point_on_triangle(p, a, b, c);
                         let distance = p.distance(closest);
@@ -281,6 +306,20 @@ pub fn uv_sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> (Vec<V
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Found by the obj_reader fuzz target: a grid within the cell cap that every one of many
+    /// large triangles covers ran for hours; now it is refused at once with the figure.
+    #[test]
+    fn many_large_triangles_are_refused_before_baking() {
+        let vertices =
+            vec![Vec3::ZERO, Vec3::new(4.0, 0.0, 0.0), Vec3::new(0.0, 4.0, 0.0), Vec3::new(0.0, 0.0, 4.0)];
+        let triangles = vec![[1, 2, 3]; 2000];
+        // 2,000 × 8.7e6 cells: refused before any cell is touched (it used to run for hours).
+        let error = MeshSdf::bake(&vertices, &triangles, 0.02, 0.04).unwrap_err();
+        assert!(error.contains("visit") && error.contains("larger cells"), "{error}");
+        // The same triangle once is an ordinary bake.
+        assert!(MeshSdf::bake(&vertices, &triangles[..1], 0.05, 0.1).is_ok());
+    }
 
     #[test]
     fn sphere_mesh_field_matches_the_analytic_sphere() {

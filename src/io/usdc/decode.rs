@@ -367,12 +367,14 @@ impl<'a> Crate<'a> {
                         _ => {}
                     }
                 }
-                let parent = entry.parent.expect("prims have parents");
+                // A crafted file may put a prim spec on the pseudo-root's path.
+                let parent = entry.parent.ok_or("a prim spec on the pseudo-root path")?;
                 children.entry(parent).or_default().push(spec.path);
                 prims.insert(spec.path, prim);
             } else if spec.kind == SpecType::Attribute as u32 {
                 let attribute = self.attribute(name, spec, time).map_err(|e| format!("<{}>: {e}", at()))?;
-                attributes.push((entry.parent.expect("properties have parents"), attribute));
+                let owner = entry.parent.ok_or("an attribute spec on the pseudo-root path")?;
+                attributes.push((owner, attribute));
             }
         }
         for (owner, attribute) in attributes {
