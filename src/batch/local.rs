@@ -79,7 +79,7 @@ pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport>
             let log = std::fs::File::create(&log_path).map_err(|e| Error::io(&log_path, e))?;
             let err = log.try_clone().map_err(|e| Error::io(&log_path, e))?;
             let mut command = Command::new(coif);
-            die_with_parent(&mut command);
+            crate::io::cleanup::die_with_parent(&mut command);
             let child = command
                 .arg("batch")
                 .arg(&manifest.path)
@@ -134,33 +134,6 @@ pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport>
         }
     }
     Ok(report)
-}
-
-/// Puts a task in its own process group (a signal meant for one task does not reach the others
-/// or the parent) and has the kernel send it SIGTERM when the parent dies, so no task outlives
-/// an interrupted batch; its own handler then removes its temporary files.
-fn die_with_parent(command: &mut Command) {
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        let parent = std::process::id() as libc::pid_t;
-        command.process_group(0);
-        // SAFETY: prctl and getppid are async-signal-safe and touch no memory of the parent.
-        unsafe {
-            command.pre_exec(move || {
-                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                // The parent may have died before the prctl: then nobody will signal us.
-                if libc::getppid() != parent {
-                    return Err(std::io::Error::other("the batch process has exited"));
-                }
-                Ok(())
-            });
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = command;
 }
 
 /// The labelled grid of every task's preview (parameter values under each tile).

@@ -6,6 +6,7 @@
 //! The removal runs on an ordinary thread (signal-hook forwards the signal), not inside a signal
 //! handler, so it may lock and allocate.
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::sync::Mutex;
 
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -72,6 +73,34 @@ pub fn install_signal_handlers() -> std::io::Result<()> {
         }
     })?;
     Ok(())
+}
+
+/// Puts a child process (a batch task, usd-core) in its own process group (a signal meant for
+/// one task does not reach the others or the parent) and has the kernel send it SIGTERM when the
+/// parent dies, so no child outlives an interrupted run; a task's own handler then removes its
+/// temporary files.
+pub fn die_with_parent(command: &mut Command) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        let parent = std::process::id() as libc::pid_t;
+        command.process_group(0);
+        // SAFETY: prctl and getppid are async-signal-safe and touch no memory of the parent.
+        unsafe {
+            command.pre_exec(move || {
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                // The parent may have died before the prctl: then nobody will signal us.
+                if libc::getppid() != parent {
+                    return Err(std::io::Error::other("the batch process has exited"));
+                }
+                Ok(())
+            });
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = command;
 }
 
 #[cfg(test)]

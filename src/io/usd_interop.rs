@@ -58,7 +58,11 @@ pub fn python() -> PathBuf {
 fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     let script = script()?;
     let python = python();
-    let output = Command::new(&python).arg(&script).arg(command).args(args).output().map_err(|e| {
+    let mut child = Command::new(&python);
+    child.arg(&script).arg(command).args(args);
+    // Killed with coif: an orphaned usd-core must not write into a folder coif has removed.
+    super::cleanup::die_with_parent(&mut child);
+    let output = child.output().map_err(|e| {
         Error::External(format!(
             "cannot run Python ({}) for USD interop: {e}; run `make setup` or set COIF_PYTHON to a Python with usd-core",
             python.display()
@@ -81,6 +85,7 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
 /// Reads any USD stage usd-core can open, flattened through a temporary `.usda`.
 pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &[String]) -> Result<Groom> {
     let folder = tempfile::tempdir().map_err(|e| Error::io(Path::new("temporary folder"), e))?;
+    let _interrupted = super::cleanup::Tracked::new(folder.path());
     let flat = folder.path().join("flattened.usda");
     let variant_args: Vec<OsString> = variants.iter().map(|v| format!("--variant={v}").into()).collect();
     let mut args: Vec<&OsStr> = vec![path.as_os_str(), flat.as_os_str()];
