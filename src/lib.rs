@@ -20,6 +20,7 @@ pub mod limits;
 pub mod render;
 pub mod sim;
 pub mod style;
+pub mod surface_mesh;
 pub mod validate;
 
 pub use error::{Error, Result};

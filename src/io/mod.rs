@@ -218,7 +218,9 @@ fn read_head(path: &Path) -> Result<Vec<u8>> {
 fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
     if options.up_axis == Some(UpAxis::Z) {
         // Z up to Y up: (x, y, z) -> (x, z, -y), a rotation, so handedness is kept.
-        groom.points.iter_mut().for_each(|p| *p = Vec3::new(p.x, p.z, -p.y));
+        let to_y_up = |p: &mut Vec3| *p = Vec3::new(p.x, p.z, -p.y);
+        groom.points.iter_mut().for_each(to_y_up);
+        groom.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(to_y_up);
     }
     if let Some(scale) = options.meters_per_unit {
         groom.scale(scale);

@@ -748,6 +748,8 @@ pub fn wanted(name: &str) -> bool {
     matches!(
         name,
         "curveVertexCounts" | "points" | "widths" | "type" | "basis" | "wrap" | "purpose" | "xformOpOrder"
+            // Meshes (a scalp or head beside the curves).
+            | "faceVertexCounts" | "faceVertexIndices" | "orientation"
     ) || name.starts_with("primvars:")
         || name.starts_with("xformOp:")
 }
