@@ -49,6 +49,11 @@ impl Range {
 pub const FRACTION: Range = Range::closed(0.0, 1.0);
 /// Coordinates, metres: a groom, obstacle or light anywhere within a kilometre of the origin.
 pub const COORDINATE: Range = Range::closed(-1e3, 1e3);
+/// Young's and shear moduli, Pa: from soft rubber-like fibres (1e5) to diamond (1e12). Hair is
+/// about 3.9e9; far below 1e5 a rod's bend–twist compliance overflows `f32`.
+pub const MODULUS: Range = Range::closed(1e5, 1e12);
+/// Material density, kg/m³: from foams (1) to above osmium (1e5); keratin is about 1300.
+pub const DENSITY: Range = Range::closed(1.0, 1e5);
 /// Simulated seconds a stage or a run may last (the step budget bounds the total work).
 pub const SECONDS: Range = Range::closed(0.0, 1e5);
 

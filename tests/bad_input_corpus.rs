@@ -72,9 +72,9 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     // (table, key, bad values): every number a plain table holds.
     let keys: &[(&str, &str, &[&str])] = &[
         ("settings", "dt", &["nan", "inf", "-1", "0", "1e-30", "1"]),
-        ("settings", "youngs_modulus", &["nan", "0", "-inf"]),
-        ("settings", "shear_modulus", &["nan", "-1"]),
-        ("settings", "density", &["inf", "0"]),
+        ("settings", "youngs_modulus", &["nan", "0", "-inf", "1e-30", "1e13"]),
+        ("settings", "shear_modulus", &["nan", "-1", "1e-20"]),
+        ("settings", "density", &["inf", "0", "1e-30"]),
         ("settings", "cuticle_peel_per_metre", &["nan", "-1", "inf"]),
         ("settings", "max_segment", &["nan", "1e-9", "-0.01", "inf"]),
         ("settings", "damping", &["nan", "-2", "inf"]),

@@ -101,6 +101,9 @@ fn a_wedge_runs_in_parallel_resumes_and_matches_a_serial_run() {
     let (a, b) = (outputs(parallel.path()), outputs(serial.path()));
     assert_eq!(a.len(), 8 * 3 + 1);
     assert!(a == b, "parallel and serial batches wrote different bytes");
+    // A task's log (what a farm's output file shows) follows its progress to the end.
+    let log = std::fs::read_to_string(serial.path().join("logs/w-003.log")).unwrap();
+    assert!(log.contains("style: 100% (") && log.contains(", eta "), "{log}");
 
     // An output changed behind the batch's back is made again.
     let changed = parallel.path().join("out/w-003/groom.usda");

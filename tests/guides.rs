@@ -1,6 +1,7 @@
-//! Production scale through guides: a generated full head whose guides are permed on the
-//! full-head rods and whose children are interpolated from them. The children must curl like
-//! their guides, keep their roots, stay out of the head and not collapse onto their guides.
+//! Production scale through guides: a generated full head (20,000 strands, 1,000 guides) whose
+//! guides are permed on the full-head rods and whose children are interpolated from them. The
+//! children must curl like their guides, keep their roots, stay out of the head and not collapse
+//! onto their guides.
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -13,33 +14,47 @@ use coif::style::{recipe, style, Recipe, StyleOptions, Styled};
 
 mod common;
 
-const STRANDS: usize = 3000;
-const GUIDES: usize = 150;
+/// A generated full head and how many of its strands are guides.
+struct Case {
+    strands: usize,
+    guides: usize,
+    unstyled: OnceLock<Groom>,
+    permed: OnceLock<Styled>,
+}
 
-fn unstyled() -> &'static Groom {
-    static GROOM: OnceLock<Groom> = OnceLock::new();
-    GROOM.get_or_init(|| {
-        generate(&GenerateParams {
-            strands: STRANDS,
-            vertices_per_strand: 32,
-            length: 0.24,
-            seed: 21,
-            ..GenerateParams::default()
+/// The production case: 20,000 strands through 1,000 guides.
+static FULL: Case = Case::new(20_000, 1000);
+/// A smaller head for the tests that style it again (threads, a file's own guides).
+static SMALL: Case = Case::new(3000, 150);
+
+impl Case {
+    const fn new(strands: usize, guides: usize) -> Case {
+        Case { strands, guides, unstyled: OnceLock::new(), permed: OnceLock::new() }
+    }
+
+    fn unstyled(&self) -> &Groom {
+        self.unstyled.get_or_init(|| {
+            generate(&GenerateParams {
+                strands: self.strands,
+                vertices_per_strand: 32,
+                length: 0.24,
+                seed: 21,
+                ..GenerateParams::default()
+            })
+            .unwrap()
         })
-        .unwrap()
-    })
-}
+    }
 
-/// The production perm preset with guides.
-fn perm() -> Recipe {
-    let text = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
-    let text = format!("{text}\n[guides]\ncount = {GUIDES}\n");
-    recipe::parse(&text, Path::new("grooms/recipes/perm_full_head.toml")).unwrap()
-}
+    /// The production perm preset with guides.
+    fn perm(&self) -> Recipe {
+        let text = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
+        let text = format!("{text}\n[guides]\ncount = {}\n", self.guides);
+        recipe::parse(&text, Path::new("grooms/recipes/perm_full_head.toml")).unwrap()
+    }
 
-fn permed() -> &'static Styled {
-    static STYLED: OnceLock<Styled> = OnceLock::new();
-    STYLED.get_or_init(|| style(unstyled(), &perm(), &StyleOptions::default()).unwrap())
+    fn permed(&self) -> &Styled {
+        self.permed.get_or_init(|| style(self.unstyled(), &self.perm(), &StyleOptions::default()).unwrap())
+    }
 }
 
 fn flags(groom: &Groom) -> &[bool] {
@@ -59,14 +74,14 @@ fn curl(groom: &Groom, strand: usize) -> Option<f32> {
 
 #[test]
 fn children_curl_like_their_guides_and_keep_their_roots() {
-    let styled = permed();
+    let styled = FULL.permed();
     let groom = &styled.groom;
     let flags = flags(groom);
-    assert_eq!(styled.report.guides, Some(GUIDES));
-    assert_eq!(flags.iter().filter(|&&g| g).count(), GUIDES);
-    assert_eq!(groom.strand_count(), STRANDS);
+    assert_eq!(styled.report.guides, Some(FULL.guides));
+    assert_eq!(flags.iter().filter(|&&g| g).count(), FULL.guides);
+    assert_eq!(groom.strand_count(), FULL.strands);
     let radii = |guide: bool| -> Vec<f32> {
-        (0..STRANDS).filter(|&s| flags[s] == guide).filter_map(|s| curl(groom, s)).collect()
+        (0..FULL.strands).filter(|&s| flags[s] == guide).filter_map(|s| curl(groom, s)).collect()
     };
     let (guides, children) = (median(radii(true)), median(radii(false)));
     eprintln!("median curl radius: guides {:.2} cm, children {:.2} cm", guides * 100.0, children * 100.0);
@@ -75,9 +90,9 @@ fn children_curl_like_their_guides_and_keep_their_roots() {
     assert!((children / guides - 1.0).abs() < 0.05, "children {children} vs guides {guides}");
     let mut stretch = 0.0f32;
     for (s, &guide) in flags.iter().enumerate() {
-        assert_eq!(groom.strand_points(s)[0], unstyled().strand_points(s)[0], "strand {s}'s root moved");
+        assert_eq!(groom.strand_points(s)[0], FULL.unstyled().strand_points(s)[0], "strand {s}'s root moved");
         if !guide {
-            stretch = stretch.max((groom.strand_length(s) / unstyled().strand_length(s) - 1.0).abs());
+            stretch = stretch.max((groom.strand_length(s) / FULL.unstyled().strand_length(s) - 1.0).abs());
         }
     }
     // Interpolation keeps every edge's length; only pushing vertices out of the head changes it.
@@ -87,10 +102,10 @@ fn children_curl_like_their_guides_and_keep_their_roots() {
 
 #[test]
 fn no_child_vertex_is_inside_the_head() {
-    let groom = &permed().groom;
+    let groom = &FULL.permed().groom;
     let head = Head::default();
     let flags = flags(groom);
-    let inside: Vec<(usize, f32)> = (0..STRANDS)
+    let inside: Vec<(usize, f32)> = (0..FULL.strands)
         .filter(|&s| !flags[s])
         // Roots grow from the skin itself (implicit value 1 within rounding) and do not move.
         .flat_map(|s| groom.strand_points(s)[1..].iter().map(move |p| (s, head.implicit(*p))))
@@ -101,23 +116,26 @@ fn no_child_vertex_is_inside_the_head() {
 
 #[test]
 fn children_of_one_guide_do_not_collapse_onto_it() {
-    let styled = &permed().groom;
+    let styled = &FULL.permed().groom;
     let closest = styled.attribute(CLOSEST_GUIDES).unwrap();
     let flags = flags(styled);
-    let children: Vec<usize> = (0..STRANDS).filter(|&s| !flags[s]).collect();
+    let children: Vec<usize> = (0..FULL.strands).filter(|&s| !flags[s]).collect();
     // Each child and its nearest (by root) fellow child of the same first guide.
-    let root = |s: usize| unstyled().strand_points(s)[0];
+    let root = |s: usize| FULL.unstyled().strand_points(s)[0];
     let mid = |g: &Groom, s: usize| g.strand_points(s)[g.strand_range(s).len() / 2];
     let (mut before, mut after, mut pairs) = (0.0, 0.0, 0);
+    let mut by_guide: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
     for &c in &children {
-        let guide = closest.data[c * 3];
-        let neighbour = children
+        by_guide.entry(closest.data[c * 3] as u32).or_default().push(c);
+    }
+    for &c in &children {
+        let neighbour = by_guide[&(closest.data[c * 3] as u32)]
             .iter()
             .copied()
-            .filter(|&o| o != c && closest.data[o * 3] == guide)
+            .filter(|&o| o != c)
             .min_by(|&a, &b| root(a).distance(root(c)).total_cmp(&root(b).distance(root(c))));
         if let Some(n) = neighbour {
-            before += mid(unstyled(), c).distance(mid(unstyled(), n));
+            before += mid(FULL.unstyled(), c).distance(mid(FULL.unstyled(), n));
             after += mid(styled, c).distance(mid(styled, n));
             pairs += 1;
         }
@@ -130,7 +148,7 @@ fn children_of_one_guide_do_not_collapse_onto_it() {
 
 #[test]
 fn children_carry_rest_shape_bonds_wetness_and_bindings() {
-    let groom = &permed().groom;
+    let groom = &FULL.permed().groom;
     groom.validate().unwrap();
     for name in ["rest", "rest_darboux", "bond_hydrogen", "bond_disulfide", "wetness"] {
         let a = groom.attribute(name).unwrap_or_else(|| panic!("no {name}"));
@@ -142,7 +160,7 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     let flags = flags(groom);
     let bonds = groom.attribute("bond_disulfide").unwrap();
     let mean = |guide: bool| {
-        let v: Vec<f32> = (0..STRANDS)
+        let v: Vec<f32> = (0..FULL.strands)
             .filter(|&s| flags[s] == guide)
             .flat_map(|s| bonds.data[groom.strand_range(s)].iter().copied())
             .collect();
@@ -151,29 +169,29 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     assert!((mean(true) - mean(false)).abs() < 0.02, "{} vs {}", mean(true), mean(false));
     let weights = groom.attribute(GUIDE_WEIGHTS).unwrap();
     let closest = groom.attribute(CLOSEST_GUIDES).unwrap();
-    for s in 0..STRANDS {
+    for s in 0..FULL.strands {
         let w = &weights.data[s * 3..s * 3 + 3];
         assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-4, "strand {s}: {w:?}");
-        assert!(closest.data[s * 3..s * 3 + 3].iter().all(|&g| g >= 0.0 && (g as usize) < GUIDES));
+        assert!(closest.data[s * 3..s * 3 + 3].iter().all(|&g| g >= 0.0 && (g as usize) < FULL.guides));
     }
 }
 
 #[test]
 fn the_same_at_any_thread_count() {
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let styled = one.install(|| style(unstyled(), &perm(), &StyleOptions::default()).unwrap());
-    assert!(styled.groom == permed().groom, "1 thread and the default pool differ");
+    let styled = one.install(|| style(SMALL.unstyled(), &SMALL.perm(), &StyleOptions::default()).unwrap());
+    assert!(styled.groom == SMALL.permed().groom, "1 thread and the default pool differ");
 }
 
 #[test]
 fn a_files_guides_are_simulated_and_its_weights_used_or_refused() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("permed.usda");
-    coif::io::write_groom(&path, &permed().groom).unwrap();
+    coif::io::write_groom(&path, &SMALL.permed().groom).unwrap();
     let file = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
-    assert_eq!(file.guides, permed().groom.guides);
-    assert_eq!(file.attribute(CLOSEST_GUIDES), permed().groom.attribute(CLOSEST_GUIDES));
-    assert_eq!(file.attribute(GUIDE_WEIGHTS), permed().groom.attribute(GUIDE_WEIGHTS));
+    assert_eq!(file.guides, SMALL.permed().groom.guides);
+    assert_eq!(file.attribute(CLOSEST_GUIDES), SMALL.permed().groom.attribute(CLOSEST_GUIDES));
+    assert_eq!(file.attribute(GUIDE_WEIGHTS), SMALL.permed().groom.attribute(GUIDE_WEIGHTS));
 
     // No [guides] in the recipe: the file's guides are simulated, its bindings kept.
     let short = recipe::parse(
@@ -182,27 +200,28 @@ fn a_files_guides_are_simulated_and_its_weights_used_or_refused() {
     )
     .unwrap();
     let again = style(&file, &short, &StyleOptions::default()).unwrap();
-    assert_eq!(again.report.guides, Some(GUIDES));
+    assert_eq!(again.report.guides, Some(SMALL.guides));
     assert_eq!(again.groom.attribute(GUIDE_WEIGHTS), file.attribute(GUIDE_WEIGHTS));
 
-    let child = (0..STRANDS).find(|&s| !file.guides.as_ref().unwrap()[s]).unwrap();
+    let child = (0..SMALL.strands).find(|&s| !file.guides.as_ref().unwrap()[s]).unwrap();
     let mut bad = file.clone();
     bad.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3] += 0.5;
     let err = style(&bad, &short, &StyleOptions::default()).err().unwrap();
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains(&format!("strand {child}")), "{err}");
     let mut bad = file.clone();
-    bad.attribute_mut(CLOSEST_GUIDES).unwrap().data[child * 3] = GUIDES as f32;
+    bad.attribute_mut(CLOSEST_GUIDES).unwrap().data[child * 3] = SMALL.guides as f32;
     let err = style(&bad, &short, &StyleOptions::default()).err().unwrap();
     assert!(
-        err.to_string().contains(&format!("strand {child}")) && err.to_string().contains("150 guides"),
+        err.to_string().contains(&format!("strand {child}"))
+            && err.to_string().contains(&format!("{} guides", SMALL.guides)),
         "{err}"
     );
 }
 
 #[test]
 fn impossible_guide_counts_and_reach_exit_2_with_the_numbers() {
-    let groom = unstyled();
+    let groom = SMALL.unstyled();
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("head.hair");
     coif::io::write_groom(&input, groom).unwrap();

@@ -177,18 +177,18 @@ fn the_penalty_keeps_crossing_strands_apart() {
     let mut closest = f32::MAX;
     for step in 0..720 {
         dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        contacts.apply(&sim.rods.positions, &radii, &sim.rods.kinematic, &mut dv, dt);
+        contacts.apply(sim.rods().positions(), &radii, sim.rods().kinematic(), &mut dv, dt);
         for (a, dv) in sim.external_acceleration_mut().iter_mut().zip(&dv) {
             *a = *dv / dt;
         }
         sim.step_with(&NoHooks);
         if step > 180 {
-            let p = sim.rods.positions[crossing];
+            let p = sim.rods().positions()[crossing];
             closest = closest.min(p.distance(Vec3::new(p.x.clamp(-0.025, 0.025), 0.0, 0.0)));
         }
     }
-    let y = sim.rods.positions[crossing].y;
-    let middle = sim.rods.positions[11 + 3].y;
+    let y = sim.rods().positions()[crossing].y;
+    let middle = sim.rods().positions()[11 + 3].y;
     eprintln!("crossing: closest approach {closest:.6} m (2r = {width}), tip y {y:.6}, middle y {middle:.6}");
     assert!(closest < width, "B never pressed onto A (closest {closest} m)");
     assert!(y > 0.0 && closest > 0.5 * width, "strands {closest} m apart, less than r");

@@ -58,7 +58,7 @@ fn the_readme_influences_comma_form_parses() {
     let input = dir.path().join("in.hair");
     assert!(coif(&["generate", "-o", path_str(&input), "--strands", "3"]).status.success());
     let output = dir.path().join("out.hair");
-    let args = ["--influences", "0.315,0.315,0.2,0.17", "--seconds", "0.01"];
+    let args = ["--influences", "0.33,0.30,0.2,0.17", "--seconds", "0.01"];
     let result = coif(&[&["simulate", path_str(&input), path_str(&output)][..], &args[..]].concat());
     assert!(result.status.success(), "{}", stderr(&result));
 }

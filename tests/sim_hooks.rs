@@ -26,7 +26,7 @@ fn moving_the_root_carries_the_strand() {
     let root = Vec3::new(0.0, 0.05, 0.0);
     sim.set_root(0, root, turn * sim.root_frame(0));
     settle(&mut sim, &NoHooks);
-    for (i, p) in sim.rods.positions.iter().enumerate() {
+    for (i, p) in sim.rods().positions().iter().enumerate() {
         let expected = root + turn * groom.points[i];
         assert!(p.distance(expected) < 1e-3 * 0.1, "vertex {i} at {p}, expected {expected}");
     }
@@ -50,12 +50,12 @@ fn obstacle_projection_and_heavier_hair() {
     let params = SimParams { damping: 4.0, ..SimParams::default() };
     let mut free = Simulation::new(&groom, params.clone()).unwrap();
     settle(&mut free, &NoHooks);
-    let free_low = free.rods.positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+    let free_low = free.rods().positions().iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
     assert!(free_low < -0.1, "a free strand hangs well below the floor height ({free_low})");
 
     let mut floored = Simulation::new(&groom, params.clone()).unwrap();
     settle(&mut floored, &Floor);
-    let low = floored.rods.positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+    let low = floored.rods().positions().iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
     assert!(low >= -0.05 - 1e-6, "strand went through the floor: {low}");
 
     // Four times the mass (soaked hair) at the same stiffness sags further.
@@ -64,7 +64,7 @@ fn obstacle_projection_and_heavier_hair() {
         heavy.set_mass_scale(v, 4.0);
     }
     settle(&mut heavy, &NoHooks);
-    let tip = |s: &Simulation| *s.rods.positions.last().unwrap();
+    let tip = |s: &Simulation| *s.rods().positions().last().unwrap();
     assert!(tip(&heavy).x < tip(&free).x - 0.005, "heavy tip {} vs free tip {}", tip(&heavy), tip(&free));
 }
 
@@ -76,14 +76,14 @@ fn external_acceleration_and_attachment() {
     // A steady wind along +Z bends the strand towards +Z.
     sim.external_acceleration_mut().iter_mut().for_each(|a| *a = Vec3::new(0.0, 0.0, 2.0));
     settle(&mut sim, &NoHooks);
-    let tip = *sim.rods.positions.last().unwrap();
+    let tip = *sim.rods().positions().last().unwrap();
     assert!(tip.z > 0.005, "wind did not bend the strand: tip {tip}");
     // Attaching the tip holds it where it is told, against the wind.
     let target = Vec3::new(0.09, 0.0, 0.0);
     sim.attach(11, target);
     settle(&mut sim, &NoHooks);
-    assert!(sim.rods.positions[11].distance(target) < 1e-7);
+    assert!(sim.rods().positions()[11].distance(target) < 1e-7);
     sim.detach(11);
     settle(&mut sim, &NoHooks);
-    assert!(sim.rods.positions[11].z > 0.005, "released tip should blow away again");
+    assert!(sim.rods().positions()[11].z > 0.005, "released tip should blow away again");
 }

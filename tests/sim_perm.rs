@@ -72,7 +72,7 @@ fn perm(influences: BondInfluences, broken: [f32; 4]) -> Vec<Vec3> {
         "rest curve radius {rest_radius}, predicted {predicted}"
     );
     release_and_settle(&mut sim);
-    sim.rods.positions.clone()
+    sim.rods().positions().to_vec()
 }
 
 fn check_curl(points: &[Vec3], set_share: f64) {
@@ -124,6 +124,6 @@ fn broken_bonds_that_do_not_re_form_spring_back() {
     sim.change_bond_rate(BondKind::Hydrogen, BondTarget::All, -1.0);
     sim.run(0.1, &NoHooks);
     release_and_settle(&mut sim);
-    let drift = sim.rods.positions.iter().zip(&straight).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
+    let drift = sim.rods().positions().iter().zip(&straight).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
     assert!(drift < 1e-3 * EDGE * VERTICES as f32, "strand ended {drift} m from straight");
 }

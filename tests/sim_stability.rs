@@ -25,7 +25,7 @@ fn imported_curly_groom_without_forces_stays_put() {
         let range = groom.strand_range(strand);
         let drift = groom.points[range.clone()]
             .iter()
-            .zip(&sim.rods.positions[range])
+            .zip(&sim.rods().positions()[range])
             .map(|(a, b)| a.distance(*b))
             .fold(0.0, f32::max);
         assert!(drift < 1e-4 * length, "strand {strand} drifted {drift} m of {length} m");
@@ -53,7 +53,7 @@ fn run_large(threads: usize) -> (Vec<Vec3>, Vec<f64>) {
                 energies.push(sim.energy().total());
             }
         }
-        (sim.rods.positions.clone(), energies)
+        (sim.rods().positions().to_vec(), energies)
     })
 }
 
@@ -97,7 +97,7 @@ fn simd_lanes_match_the_scalar_solver() {
     let mut lanes = Simulation::new(&groom, SimParams::default()).unwrap();
     let mut scalar = lanes.clone();
     let difference = |a: &Simulation, b: &Simulation| {
-        a.rods.positions.iter().zip(&b.rods.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max)
+        a.rods().positions().iter().zip(b.rods().positions()).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max)
     };
     // One step: the same arithmetic up to the order of a few roundings (coordinates ~0.1 m,
     // f32 spacing ~1e-8 m).
@@ -111,7 +111,7 @@ fn simd_lanes_match_the_scalar_solver() {
         scalar.step_with(&ScalarOnly);
     }
     let moved =
-        groom.points.iter().zip(&scalar.rods.positions).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+        groom.points.iter().zip(scalar.rods().positions()).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
     assert!(moved > 0.01, "the groom should fall under gravity (moved {moved} m)");
     let last = difference(&lanes, &scalar);
     assert!(last < 5e-5 * 0.2, "after 400 steps lanes and scalar differ by {last} m");

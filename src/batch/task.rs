@@ -98,7 +98,9 @@ pub fn run(task: &Task) -> Result<Outcome> {
         }
     }
     let groom = crate::io::read_groom(&task.groom, &Default::default())?.groom;
-    let styled = style(&groom, &recipe, &StyleOptions::default())?;
+    // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
+    let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
+    let styled = style(&groom, &recipe, &options)?;
     for output in &task.outputs {
         crate::io::write_groom(output, &styled.groom)?;
     }

@@ -107,6 +107,33 @@ pub(crate) enum Scheduler {
     Slurm,
 }
 
+/// When to show progress on stderr.
+#[derive(Clone, Copy, Default, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ProgressArg {
+    /// A bar when stderr is a terminal, nothing otherwise (logs, pipes).
+    #[default]
+    Auto,
+    /// Plain lines with the percentage, elapsed time and ETA, one per tenth of the work and at
+    /// least every 30 s: for farm and CI logs.
+    Log,
+    /// Nothing (the same as --quiet).
+    Never,
+}
+
+impl ProgressArg {
+    /// The mode for a run; `--json` and `--quiet` silence the bar, not an explicit `log`.
+    pub(crate) fn mode(self, quiet: bool, json: bool) -> coif::progress::ProgressMode {
+        use coif::progress::ProgressMode;
+        use std::io::IsTerminal;
+        match self {
+            ProgressArg::Log => ProgressMode::Log,
+            ProgressArg::Never => ProgressMode::Off,
+            ProgressArg::Auto if quiet || json || !std::io::stderr().is_terminal() => ProgressMode::Off,
+            ProgressArg::Auto => ProgressMode::Bar,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum RenderMode {
     /// The path-traced image.
@@ -160,6 +187,9 @@ pub(crate) struct RenderArgs {
     /// Worker threads (default: all cores). The image is the same for any count.
     #[arg(long)]
     pub(crate) threads: Option<usize>,
+    /// Progress on stderr: auto (a bar on a terminal), log (plain lines with an ETA) or never.
+    #[arg(long, value_enum, default_value_t)]
+    pub(crate) progress: ProgressArg,
     #[arg(long, default_value_t = 0)]
     pub(crate) seed: u64,
     #[arg(long, value_enum, default_value_t = RenderMode::Beauty)]
@@ -244,9 +274,12 @@ pub(crate) struct StyleArgs {
     /// Print one JSON object (the per-stage report) on stdout.
     #[arg(long)]
     pub(crate) json: bool,
-    /// No progress bar.
+    /// No progress bar (--progress never).
     #[arg(long)]
     pub(crate) quiet: bool,
+    /// Progress on stderr: auto (a bar on a terminal), log (plain lines with an ETA) or never.
+    #[arg(long, value_enum, default_value_t)]
+    pub(crate) progress: ProgressArg,
     /// Also write the whole process as time samples, this many frames per simulated second
     /// (USD or Alembic output).
     #[arg(long, value_name = "FPS")]
@@ -288,7 +321,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = [0.315, 0.315, 0.2, 0.17])]
+    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = coif::sim::BondInfluences::SCENE_3.0)]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
     #[arg(long, default_value_t = 3.9e9)]

@@ -39,7 +39,7 @@ pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
     for (name, value) in ["hydrogen", "ionic", "disulfide", "peptide"].iter().zip(&args.influences) {
         flag(&format!("--influences {name}"), *value, Range::closed(0.0, 1e3))?;
     }
-    flag("--youngs-modulus", args.youngs_modulus, Range::above(0.0, 1e12))?;
+    flag("--youngs-modulus", args.youngs_modulus, coif::validate::MODULUS)?;
     // The settle's own budget range (`sim::settle::MAX_SECONDS_RANGE`), one source for both.
     let (_, max_settle) = coif::sim::settle::MAX_SECONDS_RANGE;
     flag("--settle-seconds", args.settle_seconds, Range::above(0.0, max_settle as f64))?;

@@ -7,6 +7,7 @@ use serde_json::json;
 use coif::generate::{generate, GenerateParams, Style};
 use coif::info::GroomInfo;
 use coif::io;
+use coif::progress::Progress;
 use coif::{Error, Result};
 
 use super::args::*;
@@ -41,7 +42,6 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
 }
 
 fn run_style(args: StyleArgs) -> Result<()> {
-    use std::io::IsTerminal;
     super::checks::style(&args)?;
     let mut recipe = coif::style::recipe::load(&args.recipe)?;
     if let Some(count) = args.guides {
@@ -49,7 +49,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
     }
     io::Format::from_extension(&args.output)?;
     let loaded = io::read_groom(&args.groom, &args.import.options()?)?;
-    let progress = !args.quiet && !args.json && std::io::stderr().is_terminal();
+    let progress = args.progress.mode(args.quiet, args.json);
     let frames_per_second = args.frames.unwrap_or(0.0);
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
         return Err(Error::Usage(format!("--frames {frames_per_second} must be a positive rate")));
@@ -273,18 +273,13 @@ fn run_render(args: RenderArgs) -> Result<()> {
     }
 
     let loaded = io::read_groom(&args.input, &args.import.options()?)?;
-    let bar = progress_bar();
-    let progress = |done: u64, total: u64| {
-        if let Some(bar) = &bar {
-            bar.set_length(total);
-            bar.set_position(done);
-        }
+    let progress = Progress::new(args.progress.mode(false, false), "render", 1);
+    let report = |done: u64, total: u64| {
+        progress.set_total(total);
+        progress.set_done(done);
     };
-    let rendered =
-        render::with_threads(args.threads, || render::render(&loaded.groom, &settings, &progress))??;
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
+    let rendered = render::with_threads(args.threads, || render::render(&loaded.groom, &settings, &report))??;
+    progress.finish();
     rendered.image.write(&args.output)?;
     let stats = rendered.stats;
     if args.json {
@@ -299,21 +294,6 @@ fn run_render(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// A progress bar on stderr, only when stderr is a terminal (never in logs or pipes).
-fn progress_bar() -> Option<indicatif::ProgressBar> {
-    use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(1);
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("rendering {bar:40} {percent:>3}% {elapsed}<{eta}")
-    {
-        bar.set_style(style);
-    }
-    Some(bar)
 }
 
 fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool) -> Result<()> {

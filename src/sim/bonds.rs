@@ -45,8 +45,11 @@ pub struct BondInfluences(pub [f32; 4]);
 impl BondInfluences {
     /// Table 1, scenes 1 and 2: hydrogen 33 %, the other kinds 67 % (split here 20/30/17).
     pub const SCENE_1: BondInfluences = BondInfluences([0.33, 0.20, 0.30, 0.17]);
-    /// Table 1, scene 3 (perm): hydrogen + ionic 63 % (split evenly), disulfide 20 %, peptide 17 %.
-    pub const SCENE_3: BondInfluences = BondInfluences([0.315, 0.315, 0.20, 0.17]);
+    /// Table 1, scene 3 (perm): hydrogen + ionic 63 %, disulfide 20 %, peptide 17 %. Table 1 gives
+    /// hydrogen 33 % in scenes 1 and 2 on the same hair, and a bond kind's share is a property of
+    /// the fibre, not of the treatment: hydrogen 33 %, ionic the remaining 30 %. The one source of
+    /// this default for `sim`, the CLI and recipes.
+    pub const SCENE_3: BondInfluences = BondInfluences([0.33, 0.30, 0.20, 0.17]);
 
     pub fn total(&self) -> f32 {
         self.0.iter().sum()

@@ -116,14 +116,14 @@ impl Stepper {
             offsets: groom.strand_offsets.clone(),
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             radii,
-            previous: sim.rods.positions.clone(),
+            previous: sim.rods.positions().to_vec(),
             culling: ObstacleCulling::default(),
             sim,
         }
     }
 
     fn step(&mut self) {
-        self.previous.copy_from_slice(&self.sim.rods.positions);
+        self.previous.copy_from_slice(self.sim.rods.positions());
         self.culling.update(&self.colliders, &self.offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {
             shapes: &self.colliders,

@@ -129,11 +129,17 @@ impl SimParams {
             return bad(format!("damping {} must be a non-negative rate", self.damping));
         }
         let m = &self.material;
-        if [m.density, m.youngs_modulus, m.shear_modulus, m.fallback_width, self.frame_inertia_factor]
-            .iter()
-            .any(|v| !(v.is_finite() && *v > 0.0))
-        {
-            return bad("density, moduli, fallback width and frame inertia factor must be positive".into());
+        // The same ranges recipes and flags are held to (`crate::validate`).
+        for (key, value, range) in [
+            ("density", m.density, crate::validate::DENSITY),
+            ("Young's modulus", m.youngs_modulus, crate::validate::MODULUS),
+            ("shear modulus", m.shear_modulus, crate::validate::MODULUS),
+        ] {
+            crate::validate::number(key, value, range)
+                .map_err(|message| Error::Usage(format!("simulate: {message}")))?;
+        }
+        if [m.fallback_width, self.frame_inertia_factor].iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return bad("fallback width and frame inertia factor must be positive".into());
         }
         if let Err(message) = self.influences.check() {
             return bad(message);
@@ -208,7 +214,7 @@ impl Energy {
 #[derive(Clone, Debug)]
 pub struct Simulation {
     params: SimParams,
-    pub rods: Rods,
+    rods: Rods,
     pub bonds: Bonds,
     masses_dirty: bool,
     /// Δt the cached projection constants were computed for.
@@ -222,8 +228,8 @@ impl Simulation {
     pub fn new(groom: &Groom, params: SimParams) -> Result<Simulation> {
         params.check()?;
         groom.validate()?;
-        let rods = Rods::from_groom(groom, &params.material, params.frame_inertia_factor);
-        let bonds = Bonds::new(params.influences, &rods.rest_darboux);
+        let rods = Rods::from_groom(groom, &params.material, params.frame_inertia_factor)?;
+        let bonds = Bonds::new(params.influences, rods.rest_darboux());
         let mut sim = Simulation { params, rods, bonds, masses_dirty: true, coefficients_dt: 0.0, steps: 0 };
         for kind in BondKind::ALL {
             if let Some(attribute) = groom.attribute(kind.attribute_name()) {
@@ -242,6 +248,11 @@ impl Simulation {
 
     pub fn params(&self) -> &SimParams {
         &self.params
+    }
+
+    /// The rods' state (read-only: change it through the methods below).
+    pub fn rods(&self) -> &Rods {
+        &self.rods
     }
 
     /// Changes time step, iterations, gravity or damping (material and influences are fixed).
@@ -301,20 +312,20 @@ impl Simulation {
     /// The frame's third director should point along the first edge.
     pub fn set_root(&mut self, strand: usize, position: Vec3, frame: Quat) {
         let first = self.rods.strand_range(strand).start;
-        self.rods.kinematic_targets[first] = position;
-        self.rods.frames[first] = frame.normalize();
+        self.rods.kinematic_targets_mut()[first] = position;
+        self.rods.frames_mut()[first] = frame.normalize();
     }
 
     /// The strand's root frame.
     pub fn root_frame(&self, strand: usize) -> Quat {
-        self.rods.frames[self.rods.strand_range(strand).start]
+        self.rods.frames()[self.rods.strand_range(strand).start]
     }
 
     /// Makes a vertex kinematic, following `target` from the next step on.
     pub fn attach(&mut self, vertex: usize, target: Vec3) {
-        self.rods.kinematic_targets[vertex] = target;
-        if !self.rods.kinematic[vertex] {
-            self.rods.kinematic[vertex] = true;
+        self.rods.kinematic_targets_mut()[vertex] = target;
+        if !self.rods.kinematic()[vertex] {
+            self.rods.kinematic_mut()[vertex] = true;
             self.masses_dirty = true;
         }
     }
@@ -322,8 +333,8 @@ impl Simulation {
     /// Releases a vertex attached by [`attach`](Self::attach). Roots stay pinned.
     pub fn detach(&mut self, vertex: usize) {
         let strand = self.rods.strand_of(vertex);
-        if vertex != self.rods.strand_range(strand).start && self.rods.kinematic[vertex] {
-            self.rods.kinematic[vertex] = false;
+        if vertex != self.rods.strand_range(strand).start && self.rods.kinematic()[vertex] {
+            self.rods.kinematic_mut()[vertex] = false;
             self.masses_dirty = true;
         }
     }
@@ -331,14 +342,14 @@ impl Simulation {
     /// Scales a vertex's mass (1 = dry hair).
     pub fn set_mass_scale(&mut self, vertex: usize, scale: f32) {
         if scale.is_finite() && scale > 0.0 {
-            self.rods.mass_scale[vertex] = scale;
+            self.rods.mass_scale_mut()[vertex] = scale;
             self.masses_dirty = true;
         }
     }
 
     /// Per-vertex external acceleration (m/s²) added before prediction every step until changed.
     pub fn external_acceleration_mut(&mut self) -> &mut [Vec3] {
-        &mut self.rods.external_acceleration
+        self.rods.external_acceleration_mut()
     }
 
     fn target_vertices(&self, target: BondTarget) -> std::ops::Range<usize> {
@@ -385,19 +396,19 @@ impl Simulation {
 
     /// Largest vertex speed, m/s.
     pub fn max_speed(&self) -> f32 {
-        self.rods.velocities.iter().map(|v| v.length()).fold(0.0, f32::max)
+        self.rods.velocities().iter().map(|v| v.length()).fold(0.0, f32::max)
     }
 
     pub fn energy(&self) -> Energy {
         let r = &self.rods;
         let mut energy = Energy::default();
         for i in 0..r.vertex_count() {
-            if r.kinematic[i] {
+            if r.kinematic()[i] {
                 continue;
             }
-            let m = (r.mass[i] * r.mass_scale[i]) as f64;
-            energy.kinetic += 0.5 * m * r.velocities[i].as_dvec3().length_squared();
-            energy.gravitational -= m * self.params.gravity.as_dvec3().dot(r.positions[i].as_dvec3());
+            let m = (r.mass()[i] * r.mass_scale()[i]) as f64;
+            energy.kinetic += 0.5 * m * r.velocities()[i].as_dvec3().length_squared();
+            energy.gravitational -= m * self.params.gravity.as_dvec3().dot(r.positions()[i].as_dvec3());
         }
         for i in 0..r.vertex_count() {
             if !r.is_pair_centre(i) {
@@ -408,7 +419,7 @@ impl Simulation {
             let rest =
                 if (omega - rest).length_squared() > (omega + rest).length_squared() { -rest } else { rest };
             let c = omega - rest;
-            energy.elastic += 0.5 * (c * c / r.compliance[i]).as_dvec3().element_sum();
+            energy.elastic += 0.5 * (c * c / r.compliance()[i]).as_dvec3().element_sum();
         }
         energy
     }

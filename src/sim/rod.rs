@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::constraints::{darboux_canonical, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
 use super::cuticle::Cuticle;
 use super::lanes::LANES;
-use crate::groom::Groom;
+use crate::groom::{Groom, GroomError};
 
 /// Physical material of hair. Moduli are SI; the rod radius comes from the groom's widths.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -37,45 +37,73 @@ impl Default for Material {
     }
 }
 
-/// The rods' state. Public fields are read freely; change state through the
+/// The rods' state. Every array has one entry per vertex and `strand_offsets` ascends from 0 to
+/// that count with two or more vertices a strand: [`Rods::from_groom`] checks it once, and the
+/// fields are private (read through the accessors, write through slices that cannot change length)
+/// because the solver's unsafe per-strand slicing relies on it. Change state through the
 /// [`Simulation`](super::Simulation) methods so kinematic flags and masses stay consistent.
 #[derive(Clone, Debug)]
 pub struct Rods {
-    pub strand_offsets: Vec<u32>,
+    strand_offsets: Vec<u32>,
     // Per vertex.
-    pub positions: Vec<Vec3>,
-    pub velocities: Vec<Vec3>,
+    positions: Vec<Vec3>,
+    velocities: Vec<Vec3>,
     /// Inverse mass the solver uses: 0 for kinematic vertices, else `1/(mass·mass_scale)`.
-    pub inv_mass: Vec<f32>,
+    inv_mass: Vec<f32>,
     /// Mass from the material and widths, kg.
-    pub mass: Vec<f32>,
+    mass: Vec<f32>,
     /// Multiplier on `mass` (wet hair is heavier).
-    pub mass_scale: Vec<f32>,
+    mass_scale: Vec<f32>,
     /// Kinematic vertices follow `kinematic_targets` and are not moved by constraints.
-    pub kinematic: Vec<bool>,
-    pub kinematic_targets: Vec<Vec3>,
+    kinematic: Vec<bool>,
+    kinematic_targets: Vec<Vec3>,
     /// Extra acceleration per vertex, m/s², added to gravity before prediction.
-    pub external_acceleration: Vec<Vec3>,
+    external_acceleration: Vec<Vec3>,
     // Per edge.
-    pub frames: Vec<Quat>,
+    frames: Vec<Quat>,
     /// Inverse rotational inertia of the edge frame; 0 for a pinned (root) frame.
-    pub frame_inv_inertia: Vec<f32>,
-    pub rest_lengths: Vec<f32>,
+    frame_inv_inertia: Vec<f32>,
+    rest_lengths: Vec<f32>,
     // Per edge pair.
     /// Rest Darboux vector `Ω0` the bend–twist constraint uses this step (S1-15).
-    pub rest_darboux: Vec<Vec3>,
+    rest_darboux: Vec<Vec3>,
     /// Bend–twist compliance `α` per component (bend, bend, twist), 1/(N·m).
-    pub compliance: Vec<Vec3>,
+    compliance: Vec<Vec3>,
     // Scratch, kept here so a step allocates nothing.
-    pub(crate) previous_positions: Vec<Vec3>,
-    pub(crate) lambdas: Vec<Vec3>,
-    pub(crate) edge_directions: Vec<Vec3>,
-    pub(crate) solve_upper: Vec<f32>,
-    pub(crate) solve_values: Vec<f32>,
-    pub(crate) edge_coefficients: Vec<StretchShearCoefficients>,
-    pub(crate) pair_coefficients: Vec<BendTwistCoefficients>,
+    previous_positions: Vec<Vec3>,
+    lambdas: Vec<Vec3>,
+    edge_directions: Vec<Vec3>,
+    solve_upper: Vec<f32>,
+    solve_values: Vec<f32>,
+    edge_coefficients: Vec<StretchShearCoefficients>,
+    pair_coefficients: Vec<BendTwistCoefficients>,
     /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
-    pub(crate) work_units: Vec<(usize, usize, bool)>,
+    work_units: Vec<(usize, usize, bool)>,
+}
+
+/// The rod arrays of one step, borrowed from [`Rods::step_arrays`]; every slice has one entry
+/// per vertex and `offsets`/`work_units` are the checked layout.
+pub(super) struct StepArrays<'a> {
+    pub offsets: &'a [u32],
+    pub work_units: &'a [(usize, usize, bool)],
+    pub positions: &'a mut [Vec3],
+    pub velocities: &'a mut [Vec3],
+    pub previous_positions: &'a mut [Vec3],
+    pub frames: &'a mut [Quat],
+    pub rest_darboux: &'a mut [Vec3],
+    pub lambdas: &'a mut [Vec3],
+    pub edge_directions: &'a mut [Vec3],
+    pub solve_upper: &'a mut [f32],
+    pub solve_values: &'a mut [f32],
+    pub edge_coefficients: &'a [StretchShearCoefficients],
+    pub pair_coefficients: &'a [BendTwistCoefficients],
+    pub inv_mass: &'a [f32],
+    pub kinematic: &'a [bool],
+    pub kinematic_targets: &'a [Vec3],
+    pub external_acceleration: &'a [Vec3],
+    pub frame_inv_inertia: &'a [f32],
+    pub rest_lengths: &'a [f32],
+    pub compliance: &'a [Vec3],
 }
 
 /// Frame whose third director is `t`, turned from `e3` by the shortest arc (deterministic).
@@ -105,8 +133,14 @@ fn work_units(offsets: &[u32]) -> Vec<(usize, usize, bool)> {
 impl Rods {
     /// Builds rods at rest in the groom's shape: frames parallel-transported from a root frame
     /// along the edges (so the imported shape has no twist), rest lengths and Darboux vectors
-    /// taken from it. The groom must be valid (`Groom::validate`).
-    pub fn from_groom(groom: &Groom, material: &Material, frame_inertia_factor: f32) -> Rods {
+    /// taken from it. The groom is validated here (offsets, two or more finite, distinct vertices
+    /// a strand), so the layout the solver's unsafe slicing trusts holds from construction on.
+    pub fn from_groom(
+        groom: &Groom,
+        material: &Material,
+        frame_inertia_factor: f32,
+    ) -> Result<Rods, GroomError> {
+        groom.validate()?;
         let n = groom.vertex_count();
         let mut rods = Rods {
             strand_offsets: groom.strand_offsets.clone(),
@@ -182,7 +216,168 @@ impl Rods {
         }
         rods.work_units = work_units(&groom.strand_offsets);
         rods.update_inverse_masses(frame_inertia_factor);
-        rods
+        rods.assert_layout();
+        Ok(rods)
+    }
+
+    /// The layout every unsafe per-strand slice relies on. `Groom::validate` already implies it;
+    /// asserting it once here keeps that reliance local to this module, where the arrays are
+    /// built and never resized.
+    fn assert_layout(&self) {
+        let n = self.positions.len();
+        let offsets = &self.strand_offsets;
+        assert!(
+            offsets.first() == Some(&0)
+                && offsets.last().map(|&o| o as usize) == Some(n)
+                && offsets.windows(2).all(|w| w[1] >= w[0].saturating_add(2)),
+            "rod strand offsets must ascend from 0 to the vertex count, two or more vertices a strand"
+        );
+        let lengths = [
+            self.velocities.len(),
+            self.inv_mass.len(),
+            self.mass.len(),
+            self.mass_scale.len(),
+            self.kinematic.len(),
+            self.kinematic_targets.len(),
+            self.external_acceleration.len(),
+            self.frames.len(),
+            self.frame_inv_inertia.len(),
+            self.rest_lengths.len(),
+            self.rest_darboux.len(),
+            self.compliance.len(),
+            self.previous_positions.len(),
+            self.lambdas.len(),
+            self.edge_directions.len(),
+            self.solve_upper.len(),
+            self.solve_values.len(),
+            self.edge_coefficients.len(),
+            self.pair_coefficients.len(),
+        ];
+        assert!(lengths.iter().all(|&len| len == n), "every rod array must have one entry per vertex");
+        let mut next = 0;
+        for &(first, count, _) in &self.work_units {
+            assert!(first == next && count > 0, "work units must cover the strands in order, once each");
+            next = first + count;
+        }
+        assert!(next == self.strand_count(), "work units must cover every strand");
+    }
+
+    /// The arrays one step reads and writes, split so the solver can cut disjoint per-strand views.
+    /// Slices cannot change length, so the layout checked at construction still holds.
+    pub(super) fn step_arrays(&mut self) -> StepArrays<'_> {
+        StepArrays {
+            offsets: &self.strand_offsets,
+            work_units: &self.work_units,
+            positions: &mut self.positions,
+            velocities: &mut self.velocities,
+            previous_positions: &mut self.previous_positions,
+            frames: &mut self.frames,
+            rest_darboux: &mut self.rest_darboux,
+            lambdas: &mut self.lambdas,
+            edge_directions: &mut self.edge_directions,
+            solve_upper: &mut self.solve_upper,
+            solve_values: &mut self.solve_values,
+            edge_coefficients: &self.edge_coefficients,
+            pair_coefficients: &self.pair_coefficients,
+            inv_mass: &self.inv_mass,
+            kinematic: &self.kinematic,
+            kinematic_targets: &self.kinematic_targets,
+            external_acceleration: &self.external_acceleration,
+            frame_inv_inertia: &self.frame_inv_inertia,
+            rest_lengths: &self.rest_lengths,
+            compliance: &self.compliance,
+        }
+    }
+
+    /// First vertex of each strand, then the vertex count.
+    pub fn strand_offsets(&self) -> &[u32] {
+        &self.strand_offsets
+    }
+
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.velocities
+    }
+
+    pub(super) fn velocities_mut(&mut self) -> &mut [Vec3] {
+        &mut self.velocities
+    }
+
+    /// Inverse mass the solver uses: 0 for kinematic vertices, else `1/(mass·mass_scale)`.
+    pub fn inv_mass(&self) -> &[f32] {
+        &self.inv_mass
+    }
+
+    /// Mass from the material and widths, kg.
+    pub fn mass(&self) -> &[f32] {
+        &self.mass
+    }
+
+    /// Multiplier on `mass` (wet hair is heavier).
+    pub fn mass_scale(&self) -> &[f32] {
+        &self.mass_scale
+    }
+
+    pub(super) fn mass_scale_mut(&mut self) -> &mut [f32] {
+        &mut self.mass_scale
+    }
+
+    /// Kinematic vertices follow their targets and are not moved by constraints.
+    pub fn kinematic(&self) -> &[bool] {
+        &self.kinematic
+    }
+
+    pub(super) fn kinematic_mut(&mut self) -> &mut [bool] {
+        &mut self.kinematic
+    }
+
+    pub fn kinematic_targets(&self) -> &[Vec3] {
+        &self.kinematic_targets
+    }
+
+    pub(super) fn kinematic_targets_mut(&mut self) -> &mut [Vec3] {
+        &mut self.kinematic_targets
+    }
+
+    /// Extra acceleration per vertex, m/s², added to gravity before prediction.
+    pub fn external_acceleration(&self) -> &[Vec3] {
+        &self.external_acceleration
+    }
+
+    pub(super) fn external_acceleration_mut(&mut self) -> &mut [Vec3] {
+        &mut self.external_acceleration
+    }
+
+    /// Edge frames, stored at each edge's first vertex.
+    pub fn frames(&self) -> &[Quat] {
+        &self.frames
+    }
+
+    pub(super) fn frames_mut(&mut self) -> &mut [Quat] {
+        &mut self.frames
+    }
+
+    /// Inverse rotational inertia of the edge frame; 0 for a pinned (root) frame.
+    pub fn frame_inv_inertia(&self) -> &[f32] {
+        &self.frame_inv_inertia
+    }
+
+    /// Edge rest lengths, stored at each edge's first vertex (0 at tips).
+    pub fn rest_lengths(&self) -> &[f32] {
+        &self.rest_lengths
+    }
+
+    /// Rest Darboux vector `Ω0` the bend–twist constraint used in the last step (S1-15).
+    pub fn rest_darboux(&self) -> &[Vec3] {
+        &self.rest_darboux
+    }
+
+    /// Bend–twist compliance `α` per component (bend, bend, twist), 1/(N·m).
+    pub fn compliance(&self) -> &[Vec3] {
+        &self.compliance
     }
 
     /// Recomputes inverse masses from masses, scales and kinematic flags, and the frames' inverse
@@ -288,6 +483,20 @@ mod tests {
     use super::*;
 
     #[test]
+    fn rods_refuse_a_layout_the_solver_could_not_slice() {
+        let points = vec![Vec3::ZERO, Vec3::X * 0.01, Vec3::X * 0.02];
+        let good = Groom::from_strands(std::slice::from_ref(&points), 80e-6);
+        // Offsets past the points, out of order, or a one-vertex strand: an error, never rods.
+        for offsets in [vec![0, 4], vec![0, 2, 1, 3], vec![0, 1, 3], vec![1, 3]] {
+            let mut groom = good.clone();
+            groom.strand_offsets = offsets.clone();
+            assert!(Rods::from_groom(&groom, &Material::default(), 1.0).is_err(), "{offsets:?}");
+        }
+        let rods = Rods::from_groom(&good, &Material::default(), 1.0).unwrap();
+        assert_eq!((rods.strand_offsets(), rods.positions().len()), (&[0u32, 3][..], 3));
+    }
+
+    #[test]
     fn frames_follow_edges_without_twist() {
         // A helix: curvature and torsion, but parallel transport must give no material twist.
         let points: Vec<Vec3> = (0..40)
@@ -297,7 +506,7 @@ mod tests {
             })
             .collect();
         let groom = Groom::from_strands(std::slice::from_ref(&points), 80e-6);
-        let rods = Rods::from_groom(&groom, &Material::default(), 1.0);
+        let rods = Rods::from_groom(&groom, &Material::default(), 1.0).unwrap();
         for i in 0..points.len() - 1 {
             let t = (points[i + 1] - points[i]).normalize();
             assert!((director3(rods.frames[i]) - t).length() < 1e-5, "edge {i}");

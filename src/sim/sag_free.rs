@@ -71,10 +71,10 @@ impl Simulation {
             for i in (range.start + 1..range.end).rev() {
                 let bonded = self.bonded_fraction(i);
                 if r.is_pair_centre(i) && bonded > 1e-6 {
-                    let p = r.positions[i].as_dvec3();
+                    let p = r.positions()[i].as_dvec3();
                     let torque = ((moment - p * mass).cross(g.as_dvec3())).as_vec3();
-                    let frame = r.frames[i - 1];
-                    let relative = frame.conjugate() * r.frames[i];
+                    let frame = r.frames()[i - 1];
+                    let relative = frame.conjugate() * r.frames()[i];
                     let (w, omega) = if relative.w < 0.0 {
                         (-relative.w, -relative.xyz())
                     } else {
@@ -88,11 +88,11 @@ impl Simulation {
                         Vec3::new(omega.y, -omega.x, w),
                     ) * 0.5;
                     let stress = jt.inverse() * local;
-                    shape[i] = omega - r.compliance[i] * stress / bonded;
+                    shape[i] = omega - r.compliance()[i] * stress / bonded;
                 }
-                let m = (r.mass[i] * r.mass_scale[i]) as f64;
+                let m = (r.mass()[i] * r.mass_scale()[i]) as f64;
                 mass += m;
-                moment += r.positions[i].as_dvec3() * m;
+                moment += r.positions()[i].as_dvec3() * m;
             }
         }
         self.remember_shape(&shape);

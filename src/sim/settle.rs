@@ -161,7 +161,7 @@ pub fn settle_with<C>(
     }
     let s = sim(context);
     if report.converged {
-        s.rods.velocities.iter_mut().for_each(|v| *v = Vec3::ZERO);
+        s.rods.velocities_mut().iter_mut().for_each(|v| *v = Vec3::ZERO);
     }
     report.seconds = report.steps as f32 * dt;
     report.max_speed = s.max_speed();
@@ -192,8 +192,8 @@ fn relax<C>(
     while report.steps < max_steps {
         if reset {
             let s = sim(context);
-            s.rods.velocities.iter_mut().for_each(|v| *v = Vec3::ZERO);
-            probe = Some((s.rods.positions.clone(), s.rods.frames.clone()));
+            s.rods.velocities_mut().iter_mut().for_each(|v| *v = Vec3::ZERO);
+            probe = Some((s.rods.positions().to_vec(), s.rods.frames().to_vec()));
             report.resets += 1;
             since_reset = 0;
             kinetic = 0.0;
@@ -228,8 +228,8 @@ impl Simulation {
     fn kinetic_energy(&self) -> f64 {
         let r = &self.rods;
         (0..r.vertex_count())
-            .filter(|&i| !r.kinematic[i])
-            .map(|i| (r.mass[i] * r.mass_scale[i]) as f64 * r.velocities[i].as_dvec3().length_squared())
+            .filter(|&i| !r.kinematic()[i])
+            .map(|i| (r.mass()[i] * r.mass_scale()[i]) as f64 * r.velocities()[i].as_dvec3().length_squared())
             .sum()
     }
 
@@ -248,20 +248,20 @@ impl Simulation {
         let (mut force, mut weight, mut torque, mut moment) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for strand in 0..r.strand_count() {
             let range = r.strand_range(strand);
-            let mass = |i: usize| (r.mass[i] * r.mass_scale[i]) as f64;
+            let mass = |i: usize| (r.mass()[i] * r.mass_scale()[i]) as f64;
             for i in range.clone() {
-                if r.kinematic[i] {
+                if r.kinematic()[i] {
                     continue;
                 }
-                force += (mass(i) * (r.positions[i] - positions[i]).length() as f64 / vertex_scale).powi(2);
+                force += (mass(i) * (r.positions()[i] - positions[i]).length() as f64 / vertex_scale).powi(2);
                 weight += (mass(i) * g).powi(2);
             }
             let edges = range.start..range.end - 1;
             for (e, (&before, &now)) in
-                frames.iter().zip(&r.frames).enumerate().take(edges.end).skip(edges.start)
+                frames.iter().zip(r.frames()).enumerate().take(edges.end).skip(edges.start)
             {
-                let wq = r.frame_inv_inertia[e];
-                if wq <= 0.0 || (r.kinematic[e] && r.kinematic[e + 1]) {
+                let wq = r.frame_inv_inertia()[e];
+                if wq <= 0.0 || (r.kinematic()[e] && r.kinematic()[e + 1]) {
                     continue;
                 }
                 let turn = darboux_canonical(before, now).length().min(1.0);
@@ -269,7 +269,7 @@ impl Simulation {
                 torque += (angle / (wq as f64 * frame_scale)).powi(2);
                 // Gravity's moment on the strand beyond the edge, at most (whatever its direction).
                 let lever: f64 = (e + 1..range.end)
-                    .map(|j| mass(j) * r.positions[j].distance(r.positions[e]) as f64)
+                    .map(|j| mass(j) * r.positions()[j].distance(r.positions()[e]) as f64)
                     .sum();
                 moment += (g * lever).powi(2);
             }
@@ -303,8 +303,8 @@ impl Simulation {
         for strand in 0..r.strand_count() {
             let range = r.strand_range(strand);
             let first = range.start;
-            let mut frame = r.frames[first];
-            let mut p = r.positions[first];
+            let mut frame = r.frames()[first];
+            let mut p = r.positions()[first];
             points[first] = p;
             for i in first..range.end - 1 {
                 if i > first {
@@ -312,7 +312,7 @@ impl Simulation {
                     let w = (1.0 - o.length_squared()).max(0.0).sqrt();
                     frame = (frame * Quat::from_xyzw(o.x, o.y, o.z, w)).normalize();
                 }
-                p += r.rest_lengths[i] * director3(frame);
+                p += r.rest_lengths()[i] * director3(frame);
                 points[i + 1] = p;
             }
         }
@@ -323,7 +323,8 @@ impl Simulation {
     /// from, or one with the same strands): current positions as points, and the attributes
     /// `rest` (zero-stress rest curves), `rest_darboux` (Ω0) and `bond_*` (rates per kind).
     pub fn write_to_groom(&self, groom: &mut Groom) {
-        groom.points.clone_from(&self.rods.positions);
+        groom.points.clear();
+        groom.points.extend_from_slice(self.rods.positions());
         let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
         groom.set_attribute(Attribute::new("rest", AttributeRate::Vertex, 3, flat(&self.rest_curves())));
         groom.set_attribute(Attribute::new(

@@ -28,23 +28,31 @@ pub(crate) struct StepConstants {
     pub velocity_keep: f32,
 }
 
-/// A raw pointer that may cross threads; strands hand out disjoint slices of it.
+/// A raw pointer with its slice's length that may cross threads; strands hand out disjoint
+/// slices of it.
 #[derive(Clone, Copy)]
-struct SharedMut<T>(*mut T);
+struct SharedMut<T> {
+    base: *mut T,
+    len: usize,
+}
 // SAFETY: only used to create slices over disjoint per-strand ranges (see `step_all`).
 unsafe impl<T: Send> Send for SharedMut<T> {}
 unsafe impl<T: Send> Sync for SharedMut<T> {}
 
 impl<T> SharedMut<T> {
     fn new(v: &mut [T]) -> Self {
-        SharedMut(v.as_mut_ptr())
+        SharedMut { base: v.as_mut_ptr(), len: v.len() }
     }
 
+    /// The bounds are checked (once per strand and array, negligible next to the solve), so only
+    /// disjointness is left to the caller.
+    ///
     /// # Safety
-    /// `range` must be in bounds, and no two live slices may overlap.
+    /// No two live slices may overlap.
     #[allow(clippy::mut_from_ref)]
     unsafe fn slice<'a>(&self, range: Range<usize>) -> &'a mut [T] {
-        std::slice::from_raw_parts_mut(self.0.add(range.start), range.len())
+        assert!(range.start <= range.end && range.end <= self.len, "strand range outside the rod arrays");
+        std::slice::from_raw_parts_mut(self.base.add(range.start), range.len())
     }
 }
 
@@ -143,33 +151,35 @@ pub(crate) fn step_all(
     k: &StepConstants,
     hooks: &dyn Hooks,
 ) {
-    let units = std::mem::take(&mut rods.work_units);
+    let a = rods.step_arrays();
+    let units = a.work_units;
     let parts = Parts {
-        offsets: &rods.strand_offsets,
-        x: SharedMut::new(&mut rods.positions),
-        v: SharedMut::new(&mut rods.velocities),
-        x_prev: SharedMut::new(&mut rods.previous_positions),
-        q: SharedMut::new(&mut rods.frames),
-        rest: SharedMut::new(&mut rods.rest_darboux),
-        lambda: SharedMut::new(&mut rods.lambdas),
-        directions: SharedMut::new(&mut rods.edge_directions),
-        upper: SharedMut::new(&mut rods.solve_upper),
-        values: SharedMut::new(&mut rods.solve_values),
-        edge_k: &rods.edge_coefficients,
-        pair_k: &rods.pair_coefficients,
-        w: &rods.inv_mass,
-        kinematic: &rods.kinematic,
-        targets: &rods.kinematic_targets,
-        external: &rods.external_acceleration,
-        wq: &rods.frame_inv_inertia,
-        length: &rods.rest_lengths,
-        compliance: &rods.compliance,
+        offsets: a.offsets,
+        x: SharedMut::new(a.positions),
+        v: SharedMut::new(a.velocities),
+        x_prev: SharedMut::new(a.previous_positions),
+        q: SharedMut::new(a.frames),
+        rest: SharedMut::new(a.rest_darboux),
+        lambda: SharedMut::new(a.lambdas),
+        directions: SharedMut::new(a.edge_directions),
+        upper: SharedMut::new(a.solve_upper),
+        values: SharedMut::new(a.solve_values),
+        edge_k: a.edge_coefficients,
+        pair_k: a.pair_coefficients,
+        w: a.inv_mass,
+        kinematic: a.kinematic,
+        targets: a.kinematic_targets,
+        external: a.external_acceleration,
+        wq: a.frame_inv_inertia,
+        length: a.rest_lengths,
+        compliance: a.compliance,
         bonded,
         broken,
     };
     units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
-        // SAFETY: work units cover disjoint strand ranges, each visited once; strand ranges are
-        // disjoint and within the arrays (validated groom offsets).
+        // SAFETY: work units cover each strand once (checked in `Rods::from_groom`), and strand
+        // ranges are disjoint because the offsets ascend (same check); bounds are checked in
+        // `SharedMut::slice`.
         if in_lanes {
             let mut views: [Strand<'_>; lanes::LANES] =
                 std::array::from_fn(|l| unsafe { parts.strand(first_strand + l) });
@@ -214,7 +224,6 @@ pub(crate) fn step_all(
             }
         }
     });
-    rods.work_units = units;
 }
 
 /// Makes every edge its rest length at once (to first order): the length constraints of a strand

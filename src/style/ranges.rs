@@ -7,8 +7,8 @@
 //! |---|---|
 //! | `[settings]` `dt` | [1e-6, 0.1] s |
 //! | `gravity` | components in [-1000, 1000] m/s² |
-//! | `youngs_modulus`, `shear_modulus` | (0, 1e12] Pa |
-//! | `density` | (0, 1e5] kg/m³ |
+//! | `youngs_modulus`, `shear_modulus` | [1e5, 1e12] Pa |
+//! | `density` | [1, 1e5] kg/m³ |
 //! | `cuticle_peel_per_metre` | [0, 1000] /m |
 //! | `max_segment` | [1e-5, 10] m |
 //! | `damping` | [0, 1e4] /s |
@@ -29,7 +29,7 @@
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | stages | at most 10,000 |
-use crate::validate::{self, Range, COORDINATE, FRACTION, SECONDS};
+use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, MODULUS, SECONDS};
 
 use super::recipe::{Obstacle, Recipe, Stage};
 
@@ -88,9 +88,9 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
     let s = &recipe.settings;
     table("settings", "dt", s.dt.into(), Range::closed(1e-6, 0.1))?;
     validate::vector("[settings] gravity", s.gravity, COORDINATE)?;
-    table("settings", "youngs_modulus", s.youngs_modulus.into(), Range::above(0.0, 1e12))?;
-    table("settings", "shear_modulus", s.shear_modulus.into(), Range::above(0.0, 1e12))?;
-    table("settings", "density", s.density.into(), Range::above(0.0, 1e5))?;
+    table("settings", "youngs_modulus", s.youngs_modulus.into(), MODULUS)?;
+    table("settings", "shear_modulus", s.shear_modulus.into(), MODULUS)?;
+    table("settings", "density", s.density.into(), DENSITY)?;
     table("settings", "cuticle_peel_per_metre", s.cuticle_peel_per_metre.into(), Range::closed(0.0, 1e3))?;
     if let Some(max) = s.max_segment {
         table("settings", "max_segment", max.into(), Range::closed(1e-5, 10.0))?;

@@ -106,9 +106,10 @@ pub struct BondInfluences {
 }
 
 impl Default for BondInfluences {
-    /// Table 1, scene 3.
+    /// Table 1, scene 3 ([`crate::sim::BondInfluences::SCENE_3`]).
     fn default() -> Self {
-        BondInfluences { hydrogen: 0.33, ionic: 0.30, disulfide: 0.20, peptide: 0.17 }
+        let [hydrogen, ionic, disulfide, peptide] = crate::sim::BondInfluences::SCENE_3.0;
+        BondInfluences { hydrogen, ionic, disulfide, peptide }
     }
 }
 

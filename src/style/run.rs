@@ -25,6 +25,7 @@ use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape}
 use crate::interact::water::Droplets;
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
+use crate::progress::{Progress, ProgressMode};
 use crate::sim::settle::settle_with;
 use crate::sim::{
     BondInfluences, BondKind, Cuticle, Material, SettleOptions, SettleReport, SimParams, Simulation,
@@ -35,8 +36,8 @@ use crate::sim::{
 pub struct StyleOptions {
     /// Capture the groom this many times per simulated second (0: only the result).
     pub frames_per_second: f32,
-    /// Draw a progress bar on stderr (only shown on a terminal).
-    pub progress: bool,
+    /// How to report progress on stderr.
+    pub progress: ProgressMode,
     /// The groom's own scalp or head mesh: `shape = "scalp"` obstacles collide with it and the
     /// head frame is fitted to it. Readers of groom files that carry a mesh fill it in.
     pub scalp: Option<Arc<TriangleMesh>>,
@@ -132,32 +133,20 @@ pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptio
     let mut session = Session::new(groom, recipe, options)?;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
-    let progress = options.progress.then(|| {
-        let bar = indicatif::ProgressBar::new(total_steps);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} steps ({eta})")
-                .expect("a valid template")
-                .progress_chars("=> "),
-        );
-        bar
-    });
+    let progress = Progress::new(options.progress, "style", total_steps);
     // The stages placed on this groom (head-frame lengths in metres, layouts as rods).
     let placed_stages = session.recipe.stages.clone();
     for (index, spanned) in placed_stages.iter().enumerate() {
         let stage = spanned.get_ref();
-        if let Some(bar) = &progress {
-            bar.set_message(stage.kind());
-        }
+        progress.set_message(&format!("stage {}/{} {}", index + 1, placed_stages.len(), stage.kind()));
         let start = Instant::now();
         session.penetration = 0.0;
         let steps_before = session.sim.steps_taken();
-        let settle = session.run_stage(index, stage, progress.as_ref())?;
+        let settle = session.run_stage(index, stage, &progress)?;
         let steps = session.sim.steps_taken() - steps_before;
         stages.push(session.stage_report(index, stage, steps, start.elapsed().as_secs_f64(), settle));
     }
-    if let Some(bar) = progress {
-        bar.finish_and_clear();
-    }
+    progress.finish();
     let report = StyleReport {
         strands: session.groom.strand_count(),
         guides: None,
@@ -171,8 +160,10 @@ pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptio
         }),
         stages,
     };
-    if session.frame_interval.is_some() && session.frames.last() != Some(&session.sim.rods.positions) {
-        session.frames.push(session.sim.rods.positions.clone());
+    if session.frame_interval.is_some()
+        && session.frames.last().map(Vec::as_slice) != Some(session.sim.rods().positions())
+    {
+        session.frames.push(session.sim.rods().positions().to_vec());
     }
     let mut out = session.groom.clone();
     session.sim.write_to_groom(&mut out);
@@ -367,7 +358,7 @@ impl Session {
             session.apply_mass();
         }
         if frame_interval.is_some() {
-            session.frames.push(session.sim.rods.positions.clone());
+            session.frames.push(session.sim.rods().positions().to_vec());
         }
         Ok(session)
     }
@@ -413,14 +404,14 @@ impl Session {
         self.update_wetness(dt);
         if let Some(every) = self.frame_interval {
             if self.sim.steps_taken() % every == 0 {
-                self.frames.push(self.sim.rods.positions.clone());
+                self.frames.push(self.sim.rods().positions().to_vec());
             }
         }
     }
 
     /// The rod solver with the active obstacles' contacts.
     fn contact_step(&mut self) {
-        self.previous.copy_from_slice(&self.sim.rods.positions);
+        self.previous.copy_from_slice(self.sim.rods().positions());
         self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {
             shapes: &self.active,
@@ -435,7 +426,7 @@ impl Session {
 
     /// How deep the deepest vertex is inside an active obstacle now.
     fn deepest_penetration(&self) -> f32 {
-        let positions = &self.sim.rods.positions;
+        let positions = &self.sim.rods().positions();
         (0..self.groom.strand_count())
             .into_par_iter()
             .map(|strand| {
@@ -456,7 +447,7 @@ impl Session {
     /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
     /// the solver as per-vertex accelerations.
     fn compute_forces(&mut self, dt: f32) {
-        let positions = &self.sim.rods.positions;
+        let positions = &self.sim.rods().positions();
         self.dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
         self.wind_dv.iter_mut().for_each(|w| *w = 0.0);
         if let Some(dryer) = &self.dryer {
@@ -478,7 +469,7 @@ impl Session {
             );
         }
         if let Some(contacts) = &mut self.contacts {
-            contacts.apply(positions, &self.radii, &self.sim.rods.kinematic, &mut self.dv, dt);
+            contacts.apply(positions, &self.radii, self.sim.rods().kinematic(), &mut self.dv, dt);
         }
         if let Some(water) = &self.recipe.water {
             let gravity = self.sim.params().gravity;
@@ -499,7 +490,7 @@ impl Session {
         if self.wetness_params.diffusion > 0.0 && self.wetness.iter().any(|&w| w > 0.0) {
             wetness::diffuse_strands(
                 &mut self.wetness,
-                &self.sim.rods.positions,
+                self.sim.rods().positions(),
                 &self.groom.strand_offsets,
                 dt,
                 self.wetness_params.diffusion,
@@ -526,18 +517,11 @@ impl Session {
         }
     }
 
-    fn run_steps(
-        &mut self,
-        steps: u64,
-        progress: Option<&indicatif::ProgressBar>,
-        mut each: impl FnMut(&mut Self, u64),
-    ) {
+    fn run_steps(&mut self, steps: u64, progress: &Progress, mut each: impl FnMut(&mut Self, u64)) {
         for k in 0..steps {
             each(self, k);
             self.step();
-            if let Some(bar) = progress {
-                bar.inc(1);
-            }
+            progress.inc(1);
         }
     }
 
@@ -545,7 +529,7 @@ impl Session {
         &mut self,
         index: usize,
         stage: &Stage,
-        progress: Option<&indicatif::ProgressBar>,
+        progress: &Progress,
     ) -> Result<Option<SettleReport>> {
         let steps = self.steps_for(stage.duration());
         match stage {
@@ -668,7 +652,7 @@ impl Session {
     fn chemistry(
         &mut self,
         steps: u64,
-        progress: Option<&indicatif::ProgressBar>,
+        progress: &Progress,
         amounts: &super::recipe::BondAmounts,
         sign: f32,
         vertices: Option<&[bool]>,
@@ -702,22 +686,10 @@ impl Session {
 
     /// The static solve (`sim::settle`) with this session's full step: forces, contacts and
     /// wetness.
-    fn settle(&mut self, options: &SettleOptions, progress: Option<&indicatif::ProgressBar>) -> SettleReport {
+    fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> SettleReport {
         let budget = self.steps_for(options.max_seconds).max(1);
-        let report = settle_with(
-            self,
-            |s| &mut s.sim,
-            Self::step,
-            options,
-            || {
-                if let Some(bar) = progress {
-                    bar.inc(1);
-                }
-            },
-        );
-        if let Some(bar) = progress {
-            bar.inc(budget.saturating_sub(report.steps));
-        }
+        let report = settle_with(self, |s| &mut s.sim, Self::step, options, || progress.inc(1));
+        progress.inc(budget.saturating_sub(report.steps));
         report
     }
 
@@ -745,7 +717,7 @@ impl Session {
     /// nearest the rod to the tip, on a tight helix around it (chords keep the rest lengths).
     fn windings(&mut self, strands: &[bool], rods: &[usize]) -> Result<Vec<Winding>> {
         let mut windings = Vec::new();
-        let positions = self.sim.rods.positions.clone();
+        let positions = self.sim.rods().positions().to_vec();
         for (s, _) in strands.iter().enumerate().filter(|(_, &on)| on) {
             let range = self.groom.strand_range(s);
             // Nearest rod and the strand's vertex nearest to it (never the root).
@@ -775,7 +747,7 @@ impl Session {
             // a pinned root and a held winding are pulled apart and shake).
             let root = range.start;
             while first + 1 < range.end {
-                let slack: f32 = self.sim.rods.rest_lengths[root..first].iter().sum();
+                let slack: f32 = self.sim.rods().rest_lengths()[root..first].iter().sum();
                 if positions[root].distance(on_rod(first)) <= 0.95 * slack {
                     break;
                 }
@@ -804,7 +776,7 @@ impl Session {
             };
             let (mut arc, mut phi) = (vec![0.0f32], vec![0.0f32]);
             for v in first + 1..range.end {
-                let chord = self.sim.rods.rest_lengths[v - 1];
+                let chord = self.sim.rods().rest_lengths()[v - 1];
                 if chord >= 2.0 * winding_radius {
                     return Err(Error::Usage(format!(
                         "strand {s}: a {chord:.4} m segment cannot wrap a rod of radius {radius} m; \
@@ -836,7 +808,7 @@ impl Session {
                 let dir = Vec3::new(unit_hash(seed, 1, k), unit_hash(seed, 2, k), unit_hash(seed, 3, k))
                     * 2.0
                     - 1.0;
-                self.sim.rods.positions[v] + dir.normalize_or_zero() * (0.5 * (r_min + r_max))
+                self.sim.rods().positions()[v] + dir.normalize_or_zero() * (0.5 * (r_min + r_max))
             })
             .collect();
         self.droplets = Droplets::new(positions);
@@ -850,7 +822,7 @@ impl Session {
         wall_seconds: f64,
         settle: Option<SettleReport>,
     ) -> StageReport {
-        let positions = &self.sim.rods.positions;
+        let positions = &self.sim.rods().positions();
         let strands = self.groom.strand_count();
         let curvature: f32 =
             (0..strands).map(|s| mean_curvature(&positions[self.groom.strand_range(s)])).sum::<f32>()
@@ -870,7 +842,7 @@ impl Session {
         let mean = |kind: BondKind| {
             let rates = self.sim.bonds.rates(kind);
             let centres: Vec<f32> =
-                (0..rates.len()).filter(|&v| self.sim.rods.is_pair_centre(v)).map(|v| rates[v]).collect();
+                (0..rates.len()).filter(|&v| self.sim.rods().is_pair_centre(v)).map(|v| rates[v]).collect();
             centres.iter().sum::<f32>() / centres.len().max(1) as f32
         };
         StageReport {

@@ -1,0 +1,72 @@
+//! `--progress log`: farm and CI logs (stderr not a terminal) get plain progress lines with an
+//! ETA, in order, ending at 100 % and the total time; the default shows nothing there.
+mod common;
+use common::*;
+
+/// The percentages of the `LABEL: P% (done/total) ...` lines, checking each line's shape.
+fn logged_percentages(stderr: &str, label: &str) -> Vec<u32> {
+    let prefix = format!("{label}: ");
+    stderr
+        .lines()
+        .filter_map(|line| line.strip_prefix(prefix.as_str()))
+        .filter(|rest| !rest.starts_with("done in"))
+        .map(|rest| {
+            assert!(rest.contains(", elapsed ") && rest.contains(", eta "), "a progress line: {rest}");
+            rest.split('%').next().unwrap().parse().expect("a percentage")
+        })
+        .collect()
+}
+
+#[test]
+fn style_and_render_log_progress_with_an_eta_only_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("g.hair");
+    let made = coif(&["generate", "-o", path_str(&groom), "--strands", "20", "--vertices", "8"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(
+        &recipe,
+        "[settings]\ndt = 0.01\n\n[[stages]]\nkind = \"process\"\nduration = 0.5\n\n\
+         [[stages]]\nkind = \"process\"\nduration = 0.37\n",
+    )
+    .unwrap();
+    let styled = dir.path().join("s.usda");
+    let args = ["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&styled)];
+
+    let logged = coif(&[&args[..], &["--progress", "log"]].concat());
+    assert!(logged.status.success(), "{}", stderr(&logged));
+    let text = stderr(&logged);
+    let percentages = logged_percentages(&text, "style");
+    // 87 steps: one line per tenth, in order, the last at 100 % in the second stage.
+    let tenths: Vec<u32> = percentages.iter().map(|p| p / 10).collect();
+    assert_eq!(tenths, (1..=10).collect::<Vec<u32>>(), "{text}");
+    assert!(text.contains("style: 10% (9/87) stage 1/2 process, elapsed "), "{text}");
+    assert!(text.contains("style: 100% (87/87) stage 2/2 process, elapsed "), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("style: done in ")), "{text}");
+
+    let quiet = coif(&args);
+    assert!(quiet.status.success());
+    assert!(logged_percentages(&stderr(&quiet), "style").is_empty(), "no bar or lines in a log by default");
+
+    let image = dir.path().join("p.png");
+    let rendered = coif(&[
+        "render",
+        path_str(&styled),
+        "-o",
+        path_str(&image),
+        "--res",
+        "64x48",
+        "--spp",
+        "2",
+        "--progress",
+        "log",
+    ]);
+    assert!(rendered.status.success(), "{}", stderr(&rendered));
+    let percentages = logged_percentages(&stderr(&rendered), "render");
+    assert_eq!(percentages.last(), Some(&100), "{}", stderr(&rendered));
+    assert!(percentages.windows(2).all(|w| w[0] < w[1]), "{percentages:?}");
+
+    let bad = coif(&[&args[..], &["--progress", "sometimes"]].concat());
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("--progress"), "{}", stderr(&bad));
+}
