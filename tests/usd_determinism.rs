@@ -1,4 +1,4 @@
-//! `.usda` output is the same bytes at any thread count, and reading it gives the same groom:
+//! `.usda` and `.usdc` output is the same bytes at any thread count, and reading it gives the same groom:
 //! large arrays are formatted and parsed in pieces on all threads, joined in order.
 mod common;
 use common::*;
@@ -44,4 +44,27 @@ fn usda_bytes_and_read_back_do_not_depend_on_the_thread_count() {
     }
     assert!(outputs[0].len() > 1 << 20, "the file spans several read windows");
     assert!(outputs.iter().all(|o| *o == outputs[0]), "same bytes at 1, 2 and 5 threads");
+}
+
+#[test]
+fn usdc_bytes_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let hair = dir.path().join("g.hair");
+    let generated = coif(&["generate", "-o", path_str(&hair), "--strands", "1500", "--vertices", "40"]);
+    assert!(generated.status.success(), "{}", stderr(&generated));
+    // One curve prim, and a stage of several groups.
+    let houdini = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/houdini_groom.usda");
+    for (k, input) in [hair.as_path(), houdini.as_path()].into_iter().enumerate() {
+        let mut outputs = Vec::new();
+        for threads in ["1", "2", "5"] {
+            let usdc = dir.path().join(format!("{k}_t{threads}.usdc"));
+            run_with_threads(threads, &["convert", path_str(input), path_str(&usdc)]);
+            outputs.push(std::fs::read(&usdc).unwrap());
+        }
+        assert!(
+            outputs.iter().all(|o| *o == outputs[0]),
+            "{}: same bytes at 1, 2 and 5 threads",
+            input.display()
+        );
+    }
 }

@@ -7,7 +7,7 @@ mod common;
 use common::usd::*;
 use common::*;
 
-use coif::groom::{Attribute, AttributeRate, CurveBasis, Groom};
+use coif::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use coif::io::usda::TimeCodes;
 use glam::Vec3;
 use std::path::Path;
@@ -67,18 +67,102 @@ fn pxr_sees_coif_usdc_exactly_as_coif_usda_and_validates_it() {
     }
 }
 
+fn houdini_groom() -> Groom {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/houdini_groom.usda");
+    coif::io::read_groom(&path, &Default::default()).unwrap().groom
+}
+
+/// Groups as a groom built in memory may have them: interleaved strands, three bases, a pinned
+/// wrap, a purpose, attributes one group lacks, an empty group, a nested and a second root path,
+/// and attributes of every kind (int, bool, normal, integer tuples).
+fn interleaved_groups_groom() -> Groom {
+    let mut groom = rich_groom(CurveBasis::BSpline);
+    let (n, s) = (groom.vertex_count(), groom.strand_count());
+    let strand = AttributeRate::Strand;
+    groom.set_attribute(
+        Attribute::new("flag", strand, 1, (0..s).map(|i| (i % 2) as f32).collect())
+            .with_kind(AttributeKind::Bool),
+    );
+    groom.set_attribute(
+        Attribute::new("count", AttributeRate::Vertex, 1, (0..n).map(|i| i as f32 - 3.0).collect())
+            .with_kind(AttributeKind::Int),
+    );
+    groom.set_attribute(
+        Attribute::new("nrm", AttributeRate::Vertex, 3, (0..3 * n).map(|i| i as f32 * 0.01).collect())
+            .with_kind(AttributeKind::Normal),
+    );
+    groom.set_attribute(Attribute::new(
+        coif::guides::CLOSEST_GUIDES,
+        strand,
+        3,
+        (0..3 * s).map(|i| i as f32).collect(),
+    ));
+    let mut guides = CurveGroup::new("/Groom/guides", CurveBasis::Linear, CurveWrap::Nonperiodic);
+    guides.purpose = Some("guide".into());
+    guides.missing = vec!["wetness".into(), "tint".into()];
+    groom.groups = vec![
+        guides,
+        CurveGroup::new("/Groom/hair/main", CurveBasis::CatmullRom, CurveWrap::Nonperiodic),
+        CurveGroup::new("/Groom/empty", CurveBasis::Linear, CurveWrap::Nonperiodic),
+        CurveGroup::new("/Other/fuzz", CurveBasis::BSpline, CurveWrap::Pinned),
+    ];
+    groom.group_ids = (0..s).map(|i| [0, 1, 3][i % 3]).collect();
+    groom.basis = CurveBasis::Linear;
+    groom.validate().unwrap();
+    groom
+}
+
+#[test]
+fn pxr_sees_multi_group_usdc_exactly_as_usda_and_coif_reads_it_back() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, groom) in [houdini_groom(), interleaved_groups_groom()].iter().enumerate() {
+        assert!(groom.groups.len() > 1);
+        let (text, binary) = (dir.path().join(format!("{k}.usda")), dir.path().join(format!("{k}.usdc")));
+        coif::io::write_groom(&text, groom).unwrap();
+        coif::io::write_groom(&binary, groom).unwrap();
+        assert!(std::fs::read(&binary).unwrap().starts_with(b"PXR-USDC"));
+        let (from_text, from_binary) = (pxr_dump(&text, None), pxr_dump(&binary, None));
+        assert_eq!(from_binary["validationErrors"], serde_json::json!([]), "groom {k}");
+        assert_eq!(from_text, from_binary, "groom {k}: pxr sees the same stage");
+        let paths: Vec<&str> =
+            from_binary["curves"].as_array().unwrap().iter().map(|c| c["path"].as_str().unwrap()).collect();
+        assert_eq!(
+            paths.len(),
+            groom.groups.iter().filter(|g| g.name != "/Groom/empty").count(),
+            "{paths:?}"
+        );
+        let read = |path: &Path| coif::io::read_groom(path, &Default::default()).unwrap().groom;
+        let back = read(&binary);
+        assert_eq!(back, read(&text), "groom {k}: coif reads both formats alike");
+        assert_eq!(back.strand_count(), groom.strand_count());
+        // One prim per group, in group order: strands come back grouped, each group in order.
+        let grouped: Vec<Vec3> = (0..groom.group_count())
+            .flat_map(|g| groom.group_strands(g))
+            .flat_map(|s| groom.points[groom.strand_range(s)].to_vec())
+            .collect();
+        assert_eq!(back.points, grouped, "groom {k}: the strands of each group keep their order");
+        assert_eq!(back.group_count(), paths.len());
+    }
+}
+
 #[test]
 fn animated_usdc_has_the_time_samples_and_metadata_of_animated_usda() {
     let dir = tempfile::tempdir().unwrap();
-    let groom = rich_groom(CurveBasis::CatmullRom);
+    // One curve prim, and several groups (interleaved strands, three bases).
+    for groom in [rich_groom(CurveBasis::CatmullRom), interleaved_groups_groom()] {
+        animated_usdc_matches_animated_usda(&groom, dir.path());
+    }
+}
+
+fn animated_usdc_matches_animated_usda(groom: &Groom, dir: &Path) {
     let frames: Vec<Vec<Vec3>> = (1..=3)
         .map(|f| {
             groom.points.iter().map(|p| *p + Vec3::new(0.01 * f as f32, -0.003 * f as f32, 0.0)).collect()
         })
         .collect();
-    let (text, binary) = (dir.path().join("anim.usda"), dir.path().join("anim.usdc"));
+    let (text, binary) = (dir.join("anim.usda"), dir.join("anim.usdc"));
     for path in [&text, &binary] {
-        coif::io::write_animated(path, &groom, &frames, 30.0, &Default::default()).unwrap();
+        coif::io::write_animated(path, groom, &frames, 30.0, &Default::default()).unwrap();
     }
     for time in [Some(1.0), Some(2.5), Some(3.0)] {
         let (from_text, from_binary) = (pxr_dump(&text, time), pxr_dump(&binary, time));
@@ -104,7 +188,7 @@ fn animated_usdc_has_the_time_samples_and_metadata_of_animated_usda() {
     assert_eq!(earliest(&binary), earliest(&text), "without a time, the earliest sample");
     let times = TimeCodes { start: 1.0, end: 2.0, per_second: 24.0 };
     let bad =
-        coif::io::usdc::write_animated(&binary, &groom, &[groom.points[1..].to_vec()], times).unwrap_err();
+        coif::io::usdc::write_animated(&binary, groom, &[groom.points[1..].to_vec()], times).unwrap_err();
     assert!(matches!(bad, coif::Error::Usage(_)), "{bad}");
 }
 
@@ -208,10 +292,15 @@ def Xform "Groom"
 fn coif_reads_usdc_pxr_wrote_into_the_groom_of_its_usda() {
     let dir = tempfile::tempdir().unwrap();
     let mut sources = Vec::new();
-    for (k, groom) in
-        [rich_groom(CurveBasis::Linear), rich_groom(CurveBasis::CatmullRom), compressible_groom()]
-            .iter()
-            .enumerate()
+    for (k, groom) in [
+        rich_groom(CurveBasis::Linear),
+        rich_groom(CurveBasis::CatmullRom),
+        compressible_groom(),
+        houdini_groom(),
+        interleaved_groups_groom(),
+    ]
+    .iter()
+    .enumerate()
     {
         let path = dir.path().join(format!("coif{k}.usda"));
         coif::io::write_groom(&path, groom).unwrap();
@@ -269,4 +358,46 @@ fn no_python_is_started_for_usdc() {
     run(&["convert", path_str(&hair), path_str(&direct)]);
     assert_eq!(std::fs::read(&c).unwrap(), std::fs::read(&direct).unwrap(), "same groom through .usdc");
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "the writer is deterministic");
+
+    // A groom of several curve groups, written and read as crate files.
+    let houdini = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/houdini_groom.usda");
+    let (d, e, f) = (dir.path().join("d.usdc"), dir.path().join("e.usdc"), dir.path().join("f.usda"));
+    run(&["convert", path_str(&houdini), path_str(&d)]);
+    run(&["convert", path_str(&d), path_str(&e)]);
+    run(&["convert", path_str(&e), path_str(&f)]);
+    let direct = dir.path().join("direct_groups.usda");
+    run(&["convert", path_str(&houdini), path_str(&direct)]);
+    assert_eq!(std::fs::read(&f).unwrap(), std::fs::read(&direct).unwrap(), "same groups through .usdc");
+    assert_eq!(std::fs::read(&d).unwrap(), std::fs::read(&e).unwrap());
+}
+
+#[test]
+fn composed_crate_files_exit_2_naming_the_arc_without_python() {
+    let dir = tempfile::tempdir().unwrap();
+    probe(&["author-composed", path_str(dir.path())]);
+    let (stage, payload) = (dir.path().join("stage.usdc"), dir.path().join("payload.usdc"));
+    pxr_export(&dir.path().join("stage.usda"), &stage);
+    pxr_export(&dir.path().join("payload.usda"), &payload);
+    let plain = dir.path().join("plain.usdc");
+    coif::io::write_groom(&plain, &rich_groom(CurveBasis::Linear)).unwrap();
+    let out = dir.path().join("out.usda");
+    for (args, named) in [
+        (vec!["convert", path_str(&stage), path_str(&out)], "'references'"),
+        (vec!["convert", path_str(&payload), path_str(&out)], "'variant"),
+        (
+            vec!["convert", "--variant", "length=long", path_str(&plain), path_str(&out)],
+            "--variant length=long",
+        ),
+    ] {
+        let result = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(&args)
+            .env("COIF_PYTHON", "/nonexistent/python")
+            .env("COIF_PIPELINE", "/nonexistent")
+            .output()
+            .unwrap();
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {}", stderr(&result));
+        let message = stderr(&result);
+        assert!(message.contains(named) && message.contains(".usdc"), "{args:?}: {message}");
+        assert!(!out.exists(), "no output for {args:?}");
+    }
 }

@@ -8,6 +8,7 @@ pub mod hair;
 pub mod input;
 pub mod obj;
 pub mod usd_interop;
+pub mod usd_stage;
 pub mod usda;
 pub mod usdc;
 
@@ -160,17 +161,27 @@ pub fn read_groom_selected(
                 }
             }
         }
-        Format::Usdc if selection.variants.is_empty() => {
+        // Crate files never start Python: what needs composition is refused, naming it.
+        Format::Usdc => {
+            let flatten =
+                "flatten it first (pipeline/usd_interop.py flatten IN OUT.usda [--variant SET=NAME])";
+            if let Some(variant) = selection.variants.first() {
+                return Err(Error::Usage(format!(
+                    "{}: --variant {variant} needs composition, which coif does not do for crate files; {flatten}",
+                    path.display()
+                )));
+            }
             match usdc::read_file(path, options, selection.time)? {
                 usdc::ReadOutcome::Groom(groom) => groom,
-                usdc::ReadOutcome::NeedsComposition { .. } => {
-                    usd_interop::read(path, options, selection.time, &[])?
+                usdc::ReadOutcome::NeedsComposition { what } => {
+                    return Err(Error::Usage(format!(
+                        "{}: the layer uses '{what}' (composition), which coif does not resolve in crate files; {flatten}",
+                        path.display()
+                    )))
                 }
             }
         }
-        Format::Usda | Format::Usdc | Format::Usdz => {
-            usd_interop::read(path, options, selection.time, &selection.variants)?
-        }
+        Format::Usda | Format::Usdz => usd_interop::read(path, options, selection.time, &selection.variants)?,
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;
@@ -265,13 +276,12 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
             atomic::write_atomically(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))?;
             Ok(usd_warnings(path, groom))
         }
-        // The native crate writer writes one curve prim; grooms with groups go through usd-core.
-        Format::Usdc if groom.groups.is_empty() => {
+        Format::Usdc => {
             usda::check_writable(groom, path)?;
             usdc::write(path, groom)?;
             Ok(usd_warnings(path, groom))
         }
-        Format::Usdc | Format::Usdz => {
+        Format::Usdz => {
             usda::check_writable(groom, path)?;
             usd_interop::write(path, groom)?;
             Ok(usd_warnings(path, groom))
@@ -327,11 +337,15 @@ fn write_animated_curves(
                 end: frames.len() as f64,
                 per_second: frames_per_second as f64,
             };
-            if format == Format::Usdc && groom.groups.is_empty() {
-                usdc::write_animated(path, groom, frames, times)?;
-                return Ok(usd_warnings(path, groom));
+            match format {
+                Format::Usda => atomic::write_atomically(path, |out| {
+                    usda::write_animated(groom, frames, times, out, path)
+                })?,
+                Format::Usdc => usdc::write_animated(path, groom, frames, times)?,
+                _ => {
+                    usd_interop::write_usd(path, |out| usda::write_animated(groom, frames, times, out, path))?
+                }
             }
-            usd_interop::write_usd(path, |out| usda::write_animated(groom, frames, times, out, path))?;
             Ok(usd_warnings(path, groom))
         }
         Format::Alembic => {

@@ -3,7 +3,8 @@
 //! interpolation, `extent`, stage metadata, time-sampled points for animation.
 //!
 //! Writing: [`write`] for one groom, [`write_animated`] for time-sampled points with constant
-//! topology; one `BasisCurves` prim per curve group. Reading: [`read`] parses a layer (streaming, never the whole file in memory) and
+//! topology; the stage is planned by `io::usd_stage` (shared with the `.usdc` writer): one
+//! `BasisCurves` prim per curve group. Reading: [`read`] parses a layer (streaming, never the whole file in memory) and
 //! builds one groom from all its curve prims; a layer that needs composition (references,
 //! variants…) is reported as [`ReadOutcome::NeedsComposition`] so the caller can flatten it
 //! through usd-core first.
@@ -20,11 +21,11 @@ use crate::error::{Error, Result};
 use crate::groom::Groom;
 use crate::io::ImportOptions;
 
-pub use writer::{check_writable, unsupported, write, write_animated, TimeCodes, DEFAULT_PRIM_PATH};
+pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_PRIM_PATH};
+pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
 pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, Prim, Value};
 pub(crate) use reader::groom_from_layer;
-pub(crate) use writer::{curve_type_and_basis, extent, plan_primvars, PrimvarData};
 
 /// First bytes of every `.usda` file.
 pub const MAGIC: &[u8] = b"#usda";

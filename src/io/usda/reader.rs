@@ -391,7 +391,7 @@ fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKi
         t if t.starts_with("texCoord") => AttributeKind::TexCoord,
         _ => AttributeKind::Float,
     };
-    let written_as_float = super::writer::usd_type(AttributeKind::Float, name, components);
+    let written_as_float = crate::io::usd_stage::usd_type(AttributeKind::Float, name, components);
     if written_as_float.trim_end_matches("[]") == type_name {
         AttributeKind::Float
     } else {
@@ -722,7 +722,7 @@ fn merge(found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
     if !all_ids {
         groom.strand_ids = (0..groom.strand_count() as u32).collect();
     }
-    groom.drop_default_group(super::writer::DEFAULT_PRIM_PATH);
+    groom.drop_default_group(super::DEFAULT_PRIM_PATH);
     Ok(groom)
 }
 

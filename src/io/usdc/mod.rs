@@ -36,7 +36,9 @@
 //!
 //! The writer emits version 0.8.0 (what usd-core writes); the reader accepts 0.4.0 to 0.12.x.
 //! Reading builds the same layer model as the `.usda` parser, so both formats give the same
-//! groom; a layer with composition arcs is handed to usd-core to flatten, as for `.usda`.
+//! groom. Composition (references, payloads, inherits, specializes, sublayers, variants) is not
+//! resolved: such a layer, or a `--variant`, is refused with exit 2 naming the arc — no Python is
+//! ever started for a crate file.
 mod compress;
 mod decode;
 mod encode;
@@ -49,14 +51,14 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::groom::Groom;
-use crate::io::{atomic, usda, ImportOptions};
+use crate::io::{atomic, usd_stage, usda, ImportOptions};
 
 pub use decode::ReadOutcome;
 pub use format::MAGIC;
 
 /// Writes one groom as a crate file, atomically.
 pub fn write(path: &Path, groom: &Groom) -> Result<()> {
-    write_with(path, groom, None)
+    write_stage(path, &usd_stage::plan(groom, None)?)
 }
 
 /// Writes a groom whose points move: frame `k` at time code `times.start + k`.
@@ -66,27 +68,14 @@ pub fn write_animated(
     frames: &[Vec<Vec3>],
     times: usda::TimeCodes,
 ) -> Result<()> {
-    if !(times.start.is_finite()
-        && times.end.is_finite()
-        && times.start <= times.end
-        && times.per_second > 0.0)
-    {
-        return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
-    }
-    if let Some((k, frame)) = frames.iter().enumerate().find(|(_, f)| f.len() != groom.vertex_count()) {
-        return Err(Error::Usage(format!(
-            "{}: frame {k} has {} points; the groom has {} (topology must stay constant)",
-            path.display(),
-            frame.len(),
-            groom.vertex_count()
-        )));
-    }
-    write_with(path, groom, Some(&write::Animation { frames, times }))
+    usd_stage::check_animation(groom, frames, times, path)?;
+    write_stage(path, &usd_stage::plan(groom, Some((times, frames)))?)
 }
 
-fn write_with(path: &Path, groom: &Groom, animation: Option<&write::Animation>) -> Result<()> {
+/// Writes a planned stage as a crate file, atomically.
+pub fn write_stage(path: &Path, stage: &usd_stage::Stage) -> Result<()> {
     let out = atomic::create_beside(path)?;
-    let out = write::encode(groom, animation, out).map_err(|e| Error::io(path, e))?;
+    let out = write::encode(stage, out).map_err(|e| Error::io(path, e))?;
     atomic::commit(path, out)
 }
 

@@ -1,0 +1,491 @@
+//! The USD stage coif writes, planned once from a [`Groom`] and serialized by both writers
+//! (`usda::writer` as text, `usdc` as a crate file), so the two formats always hold the same
+//! prims, properties, values, metadata and time samples. A prim or property added here appears
+//! in both.
+//!
+//! The stage: layer metadata (`defaultPrim`, `doc`, `metersPerUnit`, `upAxis`, and the time codes
+//! when animated), then one `BasisCurves` prim per curve group at the group's path
+//! (`/Groom/Strands` for a groom without groups) with `Xform`s above. Each curve prim holds
+//! `basis` (cubic only), `purpose` (when the group has one), `type`, `wrap`,
+//! `curveVertexCounts`, `widths` (vertex), the primvars, `points` and `extent` — default values,
+//! or time samples of `points` and `extent` when animated.
+//!
+//! Large arrays are borrowed from the groom (and from the animation's frames) whenever a group's
+//! strands are contiguous, which they are for every groom a reader built; only small per-strand
+//! integer arrays are converted.
+use std::borrow::Cow;
+use std::ops::Range;
+use std::path::Path;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::groom::{AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::io::usda::names;
+
+/// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
+pub const DEFAULT_PRIM_PATH: &str = "/Groom/Strands";
+
+/// Points per parallel task when computing bounds.
+const CHUNK: usize = 16 * 1024;
+
+/// Stage timing for animated output (`startTimeCode`, `endTimeCode`, `timeCodesPerSecond`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeCodes {
+    pub start: f64,
+    pub end: f64,
+    pub per_second: f64,
+}
+
+/// A whole stage: layer metadata and the prim tree.
+pub struct Stage<'g> {
+    pub default_prim: String,
+    pub doc: String,
+    pub meters_per_unit: f64,
+    pub up_axis: &'static str,
+    /// Set for animated stages.
+    pub times: Option<TimeCodes>,
+    pub roots: Vec<Prim<'g>>,
+}
+
+/// A `def` prim: its schema type, properties (in the order they are written) and children.
+pub struct Prim<'g> {
+    pub name: String,
+    pub type_name: &'static str,
+    pub properties: Vec<Property<'g>>,
+    pub children: Vec<Prim<'g>>,
+}
+
+/// An attribute: USD type name (`point3f[]`, `token`…), variability, value, interpolation.
+pub struct Property<'g> {
+    pub name: String,
+    pub type_name: &'static str,
+    pub uniform: bool,
+    pub value: Value<'g>,
+    pub interpolation: Option<&'static str>,
+}
+
+pub enum Value<'g> {
+    Default(Data<'g>),
+    /// Samples in increasing time.
+    TimeSamples(Vec<(f64, Data<'g>)>),
+}
+
+/// A value's data; tuples are flattened (`components` numbers per element).
+pub enum Data<'g> {
+    Token(Cow<'g, str>),
+    Ints {
+        values: Cow<'g, [i32]>,
+        components: usize,
+    },
+    /// `bool[]` (written as 0 and 1 in text, one byte each in a crate file).
+    Bools(Vec<bool>),
+    Floats {
+        values: Cow<'g, [f32]>,
+        components: usize,
+    },
+}
+
+impl<'g> Property<'g> {
+    fn new(name: impl Into<String>, type_name: &'static str, value: Value<'g>) -> Self {
+        Property { name: name.into(), type_name, uniform: false, value, interpolation: None }
+    }
+
+    fn uniform_token(name: &str, token: impl Into<Cow<'g, str>>) -> Self {
+        Property { uniform: true, ..Property::new(name, "token", Value::Default(Data::Token(token.into()))) }
+    }
+
+    fn interpolated(mut self, interpolation: &'static str) -> Self {
+        self.interpolation = Some(interpolation);
+        self
+    }
+}
+
+/// Checks what USD cannot store: cubic strands with too few control points for their basis.
+pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
+    if groom.groups.is_empty() && groom.basis == CurveBasis::Linear {
+        return Ok(());
+    }
+    for (strand, count) in groom.vertex_counts().enumerate() {
+        let group = groom.group(groom.group_of(strand));
+        let valid = match (group.basis, group.wrap) {
+            (CurveBasis::Linear, _) => true,
+            (CurveBasis::Bezier, _) => count >= 4 && (count - 1) % 3 == 0,
+            (_, CurveWrap::Pinned) => count >= 2,
+            _ => count >= 4,
+        };
+        if !valid {
+            let rule = if group.basis == CurveBasis::Bezier { "3k + 1 (at least 4)" } else { "at least 4" };
+            return Err(Error::Usage(format!(
+                "{}: strand {strand} has {count} control points; {:?} curves in USD need {rule}",
+                path.display(),
+                group.basis
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Checks an animation before any output: sane time codes, at least one frame, constant topology.
+pub fn check_animation(groom: &Groom, frames: &[Vec<Vec3>], times: TimeCodes, path: &Path) -> Result<()> {
+    if !(times.start.is_finite()
+        && times.end.is_finite()
+        && times.start <= times.end
+        && times.per_second.is_finite()
+        && times.per_second > 0.0)
+    {
+        return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
+    }
+    if frames.is_empty() {
+        return Err(Error::Usage(format!("{}: an animated stage needs at least one frame", path.display())));
+    }
+    if let Some(k) = frames.iter().position(|f| f.len() != groom.vertex_count()) {
+        return Err(Error::Usage(format!(
+            "{}: frame {k} has {} points; the groom has {} (topology must stay constant)",
+            path.display(),
+            frames[k].len(),
+            groom.vertex_count()
+        )));
+    }
+    Ok(())
+}
+
+/// What the writers rename or drop, as warnings for the user.
+pub fn unsupported(groom: &Groom) -> Vec<String> {
+    let strands = Strands::Range(0..groom.strand_count());
+    let mut warnings = primvars(groom, &CurveGroup::default(), &strands).1;
+    warnings.sort();
+    warnings.dedup();
+    warnings
+}
+
+/// Plans the stage for `groom`; with `animation`, frame `k`'s points at time `times.start + k`.
+pub fn plan<'g>(groom: &'g Groom, animation: Option<(TimeCodes, &'g [Vec<Vec3>])>) -> Result<Stage<'g>> {
+    let mut roots: Vec<Prim<'g>> = Vec::new();
+    let mut taken: Vec<Vec<String>> = Vec::new();
+    for g in 0..groom.group_count() {
+        let strands = Strands::of_group(groom, g);
+        if strands.is_empty() && groom.group_count() > 1 {
+            continue;
+        }
+        let group = groom.group(g);
+        let path = if group.name.is_empty() { DEFAULT_PRIM_PATH } else { group.name.as_str() };
+        let mut components: Vec<String> =
+            path.split('/').filter(|c| !c.is_empty()).map(|c| valid_name(c).replace(':', "_")).collect();
+        let Some(last) = components.last().cloned() else {
+            return Err(Error::Usage(format!("curve group '{}' has no prim name", group.name)));
+        };
+        // Two groups at one path (possible only for grooms built in memory) keep both prims.
+        let mut n = 1;
+        while taken.contains(&components) {
+            n += 1;
+            *components.last_mut().unwrap() = format!("{last}_{n}");
+        }
+        taken.push(components.clone());
+        let curves = curves_prim(groom, &group, &strands, animation);
+        insert(&mut roots, &components, curves);
+    }
+    let default_prim = roots.first().map(|p| p.name.clone()).unwrap_or_else(|| "Groom".into());
+    Ok(Stage {
+        default_prim,
+        doc: concat!("Written by coif ", env!("CARGO_PKG_VERSION")).to_string(),
+        meters_per_unit: 1.0,
+        up_axis: "Y",
+        times: animation.map(|(times, _)| times),
+        roots,
+    })
+}
+
+/// Puts `leaf` at `path` (prim names) under `nodes`, creating `Xform`s on the way. A group whose
+/// path names an existing prim takes that prim's place and keeps its children.
+fn insert<'g>(nodes: &mut Vec<Prim<'g>>, path: &[String], leaf: Prim<'g>) {
+    let Some((first, rest)) = path.split_first() else { return };
+    let index = match nodes.iter().position(|n| n.name == *first) {
+        Some(i) => i,
+        None => {
+            nodes.push(Prim {
+                name: first.clone(),
+                type_name: "Xform",
+                properties: Vec::new(),
+                children: Vec::new(),
+            });
+            nodes.len() - 1
+        }
+    };
+    if rest.is_empty() {
+        let node = &mut nodes[index];
+        node.type_name = leaf.type_name;
+        node.properties = leaf.properties;
+    } else {
+        insert(&mut nodes[index].children, rest, leaf);
+    }
+}
+
+/// The strands of one group: a contiguous range (slices are borrowed) or a list (gathered).
+enum Strands {
+    Range(Range<usize>),
+    List(Vec<usize>),
+}
+
+impl Strands {
+    fn of_group(groom: &Groom, group: usize) -> Strands {
+        if groom.groups.len() <= 1 {
+            return Strands::Range(if group == 0 { 0..groom.strand_count() } else { 0..0 });
+        }
+        let list = groom.group_strands(group);
+        match (list.first(), list.last()) {
+            (Some(&a), Some(&b)) if b + 1 - a == list.len() => Strands::Range(a..b + 1),
+            _ => Strands::List(list),
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        match self {
+            Strands::Range(r) => r.is_empty(),
+            Strands::List(l) => l.is_empty(),
+        }
+    }
+
+    /// Per-strand data (`components` values per strand).
+    fn per_strand<'d, T: Clone>(&self, data: &'d [T], components: usize) -> Cow<'d, [T]> {
+        match self {
+            Strands::Range(r) => Cow::Borrowed(&data[r.start * components..r.end * components]),
+            Strands::List(l) => Cow::Owned(
+                l.iter().flat_map(|&s| data[s * components..(s + 1) * components].iter().cloned()).collect(),
+            ),
+        }
+    }
+
+    /// Per-vertex data (`components` values per vertex).
+    fn per_vertex<'d, T: Clone>(&self, groom: &Groom, data: &'d [T], components: usize) -> Cow<'d, [T]> {
+        let vertices = |r: Range<usize>| r.start * components..r.end * components;
+        match self {
+            Strands::Range(r) if r.is_empty() => Cow::Borrowed(&data[..0]),
+            Strands::Range(r) => {
+                let first = groom.strand_range(r.start).start;
+                let last = groom.strand_range(r.end - 1).end;
+                Cow::Borrowed(&data[vertices(first..last)])
+            }
+            Strands::List(l) => Cow::Owned(
+                l.iter().flat_map(|&s| data[vertices(groom.strand_range(s))].iter().cloned()).collect(),
+            ),
+        }
+    }
+
+    fn counts(&self, groom: &Groom) -> Vec<i32> {
+        let count = |s: usize| groom.strand_range(s).len() as i32;
+        match self {
+            Strands::Range(r) => r.clone().map(count).collect(),
+            Strands::List(l) => l.iter().map(|&s| count(s)).collect(),
+        }
+    }
+}
+
+fn floats(values: Cow<'_, [f32]>, components: usize) -> Data<'_> {
+    Data::Floats { values, components }
+}
+
+fn vec3s(points: Cow<'_, [Vec3]>) -> Cow<'_, [f32]> {
+    match points {
+        Cow::Borrowed(p) => Cow::Borrowed(bytemuck::cast_slice(p)),
+        Cow::Owned(p) => Cow::Owned(bytemuck::cast_slice(&p).to_vec()),
+    }
+}
+
+/// One group's `BasisCurves` prim.
+fn curves_prim<'g>(
+    groom: &'g Groom,
+    group: &CurveGroup,
+    strands: &Strands,
+    animation: Option<(TimeCodes, &'g [Vec<Vec3>])>,
+) -> Prim<'g> {
+    let mut properties = Vec::new();
+    let (curve_type, basis) = curve_type_and_basis(group.basis);
+    if let Some(basis) = basis {
+        properties.push(Property::uniform_token("basis", basis));
+    }
+    if let Some(purpose) = &group.purpose {
+        properties.push(Property::uniform_token("purpose", purpose.clone()));
+    }
+    let wrap = match group.wrap {
+        CurveWrap::Nonperiodic => "nonperiodic",
+        CurveWrap::Pinned => "pinned",
+        CurveWrap::Periodic => "periodic",
+    };
+    properties.push(Property::uniform_token("type", curve_type));
+    properties.push(Property::uniform_token("wrap", wrap));
+    let counts = Data::Ints { values: Cow::Owned(strands.counts(groom)), components: 1 };
+    properties.push(Property::new("curveVertexCounts", "int[]", Value::Default(counts)));
+    let widths = strands.per_vertex(groom, &groom.widths, 1);
+    let half_width = widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5;
+    properties
+        .push(Property::new("widths", "float[]", Value::Default(floats(widths, 1))).interpolated("vertex"));
+    properties.extend(primvars(groom, group, strands).0);
+
+    let extent = |points: &[Vec3]| -> Option<Data<'g>> {
+        let (lo, hi) = bounds(points)?;
+        let grown = [lo - Vec3::splat(half_width), hi + Vec3::splat(half_width)];
+        Some(floats(Cow::Owned(bytemuck::cast_slice(&grown).to_vec()), 3))
+    };
+    match animation {
+        None => {
+            let points = strands.per_vertex(groom, &groom.points, 1);
+            let extent = extent(&points);
+            properties.push(Property::new("points", "point3f[]", Value::Default(floats(vec3s(points), 3))));
+            if let Some(extent) = extent {
+                properties.push(Property::new("extent", "float3[]", Value::Default(extent)));
+            }
+        }
+        Some((times, frames)) => {
+            let time = |k: usize| times.start + k as f64;
+            let mut points = Vec::with_capacity(frames.len());
+            let mut extents = Vec::with_capacity(frames.len());
+            for (k, frame) in frames.iter().enumerate() {
+                let frame = strands.per_vertex(groom, frame, 1);
+                extents.extend(extent(&frame).map(|e| (time(k), e)));
+                points.push((time(k), floats(vec3s(frame), 3)));
+            }
+            properties.push(Property::new("points", "point3f[]", Value::TimeSamples(points)));
+            if !extents.is_empty() {
+                properties.push(Property::new("extent", "float3[]", Value::TimeSamples(extents)));
+            }
+        }
+    }
+    Prim { name: String::new(), type_name: "BasisCurves", properties, children: Vec::new() }
+}
+
+/// USD's `type` and `basis` tokens for a curve basis.
+pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&'static str>) {
+    match basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::BSpline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+    }
+}
+
+/// The primvars a group's strands become, and warnings for attributes renamed or dropped.
+fn primvars<'g>(groom: &'g Groom, group: &CurveGroup, strands: &Strands) -> (Vec<Property<'g>>, Vec<String>) {
+    let mut primvars = Vec::new();
+    let mut warnings = Vec::new();
+    // Names the reader gives a meaning of their own are never taken by attributes.
+    let mut used: Vec<String> = [names::GROOM_ID, names::GROOM_GUIDE, names::ST].map(String::from).to_vec();
+    let uniform_ints = |name: &str, values: Vec<i32>| {
+        let data = Data::Ints { values: Cow::Owned(values), components: 1 };
+        Property::new(format!("primvars:{name}"), "int[]", Value::Default(data)).interpolated("uniform")
+    };
+    let ids = strands.per_strand(&groom.strand_ids, 1);
+    primvars.push(uniform_ints(names::GROOM_ID, ids.iter().map(|&i| i as i32).collect()));
+    if let Some(guides) = &groom.guides {
+        let guides = strands.per_strand(guides, 1);
+        primvars.push(uniform_ints(names::GROOM_GUIDE, guides.iter().map(|&g| g as i32).collect()));
+    }
+    if let Some(uvs) = &groom.root_uvs {
+        let uvs = strands.per_strand(bytemuck::cast_slice::<_, f32>(uvs), 2);
+        let name = format!("primvars:{}", names::ST);
+        primvars.push(
+            Property::new(name, "texCoord2f[]", Value::Default(floats(uvs, 2))).interpolated("uniform"),
+        );
+    }
+    for attribute in groom.attributes.iter().filter(|a| group.carries(&a.name)) {
+        let wanted = names::primvar_for_attribute(&attribute.name);
+        let name = valid_name(wanted);
+        // A primvar that reads back as another attribute would not round-trip (`displayColor`
+        // is where `color` goes), so such names are dropped like clashes.
+        if used.contains(&name) || (name == wanted && names::attribute_for_primvar(&name) != attribute.name) {
+            warnings.push(format!(
+                "attribute '{}' clashes with primvar '{name}' and is not written",
+                attribute.name
+            ));
+            continue;
+        }
+        if name != wanted {
+            warnings.push(format!(
+                "attribute '{}' is written as primvar '{name}' (a valid USD name)",
+                attribute.name
+            ));
+        }
+        let components = attribute.components;
+        let (values, interpolation) = match attribute.rate {
+            AttributeRate::Vertex => (strands.per_vertex(groom, &attribute.data, components), "vertex"),
+            AttributeRate::Strand => (strands.per_strand(&attribute.data, components), "uniform"),
+        };
+        let integer = attribute.name == crate::guides::CLOSEST_GUIDES;
+        let (type_name, data) = if integer {
+            let ints = values.iter().map(|&v| v.round() as i32).collect();
+            (
+                ["int[]", "int2[]", "int3[]", "int4[]"][components.clamp(1, 4) - 1],
+                Data::Ints { values: Cow::Owned(ints), components },
+            )
+        } else {
+            let type_name = usd_type(attribute.kind, &attribute.name, components);
+            let data = match attribute.kind {
+                // Int and bool tuples have no USD type of their own here: they go as floats.
+                AttributeKind::Int if type_name == "int[]" => {
+                    Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
+                }
+                AttributeKind::Bool if type_name == "bool[]" => {
+                    Data::Bools(values.iter().map(|&v| v != 0.0).collect())
+                }
+                _ => floats(values, components),
+            };
+            (type_name, data)
+        };
+        used.push(name.clone());
+        primvars.push(
+            Property::new(format!("primvars:{name}"), type_name, Value::Default(data))
+                .interpolated(interpolation),
+        );
+    }
+    (primvars, warnings)
+}
+
+/// The USD array type an attribute is written as: its kind's, or for plain floats the type coif
+/// always gives that name (the reader maps that type back to plain floats).
+pub(crate) fn usd_type(kind: AttributeKind, name: &str, components: usize) -> &'static str {
+    const FLOATS: [&str; 4] = ["float[]", "float2[]", "float3[]", "float4[]"];
+    let by_size = |types: [&'static str; 4]| types[components.clamp(1, 4) - 1];
+    match kind {
+        AttributeKind::Int if components == 1 => "int[]",
+        AttributeKind::Bool if components == 1 => "bool[]",
+        AttributeKind::Point if components == 3 => "point3f[]",
+        AttributeKind::Normal if components == 3 => "normal3f[]",
+        AttributeKind::Vector if components == 3 => "vector3f[]",
+        AttributeKind::Color if components >= 3 => by_size(["", "", "color3f[]", "color4f[]"]),
+        AttributeKind::TexCoord if components >= 2 => by_size(["", "texCoord2f[]", "texCoord3f[]", ""]),
+        _ => match (name, components) {
+            (crate::groom::attr::COLOR, 3) => "color3f[]",
+            (names::REST, 3) => "point3f[]",
+            _ => by_size(FLOATS),
+        },
+    }
+}
+
+/// A USD property or prim name (identifier segments joined by ':') made from any name.
+fn valid_name(name: &str) -> String {
+    let segments: Vec<String> = name
+        .split(':')
+        .map(|segment| {
+            let mut s: String = segment
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' })
+                .collect();
+            if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
+                s.insert(0, '_');
+            }
+            s
+        })
+        .collect();
+    segments.join(":")
+}
+
+fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *points.first()?;
+    Some(
+        points
+            .par_chunks(CHUNK)
+            .map(|c| c.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+            .reduce(|| (first, first), |a, b| (a.0.min(b.0), a.1.max(b.1))),
+    )
+}
