@@ -95,6 +95,7 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
         basis: groom.basis,
         groups: groom.groups.clone(),
         group_ids: groom.group_ids.clone(),
+        meshes: groom.meshes.clone(),
         ..Default::default()
     };
     let vertex_attributes: Vec<&Attribute> =

@@ -6,6 +6,8 @@ use std::ops::Range;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::surface_mesh::SurfaceMesh;
+
 pub use crate::groups::{CurveGroup, CurveWrap};
 
 /// Canonical names of the attributes coif itself reads or writes. Format modules map them to
@@ -105,6 +107,8 @@ pub enum GroomError {
     AttributeComponents { name: String, components: usize },
     #[error("attribute '{name}' appears twice")]
     DuplicateAttribute { name: String },
+    #[error("mesh <{path}>: {problem}")]
+    Mesh { path: String, problem: String },
 }
 
 /// A groom: many strands, each a polyline (or cubic control polygon) rooted on the scalp.
@@ -131,6 +135,8 @@ pub struct Groom {
     pub group_ids: Vec<u32>,
     /// Named attributes, sorted by name (use [`Groom::set_attribute`] to add one).
     pub attributes: Vec<Attribute>,
+    /// Scalp, head or body meshes the file brought beside the curves (see [`crate::surface_mesh`]).
+    pub meshes: Vec<SurfaceMesh>,
 }
 
 impl Groom {
@@ -213,6 +219,7 @@ impl Groom {
     pub fn scale(&mut self, factor: f32) {
         self.points.iter_mut().for_each(|p| *p *= factor);
         self.widths.iter_mut().for_each(|w| *w *= factor);
+        self.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(|p| *p *= factor);
     }
 
     /// Checks every invariant of the model; the first violation is returned.
@@ -263,6 +270,9 @@ impl Groom {
             }
             let expected = self.element_count(attribute.rate) * attribute.components;
             check_len(&format!("attribute '{}'", attribute.name), expected, attribute.data.len())?;
+        }
+        for mesh in &self.meshes {
+            mesh.check().map_err(|problem| GroomError::Mesh { path: mesh.path.clone(), problem })?;
         }
         Ok(())
     }

@@ -121,7 +121,10 @@ impl Groom {
     pub fn append(&mut self, other: &Groom) -> Result<(), GroomError> {
         let ours: Vec<usize> = (0..self.strand_count()).collect();
         let theirs: Vec<usize> = (0..other.strand_count()).collect();
+        let mut meshes = std::mem::take(&mut self.meshes);
         *self = assemble(&[(&*self, &ours), (other, &theirs)])?;
+        meshes.extend(other.meshes.iter().cloned());
+        self.meshes = meshes;
         Ok(())
     }
 
@@ -175,7 +178,8 @@ impl Groom {
         }
         let strands: Vec<usize> =
             (0..self.strand_count()).filter(|&s| wanted.contains(&self.group_of(s))).collect();
-        let selected = assemble(&[(self, &strands)]).map_err(|e| e.to_string())?;
+        let mut selected = assemble(&[(self, &strands)]).map_err(|e| e.to_string())?;
+        selected.meshes = self.meshes.clone();
         Ok((selected, GroupSelection { strands }))
     }
 
@@ -210,7 +214,9 @@ impl Groom {
             .iter()
             .map(|(from_styled, list)| (if *from_styled { styled } else { self }, list.as_slice()))
             .collect();
-        assemble(&parts)
+        let mut whole = assemble(&parts)?;
+        whole.meshes = self.meshes.clone();
+        Ok(whole)
     }
 }
 

@@ -50,6 +50,15 @@ pub struct GroomInfo {
     pub attributes: Vec<AttributeInfo>,
     /// Named curve groups (empty for a groom of one unnamed group).
     pub groups: Vec<GroupInfo>,
+    /// Meshes the file brought beside the curves (scalp, head).
+    pub meshes: Vec<MeshInfo>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MeshInfo {
+    pub path: String,
+    pub points: usize,
+    pub faces: usize,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -88,6 +97,15 @@ impl GroomInfo {
                     strands: groom.group_ids.iter().filter(|&&id| id as usize == g).count(),
                 })
                 .collect(),
+            meshes: groom
+                .meshes
+                .iter()
+                .map(|m| MeshInfo {
+                    path: m.path.clone(),
+                    points: m.points.len(),
+                    faces: m.face_counts.len(),
+                })
+                .collect(),
         }
     }
 }
@@ -119,6 +137,9 @@ impl std::fmt::Display for GroomInfo {
         }
         for g in &self.groups {
             writeln!(f, "group        {} ({} strands, {:?} {:?})", g.name, g.strands, g.basis, g.wrap)?;
+        }
+        for m in &self.meshes {
+            writeln!(f, "mesh         {} ({} points, {} faces)", m.path, m.points, m.faces)?;
         }
         for a in &self.attributes {
             writeln!(

@@ -21,6 +21,7 @@ pub mod progress;
 pub mod render;
 pub mod sim;
 pub mod style;
+pub mod surface_mesh;
 pub mod validate;
 
 pub use error::{Error, Result};

@@ -401,6 +401,42 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.abc"],
     ));
+    for (name, mesh, names) in [
+        ("index out of range", "[0, 1, 9]", &["index 2 is 9"][..]),
+        ("negative index", "[0, 1, -1]", &["negative"][..]),
+        ("face of 2", "[0, 1]", &["face 0 has 2"][..]),
+    ] {
+        let counts = if name == "face of 2" { "[2]" } else { "[3]" };
+        let text = usda_with_mesh(counts, mesh, "(0, 0, 0), (1, 0, 0), (0, 1, 0)");
+        cases.push(convert(
+            format!(".usda mesh {name}"),
+            "in.usda",
+            text.into_bytes(),
+            &[&["in.usda", "/head"], names].concat(),
+        ));
+    }
+    let nan = usda_with_mesh("[3]", "[0, 1, 2]", "(0, 0, 0), (nan, 0, 0), (0, 1, 0)");
+    cases.push(convert(
+        ".usda mesh NaN point".into(),
+        "in.usda",
+        nan.into_bytes(),
+        &["in.usda", "/head", "point 1"],
+    ));
+    let huge = usda_with_mesh("[2000000000, 3]", "[0, 1, 2]", "(0, 0, 0), (1, 0, 0), (0, 1, 0)");
+    cases.push(convert(
+        ".usda mesh huge count".into(),
+        "in.usda",
+        huge.into_bytes(),
+        &["in.usda", "/head", "2000000003"],
+    ));
+    for (name, bytes, names) in blender_abc_mesh_cases() {
+        cases.push(convert(
+            format!(".abc mesh {name}"),
+            "in.abc",
+            bytes,
+            &[&["in.abc", "/Head/HeadMesh"], names].concat(),
+        ));
+    }
     cases.push(case(
         ".usda frame outside",
         vec![("in.usda", animated_usda().into_bytes())],
@@ -409,6 +445,38 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         &["in.usda", "time 0"],
     ));
     cases
+}
+
+/// A curves prim beside a `Mesh` prim `/head` with the given topology and points.
+fn usda_with_mesh(counts: &str, indices: &str, points: &str) -> String {
+    format!(
+        "#usda 1.0\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2]\n  \
+         point3f[] points = [(0, 0, 0), (0, 1, 0)]\n}}\ndef Mesh \"head\" {{\n  int[] faceVertexCounts = {counts}\n  \
+         int[] faceVertexIndices = {indices}\n  point3f[] points = [{points}]\n}}\n"
+    )
+}
+
+/// Blender's Alembic groom with its head mesh broken: a face index out of range.
+/// The arrays are found by their bytes (Alembic stores faces clockwise: coif's reversed).
+fn blender_abc_mesh_cases() -> Vec<(&'static str, Vec<u8>, &'static [&'static str])> {
+    let path = Path::new("tests/data/blender_groom.abc");
+    let bytes = std::fs::read(path).unwrap();
+    let groom = coif::io::read_groom(path, &Default::default()).unwrap().groom;
+    let mesh = &groom.meshes[0];
+    let mut file_order: Vec<u32> = Vec::new();
+    let mut at = 0;
+    for &count in &mesh.face_counts {
+        file_order.extend(mesh.face_indices[at..at + count as usize].iter().rev());
+        at += count as usize;
+    }
+    let indices: Vec<u8> = file_order.iter().flat_map(|&i| (i as i32).to_le_bytes()).collect();
+    let find = |needle: &[u8]| {
+        bytes.windows(needle.len()).position(|w| w == needle).expect("the face indices are in the file")
+    };
+    let mut out_of_range = bytes.clone();
+    let start = find(&indices);
+    out_of_range[start + 4..start + 8].copy_from_slice(&100_000i32.to_le_bytes());
+    vec![("index out of range", out_of_range, &["100000"][..])]
 }
 
 /// A two-sample animated curves layer (time codes 1 and 2).

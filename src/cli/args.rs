@@ -311,6 +311,7 @@ pub(crate) struct StyleArgs {
     pub(crate) guides: Option<usize>,
     /// The groom's scalp or head mesh, a Wavefront OBJ in coif's space (metres, Y up): the
     /// recipe's `shape = "scalp"` obstacles collide with it and its head frame is fitted to it.
+    /// Without it, a mesh in the groom file (USD `Mesh`, Alembic `PolyMesh`) under the roots is used.
     #[arg(long, value_name = "OBJ")]
     pub(crate) scalp: Option<PathBuf>,
 }

@@ -85,14 +85,15 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let strands = groom.strand_count();
     let roots: Vec<Vec3> = (0..strands).map(|s| groom.points[groom.strand_range(s).start]).collect();
     let flags = match &recipe.guides {
-        Some(spec) => {
+        // `[guides]` with only a reach keeps the groom's own guides.
+        Some(spec) if spec.count.is_some() || spec.fraction.is_some() || groom.guides.is_none() => {
             let mut flags = vec![false; strands];
             for g in select::farthest_points(&roots, spec.count_for(strands)?) {
                 flags[g] = true;
             }
             flags
         }
-        None => groom.guides.clone().ok_or_else(|| Error::Usage("the groom has no guides".into()))?,
+        _ => groom.guides.clone().ok_or_else(|| Error::Usage("the groom has no guides".into()))?,
     };
     let guide_ids: Vec<usize> = (0..strands).filter(|&s| flags[s]).collect();
     let child_ids: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();

@@ -229,7 +229,9 @@ fn read_head(path: &Path) -> Result<Vec<u8>> {
 fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
     if options.up_axis == Some(UpAxis::Z) {
         // Z up to Y up: (x, y, z) -> (x, z, -y), a rotation, so handedness is kept.
-        groom.points.iter_mut().for_each(|p| *p = Vec3::new(p.x, p.z, -p.y));
+        let to_y_up = |p: &mut Vec3| *p = Vec3::new(p.x, p.z, -p.y);
+        groom.points.iter_mut().for_each(to_y_up);
+        groom.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(to_y_up);
     }
     if let Some(scale) = options.meters_per_unit {
         groom.scale(scale);
@@ -244,6 +246,20 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
 
 /// [`write_groom`] with format-specific choices.
 pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
+    let mut warnings = write_curves(path, groom, options)?;
+    warnings.extend(mesh_warning(path, groom));
+    Ok(warnings)
+}
+
+/// No writer carries meshes yet: say so rather than drop them silently.
+fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
+    (!groom.meshes.is_empty()).then(|| {
+        let names: Vec<&str> = groom.meshes.iter().map(|m| m.path.as_str()).collect();
+        format!("{}: meshes are not written (only the curves): {}", path.display(), names.join(", "))
+    })
+}
+
+fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
     match format {
@@ -296,6 +312,18 @@ pub fn write_animated(
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
+    let mut warnings = write_animated_curves(path, groom, frames, frames_per_second, options)?;
+    warnings.extend(mesh_warning(path, groom));
+    Ok(warnings)
+}
+
+fn write_animated_curves(
+    path: &Path,
+    groom: &Groom,
+    frames: &[Vec<Vec3>],
+    frames_per_second: f32,
+    options: &ExportOptions,
+) -> Result<Vec<String>> {
     let format = Format::from_extension(path)?;
     match format {
         Format::Hair => Err(Error::Usage(format!(

@@ -107,12 +107,25 @@ pub struct Styled {
 }
 
 /// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
+/// Without a scalp in `options`, the groom's own mesh under its roots is the scalp
+/// ([`crate::surface_mesh::scalp_of`]); the result keeps the groom's meshes.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
     crate::limits::check_style(groom, recipe, options.frames_per_second)?;
-    if crate::guides::wanted(groom, recipe) {
-        return crate::guides::style(groom, recipe, options);
-    }
-    style_strands(groom, recipe, options)
+    let own_scalp;
+    let options = match options.scalp.is_none().then(|| crate::surface_mesh::scalp_of(groom)).flatten() {
+        Some(mesh) => {
+            own_scalp = StyleOptions { scalp: Some(Arc::new(mesh)), ..options.clone() };
+            &own_scalp
+        }
+        None => options,
+    };
+    let mut styled = if crate::guides::wanted(groom, recipe) {
+        crate::guides::style(groom, recipe, options)?
+    } else {
+        style_strands(groom, recipe, options)?
+    };
+    styled.groom.meshes.clone_from(&groom.meshes);
+    Ok(styled)
 }
 
 /// Styles every strand of a groom with a recipe.

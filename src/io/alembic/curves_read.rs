@@ -10,6 +10,10 @@ use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::{Pod, TimeSampling};
 use crate::groom::{attr, Attribute, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::surface_mesh::SurfaceMesh;
+
+/// Alembic's polygon-mesh schema (a scalp or head beside the curves).
+pub const POLYMESH_SCHEMA: &str = "AbcGeom_PolyMesh_v1";
 
 fn fail<T>(message: impl Into<String>) -> OgawaResult<T> {
     Err(OgawaError(message.into()))
@@ -26,6 +30,8 @@ pub struct CurvesArchive<'a> {
     archive: Archive<'a>,
     /// Paths of the curves objects, each with the paths of the Xforms above it (root first).
     curves: Vec<(String, Vec<String>)>,
+    /// Paths of the polygon meshes (scalp, head), likewise.
+    meshes: Vec<(String, Vec<String>)>,
     /// Samples of the first curves object's positions: the archive's frames.
     frames: u32,
     frame_sampling: TimeSampling,
@@ -43,15 +49,16 @@ impl<'a> CurvesArchive<'a> {
     pub fn open(bytes: &'a [u8]) -> OgawaResult<Self> {
         let archive = Archive::open(bytes)?;
         // The object tree lives inside `archive`; collect paths first, then resolve references.
-        let mut found = Vec::new();
-        let mut epic_groom = false;
-        collect(&archive.top, &mut Vec::new(), &mut found, &mut epic_groom)?;
+        let mut found = Found::default();
+        collect(&archive.top, &mut Vec::new(), &mut found)?;
+        let Found { curves: found, meshes, epic_groom } = found;
         if found.is_empty() {
             return fail("the archive holds no curves (no AbcGeom_Curve_v2 object)");
         }
         let mut result = CurvesArchive {
             archive,
             curves: found,
+            meshes,
             frames: 1,
             frame_sampling: TimeSampling::identity(),
             epic_groom,
@@ -67,6 +74,11 @@ impl<'a> CurvesArchive<'a> {
     /// The `index`-th curves object with its `.geom` and the `.xform` compounds above it.
     fn resolve(&self, index: usize) -> OgawaResult<CurvesObject<'_, 'a>> {
         let (path, xform_paths) = &self.curves[index];
+        self.resolve_path(path, xform_paths)
+    }
+
+    /// The object at `path` with its `.geom` and the `.xform` compounds of `xform_paths`.
+    fn resolve_path(&self, path: &str, xform_paths: &[String]) -> OgawaResult<CurvesObject<'_, 'a>> {
         let top = &self.archive.top;
         let object = find(top, path).expect("collected from this tree");
         let geom = object
@@ -77,7 +89,7 @@ impl<'a> CurvesArchive<'a> {
             .iter()
             .filter_map(|p| find(top, p).and_then(|o| o.properties.compound(".xform")))
             .collect();
-        Ok(CurvesObject { path: path.clone(), geom, xforms })
+        Ok(CurvesObject { path: path.to_string(), geom, xforms })
     }
 
     /// Number of samples (frames) of the positions.
@@ -111,7 +123,62 @@ impl<'a> CurvesArchive<'a> {
         }
         let mut groom = merged.expect("at least one curves object");
         groom.drop_default_group_named(super::curves_write::DEFAULT_OBJECT_NAME);
+        for (path, xform_paths) in &self.meshes {
+            let object = self.resolve_path(path, xform_paths)?;
+            if let Some(mesh) = self.read_mesh(&object, time)? {
+                groom.meshes.push(mesh);
+            }
+        }
         Ok(groom)
+    }
+
+    /// A `PolyMesh` object (a scalp or head) at `time`, transformed, wound counter-clockwise
+    /// (Alembic winds clockwise); `None` when it has no faces.
+    fn read_mesh(&self, object: &CurvesObject<'_, 'a>, time: f64) -> OgawaResult<Option<SurfaceMesh>> {
+        let ogawa = &self.archive.ogawa;
+        let path = &object.path;
+        let positions = required(object, "P")?;
+        positions.expect(&[Pod::F32, Pod::F64], 3)?;
+        let index = self.index_at(positions, time);
+        let points: Vec<Vec3> = if positions.pod == Pod::F32 {
+            positions.read_f32_as(ogawa, index)?
+        } else {
+            positions.read_f32(ogawa, index)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+        };
+        let indices = |name: &str| -> OgawaResult<Vec<u32>> {
+            let property = required(object, name)?;
+            property.expect(&[Pod::I32, Pod::U32], 1)?;
+            let values = property.read_f64(ogawa, self.index_at(property, time))?;
+            values
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| {
+                    if (0.0..=u32::MAX as f64).contains(&v) {
+                        Ok(v as u32)
+                    } else {
+                        fail(format!("{path}: {name} entry {i} is {v}"))
+                    }
+                })
+                .collect()
+        };
+        let face_counts = indices(".faceCounts")?;
+        let face_indices = indices(".faceIndices")?;
+        if face_counts.is_empty() {
+            return Ok(None);
+        }
+        let matrix = self.world_matrix(object, time)?;
+        let mut mesh = SurfaceMesh {
+            path: path.clone(),
+            points: points.iter().map(|p| matrix.transform_point3(p.as_dvec3()).as_vec3()).collect(),
+            face_counts,
+            face_indices,
+        };
+        // Clockwise in the file; a mirroring transform turns the winding once more.
+        if matrix.determinant() >= 0.0 {
+            mesh.flip_winding();
+        }
+        mesh.check().map_err(|problem| OgawaError(format!("{path}: {problem}")))?;
+        Ok(Some(mesh))
     }
 
     /// Every frame, in order; refuses files that would expand far beyond their size.
@@ -480,15 +547,21 @@ fn has_schema(object: &Object<'_>, schema: &str, title: &str) -> bool {
         || object.metadata.get("schemaObjTitle") == Some(&format!("{schema}:{title}"))
 }
 
-/// Finds curves objects (paths) and the Xform paths above each; notes Epic's groom version.
-fn collect(
-    object: &Object<'_>,
-    xforms: &mut Vec<String>,
-    found: &mut Vec<(String, Vec<String>)>,
-    epic_groom: &mut bool,
-) -> OgawaResult<()> {
+/// What [`collect`] finds in the object tree.
+#[derive(Default)]
+struct Found {
+    /// Curves and polygon-mesh objects, each with the Xform paths above it (root first).
+    curves: Vec<(String, Vec<String>)>,
+    meshes: Vec<(String, Vec<String>)>,
+    /// The archive declares Epic's groom version.
+    epic_groom: bool,
+}
+
+/// Finds curves and polygon-mesh objects (paths) and the Xform paths above each; notes Epic's
+/// groom version.
+fn collect(object: &Object<'_>, xforms: &mut Vec<String>, found: &mut Found) -> OgawaResult<()> {
     if let Some(user) = object.properties.compound(".userProperties") {
-        *epic_groom |= user.get(epic::VERSION_MAJOR).is_some();
+        found.epic_groom |= user.get(epic::VERSION_MAJOR).is_some();
     }
     let is_xform =
         has_schema(object, XFORM_SCHEMA, ".xform") && object.properties.compound(".xform").is_some();
@@ -496,10 +569,12 @@ fn collect(
         xforms.push(object.full_name.clone());
     }
     if has_schema(object, CURVE_SCHEMA, ".geom") {
-        found.push((object.full_name.clone(), xforms.clone()));
+        found.curves.push((object.full_name.clone(), xforms.clone()));
+    } else if has_schema(object, POLYMESH_SCHEMA, ".geom") {
+        found.meshes.push((object.full_name.clone(), xforms.clone()));
     }
     for child in &object.children {
-        collect(child, xforms, found, epic_groom)?;
+        collect(child, xforms, found)?;
     }
     if is_xform {
         xforms.pop();

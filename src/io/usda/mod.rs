@@ -73,6 +73,8 @@ pub struct Selection {
 }
 
 /// What reading a `.usda` layer gave.
+// Returned once per file: boxing the groom would buy nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum ReadOutcome {
     Groom(Groom),
     /// The layer composes other layers or variants (the arc named, on that line); coif's own

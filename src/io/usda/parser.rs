@@ -757,6 +757,11 @@ pub fn wanted(name: &str) -> bool {
             | "wrap"
             | "purpose"
             | "xformOpOrder"
+            // Meshes (a scalp or head beside the curves).
+            | "faceVertexCounts"
+            | "faceVertexIndices"
+            | "orientation"
+            // Cameras (the render's shot).
             | "projection"
             | "focalLength"
             | "horizontalAperture"

@@ -12,6 +12,7 @@ use crate::groom::{
     Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
 };
 use crate::io::{ImportOptions, UpAxis};
+use crate::surface_mesh::SurfaceMesh;
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
 const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
@@ -68,11 +69,13 @@ pub fn groom_from_layer(
 ) -> Result<Groom> {
     let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
-    let mut walker = Walker { path, time, stage, found: Vec::new() };
+    let mut walker = Walker { path, time, stage, found: Vec::new(), meshes: Vec::new() };
     for prim in layer.prims {
         walker.visit(prim, "", DMat4::IDENTITY)?;
     }
-    merge(walker.found, path, layer_lines)
+    let mut groom = merge(walker.found, path, layer_lines)?;
+    groom.meshes = walker.meshes;
+    Ok(groom)
 }
 
 struct Walker<'a> {
@@ -80,6 +83,7 @@ struct Walker<'a> {
     time: Option<f64>,
     stage: DMat4,
     found: Vec<Curves>,
+    meshes: Vec<SurfaceMesh>,
 }
 
 impl Walker<'_> {
@@ -97,6 +101,10 @@ impl Walker<'_> {
             if let Some(curves) = self.curves(&mut prim, &prim_path, world)? {
                 self.found.push(curves);
             }
+        } else if prim.type_name == "Mesh" {
+            if let Some(mesh) = self.mesh(&mut prim, &prim_path, world)? {
+                self.meshes.push(mesh);
+            }
         }
         for child in children {
             self.visit(child, &prim_path, world)?;
@@ -106,6 +114,62 @@ impl Walker<'_> {
 
     fn error(&self, prim_path: &str, line: u32, message: impl std::fmt::Display) -> Error {
         Error::format(self.path, format!("line {line}: prim <{prim_path}>: {message}"))
+    }
+
+    /// Reads one `Mesh` prim (a scalp, head or body) in coif's space, wound counter-clockwise;
+    /// `None` when it has no points or faces (an empty placeholder).
+    fn mesh(&self, prim: &mut Prim, prim_path: &str, world: DMat4) -> Result<Option<SurfaceMesh>> {
+        let time = self.time;
+        let at_prim = |line: u32, message: String| self.error(prim_path, line, message);
+        let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
+            return Ok(None);
+        };
+        let points_line = points_attr.line;
+        let points: Vec<Vec3> = match take_value(points_attr, time) {
+            None => return Ok(None),
+            Some(Value::Vec3(points)) => points,
+            Some(other) => match other.to_f32() {
+                Some(flat) if flat.len() % 3 == 0 => flat.chunks_exact(3).map(Vec3::from_slice).collect(),
+                _ => return Err(at_prim(points_line, "'points' must be a point3f[] array".into())),
+            },
+        };
+        let ints = |name: &str| -> Result<Option<Vec<u32>>> {
+            let Some(attribute) = prim.attribute(name) else { return Ok(None) };
+            match value_at(attribute, time) {
+                None => Ok(None),
+                Some(Value::Int(values)) => values
+                    .iter()
+                    .map(|&v| u32::try_from(v).ok())
+                    .collect::<Option<Vec<u32>>>()
+                    .map(Some)
+                    .ok_or_else(|| at_prim(attribute.line, format!("'{name}' holds a negative value"))),
+                Some(_) => Err(at_prim(attribute.line, format!("'{name}' must be an int[] array"))),
+            }
+        };
+        let (Some(face_counts), Some(face_indices)) = (ints("faceVertexCounts")?, ints("faceVertexIndices")?)
+        else {
+            return Ok(None);
+        };
+        if face_counts.is_empty() {
+            return Ok(None);
+        }
+        let to_coif = self.stage * world;
+        let mut mesh = SurfaceMesh {
+            path: prim_path.to_string(),
+            points: points.iter().map(|p| to_coif.transform_point3(p.as_dvec3()).as_vec3()).collect(),
+            face_counts,
+            face_indices,
+        };
+        let left_handed = match prim.attribute("orientation").and_then(|a| value_at(a, time)) {
+            Some(Value::Text(t)) if t.len() == 1 => t[0] == "leftHanded",
+            _ => false,
+        };
+        // A mirroring transform turns the winding too.
+        if left_handed != (to_coif.determinant() < 0.0) {
+            mesh.flip_winding();
+        }
+        mesh.check().map_err(|problem| at_prim(prim.line, format!("mesh: {problem}")))?;
+        Ok(Some(mesh))
     }
 
     /// Reads one `BasisCurves` prim; `None` when it has no points (an empty placeholder).

@@ -16,6 +16,8 @@ use crate::io::usda::{self, Attribute, Layer, Prim, Value};
 use crate::io::ImportOptions;
 
 /// What reading a crate file gave.
+// Returned once per file: boxing the groom would buy nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum ReadOutcome {
     Groom(Groom),
     /// The layer uses a composition arc (named), which the native reader does not resolve.

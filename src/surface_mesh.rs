@@ -1,0 +1,193 @@
+//! Polygon meshes that travel with a groom: the scalp, head or body a DCC exports beside the
+//! curves (USD `Mesh` prims, Alembic `PolyMesh` objects). Readers bring them into coif's space
+//! (metres, Y up) with the curves; styling uses the one the roots sit on as the groom's own
+//! scalp ([`scalp_of`]), and writers that can carry meshes give them back at their paths.
+use glam::Vec3;
+
+use crate::groom::Groom;
+use crate::interact::mesh_sdf::TriangleMesh;
+
+/// A polygon mesh as the file holds it: faces of any vertex count, wound counter-clockwise seen
+/// from outside (USD's right-handed default; readers convert other conventions).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceMesh {
+    /// The prim path or object path it came from (`/root/Head/HeadMesh`).
+    pub path: String,
+    pub points: Vec<Vec3>,
+    /// Vertices per face (each at least 3).
+    pub face_counts: Vec<u32>,
+    /// Every face's vertex indices, concatenated.
+    pub face_indices: Vec<u32>,
+}
+
+impl SurfaceMesh {
+    /// Checks the topology against the points: the first problem, in words (readers prefix the
+    /// file and prim).
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(i) = self.points.iter().position(|p| !p.is_finite()) {
+            return Err(format!("point {i} is not finite ({})", self.points[i]));
+        }
+        if let Some(face) = self.face_counts.iter().position(|&c| c < 3) {
+            return Err(format!(
+                "face {face} has {} vertices; a face needs at least 3",
+                self.face_counts[face]
+            ));
+        }
+        let total: u64 = self.face_counts.iter().map(|&c| c as u64).sum();
+        if total != self.face_indices.len() as u64 {
+            return Err(format!(
+                "face vertex counts add up to {total} but there are {} face vertex indices",
+                self.face_indices.len()
+            ));
+        }
+        if let Some(i) = self.face_indices.iter().position(|&v| v as usize >= self.points.len()) {
+            return Err(format!(
+                "face vertex index {i} is {}, but the mesh has {} points",
+                self.face_indices[i],
+                self.points.len()
+            ));
+        }
+        Ok(())
+    }
+
+    /// The faces as triangle fans, in face order.
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        let mut triangles = Vec::with_capacity(self.face_indices.len());
+        let mut at = 0usize;
+        for &count in &self.face_counts {
+            let face = self.face_indices.get(at..at + count as usize).unwrap_or(&[]);
+            for k in 1..face.len().saturating_sub(1) {
+                triangles.push([face[0], face[k], face[k + 1]]);
+            }
+            at += count as usize;
+        }
+        triangles
+    }
+
+    /// Reverses every face's winding (for files wound clockwise, as Alembic is).
+    pub fn flip_winding(&mut self) {
+        let mut at = 0usize;
+        for &count in &self.face_counts {
+            self.face_indices[at..at + count as usize].reverse();
+            at += count as usize;
+        }
+    }
+
+    /// The mesh as a collider: triangles oriented outwards. A closed mesh's winding decides
+    /// inside from outside in the distance field, and files disagree on conventions, so the
+    /// orientation is taken from the geometry (the signed volume), not trusted from the file.
+    pub fn collider(&self) -> TriangleMesh {
+        let mut triangles = self.triangles();
+        let centre = self.points.iter().copied().sum::<Vec3>() / self.points.len().max(1) as f32;
+        let volume: f32 = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| self.points[v as usize] - centre);
+                a.dot(b.cross(c))
+            })
+            .sum();
+        if volume < 0.0 {
+            triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        TriangleMesh { points: self.points.clone(), triangles }
+    }
+}
+
+/// The groom's own scalp among its meshes: the one its roots lie closest to (median distance
+/// from a spread of roots to the nearest face centre), as a collider. `None` without meshes.
+pub fn scalp_of(groom: &Groom) -> Option<TriangleMesh> {
+    let strands = groom.strand_count();
+    let candidates: Vec<&SurfaceMesh> = groom.meshes.iter().filter(|m| !m.face_counts.is_empty()).collect();
+    match candidates.as_slice() {
+        [] => None,
+        [only] => Some(only.collider()),
+        _ if strands == 0 => Some(candidates[0].collider()),
+        _ => {
+            const SAMPLED_ROOTS: usize = 64;
+            let step = strands.div_ceil(SAMPLED_ROOTS).max(1);
+            let roots: Vec<Vec3> = (0..strands).step_by(step).map(|s| groom.strand_points(s)[0]).collect();
+            let score = |mesh: &SurfaceMesh| {
+                let collider = mesh.collider();
+                let centres: Vec<Vec3> = collider.area_samples().map(|(c, _)| c).collect();
+                let mut distances: Vec<f32> = roots
+                    .iter()
+                    .map(|r| centres.iter().map(|c| c.distance_squared(*r)).fold(f32::INFINITY, f32::min))
+                    .collect();
+                distances.sort_by(f32::total_cmp);
+                distances[distances.len() / 2]
+            };
+            // Ties go to the first mesh in file order (deterministic).
+            let best = candidates
+                .iter()
+                .map(|m| score(m))
+                .enumerate()
+                .fold((0, f32::INFINITY), |best, (i, s)| if s < best.1 { (i, s) } else { best })
+                .0;
+            Some(candidates[best].collider())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube(scale: f32, offset: Vec3) -> SurfaceMesh {
+        let points = (0..8)
+            .map(|i| offset + scale * Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
+            .collect();
+        // Outward, counter-clockwise quads.
+        let faces = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        SurfaceMesh {
+            path: "/cube".into(),
+            points,
+            face_counts: vec![4; 6],
+            face_indices: faces.iter().flatten().copied().collect(),
+        }
+    }
+
+    fn signed_volume(mesh: &TriangleMesh) -> f32 {
+        mesh.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| mesh.points[v as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn collider_is_outward_whatever_the_file_winding() {
+        let mesh = cube(2.0, Vec3::ZERO);
+        assert!((signed_volume(&mesh.collider()) - 8.0).abs() < 1e-4);
+        let mut flipped = mesh.clone();
+        flipped.flip_winding();
+        assert_ne!(flipped.face_indices, mesh.face_indices);
+        assert!((signed_volume(&flipped.collider()) - 8.0).abs() < 1e-4);
+        assert_eq!(mesh.triangles().len(), 12);
+    }
+
+    #[test]
+    fn check_names_the_problem() {
+        let mut mesh = cube(1.0, Vec3::ZERO);
+        assert_eq!(mesh.check(), Ok(()));
+        mesh.face_indices[5] = 8;
+        assert!(mesh.check().unwrap_err().contains("index 5 is 8"));
+        let mut mesh = cube(1.0, Vec3::ZERO);
+        mesh.points[3].y = f32::NAN;
+        assert!(mesh.check().unwrap_err().contains("point 3"));
+        let mut mesh = cube(1.0, Vec3::ZERO);
+        mesh.face_counts[0] = 2;
+        assert!(mesh.check().unwrap_err().contains("face 0"));
+    }
+
+    #[test]
+    fn the_scalp_is_the_mesh_under_the_roots() {
+        let mut groom =
+            Groom::from_strands(&[vec![Vec3::new(0.5, 1.0, 0.5), Vec3::new(0.5, 1.5, 0.5)]], 1e-4);
+        groom.meshes = vec![cube(1.0, Vec3::new(5.0, 0.0, 0.0)), cube(1.0, Vec3::ZERO)];
+        let scalp = scalp_of(&groom).unwrap();
+        assert_eq!(scalp.points[0], Vec3::ZERO);
+        assert!(scalp_of(&Groom::default()).is_none());
+    }
+}
