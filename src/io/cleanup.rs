@@ -93,7 +93,7 @@ pub fn die_with_parent(command: &mut Command) {
                 }
                 // The parent may have died before the prctl: then nobody will signal us.
                 if libc::getppid() != parent {
-                    return Err(std::io::Error::other("the batch process has exited"));
+                    return Err(std::io::Error::other("coif exited before its child started"));
                 }
                 Ok(())
             });
