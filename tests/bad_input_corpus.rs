@@ -72,6 +72,7 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     // (table, key, bad values): every number a plain table holds.
     let keys: &[(&str, &str, &[&str])] = &[
         ("settings", "dt", &["nan", "inf", "-1", "0", "1e-30", "1"]),
+        ("settings", "iterations", &["0", "1001", "4000000000"]),
         ("settings", "youngs_modulus", &["nan", "0", "-inf", "1e-30", "1e13"]),
         ("settings", "shear_modulus", &["nan", "-1", "1e-20"]),
         ("settings", "density", &["inf", "0", "1e-30"]),

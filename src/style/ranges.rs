@@ -6,6 +6,7 @@
 //! | key | range |
 //! |---|---|
 //! | `[settings]` `dt` | [1e-6, 0.1] s |
+//! | `iterations` | [1, 1000] |
 //! | `gravity` | components in [-1000, 1000] m/s² |
 //! | `youngs_modulus`, `shear_modulus` | [1e5, 1e12] Pa |
 //! | `density` | [1, 1e5] kg/m³ |
@@ -87,6 +88,7 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
     };
     let s = &recipe.settings;
     table("settings", "dt", s.dt.into(), Range::closed(1e-6, 0.1))?;
+    table("settings", "iterations", s.iterations.into(), Range::closed(1.0, 1000.0))?;
     validate::vector("[settings] gravity", s.gravity, COORDINATE)?;
     table("settings", "youngs_modulus", s.youngs_modulus.into(), MODULUS)?;
     table("settings", "shear_modulus", s.shear_modulus.into(), MODULUS)?;

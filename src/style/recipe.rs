@@ -572,9 +572,6 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     if !positive(settings.dt) || settings.dt > 0.1 {
         return Err(format!("[settings] dt = {} must be a positive time step of at most 0.1 s", settings.dt));
     }
-    if settings.iterations == 0 || settings.iterations > 1000 {
-        return Err(format!("[settings] iterations = {} must be between 1 and 1000", settings.iterations));
-    }
     if ![settings.youngs_modulus, settings.shear_modulus, settings.density].iter().all(|&v| positive(v)) {
         return Err("[settings] youngs_modulus, shear_modulus and density must be positive".into());
     }
