@@ -54,11 +54,8 @@ fn run_style(args: StyleArgs) -> Result<()> {
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
         return Err(Error::Usage(format!("--frames {frames_per_second} must be a positive rate")));
     }
-    if frames_per_second > 0.0 && io::Format::from_extension(&args.output)? == io::Format::Hair {
-        return Err(Error::Usage(format!(
-            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
-            args.output.display()
-        )));
+    if frames_per_second > 0.0 {
+        io::check_animated_output(&args.output)?;
     }
     let scalp = match &args.scalp {
         Some(path) => {

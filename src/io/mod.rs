@@ -317,6 +317,19 @@ pub fn write_animated(
     Ok(warnings)
 }
 
+/// The format of an animated output, refusing one that holds no time samples (`.hair`): callers
+/// check this before a long simulation, not only when writing.
+pub fn check_animated_output(path: &Path) -> Result<Format> {
+    let format = Format::from_extension(path)?;
+    if format == Format::Hair {
+        return Err(Error::Usage(format!(
+            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
+            path.display()
+        )));
+    }
+    Ok(format)
+}
+
 fn write_animated_curves(
     path: &Path,
     groom: &Groom,
@@ -324,12 +337,9 @@ fn write_animated_curves(
     frames_per_second: f32,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
-    let format = Format::from_extension(path)?;
+    let format = check_animated_output(path)?;
     match format {
-        Format::Hair => Err(Error::Usage(format!(
-            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
-            path.display()
-        ))),
+        Format::Hair => unreachable!("refused by check_animated_output"),
         Format::Usda | Format::Usdc | Format::Usdz => {
             usda::check_writable(groom, path)?;
             let times = usda::TimeCodes {
