@@ -28,6 +28,7 @@ pub trait Number: Copy + Send {
 }
 
 impl Number for f32 {
+    #[inline]
     fn prefix(bytes: &[u8]) -> Option<(f32, usize)> {
         let decimal = Decimal::scan(bytes)?;
         if let Some(value) = decimal.exact_f32() {
@@ -57,6 +58,7 @@ struct Decimal {
 impl Decimal {
     /// The decimal at the start of `bytes`, or `None` if that is not a whole plain decimal
     /// (a word such as `inf`, a lone `.`, `1e`, `1.5.3`): those take the token path.
+    #[inline]
     fn scan(bytes: &[u8]) -> Option<Decimal> {
         let (negative, mut at) = match bytes.first()? {
             b'-' => (true, 1),
@@ -68,7 +70,11 @@ impl Decimal {
         let mut exponent = 0i64;
         let mut read_digits = |at: &mut usize| {
             let start = *at;
-            while let Some(digit) = bytes.get(*at).map(|b| b.wrapping_sub(b'0')).filter(|&d| d < 10) {
+            while *at < bytes.len() {
+                let digit = bytes[*at].wrapping_sub(b'0');
+                if digit > 9 {
+                    break;
+                }
                 mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit));
                 *at += 1;
             }
@@ -113,6 +119,7 @@ impl Decimal {
     /// product or quotient is the correctly rounded `f64`; rounding that to `f32` is right unless
     /// it lands exactly halfway between two `f32`s (then `None`), as every `f32` halfway point is
     /// an `f64` and both roundings are monotonic.
+    #[inline]
     fn exact_f32(&self) -> Option<f32> {
         const POWERS: [f64; 23] = [
             1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
