@@ -96,8 +96,10 @@ pub struct ImportOptions {
     pub meters_per_unit: Option<f32>,
     /// The file's up axis; `None` keeps the file's own or Y.
     pub up_axis: Option<UpAxis>,
-    /// Alembic: the sample to read from an animated file (0 = first); `None` reads the first.
-    pub frame: Option<u32>,
+    /// The frame number to read from an animated Alembic file, on the file's own timeline (time
+    /// = frame / its frame rate); `None` reads its first sample. USD takes its time code from
+    /// [`usda::Selection::time`].
+    pub frame: Option<f64>,
 }
 
 /// Choices for writing a groom that only some formats use.
@@ -129,23 +131,23 @@ pub fn read_groom_selected(
         Some(format) => format,
         None => Format::from_extension(path)?,
     };
+    // One frame for every format: a USD time code is the frame number on the stage's timeline.
+    let selection =
+        &usda::Selection { time: selection.time.or(options.frame), variants: selection.variants.clone() };
     let groom = match format {
         Format::Hair | Format::Alembic => {
             if !selection.variants.is_empty() || (format == Format::Hair && selection.time.is_some()) {
-                return Err(Error::Usage(format!(
-                    "{}: a time or variant selection applies to USD input only (Alembic takes --frame)",
-                    path.display()
-                )));
+                let what = if selection.variants.is_empty() {
+                    "a .hair file holds one frame: --frame applies to USD and Alembic input"
+                } else {
+                    "--variant applies to USD input only"
+                };
+                return Err(Error::Usage(format!("{}: {what}", path.display())));
             }
             let bytes = input::map_file(path)?;
             let mut groom = match format {
                 Format::Hair => hair::read(&bytes, path)?,
-                _ => alembic::read(
-                    &bytes,
-                    path,
-                    options.frame.unwrap_or(0),
-                    options.meters_per_unit.is_some(),
-                )?,
+                _ => alembic::read(&bytes, path, selection.time, options.meters_per_unit.is_some())?,
             };
             apply_import_options(&mut groom, options);
             groom
