@@ -195,3 +195,100 @@ fn directions_rotate_with_the_points_from_z_up() {
     }
     assert_eq!(written["curves"][0]["primvars"]["N"]["type"], "normal3f[]");
 }
+
+#[test]
+fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
+    // What Unreal's USD groom importer reads: `groom_*` primvars (int per strand for ids, guide
+    // flags and group ids, float2 root UVs), `widths` (vertex), and the spec version as
+    // `userProperties:groom_version_*` ints on the root prim. Checked in pxr against the input.
+    let dir = tempfile::tempdir().unwrap();
+    let blender = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_groom.usda");
+    for (input, ext) in [(blender.clone(), "usda"), (blender, "usdc"), (houdini_groom(), "usda")] {
+        let out = dir.path().join(format!("unreal.{ext}"));
+        let run = coif(&["convert", path_str(&input), path_str(&out), "--unreal"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let (source, written) = (pxr_dump(&input, None), pxr_dump(&out, None));
+        let label = format!("{} → .{ext}", input.display());
+        assert!(
+            source["prims"].as_array().unwrap().iter().any(|p| p[1] == "Mesh"),
+            "{label}: the input has a mesh"
+        );
+        assert!(
+            !written["prims"].as_array().unwrap().iter().any(|p| p[1] == "Mesh"),
+            "{label}: a mesh in the groom file"
+        );
+        let root = format!("/{}", written["defaultPrim"].as_str().unwrap());
+        for (name, value) in [("groom_version_major", 1), ("groom_version_minor", 5)] {
+            let property = &written["userProperties"][format!("{root}.userProperties:{name}")];
+            assert_eq!(
+                (property["type"].as_str(), property["value"].as_i64()),
+                (Some("int"), Some(value)),
+                "{label}: {name}"
+            );
+        }
+        // Widths as a plain convert writes them (metres, world scale applied; checked against
+        // pxr by the round-trip test): --unreal changes names, not values.
+        let plain_path = dir.path().join(format!("plain.{ext}"));
+        assert!(coif(&["convert", path_str(&input), path_str(&plain_path)]).status.success());
+        let plain = pxr_dump(&plain_path, None);
+        let plain_curves = curves_by_path(&plain);
+        let (source_curves, written_curves) = (curves_by_path(&source), curves_by_path(&written));
+        assert_eq!(source_curves.len(), written_curves.len(), "{label}");
+        for (group, ((path, src), (out_path, out))) in source_curves.iter().zip(&written_curves).enumerate() {
+            assert_eq!(path, out_path, "{label}");
+            let strands = src["counts"].as_array().unwrap().len();
+            let primvar = |name: &str, ty: &str| -> Vec<f32> {
+                let p = &out["primvars"][name];
+                assert_eq!(
+                    (p["type"].as_str(), p["interpolation"].as_str()),
+                    (Some(ty), Some("uniform")),
+                    "{label} {path} {name}"
+                );
+                let values = f32s(&p["values"]);
+                assert_eq!(
+                    values.len(),
+                    strands * if ty.starts_with("float2") { 2 } else { 1 },
+                    "{label} {path} {name}"
+                );
+                values
+            };
+            assert!(primvar("groom_group_id", "int[]").iter().all(|&g| g == group as f32), "{label} {path}");
+            assert_eq!(primvar("groom_id", "int[]").len(), strands);
+            let guide = if src["purpose"] == "guide" { 1.0 } else { 0.0 };
+            if out["primvars"].get("groom_guide").is_some() {
+                assert!(primvar("groom_guide", "int[]").iter().all(|&g| g == guide), "{label} {path}");
+            } else {
+                assert!(source_curves.iter().all(|(_, c)| c["purpose"] != "guide"), "{label}: guides lost");
+            }
+            // Root UVs: the file's own, or Blender's surface UV.
+            let uv_source = ["st", "surface_uv_coordinate"].iter().find_map(|n| src["primvars"].get(*n));
+            if let Some(uv) = uv_source {
+                assert_eq!(primvar("groom_root_uv", "float2[]"), f32s(&uv["values"]), "{label} {path}");
+            }
+            assert_eq!(out["widthsInterpolation"], "vertex", "{label}");
+            assert_eq!(vertex_widths(out), vertex_widths(plain_curves[group].1), "{label}: widths");
+            assert_eq!(out["points"], plain_curves[group].1["points"], "{label}: points");
+            for name in out["primvars"].as_object().unwrap().keys() {
+                assert!(
+                    name.starts_with("groom_") || name == "st",
+                    "{label}: primvar {name} is not Unreal's"
+                );
+            }
+        }
+    }
+    // Alembic: Unreal refuses a groom .abc holding a PolyMesh; none is written.
+    let abc = dir.path().join("unreal.abc");
+    let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&abc), "--unreal"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bytes = std::fs::read(&abc).unwrap();
+    assert!(!bytes.windows(18).any(|w| w == b"AbcGeom_PolyMesh_v"), "a PolyMesh in the Unreal .abc");
+    assert!(
+        bytes.windows(14).any(|w| w == b"groom_root_uv\0")
+            || bytes.windows(13).any(|w| w == b"groom_root_uv")
+    );
+    // Formats Unreal does not import are refused, naming the flag.
+    let run =
+        coif(&["convert", "tests/data/blender_groom.usda", path_str(&dir.path().join("u.hair")), "--unreal"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(stderr(&run).contains("--unreal"), "{}", stderr(&run));
+}

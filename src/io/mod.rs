@@ -7,6 +7,7 @@ pub mod cleanup;
 pub mod hair;
 pub mod input;
 pub mod obj;
+pub mod unreal;
 pub mod usd_interop;
 pub mod usd_stage;
 pub mod usda;
@@ -264,6 +265,9 @@ fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
 fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
+    if options.unreal {
+        return write_unreal(path, groom, format);
+    }
     match format {
         Format::Hair => {
             hair::check_writable(groom, path)?;
@@ -293,6 +297,37 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
             alembic::write(path, groom, &abc_options)?;
             Ok(Vec::new())
         }
+    }
+}
+
+/// Epic's groom layout (see [`unreal`]): Alembic or USD (text or crate).
+fn write_unreal(path: &Path, groom: &Groom, format: Format) -> Result<Vec<String>> {
+    match format {
+        Format::Alembic => {
+            let prepared = unreal::with_root_uvs(groom);
+            let abc_options = alembic::AlembicWriteOptions { unreal: true, ..Default::default() };
+            alembic::write(path, prepared.as_ref().unwrap_or(groom), &abc_options)?;
+            Ok(Vec::new())
+        }
+        Format::Usda | Format::Usdc => {
+            let groom = unreal::for_usd(groom);
+            usda::check_writable(&groom, path)?;
+            let mut stage = usd_stage::plan(&groom, None)?;
+            usd_stage::add_unreal_groom_properties(&mut stage);
+            if format == Format::Usda {
+                atomic::write_atomically(path, |w| {
+                    usda::write_stage(&stage, w).map_err(|e| Error::io(path, e))
+                })?;
+            } else {
+                usdc::write_stage(path, &stage)?;
+            }
+            Ok(usd_warnings(path, &groom))
+        }
+        Format::Hair | Format::Usdz => Err(Error::Usage(format!(
+            "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
+            path.display(),
+            path.extension().and_then(|e| e.to_str()).unwrap_or("")
+        ))),
     }
 }
 

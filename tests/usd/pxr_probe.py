@@ -36,6 +36,13 @@ def dump(path, time=None):
         "endTimeCode": stage.GetEndTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
         "timeCodesPerSecond": stage.GetTimeCodesPerSecond(),
         "curves": [],
+        "prims": [[str(p.GetPath()), str(p.GetTypeName())] for p in stage.Traverse()],
+        "userProperties": {
+            str(a.GetPath()): {"type": str(a.GetTypeName()), "value": a.Get(code)}
+            for p in stage.Traverse()
+            for a in p.GetAuthoredPropertiesInNamespace("userProperties")
+            if isinstance(a, Usd.Attribute) and isinstance(a.Get(code), (int, float, str))
+        },
     }
     cache = UsdGeom.XformCache(code)
     for prim in stage.Traverse():
