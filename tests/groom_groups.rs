@@ -292,3 +292,92 @@ fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
     assert_eq!(run.status.code(), Some(2));
     assert!(stderr(&run).contains("--unreal"), "{}", stderr(&run));
 }
+
+#[test]
+fn blender_grooms_convert_round_trips_are_exact_in_pxr() {
+    // Blender's USD (centimetres, Z up, a ×100 scale on /root) and its Alembic of the same scene
+    // (metres, Y up), converted to .usda and .usdc: pxr must see the same prims, bases, wraps,
+    // segment counts, points and widths (in metres, Y up), primvar types and roles, and
+    // `surface_normal` turned with the points.
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let usd = data.join("blender_groom.usda");
+    let source = pxr_dump(&usd, None);
+    let to_coif = |dump: &Value, c: &Value, key: &str| -> Vec<f32> {
+        let mpu = dump["metersPerUnit"].as_f64().unwrap() as f32;
+        let v = f32s(&c[key]);
+        v.chunks_exact(3).flat_map(|p| [p[0] * mpu, p[2] * mpu, -p[1] * mpu]).collect()
+    };
+    for (input, ext) in [
+        (usd.clone(), "usda"),
+        (data.join("blender_groom.usdc"), "usdc"),
+        (data.join("blender_groom.abc"), "usda"),
+    ] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&input), path_str(&out)]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let written = pxr_dump(&out, None);
+        let label = format!("{} → .{ext}", input.display());
+        assert_eq!(written["validationErrors"], serde_json::json!([]), "{label}: UsdValidation");
+        let (sc, wc) = (curves_by_path(&source), curves_by_path(&written));
+        assert_eq!(sc.len(), wc.len(), "{label}");
+        for (path, a) in &sc {
+            // Prim order may differ (Blender's .usdc lists Hair first), and Blender's Alembic has
+            // no /root: match by the object and data names.
+            let tail = path.trim_start_matches("/root");
+            let b =
+                wc.iter().find(|(p, _)| p.ends_with(tail)).unwrap_or_else(|| panic!("{label}: no {tail}")).1;
+            // Alembic has no `pinned` wrap (README): from .abc, Catmull-Rom comes back nonperiodic.
+            let from_abc = input.extension().unwrap() == "abc";
+            let keys: &[&str] = if from_abc {
+                &["type", "basis", "counts"]
+            } else {
+                &["type", "basis", "wrap", "counts", "segmentEnds"]
+            };
+            for key in keys {
+                assert_eq!(a[key], b[key], "{label} {path}: {key}");
+            }
+            let (pa, pb) = (to_coif(&source, a, "world_points"), f32s(&b["world_points"]));
+            assert_eq!(pa.len(), pb.len());
+            let worst = pa.iter().zip(&pb).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+            assert!(worst < 2e-6, "{label} {path}: points differ by {worst} m");
+            // Widths scale with the stage units and /root's ×100 (the ratio of world to local
+            // lengths of the first segment).
+            let (local, world) = (f32s(&a["points"]), f32s(&a["world_points"]));
+            let length =
+                |v: &[f32]| ((v[3] - v[0]).powi(2) + (v[4] - v[1]).powi(2) + (v[5] - v[2]).powi(2)).sqrt();
+            let scale = length(&world) / length(&local) * source["metersPerUnit"].as_f64().unwrap() as f32;
+            for (x, y) in vertex_widths(a).iter().zip(vertex_widths(b)) {
+                assert!(
+                    (x * scale - y).abs() <= 1e-6 * y.abs().max(1e-6),
+                    "{label} {path}: width {x} vs {y} m"
+                );
+            }
+            if !from_abc {
+                for (name, primvar) in a["primvars"].as_object().unwrap() {
+                    let w = &b["primvars"][name];
+                    for key in ["type", "interpolation"] {
+                        assert_eq!(primvar[key], w[key], "{label} {path}: primvar {name} {key}");
+                    }
+                }
+                let normals = (
+                    to_coif(&source, &a["primvars"]["surface_normal"], "values"),
+                    f32s(&b["primvars"]["surface_normal"]["values"]),
+                );
+                let n = normals.0.len() / 3;
+                let mean_dot: f32 = normals
+                    .0
+                    .chunks_exact(3)
+                    .zip(normals.1.chunks_exact(3))
+                    .map(|(p, q)| {
+                        (p[0] * q[0] + p[1] * q[1] + p[2] * q[2])
+                            / (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+                            / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt()
+                    })
+                    .sum::<f32>()
+                    / n as f32;
+                assert!(n > 0 && mean_dot >= 0.999, "{label} {path}: surface_normal mean dot {mean_dot}");
+            }
+        }
+    }
+}
