@@ -382,7 +382,7 @@ pub(crate) struct ImportArgs {
     /// Animated input: the frame number to read on the file's own timeline (USD: the time code;
     /// Alembic: time = frame / the file's frame rate). Default: USD's default values (else its
     /// first sample), Alembic's first sample.
-    #[arg(long, value_name = "TIME")]
+    #[arg(long, value_name = "FRAME", allow_negative_numbers = true)]
     pub(crate) frame: Option<f64>,
     /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).
     #[arg(long, value_name = "SET=NAME")]
