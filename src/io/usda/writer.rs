@@ -123,6 +123,7 @@ fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<(
             write_array(out, &tuples, |buf, t| push_tuple(buf, t, |buf, &v| push_int(buf, v)))
         }
         Data::Bools(values) => write_array(out, values, |buf, &v| buf.push(if v { b'1' } else { b'0' })),
+        Data::Int(value) => out.write_all(value.to_string().as_bytes()),
         Data::Floats { values, components: 1 } => write_array(out, values, |buf, &v| push_f32(buf, v)),
         Data::Floats { values, components: 3 } => {
             let tuples: &[[f32; 3]] = bytemuck::cast_slice(values);
