@@ -223,10 +223,10 @@ impl Integrator<'_> {
             }
             let wo = -direction;
             let (bsdf, spawn, spawn_near) = match surface {
-                // Embree ignores a curve's own surface near a ray's origin, so hair rays
-                // start on the hit point itself.
-                Surface::Hair { tangent, color, melanin, normal, .. } => {
-                    (self.hair_bsdf(tangent, color, melanin, normal, wo), position, 0.0)
+                // Rays leave a fibre from its centre line: they see it only from inside, which
+                // the scene's curve filter ignores (the BSDF accounts for the walk through it).
+                Surface::Hair { tangent, color, melanin, normal, axis, .. } => {
+                    (self.hair_bsdf(tangent, color, melanin, normal, wo), axis, 0.0)
                 }
                 Surface::Diffuse { normal, albedo } => {
                     (Bsdf::Diffuse(Lambert { normal, albedo }), position, self.epsilon)

@@ -72,6 +72,9 @@ pub enum Surface {
         melanin: Option<[f32; 2]>,
         /// Embree's surface normal at the hit (not normalised), for the offset across the fibre.
         normal: Vec3,
+        /// The strand's centre line at the hit: where rays leaving the fibre start (see
+        /// [`RenderScene::surface`]).
+        axis: Vec3,
         /// Index of the hit segment's first vertex and the fraction towards the next one, for
         /// per-vertex attributes.
         vertex: u32,
@@ -405,6 +408,31 @@ impl<'d> RenderScene<'d> {
         }
     }
 
+    /// The point of the hit segment's centre line at the hit's curve parameter.
+    fn curve_point(&self, hit: &Hit) -> Vec3 {
+        let s = self.segments[hit.primitive as usize].start as usize;
+        let p = |k: usize| Vec3::new(self.points[s + k][0], self.points[s + k][1], self.points[s + k][2]);
+        let u = hit.u.clamp(0.0, 1.0);
+        let (u2, u3, m) = (u * u, u * u * u, 1.0 - u);
+        match self.curve {
+            CurveType::Linear => p(0).lerp(p(1), u),
+            CurveType::BSpline => {
+                (m * m * m * p(0)
+                    + (3.0 * u3 - 6.0 * u2 + 4.0) * p(1)
+                    + (-3.0 * u3 + 3.0 * u2 + 3.0 * u + 1.0) * p(2)
+                    + u3 * p(3))
+                    / 6.0
+            }
+            CurveType::Bezier => m * m * m * p(0) + 3.0 * u * m * m * p(1) + 3.0 * u2 * m * p(2) + u3 * p(3),
+            CurveType::CatmullRom => {
+                0.5 * ((-u3 + 2.0 * u2 - u) * p(0)
+                    + (3.0 * u3 - 5.0 * u2 + 2.0) * p(1)
+                    + (-3.0 * u3 + 4.0 * u2 + u) * p(2)
+                    + (u3 - u2) * p(3))
+            }
+        }
+    }
+
     fn curve_tangent(&self, hit: &Hit) -> Vec3 {
         let s = self.segments[hit.primitive as usize].start as usize;
         let p = |k: usize| Vec3::new(self.points[s + k][0], self.points[s + k][1], self.points[s + k][2]);
@@ -433,6 +461,12 @@ impl<'d> RenderScene<'d> {
     }
 
     /// Shading information at a hit point `position` (on the ray) for a ray of `direction`.
+    ///
+    /// A hair hit also gives the centre line beside it. The hair BSDFs account for the whole walk
+    /// through a fibre, so rays leaving it start there: Embree's hit point on a thin round curve
+    /// may lie a fraction of the radius inside or outside the tube, and a ray starting on it
+    /// meets the same surface again; from the centre line it meets the fibre only from inside,
+    /// which the curve filter ignores (see `embree::curve_filter`).
     pub fn surface(&self, hit: &Hit, position: Vec3, direction: Vec3) -> Surface {
         if self.is_hair(hit) {
             let (a, b, fraction) = self.attribute_vertices(hit);
@@ -447,6 +481,7 @@ impl<'d> RenderScene<'d> {
                 color,
                 melanin,
                 normal: hit.normal,
+                axis: self.curve_point(hit),
                 vertex: a,
                 fraction,
                 strand: segment.strand,
