@@ -19,11 +19,8 @@ pub mod ogawa;
 pub mod spooky;
 pub mod types;
 
-use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-
-use tempfile::NamedTempFile;
 
 pub use curves_read::CurvesArchive;
 pub use curves_write::{AlembicWriteOptions, CurvesWriter};
@@ -82,7 +79,7 @@ pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Resul
 /// under its name only when [`AnimationWriter::finish`] succeeds.
 pub struct AnimationWriter {
     path: PathBuf,
-    writer: CurvesWriter<BufWriter<NamedTempFile<File>>>,
+    writer: CurvesWriter<BufWriter<atomic::TempFile>>,
 }
 
 impl AnimationWriter {
