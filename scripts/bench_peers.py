@@ -1,8 +1,13 @@
 """Equal-noise benchmark of coif's Chiang hair lobe against Mitsuba 3's `hair` BSDF (the same
 Chiang et al. 2016 model) on one groom and one shot (`make bench-peers`; never part of `make test`).
 
-Both renderers get the same curves (a coif-generated groom, read here from its `.hair` file and
-handed to Mitsuba as a `linearcurve`), the same camera, a distant key light, a constant dome, the
+Both renderers get the same curves: a coif-generated groom, read here from its `.hair` file, whose
+polyline vertices become the control points of cubic B-splines, written to a `.usda` for coif and
+handed to Mitsuba as a `bsplinecurve` (Embree round B-splines in both). Not `linearcurve`: in
+Mitsuba 3.9.1 it sets no surface parameterisation, so the shading frame's tangent is an arbitrary
+direction across the fibre and the `hair` BSDF scatters about the wrong axis (a back-lit fibre
+shows 0.43x the transmission its own BSDF predicts; `bsplinecurve` agrees with coif within 0.4 %).
+The same camera, a distant key light, a constant dome, the
 same pigment and roughness, 8 scattering vertices, 2 threads. Each is measured against its own
 high-spp reference (so bias between the two does not count, only noise): relative RMSE of
 luminance on the full frame and in the dense-hair window (in coif's reference: the densest quarter of the covered pixels), at several sample counts, several seeds each. Time is render time only (coif's
@@ -76,6 +81,19 @@ def write_mitsuba_curves(strands, path):
             for p, r in zip(points, radii):
                 f.write(f"{p[0]:.7g} {p[1]:.7g} {p[2]:.7g} {r:.7g}\n")
             f.write("\n")
+
+
+def write_usda_bspline(strands, path):
+    """The strands as one UsdGeom BasisCurves prim: cubic, B-spline, widths per vertex."""
+    with open(path, "w") as f:
+        f.write('#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = "Y"\n)\n\ndef BasisCurves "groom"\n{\n')
+        f.write('    uniform token type = "cubic"\n    uniform token basis = "bspline"\n')
+        f.write('    uniform token wrap = "nonperiodic"\n')
+        f.write("    int[] curveVertexCounts = [" + ", ".join(str(len(p)) for p, _ in strands) + "]\n")
+        points = ", ".join(f"({x:.7g}, {y:.7g}, {z:.7g})" for p, _ in strands for x, y, z in p)
+        f.write(f"    point3f[] points = [{points}]\n")
+        widths = ", ".join(f"{2 * r:.7g}" for _, radii in strands for r in radii)
+        f.write(f'    float[] widths = [{widths}] (\n        interpolation = "vertex"\n    )\n}}\n')
 
 
 def luminance(rgb):
@@ -163,7 +181,7 @@ class Mitsuba:
                 "key": {"type": "directional", "direction": (-direction).tolist(), "irradiance": KEY_IRRADIANCE},
                 "dome": {"type": "constant", "radiance": DOME_RADIANCE},
                 "hair": {
-                    "type": "linearcurve",
+                    "type": "bsplinecurve",
                     "filename": curves,
                     "bsdf": {
                         "type": "hair",
@@ -253,13 +271,15 @@ def main():
         check=True, capture_output=True,
     )  # fmt: skip
     strands = read_hair(groom)
+    curves = os.path.join(args.out, "groom_bspline.usda")
+    write_usda_bspline(strands, curves)
     print(
-        f"groom: {len(strands)} strands x 24 vertices, 150 um; {width}x{height}; {MAX_BOUNCES} bounces;"
+        f"groom: {len(strands)} B-spline strands x 24 control points, 150 um; {width}x{height}; {MAX_BOUNCES} bounces;"
         f" 2 threads; references {args.reference_spp} spp; {args.runs} seeds per count; load {load()}",
         flush=True,
     )
 
-    coif = Coif(args.coif, groom, args.out, width, height)
+    coif = Coif(args.coif, curves, args.out, width, height)
     mitsuba = Mitsuba(strands, args.out, width, height)
     coif_reference, coverage, coif_reference_seconds = coif.render(args.reference_spp, 0)
     # The densest quarter of the pixels the hair covers (thin strands rarely cover a pixel whole).

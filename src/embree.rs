@@ -116,24 +116,42 @@ pub struct Ray {
 /// given id (`false` lets the ray pass, as through a transparent strand).
 pub type HitFilter = Box<dyn Fn(u32, u32) -> bool + Send + Sync>;
 
-/// Embree's filter callback: asks the geometry's [`HitFilter`] about every valid lane.
-unsafe extern "C" fn filter_trampoline(args: *const sys::RTCFilterFunctionNArguments) {
-    // SAFETY: Embree passes valid arguments; the user pointer is the `HitFilter` the scene owns;
-    // RTCRayN / RTCHitN are structs of arrays of N 4-byte fields in the documented order
-    // (ray: ..., tfar, mask, id = field 10; hit: Ng xyz, u, v, primID = field 5).
+/// Embree's filter callback for curves: drops hits on a curve's far side, then asks the
+/// geometry's [`HitFilter`], if any, about every lane still valid.
+///
+/// Round curves are solid tubes to Embree, which reports a ray leaving a tube as a hit on its
+/// inside. Coif's hair BSDFs account for the whole walk through a fibre at the entry point (the
+/// near-field model of Chiang et al.), so a ray leaving a fibre, through its far side or back the
+/// way it came, must not meet that fibre again: hits where the ray runs along the outward normal
+/// are dropped (Mitsuba culls curve back faces likewise). Without this a fibre shadowed its own
+/// transmitted light and the light reached the camera after extra, absorbing walks through the
+/// same fibre.
+unsafe extern "C" fn curve_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments; the user pointer is the `Option<HitFilter>` the
+    // scene owns; RTCRayN / RTCHitN are structs of arrays of N 4-byte fields in the documented
+    // order (ray: org xyz, tnear, dir xyz = fields 4-6, time, tfar, mask, id = field 10;
+    // hit: Ng xyz = fields 0-2, u, v, primID = field 5).
     let args = &*args;
-    let filter = &*(args.geometryUserPtr as *const HitFilter);
+    let filter = &*(args.geometryUserPtr as *const Option<HitFilter>);
     let n = args.N as usize;
     let ray = args.ray as *const u32;
     let hit = args.hit as *const u32;
+    let float = |base: *const u32, field: usize, lane: usize| f32::from_bits(*base.add(field * n + lane));
     for lane in 0..n {
         let valid = args.valid.add(lane);
         if *valid == 0 {
             continue;
         }
-        let id = *ray.add(10 * n + lane);
-        let primitive = *hit.add(5 * n + lane);
-        if !filter(primitive, id) {
+        let direction = Vec3::new(float(ray, 4, lane), float(ray, 5, lane), float(ray, 6, lane));
+        let normal = Vec3::new(float(hit, 0, lane), float(hit, 1, lane), float(hit, 2, lane));
+        let leaving = direction.dot(normal) > 0.0;
+        let seen = !leaving
+            && filter.as_ref().is_none_or(|filter| {
+                let id = *ray.add(10 * n + lane);
+                let primitive = *hit.add(5 * n + lane);
+                filter(primitive, id)
+            });
+        if !seen {
             *valid = 0;
         }
     }
@@ -157,7 +175,7 @@ pub struct Scene<'d> {
     device: &'d Device,
     /// Hit filters Embree calls back into; boxed twice so Embree holds a thin pointer.
     #[allow(clippy::vec_box)]
-    filters: Vec<Box<HitFilter>>,
+    filters: Vec<Box<Option<HitFilter>>>,
 }
 
 unsafe impl Send for Scene<'_> {}
@@ -185,7 +203,8 @@ impl<'d> Scene<'d> {
 
     /// Adds round curves of any basis: `points` carries (x, y, z, radius) per control point and
     /// segment `i` reads [`CurveType::points_per_segment`] points from `segment_starts[i]`.
-    /// `filter`, if given, is asked about every candidate hit (primitive = segment index).
+    /// `filter`, if given, is asked about every candidate hit (primitive = segment index). Rays
+    /// never see a curve from inside: see [`curve_filter`].
     pub fn add_round_curves(
         &mut self,
         kind: CurveType,
@@ -223,13 +242,14 @@ impl<'d> Scene<'d> {
             ) as *mut u32;
             device.check("allocating curve segments")?;
             ptr::copy_nonoverlapping(segment_starts.as_ptr(), index, segment_starts.len());
-            if let Some(filter) = filter {
-                let boxed = Box::new(filter);
-                sys::rtcSetGeometryUserData(geometry, &*boxed as *const HitFilter as *mut std::ffi::c_void);
-                sys::rtcSetGeometryIntersectFilterFunction(geometry, Some(filter_trampoline));
-                sys::rtcSetGeometryOccludedFilterFunction(geometry, Some(filter_trampoline));
-                self.filters.push(boxed);
-            }
+            let boxed = Box::new(filter);
+            sys::rtcSetGeometryUserData(
+                geometry,
+                &*boxed as *const Option<HitFilter> as *mut std::ffi::c_void,
+            );
+            sys::rtcSetGeometryIntersectFilterFunction(geometry, Some(curve_filter));
+            sys::rtcSetGeometryOccludedFilterFunction(geometry, Some(curve_filter));
+            self.filters.push(boxed);
             self.attach(geometry, "adding curves")
         }
     }

@@ -223,10 +223,10 @@ impl Integrator<'_> {
             }
             let wo = -direction;
             let (bsdf, spawn, spawn_near) = match surface {
-                // Embree ignores a curve's own surface near a ray's origin, so hair rays
-                // start on the hit point itself.
-                Surface::Hair { tangent, color, melanin, normal, .. } => {
-                    (self.hair_bsdf(tangent, color, melanin, normal, wo), position, 0.0)
+                // Rays leave a fibre just beside its surface, placed from its centre line (see
+                // `RenderScene::surface`), and never meet it again.
+                Surface::Hair { tangent, color, melanin, normal, exit, .. } => {
+                    (self.hair_bsdf(tangent, color, melanin, normal, wo), exit.surface(), 0.0)
                 }
                 Surface::Diffuse { normal, albedo } => {
                     (Bsdf::Diffuse(Lambert { normal, albedo }), position, self.epsilon)
@@ -234,7 +234,7 @@ impl Integrator<'_> {
             };
             let offset = |w: Vec3| match surface {
                 Surface::Diffuse { normal, .. } => spawn + normal * (self.epsilon * normal.dot(w).signum()),
-                Surface::Hair { .. } => spawn,
+                Surface::Hair { exit, .. } => exit.origin(w),
             };
             // The last vertex traces no continuation, so its light samples take all the weight.
             let last = depth + 1 == self.max_depth;

@@ -1,6 +1,6 @@
 //! The render scene: the groom as Embree round curves, the analytic head as a triangle mesh and a
 //! floor, plus what shading needs at a hit (tangent, colour, opacity, attribute values).
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::embree::{self, CurveType, Device, Hit};
 use crate::error::{Error, Result};
@@ -72,6 +72,8 @@ pub enum Surface {
         melanin: Option<[f32; 2]>,
         /// Embree's surface normal at the hit (not normalised), for the offset across the fibre.
         normal: Vec3,
+        /// Where rays leaving the fibre start (see [`RenderScene::surface`]).
+        exit: FibreExit,
         /// Index of the hit segment's first vertex and the fraction towards the next one, for
         /// per-vertex attributes.
         vertex: u32,
@@ -82,6 +84,33 @@ pub enum Surface {
         normal: Vec3,
         albedo: Vec3,
     },
+}
+
+/// Where rays leave a fibre hit, measured from the fibre's centre line rather than Embree's hit
+/// point (which may lie a fraction of the radius inside or outside a thin tube).
+#[derive(Clone, Copy, Debug)]
+pub struct FibreExit {
+    axis: Vec3,
+    /// From the centre line to the surface through the hit: radial direction × radius.
+    radial: Vec3,
+}
+
+/// How far outside or inside the surface, as a fraction of the radius, rays leaving a fibre start.
+const FIBRE_EXIT_MARGIN: f32 = 0.05;
+
+impl FibreExit {
+    /// The surface point across from the centre line through the hit.
+    pub fn surface(&self) -> Vec3 {
+        self.axis + self.radial
+    }
+
+    /// The origin of a ray leaving in direction `w`: just outside the surface when `w` points
+    /// away from the fibre, just inside when it points into it (the ray then crosses the fibre,
+    /// whose far side it does not meet: see `embree::curve_filter`).
+    pub fn origin(&self, w: Vec3) -> Vec3 {
+        let side = if self.radial.dot(w) >= 0.0 { 1.0 } else { -1.0 };
+        self.axis + self.radial * (1.0 + side * FIBRE_EXIT_MARGIN)
+    }
 }
 
 /// One strand's per-segment lookup: first groom vertex of the segment and owning strand.
@@ -405,6 +434,31 @@ impl<'d> RenderScene<'d> {
         }
     }
 
+    /// The hit segment's centre line and radius at the hit's curve parameter, as (x, y, z, r).
+    fn curve_point(&self, hit: &Hit) -> Vec4 {
+        let s = self.segments[hit.primitive as usize].start as usize;
+        let p = |k: usize| Vec4::from_array(self.points[s + k]);
+        let u = hit.u.clamp(0.0, 1.0);
+        let (u2, u3, m) = (u * u, u * u * u, 1.0 - u);
+        match self.curve {
+            CurveType::Linear => p(0).lerp(p(1), u),
+            CurveType::BSpline => {
+                (m * m * m * p(0)
+                    + (3.0 * u3 - 6.0 * u2 + 4.0) * p(1)
+                    + (-3.0 * u3 + 3.0 * u2 + 3.0 * u + 1.0) * p(2)
+                    + u3 * p(3))
+                    / 6.0
+            }
+            CurveType::Bezier => m * m * m * p(0) + 3.0 * u * m * m * p(1) + 3.0 * u2 * m * p(2) + u3 * p(3),
+            CurveType::CatmullRom => {
+                0.5 * ((-u3 + 2.0 * u2 - u) * p(0)
+                    + (3.0 * u3 - 5.0 * u2 + 2.0) * p(1)
+                    + (-3.0 * u3 + 4.0 * u2 + u) * p(2)
+                    + (u3 - u2) * p(3))
+            }
+        }
+    }
+
     fn curve_tangent(&self, hit: &Hit) -> Vec3 {
         let s = self.segments[hit.primitive as usize].start as usize;
         let p = |k: usize| Vec3::new(self.points[s + k][0], self.points[s + k][1], self.points[s + k][2]);
@@ -433,6 +487,14 @@ impl<'d> RenderScene<'d> {
     }
 
     /// Shading information at a hit point `position` (on the ray) for a ray of `direction`.
+    ///
+    /// A hair hit also gives where rays leave the fibre. The hair BSDFs account for the whole
+    /// walk through a fibre at the hit, so a ray leaving it must not meet it again; but Embree's
+    /// hit point on a thin round curve may lie a fraction of the radius inside or outside the
+    /// tube, and a ray starting on it meets the same surface again. So the exit is placed from
+    /// the centre line: on the radius through the hit, just outside the surface for rays going
+    /// out and just inside for rays going in, which then meet the fibre only from inside (the
+    /// curve filter ignores that).
     pub fn surface(&self, hit: &Hit, position: Vec3, direction: Vec3) -> Surface {
         if self.is_hair(hit) {
             let (a, b, fraction) = self.attribute_vertices(hit);
@@ -442,11 +504,22 @@ impl<'d> RenderScene<'d> {
             let melanin = self.melanin.as_ref().map(|m| {
                 m.at(a, b, fraction, strand, |x, y, f| [x[0] + (y[0] - x[0]) * f, x[1] + (y[1] - x[1]) * f])
             });
+            let tangent = self.curve_tangent(hit);
             return Surface::Hair {
-                tangent: self.curve_tangent(hit),
+                tangent,
                 color,
                 melanin,
                 normal: hit.normal,
+                exit: {
+                    let centre = self.curve_point(hit);
+                    let axis = centre.truncate();
+                    let across = position - axis;
+                    let radial = (across - tangent * tangent.dot(across))
+                        .try_normalize()
+                        .or_else(|| hit.normal.try_normalize())
+                        .unwrap_or_else(|| tangent.any_orthonormal_vector());
+                    FibreExit { axis, radial: radial * centre.w }
+                },
                 vertex: a,
                 fraction,
                 strand: segment.strand,
