@@ -285,3 +285,43 @@ fn a_generous_time_budget_changes_nothing() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
+
+/// A groom's own mesh (the head or scalp its file brings) is drawn under the hair, and `--head
+/// off` leaves it out. A wall 1.5 m in front of the camera must be hit at depth 1.5 by the centre
+/// pixel's rays (the depth AOV, to the wall plane), and be lit; without it those rays miss.
+#[test]
+fn the_grooms_own_mesh_is_drawn_unless_the_head_is_off() {
+    // One short strand off to the side, so the centre of the image sees only the wall.
+    let mut groom =
+        coif::Groom::from_strands(&[vec![Vec3::new(0.3, 0.0, 0.0), Vec3::new(0.3, 0.05, 0.0)]], 1e-3);
+    groom.meshes.push(coif::surface_mesh::SurfaceMesh {
+        path: "/groom/wall".into(),
+        points: vec![
+            Vec3::new(-1.0, -1.0, -0.5),
+            Vec3::new(1.0, -1.0, -0.5),
+            Vec3::new(1.0, 1.0, -0.5),
+            Vec3::new(-1.0, 1.0, -0.5),
+        ],
+        face_counts: vec![4],
+        face_indices: vec![0, 1, 2, 3],
+    });
+    let camera = coif::render::camera::CameraSpec {
+        position: Vec3::new(0.0, 0.0, 1.0),
+        target: Vec3::ZERO,
+        up: None,
+        fov_degrees: Some(20.0),
+    };
+    let mut settings =
+        RenderSettings { width: 9, height: 9, spp: 4, camera: Some(camera), ..Default::default() };
+    settings.scene.floor = false;
+    settings.aovs = AovSet { depth: true, tangent: false };
+    let centre = 4 * 9 + 4;
+    let shown = render(&groom, &settings, &|_, _| {}).unwrap();
+    let depth = shown.image.aovs[0].data[centre];
+    assert!((depth - 1.5).abs() < 1e-3, "depth {depth}, the wall is at 1.5");
+    assert!(shown.image.rgba[centre][0] > 0.05, "the wall is lit: {:?}", shown.image.rgba[centre]);
+
+    settings.scene.head = HeadMode::Off;
+    let hidden = render(&groom, &settings, &|_, _| {}).unwrap();
+    assert!(hidden.image.aovs[0].data[centre].is_infinite(), "nothing to hit without the wall");
+}

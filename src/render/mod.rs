@@ -215,19 +215,20 @@ fn make_camera(settings: &RenderSettings, bounds: (Vec3, Vec3)) -> Camera {
     }
 }
 
-/// Bounds of the groom's points padded by their radii, and the head when it will be shown.
+/// Bounds of the groom's points padded by their radii, and of the head when it will be shown.
 fn groom_bounds(groom: &Groom, options: &SceneOptions) -> Result<(Vec3, Vec3)> {
     let (mut lo, mut hi) =
         groom.bounds().ok_or_else(|| Error::Usage("render: the groom has no strands to render".into()))?;
-    let show_head = match options.head {
-        scene::HeadMode::On => true,
-        scene::HeadMode::Off => false,
-        scene::HeadMode::Auto => scene::roots_on_default_head(groom),
-    };
-    if show_head {
+    if options.head.analytic_head(groom) {
         let head = crate::head::Head::default();
         lo = lo.min(head.center - head.radii);
         hi = hi.max(head.center + head.radii);
+    }
+    if options.head.own_meshes() {
+        for p in groom.meshes.iter().flat_map(|m| &m.points) {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
     }
     Ok((lo, hi))
 }

@@ -8,14 +8,35 @@ use crate::groom::{attr, AttributeRate, CurveBasis, Groom};
 use crate::head::Head;
 use crate::render::hair_bsdf::MELANIN_RANGE;
 
-/// Whether to put the analytic head under the hair.
+/// Whether to put a head under the hair: the groom's own meshes (scalp, head, body from its
+/// file), or coif's analytic head.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum HeadMode {
-    /// When the strand roots sit on coif's default head (grooms from `coif generate`).
+    /// The groom's own meshes when its file brings any; else the analytic head when the strand
+    /// roots sit on it (grooms from `coif generate`).
     #[default]
     Auto,
+    /// The groom's own meshes, else the analytic head.
     On,
+    /// Neither.
     Off,
+}
+
+impl HeadMode {
+    /// Whether the analytic head is drawn for this groom.
+    pub fn analytic_head(self, groom: &Groom) -> bool {
+        match self {
+            HeadMode::Off => false,
+            _ if !groom.meshes.is_empty() => false,
+            HeadMode::On => true,
+            HeadMode::Auto => roots_on_default_head(groom),
+        }
+    }
+
+    /// Whether the groom's own meshes are drawn.
+    pub fn own_meshes(self) -> bool {
+        self != HeadMode::Off
+    }
 }
 
 /// Geometry options of a render.
@@ -124,6 +145,8 @@ pub struct RenderScene<'d> {
     embree: embree::Scene<'d>,
     hair_geometry: Option<u32>,
     head_geometry: Option<u32>,
+    /// The groom's own meshes, shaded like the head.
+    mesh_geometries: Vec<u32>,
     curve: CurveType,
     /// (x, y, z, radius) per groom vertex, as given to Embree.
     points: Vec<[f32; 4]>,
@@ -333,11 +356,7 @@ impl<'d> RenderScene<'d> {
             lo = lo.min(c - r);
             hi = hi.max(c + r);
         }
-        let head = match options.head {
-            HeadMode::On => Some(Head::default()),
-            HeadMode::Off => None,
-            HeadMode::Auto => roots_on_default_head(groom).then(Head::default),
-        };
+        let head = options.head.analytic_head(groom).then(Head::default);
         let head_geometry = match head {
             Some(head) => {
                 lo = lo.min(head.center - head.radii);
@@ -347,6 +366,16 @@ impl<'d> RenderScene<'d> {
             }
             None => None,
         };
+        let mut mesh_geometries = Vec::new();
+        if options.head.own_meshes() {
+            for mesh in &groom.meshes {
+                for p in &mesh.points {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+                mesh_geometries.push(embree.add_triangle_mesh(&mesh.points, &mesh.triangles())?);
+            }
+        }
         if !lo.is_finite() {
             return Err(Error::Usage("render: the groom has no strands to render".into()));
         }
@@ -397,6 +426,7 @@ impl<'d> RenderScene<'d> {
             embree,
             hair_geometry,
             head_geometry,
+            mesh_geometries,
             curve,
             segment_count: segments.len(),
             points,
@@ -528,6 +558,9 @@ impl<'d> RenderScene<'d> {
         let head = self.head.filter(|_| Some(hit.geometry) == self.head_geometry);
         let (normal, albedo) = match head {
             Some(head) => (head.normal_at(position), self.head_albedo),
+            None if self.mesh_geometries.contains(&hit.geometry) => {
+                (hit.normal.normalize_or(Vec3::Y), self.head_albedo)
+            }
             None => (hit.normal.normalize_or(Vec3::Y), self.floor_albedo),
         };
         // Face the normal towards the incoming ray so offsets go to the lit side.
