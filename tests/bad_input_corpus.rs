@@ -597,15 +597,25 @@ fn fuzz_found_cases(hair: &[u8]) -> Vec<Case> {
 /// Runs one case in a fresh folder; returns a failure description, if any.
 fn run(case: &Case) -> Option<String> {
     let dir = tempfile::tempdir().unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(&case.args)
+        .current_dir(prepared(case, &dir))
+        .output()
+        .expect("the coif binary runs");
+    judge(case, &output, dir.path())
+}
+
+/// Writes a case's files into its folder.
+fn prepared<'a>(case: &Case, dir: &'a tempfile::TempDir) -> &'a Path {
     for (name, bytes) in &case.files {
         std::fs::write(dir.path().join(name), bytes).unwrap();
     }
-    let output = Command::new(env!("CARGO_BIN_EXE_coif"))
-        .args(&case.args)
-        .current_dir(dir.path())
-        .output()
-        .expect("the coif binary runs");
-    let err = stderr(&output);
+    dir.path()
+}
+
+/// What is wrong with a case's run: its exit code, a panic, a culprit not named, files left.
+fn judge(case: &Case, output: &std::process::Output, dir: &Path) -> Option<String> {
+    let err = stderr(output);
     let mut problems = Vec::new();
     if output.status.code() != Some(case.code) {
         problems.push(format!("exit {:?}, expected {}", output.status.code(), case.code));
@@ -620,7 +630,7 @@ fn run(case: &Case) -> Option<String> {
     }
     let mut expected: Vec<String> = case.files.iter().map(|(n, _)| n.clone()).collect();
     expected.sort();
-    let left = listing(dir.path());
+    let left = listing(dir);
     if left != expected {
         problems.push(format!("left behind: {left:?}"));
     }
@@ -631,8 +641,7 @@ fn listing(dir: &Path) -> Vec<String> {
     common::dir_listing(dir)
 }
 
-#[test]
-fn every_bad_input_exits_2_names_its_culprit_and_leaves_nothing() {
+fn all_cases() -> Vec<Case> {
     let inputs = inputs();
     let mut cases = recipe_cases(&inputs.hair);
     cases.extend(mesh_cases(&inputs.hair));
@@ -641,22 +650,34 @@ fn every_bad_input_exits_2_names_its_culprit_and_leaves_nothing() {
     cases.extend(manifest_cases(&inputs.hair));
     cases.extend(directory_cases(&inputs.hair));
     cases.extend(fuzz_found_cases(&inputs.hair));
-    assert!(cases.len() >= 150, "only {} cases", cases.len());
+    cases
+}
 
-    let next = Mutex::new(cases.iter());
+/// Runs every case through `run` on a few threads; returns the failures in case order.
+fn failures_of(cases: &[Case], run: impl Fn(&Case) -> Option<String> + Sync) -> Vec<String> {
+    let next = Mutex::new(cases.iter().enumerate());
     let failures = Mutex::new(Vec::new());
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get()).clamp(2, 8);
     std::thread::scope(|scope| {
         for _ in 0..threads {
             scope.spawn(|| loop {
-                let Some(case) = next.lock().unwrap().next() else { break };
+                let Some((index, case)) = next.lock().unwrap().next() else { break };
                 if let Some(failure) = run(case) {
-                    failures.lock().unwrap().push(failure);
+                    failures.lock().unwrap().push((index, failure));
                 }
             });
         }
     });
-    let failures = failures.into_inner().unwrap();
+    let mut failures = failures.into_inner().unwrap();
+    failures.sort();
+    failures.into_iter().map(|(_, failure)| failure).collect()
+}
+
+#[test]
+fn every_bad_input_exits_2_names_its_culprit_and_leaves_nothing() {
+    let cases = all_cases();
+    assert!(cases.len() >= 150, "only {} cases", cases.len());
+    let failures = failures_of(&cases, run);
     assert!(
         failures.is_empty(),
         "{} of {} cases failed:\n{}",
@@ -727,6 +748,48 @@ fn signals_remove_the_temporary_file() {
     }
 }
 
+/// A write that fails for lack of room (here a file-size limit, as a full disk would) is the
+/// environment's fault: exit 1, the output named, nothing left behind — also when it fails in the
+/// middle of an animation's frames (it was exit 2, "bad input", there).
+#[cfg(unix)]
+#[test]
+fn a_failing_write_exits_1_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let made = coif(&[
+        "generate",
+        "-o",
+        path_str(&dir.path().join("g.hair")),
+        "--strands",
+        "5000",
+        "--vertices",
+        "16",
+    ]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    std::fs::write(dir.path().join("r.toml"), BASE).unwrap();
+    // File-size limits in KB: the animation's first frame fits, its third does not; the crate
+    // file is compressed, so it gets less room.
+    for (args, limit_kb) in [
+        ("style r.toml --groom g.hair -o out.abc --frames 8", 1024),
+        ("convert g.hair out.abc", 1024),
+        ("convert g.hair out.usda", 1024),
+        ("convert g.hair out.usdc", 128),
+    ] {
+        // SIGXFSZ ignored, so the write returns EFBIG instead of killing the process.
+        let output = Command::new("sh")
+            .arg("-c")
+            .arg(format!("trap '' XFSZ; ulimit -f {}; exec \"$0\" {args}", limit_kb * 2))
+            .arg(env!("CARGO_BIN_EXE_coif"))
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{args}: {err}");
+        let out = args.split(' ').find(|a| a.starts_with("out.")).unwrap();
+        assert!(err.contains(out), "{args}: {err}");
+        assert_eq!(listing(dir.path()), vec!["g.hair".to_string(), "r.toml".to_string()], "{args}");
+    }
+}
+
 /// SIGTERM while usd-core converts a `.usdz` export removes the `.coif-usd.*` folder beside the
 /// output (and the converter's files in it) and exits 143.
 #[cfg(unix)]
@@ -762,4 +825,34 @@ fn sigterm_during_a_usd_core_export_removes_the_temporary_folder() {
     // usd-core, if still running, must not bring the folder or the output back.
     std::thread::sleep(std::time::Duration::from_secs(2));
     assert_eq!(listing(dir.path()), vec!["big.hair".to_string()]);
+}
+
+/// The record that the corpus tests something: runs every case against another coif binary
+/// (`COIF_CORPUS_BINARY=path`, e.g. a build from before the hardening work) and prints the cases
+/// it fails. Each run is capped at 4 GB of address space and 30 s, so the old binary's unbounded
+/// allocations abort and its unbounded runs are killed ("no exit").
+/// `COIF_CORPUS_BINARY=/path/coif cargo test --test bad_input_corpus -- --ignored --nocapture`
+#[cfg(unix)]
+#[test]
+#[ignore = "a tool: needs COIF_CORPUS_BINARY"]
+fn against_another_binary() {
+    let binary = std::env::var("COIF_CORPUS_BINARY").expect("COIF_CORPUS_BINARY names a coif binary");
+    let cases = all_cases();
+    let run_with_limits = |case: &Case| {
+        let dir = tempfile::tempdir().unwrap();
+        let output = Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 4000000; exec timeout -s KILL 30 \"$0\" \"$@\"")
+            .arg(&binary)
+            .args(&case.args)
+            .current_dir(prepared(case, &dir))
+            .output()
+            .expect("sh runs");
+        judge(case, &output, dir.path())
+    };
+    let failures = failures_of(&cases, run_with_limits);
+    println!("{} of {} cases fail with {binary}:", failures.len(), cases.len());
+    for failure in &failures {
+        println!("FAILS {}", failure.replace('\n', " | "));
+    }
 }
