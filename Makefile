@@ -42,6 +42,8 @@ grooms: build
 check-blender: setup
 	bash scripts/check_blender_setup.sh
 	$(CARGO) run --release --locked --example alembic_check_files -- out/check-blender
+	$(CARGO) run --release --locked -- convert tests/data/blender_groom.abc out/check-blender/blender_groom.abc
+	$(CARGO) run --release --locked -- convert tests/data/blender_groom.usda out/check-blender/blender_groom_usd.abc
 	.deps/bpy-venv/bin/python scripts/check_blender.py out/check-blender
 
 # Fuzzing (cargo-fuzz, installed by scripts/fuzz_setup.sh if missing; libFuzzer needs nightly

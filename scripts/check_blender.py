@@ -2,7 +2,10 @@
 counts, positions (every frame of the animation) and radii with what coif wrote.
 
 Usage: .deps/bpy-venv/bin/python scripts/check_blender.py DIR
-DIR holds static.abc, animated.abc and expected.json from `examples/alembic_check_files.rs`.
+DIR holds static.abc, animated.abc and expected.json from `examples/alembic_check_files.rs`, and
+blender_groom.abc / blender_groom_usd.abc: `coif convert` of Blender's own test groom
+(tests/data/blender_groom.abc and .usda), compared per curves object with Blender's import of
+its own file (curve and point counts, bounding box, radii).
 Blender turns Alembic's Y up into its Z up: (x, y, z) -> (x, -z, y).
 """
 import json
@@ -76,7 +79,46 @@ def main():
         worst = max(worst, compare(f"animated frame {f + 1}", points, expected_points))
     print(f"animated.abc: {len(frames)} frames, {expected['strands']} curves, {expected['vertices']} points "
           f"each; positions within {worst:.2g} m on every frame")
+    original = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "blender_groom.abc")
+    for name in ("blender_groom.abc", "blender_groom_usd.abc"):
+        converted = os.path.join(folder, name)
+        if os.path.exists(converted):
+            compare_groom(original, converted)
     print("check-blender: OK")
+
+
+def groom_objects(path):
+    """Per curves object (by name): curve count, point count, world bbox, radii."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.alembic_import(filepath=path, as_background_job=False)
+    out = {}
+    for obj in bpy.context.scene.objects:
+        if obj.type not in ("CURVES", "CURVE"):
+            continue
+        points, evaluated = world_points(obj)
+        lo = Vector([min(p[i] for p in points) for i in range(3)])
+        hi = Vector([max(p[i] for p in points) for i in range(3)])
+        radii = [r.value for r in evaluated.data.attributes["radius"].data]
+        out[obj.name.split(".")[0]] = (len(evaluated.data.curves), len(points), lo, hi, radii)
+    return out
+
+
+def compare_groom(original, converted):
+    """coif's conversion of Blender's groom, imported by Blender, against Blender's own file."""
+    want, got = groom_objects(original), groom_objects(converted)
+    for name, (curves, points, lo, hi, radii) in want.items():
+        match = [k for k in got if name in k]
+        if len(match) != 1:
+            sys.exit(f"{converted}: no single curves object for {name}: {list(got)}")
+        g_curves, g_points, g_lo, g_hi, g_radii = got[match[0]]
+        if (g_curves, g_points) != (curves, points):
+            sys.exit(f"{converted} {name}: {g_curves} curves / {g_points} points, Blender's file {curves} / {points}")
+        box = max((g_lo - lo).length, (g_hi - hi).length)
+        radius = max(abs(a - b) for a, b in zip(g_radii, radii))
+        if box > TOLERANCE or radius > 1e-9:
+            sys.exit(f"{converted} {name}: bounding box off by {box:.3g} m, radii by {radius:.3g}")
+        print(f"{os.path.basename(converted)} {name}: {curves} curves, {points} points; "
+              f"bbox within {box:.2g} m, radii within {radius:.2g}")
 
 
 if __name__ == "__main__":

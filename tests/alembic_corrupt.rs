@@ -126,7 +126,7 @@ fn every_truncation_is_an_error() {
     let bytes = golden();
     let path = std::path::Path::new("truncated.abc");
     for len in 0..bytes.len() {
-        assert!(alembic::read(&bytes[..len], path, 0, false).is_err(), "truncated to {len} bytes");
+        assert!(alembic::read(&bytes[..len], path, None, false).is_err(), "truncated to {len} bytes");
     }
     assert_rejected(&bytes[..700], "truncated");
 }
@@ -142,7 +142,7 @@ proptest! {
             bytes[at] = value;
         }
         let path = std::path::Path::new("fuzzed.abc");
-        let _ = alembic::read(&bytes, path, 0, false);
+        let _ = alembic::read(&bytes, path, None, false);
         let _ = alembic::read_all_frames(&bytes, path, false);
     }
 }

@@ -116,7 +116,7 @@ fn xform_hierarchies_are_applied_and_curves_objects_merged() {
     w.set_sample(width, &f32s(&[0.02, 0.03]), 2).unwrap();
     let bytes = w.finish().unwrap().into_inner();
 
-    let groom = alembic::read(&bytes, std::path::Path::new("rig.abc"), 0, false).unwrap();
+    let groom = alembic::read(&bytes, std::path::Path::new("rig.abc"), None, false).unwrap();
     assert_eq!(groom.strand_offsets, vec![0, 3, 7, 9, 14]);
     let head_world = DMat4::from_translation(DVec3::new(0.0, 0.0, 5.0))
         * DMat4::from_rotation_y(FRAC_PI_2)
@@ -169,7 +169,7 @@ fn epic_groom_attributes_and_indexed_params() {
     let bytes = w.finish().unwrap().into_inner();
 
     let path = std::path::Path::new("epic.abc");
-    let groom = alembic::read(&bytes, path, 0, true).unwrap();
+    let groom = alembic::read(&bytes, path, None, true).unwrap();
     assert_eq!(groom.widths, vec![0.5, 0.5, 0.5, 0.25, 0.25, 0.25, 0.125, 0.125], "groom_width per curve");
     assert_eq!(groom.guides, Some(vec![true, false, true]));
     assert_eq!(groom.strand_ids, vec![7, 8, 9]);
@@ -196,7 +196,7 @@ fn epic_spec_on_an_xform_means_centimetres() {
     let width = w.add_array(geom, "width", param_md("vtx", Pod::F32, 1), Pod::F32, 1, 0);
     w.set_sample(width, &f32s(&[0.008, 0.006, 0.004]), 3).unwrap();
     let bytes = w.finish().unwrap().into_inner();
-    let groom = alembic::read(&bytes, std::path::Path::new("cm.abc"), 0, false).unwrap();
+    let groom = alembic::read(&bytes, std::path::Path::new("cm.abc"), None, false).unwrap();
     for (got, expected) in groom.points.iter().zip(line(0.0, 3)) {
         assert!((*got - expected).length() < 1e-6);
     }
@@ -217,13 +217,13 @@ fn the_basis_byte_decides_the_curve_kind() {
         let top = w.top();
         curves(&mut w, top, "c", &[4], &line(0.0, 4), bytes);
         let file = w.finish().unwrap().into_inner();
-        let groom = alembic::read(&file, std::path::Path::new("b.abc"), 0, false).unwrap();
+        let groom = alembic::read(&file, std::path::Path::new("b.abc"), None, false).unwrap();
         assert_eq!(groom.basis, expected, "{bytes:?}");
     }
 }
 
 #[test]
-fn animated_foreign_file_picks_frames_by_time() {
+fn animated_foreign_file_reads_frames_on_the_union_of_its_samplings() {
     // Positions on 24 fps from frame 1; an Xform sampled at 7 fps moving +1 in x per sample.
     let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
     let fast = w.add_time_sampling(TimeSampling::uniform(24.0, 1.0 / 24.0));
@@ -258,15 +258,20 @@ fn animated_foreign_file_picks_frames_by_time() {
     }
     let bytes = w.finish().unwrap().into_inner();
     let archive = CurvesArchive::open(&bytes).unwrap();
-    assert_eq!(archive.frame_count(), 6);
-    // Frame f is at (f + 1)/24 s; xform samples at 1/7, 2/7, 3/7 s. Nearest, by hand:
-    // 1/24…5/24 are all closer to 1/7 than to 2/7; 6/24 = 0.25 is closer to 2/7 (0.286).
-    for (f, xform_sample) in [0.0f32, 0.0, 0.0, 0.0, 0.0, 1.0].into_iter().enumerate() {
-        let f = f as u32;
-        let groom = archive.read_frame(f).unwrap();
-        let expected = Vec3::new(xform_sample, 0.0, f as f32);
+    // The timeline is the union of both samplings (6 + 3 times); frames count at the positions'
+    // 24 fps (the first animated property's cycle: the file declares no rate).
+    assert_eq!(archive.frame_count(), 9);
+    assert_eq!(archive.frames_per_second(), 24.0);
+    // Frame f is at f/24 s: positions sample f - 1; the Xform holds its first sample before 1/7 s,
+    // then moves linearly (+1 per 1/7 s), and holds its last after 3/7 s — by hand:
+    // x = clamp((f/24 − 1/7)·7, 0, 2).
+    for f in [1.0f64, 2.0, 3.0, 4.0, 5.0, 6.0, 11.0, 12.0] {
+        let groom = archive.read_at_frame(f).unwrap();
+        let x = ((f / 24.0 - 1.0 / 7.0) * 7.0).clamp(0.0, 2.0) as f32;
+        let expected = Vec3::new(x, 0.0, (f.min(6.0) - 1.0) as f32);
         assert!((groom.points[0] - expected).length() < 1e-6, "frame {f}: {} vs {expected}", groom.points[0]);
     }
+    assert!(archive.read_at_frame(0.5).is_err(), "before the first sample");
 }
 
 #[test]

@@ -98,8 +98,9 @@ fn animated_round_trip_every_frame_and_one_frame() {
     let bytes = std::fs::read(&path).unwrap();
     let all = alembic::read_all_frames(&bytes, &path, false).unwrap();
     assert_eq!(all, frames);
+    // Frame numbers on the file's timeline: coif writes frame 1 at 1/24 s.
     for (f, expected) in frames.iter().enumerate() {
-        let options = ImportOptions { frame: Some(f as u32), ..Default::default() };
+        let options = ImportOptions { frame: Some(f as f64 + 1.0), ..Default::default() };
         assert_eq!(&read_groom(&path, &options).unwrap().groom, expected, "frame {f}");
     }
     let archive = CurvesArchive::open(&bytes).unwrap();
@@ -107,9 +108,13 @@ fn animated_round_trip_every_frame_and_one_frame() {
     // Uniform sampling at 24 fps starting at frame 1.
     assert!((archive.frame_time(0) - 1.0 / 24.0).abs() < 1e-12);
     assert!((archive.frame_time(4) - 5.0 / 24.0).abs() < 1e-12);
-    // Past the end is bad input.
-    let out = coif(&["info", path_str(&path), "--frame", "5"]);
+    assert_eq!((archive.frame_range(), archive.frames_per_second()), ((1.0, 5.0), 24.0));
+    // Before the first frame is bad input; past the last, the last holds (as in USD).
+    let out = coif(&["info", path_str(&path), "--frame", "0"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("frame 0 is before the file's first sample (frame 1"), "{}", stderr(&out));
+    let options = ImportOptions { frame: Some(9.0), ..Default::default() };
+    assert_eq!(&read_groom(&path, &options).unwrap().groom, frames.last().unwrap());
 }
 
 #[test]
@@ -264,7 +269,7 @@ fn an_xform_parent_is_written_and_applied_on_reading() {
     let archive = Archive::open(&bytes).unwrap();
     assert_eq!(archive.top.children[0].full_name, "/xform");
     assert_eq!(archive.top.children[0].children[0].full_name, "/xform/curves");
-    let back = alembic::read(&bytes, &path, 0, false).unwrap();
+    let back = alembic::read(&bytes, &path, None, false).unwrap();
     for (got, p) in back.points.iter().zip(&groom.points) {
         let expected = matrix.transform_point3(p.as_dvec3()).as_vec3();
         assert!((*got - expected).length() < 1e-6, "{got} vs {expected}");

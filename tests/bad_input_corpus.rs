@@ -286,7 +286,7 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["--influences", "1,1,1"], "--influences"),
         (&["--iterations", "0"], "--iterations"),
         (&["--frame", "nan"], "--frame"),
-        (&["--frame=-5"], "--frame"),
+        (&["--frame=-5e9"], "--frame"),
         (&["--units", "0"], "--units"),
     ];
     for (flags, culprit) in simulate {
@@ -396,11 +396,11 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         cases.push(convert(format!(".abc flip {name}"), "in.abc", bytes, &["in.abc"]));
     }
     cases.push(case(
-        ".abc frame beyond",
-        vec![("in.abc", abc.clone())],
-        &["convert", "in.abc", "out.usda", "--frame", "7"],
+        ".abc frame before the first sample",
+        vec![("in.abc", std::fs::read("tests/data/blender_groom_anim.abc").unwrap())],
+        &["convert", "in.abc", "out.usda", "--frame", "0"],
         2,
-        &["in.abc"],
+        &["in.abc", "frame 0", "(frame 1"],
     ));
     for (name, mesh, names) in [
         ("index out of range", "[0, 1, 9]", &["index 2 is 9"][..]),
@@ -443,7 +443,7 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         vec![("in.usda", animated_usda().into_bytes())],
         &["convert", "in.usda", "out.hair", "--frame", "0"],
         2,
-        &["in.usda", "time 0"],
+        &["in.usda", "frame 0"],
     ));
     cases
 }

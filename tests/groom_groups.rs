@@ -195,3 +195,189 @@ fn directions_rotate_with_the_points_from_z_up() {
     }
     assert_eq!(written["curves"][0]["primvars"]["N"]["type"], "normal3f[]");
 }
+
+#[test]
+fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
+    // What Unreal's USD groom importer reads: `groom_*` primvars (int per strand for ids, guide
+    // flags and group ids, float2 root UVs), `widths` (vertex), and the spec version as
+    // `userProperties:groom_version_*` ints on the root prim. Checked in pxr against the input.
+    let dir = tempfile::tempdir().unwrap();
+    let blender = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_groom.usda");
+    for (input, ext) in [(blender.clone(), "usda"), (blender, "usdc"), (houdini_groom(), "usda")] {
+        let out = dir.path().join(format!("unreal.{ext}"));
+        let run = coif(&["convert", path_str(&input), path_str(&out), "--unreal"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let (source, written) = (pxr_dump(&input, None), pxr_dump(&out, None));
+        let label = format!("{} → .{ext}", input.display());
+        assert!(
+            source["prims"].as_array().unwrap().iter().any(|p| p[1] == "Mesh"),
+            "{label}: the input has a mesh"
+        );
+        assert!(
+            !written["prims"].as_array().unwrap().iter().any(|p| p[1] == "Mesh"),
+            "{label}: a mesh in the groom file"
+        );
+        let root = format!("/{}", written["defaultPrim"].as_str().unwrap());
+        for (name, value) in [("groom_version_major", 1), ("groom_version_minor", 5)] {
+            let property = &written["userProperties"][format!("{root}.userProperties:{name}")];
+            assert_eq!(
+                (property["type"].as_str(), property["value"].as_i64()),
+                (Some("int"), Some(value)),
+                "{label}: {name}"
+            );
+        }
+        // Widths as a plain convert writes them (metres, world scale applied; checked against
+        // pxr by the round-trip test): --unreal changes names, not values.
+        let plain_path = dir.path().join(format!("plain.{ext}"));
+        assert!(coif(&["convert", path_str(&input), path_str(&plain_path)]).status.success());
+        let plain = pxr_dump(&plain_path, None);
+        let plain_curves = curves_by_path(&plain);
+        let (source_curves, written_curves) = (curves_by_path(&source), curves_by_path(&written));
+        assert_eq!(source_curves.len(), written_curves.len(), "{label}");
+        for (group, ((path, src), (out_path, out))) in source_curves.iter().zip(&written_curves).enumerate() {
+            assert_eq!(path, out_path, "{label}");
+            let strands = src["counts"].as_array().unwrap().len();
+            let primvar = |name: &str, ty: &str| -> Vec<f32> {
+                let p = &out["primvars"][name];
+                assert_eq!(
+                    (p["type"].as_str(), p["interpolation"].as_str()),
+                    (Some(ty), Some("uniform")),
+                    "{label} {path} {name}"
+                );
+                let values = f32s(&p["values"]);
+                assert_eq!(
+                    values.len(),
+                    strands * if ty.starts_with("float2") { 2 } else { 1 },
+                    "{label} {path} {name}"
+                );
+                values
+            };
+            assert!(primvar("groom_group_id", "int[]").iter().all(|&g| g == group as f32), "{label} {path}");
+            assert_eq!(primvar("groom_id", "int[]").len(), strands);
+            let guide = if src["purpose"] == "guide" { 1.0 } else { 0.0 };
+            if out["primvars"].get("groom_guide").is_some() {
+                assert!(primvar("groom_guide", "int[]").iter().all(|&g| g == guide), "{label} {path}");
+            } else {
+                assert!(source_curves.iter().all(|(_, c)| c["purpose"] != "guide"), "{label}: guides lost");
+            }
+            // Root UVs: the file's own, or Blender's surface UV.
+            let uv_source = ["st", "surface_uv_coordinate"].iter().find_map(|n| src["primvars"].get(*n));
+            if let Some(uv) = uv_source {
+                assert_eq!(primvar("groom_root_uv", "float2[]"), f32s(&uv["values"]), "{label} {path}");
+            }
+            assert_eq!(out["widthsInterpolation"], "vertex", "{label}");
+            assert_eq!(vertex_widths(out), vertex_widths(plain_curves[group].1), "{label}: widths");
+            assert_eq!(out["points"], plain_curves[group].1["points"], "{label}: points");
+            for name in out["primvars"].as_object().unwrap().keys() {
+                assert!(
+                    name.starts_with("groom_") || name == "st",
+                    "{label}: primvar {name} is not Unreal's"
+                );
+            }
+        }
+    }
+    // Alembic: Unreal refuses a groom .abc holding a PolyMesh; none is written.
+    let abc = dir.path().join("unreal.abc");
+    let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&abc), "--unreal"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bytes = std::fs::read(&abc).unwrap();
+    assert!(!bytes.windows(18).any(|w| w == b"AbcGeom_PolyMesh_v"), "a PolyMesh in the Unreal .abc");
+    assert!(
+        bytes.windows(14).any(|w| w == b"groom_root_uv\0")
+            || bytes.windows(13).any(|w| w == b"groom_root_uv")
+    );
+    // Formats Unreal does not import are refused, naming the flag.
+    let run =
+        coif(&["convert", "tests/data/blender_groom.usda", path_str(&dir.path().join("u.hair")), "--unreal"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(stderr(&run).contains("--unreal"), "{}", stderr(&run));
+}
+
+#[test]
+fn blender_grooms_convert_round_trips_are_exact_in_pxr() {
+    // Blender's USD (centimetres, Z up, a ×100 scale on /root) and its Alembic of the same scene
+    // (metres, Y up), converted to .usda and .usdc: pxr must see the same prims, bases, wraps,
+    // segment counts, points and widths (in metres, Y up), primvar types and roles, and
+    // `surface_normal` turned with the points.
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let usd = data.join("blender_groom.usda");
+    let source = pxr_dump(&usd, None);
+    let to_coif = |dump: &Value, c: &Value, key: &str| -> Vec<f32> {
+        let mpu = dump["metersPerUnit"].as_f64().unwrap() as f32;
+        let v = f32s(&c[key]);
+        v.chunks_exact(3).flat_map(|p| [p[0] * mpu, p[2] * mpu, -p[1] * mpu]).collect()
+    };
+    for (input, ext) in [
+        (usd.clone(), "usda"),
+        (data.join("blender_groom.usdc"), "usdc"),
+        (data.join("blender_groom.abc"), "usda"),
+    ] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&input), path_str(&out)]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let written = pxr_dump(&out, None);
+        let label = format!("{} → .{ext}", input.display());
+        assert_eq!(written["validationErrors"], serde_json::json!([]), "{label}: UsdValidation");
+        let (sc, wc) = (curves_by_path(&source), curves_by_path(&written));
+        assert_eq!(sc.len(), wc.len(), "{label}");
+        for (path, a) in &sc {
+            // Prim order may differ (Blender's .usdc lists Hair first), and Blender's Alembic has
+            // no /root: match by the object and data names.
+            let tail = path.trim_start_matches("/root");
+            let b =
+                wc.iter().find(|(p, _)| p.ends_with(tail)).unwrap_or_else(|| panic!("{label}: no {tail}")).1;
+            // Alembic has no `pinned` wrap (README): from .abc, Catmull-Rom comes back nonperiodic.
+            let from_abc = input.extension().unwrap() == "abc";
+            let keys: &[&str] = if from_abc {
+                &["type", "basis", "counts"]
+            } else {
+                &["type", "basis", "wrap", "counts", "segmentEnds"]
+            };
+            for key in keys {
+                assert_eq!(a[key], b[key], "{label} {path}: {key}");
+            }
+            let (pa, pb) = (to_coif(&source, a, "world_points"), f32s(&b["world_points"]));
+            assert_eq!(pa.len(), pb.len());
+            let worst = pa.iter().zip(&pb).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+            assert!(worst < 2e-6, "{label} {path}: points differ by {worst} m");
+            // Widths scale with the stage units and /root's ×100 (the ratio of world to local
+            // lengths of the first segment).
+            let (local, world) = (f32s(&a["points"]), f32s(&a["world_points"]));
+            let length =
+                |v: &[f32]| ((v[3] - v[0]).powi(2) + (v[4] - v[1]).powi(2) + (v[5] - v[2]).powi(2)).sqrt();
+            let scale = length(&world) / length(&local) * source["metersPerUnit"].as_f64().unwrap() as f32;
+            for (x, y) in vertex_widths(a).iter().zip(vertex_widths(b)) {
+                assert!(
+                    (x * scale - y).abs() <= 1e-6 * y.abs().max(1e-6),
+                    "{label} {path}: width {x} vs {y} m"
+                );
+            }
+            if !from_abc {
+                for (name, primvar) in a["primvars"].as_object().unwrap() {
+                    let w = &b["primvars"][name];
+                    for key in ["type", "interpolation"] {
+                        assert_eq!(primvar[key], w[key], "{label} {path}: primvar {name} {key}");
+                    }
+                }
+                let normals = (
+                    to_coif(&source, &a["primvars"]["surface_normal"], "values"),
+                    f32s(&b["primvars"]["surface_normal"]["values"]),
+                );
+                let n = normals.0.len() / 3;
+                let mean_dot: f32 = normals
+                    .0
+                    .chunks_exact(3)
+                    .zip(normals.1.chunks_exact(3))
+                    .map(|(p, q)| {
+                        (p[0] * q[0] + p[1] * q[1] + p[2] * q[2])
+                            / (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+                            / (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt()
+                    })
+                    .sum::<f32>()
+                    / n as f32;
+                assert!(n > 0 && mean_dot >= 0.999, "{label} {path}: surface_normal mean dot {mean_dot}");
+            }
+        }
+    }
+}

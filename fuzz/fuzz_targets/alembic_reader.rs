@@ -6,7 +6,7 @@ use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
     let path = Path::new("fuzz.abc");
-    let _ = coif::io::alembic::read(data, path, 0, false);
-    let _ = coif::io::alembic::read(data, path, 1, false);
+    let _ = coif::io::alembic::read(data, path, None, false);
+    let _ = coif::io::alembic::read(data, path, Some(2.0), false);
     let _ = coif::io::alembic::read_all_frames(data, path, false);
 });

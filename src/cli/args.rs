@@ -379,9 +379,10 @@ pub(crate) struct ImportArgs {
     /// Up axis of the input file, for formats that do not say.
     #[arg(long, value_enum)]
     pub(crate) up: Option<UpAxisArg>,
-    /// Animated input: the USD time code to read, or the Alembic sample (0 = first). Default:
-    /// USD's default values (else its first sample), Alembic's first sample.
-    #[arg(long, value_name = "TIME")]
+    /// Animated input: the frame number to read on the file's own timeline (USD: the time code;
+    /// Alembic: time = frame / the file's frame rate). Default: USD's default values (else its
+    /// first sample), Alembic's first sample.
+    #[arg(long, value_name = "FRAME", allow_negative_numbers = true)]
     pub(crate) frame: Option<f64>,
     /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).
     #[arg(long, value_name = "SET=NAME")]
@@ -391,8 +392,11 @@ pub(crate) struct ImportArgs {
 impl ImportArgs {
     pub(crate) fn options(&self) -> coif::Result<ImportOptions> {
         super::checks::import(self)?;
-        let frame = self.frame.map(|f| f.max(0.0) as u32);
-        Ok(ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame })
+        Ok(ImportOptions {
+            meters_per_unit: self.units,
+            up_axis: self.up.map(UpAxis::from),
+            frame: self.frame,
+        })
     }
 
     pub(crate) fn selection(&self) -> io::usda::Selection {

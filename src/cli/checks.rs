@@ -13,7 +13,8 @@ pub(crate) fn import(args: &ImportArgs) -> Result<()> {
         flag("--units", units, Range::above(0.0, 1e6))?;
     }
     if let Some(frame) = args.frame {
-        flag("--frame", frame, Range::closed(0.0, u32::MAX as f64))?;
+        // Negative frames are real (a simulation's pre-roll); beyond a billion is a typo.
+        flag("--frame", frame, Range::closed(-1e9, 1e9))?;
     }
     Ok(())
 }

@@ -1,7 +1,11 @@
 //! Atomic file output: write to a temporary file beside the target, flush and fsync it, then
 //! rename it over the target. A reader never sees a half-written file under the output name, and
 //! a failed or interrupted write leaves nothing behind (the temporary file is removed on drop).
-use std::io::{BufWriter, Write};
+//! While a file is written, the kernel is asked every [`WRITEBACK_STEP`] bytes to start putting it
+//! on disk, so the final fsync waits for the last step, not for the whole file (a groom's `.usda`
+//! is hundreds of megabytes, and its fsync alone used to take as long as formatting it).
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;
 
 use tempfile::NamedTempFile;
@@ -18,9 +22,55 @@ where
     commit(path, writer)
 }
 
+/// Bytes written between two requests to start write-back.
+const WRITEBACK_STEP: usize = 32 << 20;
+
+/// A temporary file being written: starts the kernel's write-back every [`WRITEBACK_STEP`] bytes.
+pub struct TempFile {
+    file: NamedTempFile,
+    since_writeback: usize,
+}
+
+impl Write for TempFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let written = self.file.write(buf)?;
+        self.since_writeback += written;
+        if self.since_writeback >= WRITEBACK_STEP {
+            self.since_writeback = 0;
+            start_writeback(self.file.as_file());
+        }
+        Ok(written)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+impl Seek for TempFile {
+    fn seek(&mut self, position: SeekFrom) -> std::io::Result<u64> {
+        self.file.seek(position)
+    }
+}
+
+/// Asks the kernel to start writing the file's dirty pages to disk, without waiting for them.
+/// Advisory: a failure here is left for the fsync in [`commit`] to report.
+#[cfg(target_os = "linux")]
+fn start_writeback(file: &File) {
+    use std::os::fd::AsRawFd;
+    // SAFETY: a system call on a descriptor `file` keeps open; offset 0 and length 0 name the
+    // whole file, and no memory is passed.
+    unsafe {
+        libc::sync_file_range(file.as_raw_fd(), 0, 0, libc::SYNC_FILE_RANGE_WRITE);
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn start_writeback(_file: &File) {}
+
 /// A buffered temporary file beside `path`, for writers that stream or seek (Ogawa patches its
 /// header at the end). Hand it to [`commit`] when complete; dropping it removes it.
-pub fn create_beside(path: &Path) -> Result<BufWriter<NamedTempFile>> {
+pub fn create_beside(path: &Path) -> Result<BufWriter<TempFile>> {
     let dir = match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
@@ -35,15 +85,15 @@ pub fn create_beside(path: &Path) -> Result<BufWriter<NamedTempFile>> {
     let temp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     // Removed by the signal handler if the process is interrupted before `commit`.
     super::cleanup::track(temp.path());
-    Ok(BufWriter::with_capacity(1 << 20, temp))
+    Ok(BufWriter::with_capacity(1 << 20, TempFile { file: temp, since_writeback: 0 }))
 }
 
 /// Flushes and fsyncs a file from [`create_beside`], then renames it over `path`.
-pub fn commit(path: &Path, mut writer: BufWriter<NamedTempFile>) -> Result<()> {
-    let temp_path = writer.get_ref().path().to_path_buf();
+pub fn commit(path: &Path, mut writer: BufWriter<TempFile>) -> Result<()> {
+    let temp_path = writer.get_ref().file.path().to_path_buf();
     let result = (|| {
         writer.flush().map_err(|e| Error::io(path, e))?;
-        let temp = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
+        let temp = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?.file;
         temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
         temp.persist(path).map_err(|e| Error::io(path, e.error))?;
         Ok(())

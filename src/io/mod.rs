@@ -7,6 +7,7 @@ pub mod cleanup;
 pub mod hair;
 pub mod input;
 pub mod obj;
+pub mod unreal;
 pub mod usd_interop;
 pub mod usd_stage;
 pub mod usda;
@@ -96,8 +97,10 @@ pub struct ImportOptions {
     pub meters_per_unit: Option<f32>,
     /// The file's up axis; `None` keeps the file's own or Y.
     pub up_axis: Option<UpAxis>,
-    /// Alembic: the sample to read from an animated file (0 = first); `None` reads the first.
-    pub frame: Option<u32>,
+    /// The frame number to read from an animated Alembic file, on the file's own timeline (time
+    /// = frame / its frame rate); `None` reads its first sample. USD takes its time code from
+    /// [`usda::Selection::time`].
+    pub frame: Option<f64>,
 }
 
 /// Choices for writing a groom that only some formats use.
@@ -129,23 +132,23 @@ pub fn read_groom_selected(
         Some(format) => format,
         None => Format::from_extension(path)?,
     };
+    // One frame for every format: a USD time code is the frame number on the stage's timeline.
+    let selection =
+        &usda::Selection { time: selection.time.or(options.frame), variants: selection.variants.clone() };
     let groom = match format {
         Format::Hair | Format::Alembic => {
             if !selection.variants.is_empty() || (format == Format::Hair && selection.time.is_some()) {
-                return Err(Error::Usage(format!(
-                    "{}: a time or variant selection applies to USD input only (Alembic takes --frame)",
-                    path.display()
-                )));
+                let what = if selection.variants.is_empty() {
+                    "a .hair file holds one frame: --frame applies to USD and Alembic input"
+                } else {
+                    "--variant applies to USD input only"
+                };
+                return Err(Error::Usage(format!("{}: {what}", path.display())));
             }
             let bytes = input::map_file(path)?;
             let mut groom = match format {
                 Format::Hair => hair::read(&bytes, path)?,
-                _ => alembic::read(
-                    &bytes,
-                    path,
-                    options.frame.unwrap_or(0),
-                    options.meters_per_unit.is_some(),
-                )?,
+                _ => alembic::read(&bytes, path, selection.time, options.meters_per_unit.is_some())?,
             };
             apply_import_options(&mut groom, options);
             groom
@@ -262,6 +265,9 @@ fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
 fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
+    if options.unreal {
+        return write_unreal(path, groom, format);
+    }
     match format {
         Format::Hair => {
             hair::check_writable(groom, path)?;
@@ -291,6 +297,37 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
             alembic::write(path, groom, &abc_options)?;
             Ok(Vec::new())
         }
+    }
+}
+
+/// Epic's groom layout (see [`unreal`]): Alembic or USD (text or crate).
+fn write_unreal(path: &Path, groom: &Groom, format: Format) -> Result<Vec<String>> {
+    match format {
+        Format::Alembic => {
+            let prepared = unreal::with_root_uvs(groom);
+            let abc_options = alembic::AlembicWriteOptions { unreal: true, ..Default::default() };
+            alembic::write(path, prepared.as_ref().unwrap_or(groom), &abc_options)?;
+            Ok(Vec::new())
+        }
+        Format::Usda | Format::Usdc => {
+            let groom = unreal::for_usd(groom);
+            usda::check_writable(&groom, path)?;
+            let mut stage = usd_stage::plan(&groom, None)?;
+            usd_stage::add_unreal_groom_properties(&mut stage);
+            if format == Format::Usda {
+                atomic::write_atomically(path, |w| {
+                    usda::write_stage(&stage, w).map_err(|e| Error::io(path, e))
+                })?;
+            } else {
+                usdc::write_stage(path, &stage)?;
+            }
+            Ok(usd_warnings(path, &groom))
+        }
+        Format::Hair | Format::Usdz => Err(Error::Usage(format!(
+            "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
+            path.display(),
+            path.extension().and_then(|e| e.to_str()).unwrap_or("")
+        ))),
     }
 }
 

@@ -81,6 +81,8 @@ pub enum Data<'g> {
     },
     /// `bool[]` (written as 0 and 1 in text, one byte each in a crate file).
     Bools(Vec<bool>),
+    /// One `int` (not an array).
+    Int(i32),
     Floats {
         values: Cow<'g, [f32]>,
         components: usize,
@@ -99,6 +101,22 @@ impl<'g> Property<'g> {
     fn interpolated(mut self, interpolation: &'static str) -> Self {
         self.interpolation = Some(interpolation);
         self
+    }
+}
+
+/// Unreal's groom-level properties on every root prim (Epic's USD groom importer reads
+/// `userProperties:groom_*` on the prim the groom is imported from): the groom spec version.
+pub fn add_unreal_groom_properties(stage: &mut Stage) {
+    let (major, minor) = crate::io::alembic::curves_write::epic::SPEC_VERSION;
+    for root in &mut stage.roots {
+        for (name, value) in [("groom_version_major", major), ("groom_version_minor", minor)] {
+            let data = Data::Int(value as i32);
+            root.properties.push(Property::new(
+                format!("userProperties:{name}"),
+                "int",
+                Value::Default(data),
+            ));
+        }
     }
 }
 

@@ -1,6 +1,9 @@
 """Test helper: what usd-core (pxr) itself sees in a stage, as JSON, and stages authored by pxr.
 
   pxr_probe.py dump STAGE [--time T]     curves, primvars, metadata, extents, validation findings
+  pxr_probe.py blended STAGE T0 T1 W     world points of each curve prim with every Xform's local
+                                         matrix blended between T0 and T1 (W = weight of T1):
+                                         scale and translation lerped, rotation slerped
   pxr_probe.py author-transformed OUT    nested Xforms, cm units, Z up, two curve prims, samples
   pxr_probe.py author-composed DIR       a stage that references a layer with a variant set
   pxr_probe.py export IN OUT             IN saved by pxr in OUT's format (e.g. .usda to .usdc)
@@ -33,6 +36,13 @@ def dump(path, time=None):
         "endTimeCode": stage.GetEndTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
         "timeCodesPerSecond": stage.GetTimeCodesPerSecond(),
         "curves": [],
+        "prims": [[str(p.GetPath()), str(p.GetTypeName())] for p in stage.Traverse()],
+        "userProperties": {
+            str(a.GetPath()): {"type": str(a.GetTypeName()), "value": a.Get(code)}
+            for p in stage.Traverse()
+            for a in p.GetAuthoredPropertiesInNamespace("userProperties")
+            if isinstance(a, Usd.Attribute) and isinstance(a.Get(code), (int, float, str))
+        },
     }
     cache = UsdGeom.XformCache(code)
     for prim in stage.Traverse():
@@ -73,6 +83,43 @@ def dump(path, time=None):
     result["validationErrors"] = [
         e.GetMessage() for e in findings if e.GetType() == UsdValidation.ValidationErrorType.Error
     ]
+    return result
+
+
+def blended(path, t0, t1, weight):
+    stage = Usd.Stage.Open(path)
+
+    def blend(a, b):
+        def parts(m):
+            # Factor: m = r * s * r^T * u * t (u: the rotation, r: shear axes; identity here).
+            ok, r, s, u, t, p = m.Factor()
+            assert ok, "a singular transform"
+            return s, u.ExtractRotationQuat(), t
+        (sa, qa, ta), (sb, qb, tb) = parts(a), parts(b)
+        s = Gf.Vec3d(*[x + (y - x) * weight for x, y in zip(sa, sb)])
+        q = Gf.Slerp(weight, qa, qb)
+        t = ta + (tb - ta) * weight
+        return Gf.Matrix4d().SetScale(s) * Gf.Matrix4d().SetRotate(q) * Gf.Matrix4d().SetTranslate(t)
+
+    result = {"metersPerUnit": UsdGeom.GetStageMetersPerUnit(stage), "upAxis": UsdGeom.GetStageUpAxis(stage), "curves": []}
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdGeom.BasisCurves):
+            continue
+        world = Gf.Matrix4d(1)
+        chain = []
+        p = prim
+        while p and not p.IsPseudoRoot():
+            chain.append(p)
+            p = p.GetParent()
+        for p in chain:  # leaf first: row vectors, so the leaf's matrix multiplies first
+            if p.IsA(UsdGeom.Xformable):
+                x = UsdGeom.Xformable(p)
+                local = blend(x.GetLocalTransformation(Usd.TimeCode(t0)), x.GetLocalTransformation(Usd.TimeCode(t1)))
+                world = world * local
+        points = UsdGeom.BasisCurves(prim).GetPointsAttr().Get(Usd.TimeCode(t0))
+        result["curves"].append(
+            {"path": str(prim.GetPath()), "world_points": floats(world.Transform(Gf.Vec3d(q)) for q in points)}
+        )
     return result
 
 
@@ -172,6 +219,8 @@ if __name__ == "__main__":
     if command == "dump":
         time = float(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == "--time" else None
         json.dump(dump(target, time), sys.stdout)
+    elif command == "blended":
+        json.dump(blended(target, *(float(a) for a in sys.argv[3:6])), sys.stdout)
     elif command == "author-transformed":
         author_transformed(target)
     elif command == "author-composed":

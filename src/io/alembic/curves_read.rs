@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::archive_read::{Archive, Compound, Object, Property, Sampled};
 use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
-use super::types::{Pod, TimeSampling};
+use super::types::Pod;
 use crate::groom::{attr, Attribute, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::surface_mesh::SurfaceMesh;
 
@@ -24,6 +24,13 @@ pub const DEFAULT_WIDTH: f32 = 80e-6;
 /// A file may expand to at most this many vertices (all frames together) per byte it holds,
 /// plus a fixed allowance: constant samples are stored once but expand per frame.
 const MAX_VERTICES_PER_FILE_BYTE: u64 = 64;
+/// Sample times closer than this many frames are the same time (rounding in the samplings).
+const SAME_TIME_IN_FRAMES: f64 = 1e-6;
+/// The timeline may hold this many sample times beyond one per byte of the file (a constant
+/// tail of samples is stored once but still counted).
+const MAX_TIMELINE_SAMPLES: u64 = 1 << 20;
+/// Frame rate of an archive that says none and has no cyclic sampling (film's rate).
+const DEFAULT_FRAMES_PER_SECOND: f64 = 24.0;
 
 /// Curves found in an archive, ready to be read at any sample.
 pub struct CurvesArchive<'a> {
@@ -32,9 +39,11 @@ pub struct CurvesArchive<'a> {
     curves: Vec<(String, Vec<String>)>,
     /// Paths of the polygon meshes (scalp, head), likewise.
     meshes: Vec<(String, Vec<String>)>,
-    /// Samples of the first curves object's positions: the archive's frames.
-    frames: u32,
-    frame_sampling: TimeSampling,
+    /// The archive's timeline: the times (seconds, ascending) of every sample of anything that
+    /// moves the curves or meshes (positions and the transforms above them); empty when static.
+    times: Vec<f64>,
+    /// Frames per second of the file's timeline (see [`frame_rate`]).
+    fps: f64,
     /// The file follows Epic's groom spec (it declares `groom_version_major`): centimetres.
     pub epic_groom: bool,
 }
@@ -55,20 +64,40 @@ impl<'a> CurvesArchive<'a> {
         if found.is_empty() {
             return fail("the archive holds no curves (no AbcGeom_Curve_v2 object)");
         }
-        let mut result = CurvesArchive {
-            archive,
-            curves: found,
-            meshes,
-            frames: 1,
-            frame_sampling: TimeSampling::identity(),
-            epic_groom,
-        };
-        let first = result.resolve(0)?;
-        let positions = required(&first, "P")?;
-        let (frames, sampling) = (positions.num_samples.max(1), positions.time_sampling as usize);
-        result.frames = frames;
-        result.frame_sampling = result.archive.time_samplings[sampling].clone();
+        let mut result =
+            CurvesArchive { archive, curves: found, meshes, times: Vec::new(), fps: 0.0, epic_groom };
+        let animated = result.animated_properties()?;
+        let declared: u64 = animated.iter().map(|p| p.num_samples as u64).sum();
+        if declared > result.archive.ogawa.len() + MAX_TIMELINE_SAMPLES {
+            return fail(format!(
+                "the animated properties declare {declared} samples, more than the file can hold"
+            ));
+        }
+        let mut times = Vec::new();
+        for property in &animated {
+            let sampling = &result.archive.time_samplings[property.time_sampling as usize];
+            times.extend((0..property.num_samples as u64).map(|i| sampling.sample_time(i)));
+        }
+        times.sort_by(f64::total_cmp);
+        result.fps = frame_rate(&result.archive, &animated);
+        // Times one millionth of a frame apart are one sample written through different samplings.
+        let tolerance = SAME_TIME_IN_FRAMES / result.fps;
+        times.dedup_by(|b, a| *b - *a <= tolerance);
+        result.times = times;
         Ok(result)
+    }
+
+    /// Every property with more than one sample that places the curves or meshes: their
+    /// positions and the transforms above them. A single sample holds at every time.
+    fn animated_properties(&self) -> OgawaResult<Vec<&Sampled<'a>>> {
+        let mut animated = Vec::new();
+        for (path, xform_paths) in self.curves.iter().chain(&self.meshes) {
+            let object = self.resolve_path(path, xform_paths)?;
+            let positions = object.geom.sampled("P").into_iter();
+            let transforms = object.xforms.iter().filter_map(|x| x.sampled(".vals"));
+            animated.extend(positions.chain(transforms).filter(|p| p.num_samples > 1));
+        }
+        Ok(animated)
     }
 
     /// The `index`-th curves object with its `.geom` and the `.xform` compounds above it.
@@ -92,26 +121,56 @@ impl<'a> CurvesArchive<'a> {
         Ok(CurvesObject { path: path.to_string(), geom, xforms })
     }
 
-    /// Number of samples (frames) of the positions.
+    /// Number of distinct sample times on the archive's timeline (1 for a static file).
     pub fn frame_count(&self) -> u32 {
-        self.frames
+        self.times.len().max(1) as u32
     }
 
-    /// Time in seconds of frame `frame`.
-    pub fn frame_time(&self, frame: u32) -> f64 {
-        self.frame_sampling.sample_time(frame as u64)
+    /// Time in seconds of the `index`-th sample time of the timeline (0 = first).
+    pub fn frame_time(&self, index: u32) -> f64 {
+        self.times.get(index as usize).copied().unwrap_or(0.0)
     }
 
-    /// Every curves object merged into one groom, at frame `frame` (in file units).
-    pub fn read_frame(&self, frame: u32) -> OgawaResult<Groom> {
-        if frame >= self.frames {
-            return fail(format!(
-                "frame {frame} does not exist; the file has {} (0 to {})",
-                self.frames,
-                self.frames - 1
-            ));
+    /// Frames per second of the file's timeline: frame number `n` is at `n / fps` seconds.
+    pub fn frames_per_second(&self) -> f64 {
+        self.fps
+    }
+
+    /// The frame numbers of the first and last sample times (equal for a static file).
+    pub fn frame_range(&self) -> (f64, f64) {
+        let first = self.frame_time(0) * self.fps;
+        (first, self.frame_time(self.frame_count() - 1) * self.fps)
+    }
+
+    /// Every curves object merged into one groom, at frame number `frame` of the file's
+    /// timeline (time `frame / fps`; see [`Self::read_at_time`]).
+    pub fn read_at_frame(&self, frame: f64) -> OgawaResult<Groom> {
+        let time = frame / self.fps;
+        if let Some(&first) = self.times.first() {
+            if time < first - SAME_TIME_IN_FRAMES / self.fps {
+                return fail(format!(
+                    "frame {frame} is before the file's first sample (frame {}; {} frames per second)",
+                    (first * self.fps * 1e6).round() / 1e6,
+                    self.fps
+                ));
+            }
         }
-        let time = self.frame_time(frame);
+        self.read_at_time(time)
+    }
+
+    /// The `index`-th sample time of the timeline (0 = first).
+    pub fn read_frame(&self, index: u32) -> OgawaResult<Groom> {
+        if index >= self.frame_count() {
+            return fail(format!("sample {index} does not exist; the file has {}", self.frame_count()));
+        }
+        self.read_at_time(self.frame_time(index))
+    }
+
+    /// Every curves object merged into one groom at `time` seconds: positions and transforms
+    /// interpolated linearly between the samples around it, everything else from the latest
+    /// sample at or before it; before a property's first sample its first holds, after its
+    /// last its last.
+    pub fn read_at_time(&self, time: f64) -> OgawaResult<Groom> {
         let mut merged: Option<Groom> = None;
         for index in 0..self.curves.len() {
             let object = self.resolve(index)?;
@@ -137,14 +196,7 @@ impl<'a> CurvesArchive<'a> {
     fn read_mesh(&self, object: &CurvesObject<'_, 'a>, time: f64) -> OgawaResult<Option<SurfaceMesh>> {
         let ogawa = &self.archive.ogawa;
         let path = &object.path;
-        let positions = required(object, "P")?;
-        positions.expect(&[Pod::F32, Pod::F64], 3)?;
-        let index = self.index_at(positions, time);
-        let points: Vec<Vec3> = if positions.pod == Pod::F32 {
-            positions.read_f32_as(ogawa, index)?
-        } else {
-            positions.read_f32(ogawa, index)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
-        };
+        let points = self.points_at(required(object, "P")?, time)?;
         let indices = |name: &str| -> OgawaResult<Vec<u32>> {
             let property = required(object, name)?;
             property.expect(&[Pod::I32, Pod::U32], 1)?;
@@ -184,28 +236,79 @@ impl<'a> CurvesArchive<'a> {
     /// Every frame, in order; refuses files that would expand far beyond their size.
     pub fn read_all_frames(&self) -> OgawaResult<Vec<Groom>> {
         let first = self.read_frame(0)?;
-        let total = first.vertex_count() as u64 * self.frames as u64;
+        let frames = self.frame_count();
+        let total = first.vertex_count() as u64 * frames as u64;
         let limit = self.archive.ogawa.len() * MAX_VERTICES_PER_FILE_BYTE + (1 << 20);
         if total > limit {
             return fail(format!(
-                "{} frames of {} vertices would expand the {}-byte file to {total} vertices; read one frame instead",
-                self.frames,
+                "{frames} frames of {} vertices would expand the {}-byte file to {total} vertices; read one frame instead",
                 first.vertex_count(),
                 self.archive.ogawa.len()
             ));
         }
         // Frames are independent: read them on every core (the order of the result is fixed).
         let rest: Vec<Groom> =
-            (1..self.frames).into_par_iter().map(|f| self.read_frame(f)).collect::<OgawaResult<_>>()?;
-        let mut frames = Vec::with_capacity(self.frames as usize);
-        frames.push(first);
-        frames.extend(rest);
-        Ok(frames)
+            (1..frames).into_par_iter().map(|f| self.read_frame(f)).collect::<OgawaResult<_>>()?;
+        let mut all = Vec::with_capacity(frames as usize);
+        all.push(first);
+        all.extend(rest);
+        Ok(all)
     }
 
+    /// The latest sample of `property` at or before `time` (else its first).
     fn index_at(&self, property: &Sampled<'a>, time: f64) -> u32 {
+        self.samples_around(property, time).0
+    }
+
+    /// The samples of `property` around `time` and the weight of the later one: `(i, i, 0)` on
+    /// a sample, before the first or after the last.
+    fn samples_around(&self, property: &Sampled<'a>, time: f64) -> (u32, u32, f64) {
         let sampling = &self.archive.time_samplings[property.time_sampling as usize];
-        sampling.nearest_index(time, property.num_samples as u64) as u32
+        let count = property.num_samples.max(1) as u64;
+        let tolerance = SAME_TIME_IN_FRAMES / self.fps;
+        // The first sample after `time` (times increase with the index).
+        let (mut lo, mut hi) = (0u64, count);
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if sampling.sample_time(mid) <= time + tolerance {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        if lo == 0 || lo == count {
+            let held = lo.saturating_sub(1) as u32;
+            return (held, held, 0.0);
+        }
+        let (t0, t1) = (sampling.sample_time(lo - 1), sampling.sample_time(lo));
+        let weight = if time - t0 <= tolerance || t1 <= t0 { 0.0 } else { (time - t0) / (t1 - t0) };
+        ((lo - 1) as u32, lo as u32, weight)
+    }
+
+    /// A float property at `time`, interpolated linearly between the samples around it when
+    /// they have the same length (else the earlier one).
+    fn read_f64_at(&self, property: &Sampled<'a>, time: f64) -> OgawaResult<Vec<f64>> {
+        let ogawa = &self.archive.ogawa;
+        let (i0, i1, weight) = self.samples_around(property, time);
+        let mut values = property.read_f64(ogawa, i0)?;
+        if weight > 0.0 {
+            let later = property.read_f64(ogawa, i1)?;
+            if later.len() == values.len() {
+                values.iter_mut().zip(&later).for_each(|(a, b)| *a += (b - *a) * weight);
+            }
+        }
+        Ok(values)
+    }
+
+    /// Positions (`P`, float or double) at `time`, interpolated as [`Self::read_f64_at`].
+    fn points_at(&self, positions: &Sampled<'a>, time: f64) -> OgawaResult<Vec<Vec3>> {
+        positions.expect(&[Pod::F32, Pod::F64], 3)?;
+        let (i0, _, weight) = self.samples_around(positions, time);
+        if positions.pod == Pod::F32 && weight == 0.0 {
+            return positions.read_f32_as(&self.archive.ogawa, i0);
+        }
+        let flat = self.read_f64_at(positions, time)?;
+        Ok(flat.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2]).as_vec3()).collect())
     }
 
     fn read_object(&self, object: &CurvesObject<'_, 'a>, time: f64) -> OgawaResult<Groom> {
@@ -218,14 +321,7 @@ impl<'a> CurvesArchive<'a> {
         let basis_bytes = basis_property.sample_bytes(ogawa, self.index_at(basis_property, time))?;
         let basis = curve_basis(basis_bytes, path)?;
 
-        let positions = required(object, "P")?;
-        positions.expect(&[Pod::F32, Pod::F64], 3)?;
-        let index = self.index_at(positions, time);
-        let mut points: Vec<Vec3> = if positions.pod == Pod::F32 {
-            positions.read_f32_as(ogawa, index)?
-        } else {
-            positions.read_f32(ogawa, index)?.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
-        };
+        let mut points = self.points_at(required(object, "P")?, time)?;
         let counts_property = required(object, "nVertices")?;
         counts_property.expect(&[Pod::I32, Pod::U32, Pod::I16, Pod::U16], 1)?;
         let counts = counts_property.read_f64(ogawa, self.index_at(counts_property, time))?;
@@ -335,48 +431,20 @@ impl<'a> CurvesArchive<'a> {
         Ok(world)
     }
 
+    /// An Xform's local matrix at `time`: between two samples, the two matrices blended as
+    /// Blender's importer does (scale and translation linearly, rotation along the shortest arc).
     fn local_matrix(&self, xform: &Compound<'a>, time: f64) -> OgawaResult<DMat4> {
         let ogawa = &self.archive.ogawa;
         let Some(ops) = xform.sampled(".ops") else { return Ok(DMat4::IDENTITY) };
         let ops = ops.sample_bytes(ogawa, 0)?;
-        let vals = match xform.sampled(".vals") {
-            Some(v) => v.read_f64(ogawa, self.index_at(v, time))?,
-            None => Vec::new(),
-        };
-        let mut matrix = DMat4::IDENTITY;
-        let mut at = 0usize;
-        for &op in ops {
-            let channels = match op >> 4 {
-                0 | 1 => 3,
-                2 => 4,
-                3 => 16,
-                4..=6 => 1,
-                other => return fail(format!("xform {}: unknown operation type {other}", xform.name)),
-            };
-            let Some(v) = vals.get(at..at + channels) else {
-                return fail(format!("xform {}: {} values for its operations", xform.name, vals.len()));
-            };
-            at += channels;
-            let op_matrix = match op >> 4 {
-                0 => DMat4::from_scale(DVec3::new(v[0], v[1], v[2])),
-                1 => DMat4::from_translation(DVec3::new(v[0], v[1], v[2])),
-                2 => {
-                    let axis = DVec3::new(v[0], v[1], v[2]);
-                    if axis.length_squared() == 0.0 {
-                        DMat4::IDENTITY
-                    } else {
-                        DMat4::from_axis_angle(axis.normalize(), v[3].to_radians())
-                    }
-                }
-                3 => DMat4::from_cols_array(v.try_into().unwrap()),
-                4 => DMat4::from_rotation_x(v[0].to_radians()),
-                5 => DMat4::from_rotation_y(v[0].to_radians()),
-                _ => DMat4::from_rotation_z(v[0].to_radians()),
-            };
-            // Operations are listed outermost first: the last one touches the point first.
-            matrix *= op_matrix;
+        let Some(vals) = xform.sampled(".vals") else { return compose_ops(xform, ops, &[]) };
+        let (i0, i1, weight) = self.samples_around(vals, time);
+        let earlier = compose_ops(xform, ops, &vals.read_f64(ogawa, i0)?)?;
+        if weight == 0.0 {
+            return Ok(earlier);
         }
-        Ok(matrix)
+        let later = compose_ops(xform, ops, &vals.read_f64(ogawa, i1)?)?;
+        Ok(blend_matrices(earlier, later, weight))
     }
 
     /// A geometry parameter (plain array or indexed `.vals`/`.indices` compound) at `time`,
@@ -446,6 +514,81 @@ impl<'a> CurvesArchive<'a> {
         }
         Ok(Param { values, extent: extent as usize, rate })
     }
+}
+
+/// The matrix of an Xform's operations `ops` (one byte each, outermost first) with values `vals`.
+fn compose_ops(xform: &Compound<'_>, ops: &[u8], vals: &[f64]) -> OgawaResult<DMat4> {
+    let mut matrix = DMat4::IDENTITY;
+    let mut at = 0usize;
+    for &op in ops {
+        let channels = match op >> 4 {
+            0 | 1 => 3,
+            2 => 4,
+            3 => 16,
+            4..=6 => 1,
+            other => return fail(format!("xform {}: unknown operation type {other}", xform.name)),
+        };
+        let Some(v) = vals.get(at..at + channels) else {
+            return fail(format!("xform {}: {} values for its operations", xform.name, vals.len()));
+        };
+        at += channels;
+        let op_matrix = match op >> 4 {
+            0 => DMat4::from_scale(DVec3::new(v[0], v[1], v[2])),
+            1 => DMat4::from_translation(DVec3::new(v[0], v[1], v[2])),
+            2 => {
+                let axis = DVec3::new(v[0], v[1], v[2]);
+                if axis.length_squared() == 0.0 {
+                    DMat4::IDENTITY
+                } else {
+                    DMat4::from_axis_angle(axis.normalize(), v[3].to_radians())
+                }
+            }
+            3 => DMat4::from_cols_array(v.try_into().unwrap()),
+            4 => DMat4::from_rotation_x(v[0].to_radians()),
+            5 => DMat4::from_rotation_y(v[0].to_radians()),
+            _ => DMat4::from_rotation_z(v[0].to_radians()),
+        };
+        // Operations are listed outermost first: the last one touches the point first.
+        matrix *= op_matrix;
+    }
+    Ok(matrix)
+}
+
+/// `a` and `b` blended by `weight` (0 = `a`): scale and translation linearly, rotation by slerp;
+/// matrices that are not scale-rotation-translation (shear, beyond `f32` rounding) are blended
+/// entry by entry.
+fn blend_matrices(a: DMat4, b: DMat4, weight: f64) -> DMat4 {
+    let decompose = |m: DMat4| {
+        let (scale, rotation, translation) = m.to_scale_rotation_translation();
+        let exact = DMat4::from_scale_rotation_translation(scale, rotation, translation)
+            .abs_diff_eq(m, 1e-5 * m.to_cols_array().iter().fold(1.0f64, |acc, v| acc.max(v.abs())));
+        exact.then_some((scale, rotation, translation))
+    };
+    match (decompose(a), decompose(b)) {
+        (Some((sa, ra, ta)), Some((sb, rb, tb))) => DMat4::from_scale_rotation_translation(
+            sa.lerp(sb, weight),
+            ra.slerp(rb, weight),
+            ta.lerp(tb, weight),
+        ),
+        _ => a * (1.0 - weight) + b * weight,
+    }
+}
+
+/// Frames per second of an archive's timeline: the `FramesPerTimeUnit` Blender writes in the
+/// archive's metadata; else one frame per cycle of the first animated property's cyclic
+/// sampling (uniform, or several samples per frame for motion blur); else 24.
+fn frame_rate(archive: &Archive<'_>, animated: &[&Sampled<'_>]) -> f64 {
+    let sensible = |fps: f64| (fps.is_finite() && (1e-3..=1e6).contains(&fps)).then_some(fps);
+    let declared = archive.metadata.get("FramesPerTimeUnit").and_then(|v| v.trim().parse().ok());
+    declared
+        .and_then(sensible)
+        .or_else(|| {
+            animated.iter().find_map(|p| {
+                let sampling = &archive.time_samplings[p.time_sampling as usize];
+                (!sampling.is_acyclic()).then(|| 1.0 / sampling.time_per_cycle).and_then(sensible)
+            })
+        })
+        .unwrap_or(DEFAULT_FRAMES_PER_SECOND)
 }
 
 const NUMERIC: &[Pod] = &[

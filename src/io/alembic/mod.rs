@@ -19,11 +19,8 @@ pub mod ogawa;
 pub mod spooky;
 pub mod types;
 
-use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-
-use tempfile::NamedTempFile;
 
 pub use curves_read::CurvesArchive;
 pub use curves_write::{AlembicWriteOptions, CurvesWriter};
@@ -48,12 +45,17 @@ fn centimetres_to_metres(groom: &mut Groom) {
     }
 }
 
-/// Reads frame `frame` (sample index, 0 = first) of an Alembic file's curves, all curves
+/// Reads an Alembic file's curves at frame number `frame` of the file's own timeline (time
+/// `frame / fps`, see [`CurvesArchive::read_at_frame`]; `None`: its first sample), all curves
 /// objects merged, transforms applied. Files that declare Epic's groom spec are in centimetres
 /// and are converted to metres unless `keep_file_units` (the caller converts them itself).
-pub fn read(bytes: &[u8], path: &Path, frame: u32, keep_file_units: bool) -> Result<Groom> {
+pub fn read(bytes: &[u8], path: &Path, frame: Option<f64>, keep_file_units: bool) -> Result<Groom> {
     let archive = CurvesArchive::open(bytes).map_err(format_error(path))?;
-    let mut groom = archive.read_frame(frame).map_err(format_error(path))?;
+    let groom = match frame {
+        Some(frame) => archive.read_at_frame(frame),
+        None => archive.read_frame(0),
+    };
+    let mut groom = groom.map_err(format_error(path))?;
     if archive.epic_groom && !keep_file_units {
         centimetres_to_metres(&mut groom);
     }
@@ -82,7 +84,7 @@ pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Resul
 /// under its name only when [`AnimationWriter::finish`] succeeds.
 pub struct AnimationWriter {
     path: PathBuf,
-    writer: CurvesWriter<BufWriter<NamedTempFile<File>>>,
+    writer: CurvesWriter<BufWriter<atomic::TempFile>>,
 }
 
 impl AnimationWriter {

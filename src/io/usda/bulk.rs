@@ -1,6 +1,12 @@
 //! Fast path for large numeric arrays (points, widths, primvars): the array's text is taken a
 //! window at a time, cut at element boundaries, and the pieces are parsed on all threads, then
 //! appended in order. Same grammar and errors as the element-by-element path, same values.
+//!
+//! Each number is read in one pass where it starts: a plain decimal (what every writer emits) is
+//! scanned into its digits and power of ten, and converted exactly (Clinger's fast path) or, for
+//! long or extreme spellings, by `fast-float2` (Eisel-Lemire): correctly rounded, as
+//! `str::parse` is. Anything else — `inf`, `nan`, a bad token — goes through the token path the
+//! element-by-element reader uses, so its value and error message are the same.
 use rayon::prelude::*;
 
 /// Pieces smaller than this are not worth a thread.
@@ -12,18 +18,181 @@ pub struct BulkError {
     pub message: String,
 }
 
-/// Whether byte `at` sits inside a `#` comment (which runs to the end of its line).
-pub fn in_comment(text: &[u8], at: usize) -> bool {
-    let line_start = memchr::memrchr(b'\n', &text[..at]).map_or(0, |i| i + 1);
-    memchr::memchr(b'#', &text[line_start..at]).is_some()
+/// A number type an array is read as.
+pub trait Number: Copy + Send {
+    /// A plain decimal at the start of `bytes` and its length in bytes; `None` sends the token
+    /// through [`Number::token`].
+    fn prefix(bytes: &[u8]) -> Option<(Self, usize)>;
+    /// A whole token as the element-by-element reader reads it (`None`: not a number).
+    fn token(token: &str) -> Option<Self>;
+}
+
+impl Number for f32 {
+    #[inline]
+    fn prefix(bytes: &[u8]) -> Option<(f32, usize)> {
+        let decimal = Decimal::scan(bytes)?;
+        if let Some(value) = decimal.exact_f32() {
+            return Some((value, decimal.len));
+        }
+        // Long or extreme spellings: the full algorithm (correctly rounded too).
+        let (value, len) = fast_float2::parse_partial::<f32, _>(bytes).ok()?;
+        (len == decimal.len).then_some((value, len))
+    }
+
+    fn token(token: &str) -> Option<f32> {
+        super::lexer::parse_f32(token)
+    }
+}
+
+/// A plain decimal (`-12.5e-3`) as its digits read into an integer and a power of ten.
+struct Decimal {
+    negative: bool,
+    /// The digits as one integer (meaningful when `digits` <= 19).
+    mantissa: u64,
+    digits: usize,
+    exponent: i64,
+    /// Bytes the spelling takes.
+    len: usize,
+}
+
+impl Decimal {
+    /// The decimal at the start of `bytes`, or `None` if that is not a whole plain decimal
+    /// (a word such as `inf`, a lone `.`, `1e`, `1.5.3`): those take the token path.
+    #[inline]
+    fn scan(bytes: &[u8]) -> Option<Decimal> {
+        let (negative, mut at) = match bytes.first()? {
+            b'-' => (true, 1),
+            b'+' => (false, 1),
+            _ => (false, 0),
+        };
+        let mut mantissa = 0u64;
+        let mut digits = 0;
+        let mut exponent = 0i64;
+        let mut read_digits = |at: &mut usize| {
+            let start = *at;
+            while *at < bytes.len() {
+                let digit = bytes[*at].wrapping_sub(b'0');
+                if digit > 9 {
+                    break;
+                }
+                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit));
+                *at += 1;
+            }
+            *at - start
+        };
+        digits += read_digits(&mut at);
+        if bytes.get(at) == Some(&b'.') {
+            at += 1;
+            let fraction = read_digits(&mut at);
+            digits += fraction;
+            exponent -= fraction as i64;
+        }
+        if digits == 0 {
+            return None;
+        }
+        if let Some(b'e' | b'E') = bytes.get(at) {
+            at += 1;
+            let negative_exponent = bytes.get(at) == Some(&b'-');
+            if matches!(bytes.get(at), Some(b'-' | b'+')) {
+                at += 1;
+            }
+            let start = at;
+            let mut power = 0i64;
+            while let Some(digit) = bytes.get(at).map(|b| b.wrapping_sub(b'0')).filter(|&d| d < 10) {
+                // Saturates far beyond any float's range; the full algorithm then decides.
+                power = (power * 10 + i64::from(digit)).min(1 << 40);
+                at += 1;
+            }
+            if at == start {
+                return None;
+            }
+            exponent += if negative_exponent { -power } else { power };
+        }
+        if continues_token(bytes.get(at)) {
+            return None;
+        }
+        Some(Decimal { negative, mantissa, digits, exponent, len: at })
+    }
+
+    /// The nearest `f32`, when one exact `f64` operation and a rounding to `f32` give it
+    /// (Clinger's fast path): the digits and the power of ten are exact in `f64`, so their
+    /// product or quotient is the correctly rounded `f64`; rounding that to `f32` is right unless
+    /// it lands exactly halfway between two `f32`s (then `None`), as every `f32` halfway point is
+    /// an `f64` and both roundings are monotonic.
+    #[inline]
+    fn exact_f32(&self) -> Option<f32> {
+        const POWERS: [f64; 23] = [
+            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
+            1e18, 1e19, 1e20, 1e21, 1e22,
+        ];
+        if self.digits > 19 || self.mantissa > 1 << 53 || self.exponent.unsigned_abs() > 22 {
+            return None;
+        }
+        let mantissa = self.mantissa as f64;
+        let power = POWERS[self.exponent.unsigned_abs() as usize];
+        let nearest = if self.exponent >= 0 { mantissa * power } else { mantissa / power };
+        // The 29 bits an f64 has below an f32's precision (the value is a normal f32 here:
+        // between 1e-22 and 9.1e37, or zero).
+        if nearest.to_bits() & 0x1fff_ffff == 0x1000_0000 {
+            return None;
+        }
+        let value = nearest as f32;
+        Some(if self.negative { -value } else { value })
+    }
+}
+
+impl Number for i64 {
+    fn prefix(bytes: &[u8]) -> Option<(i64, usize)> {
+        let (negative, digits) = match bytes.first()? {
+            b'-' => (true, &bytes[1..]),
+            _ => (false, bytes),
+        };
+        // Up to 18 digits cannot overflow; longer numbers take the token path.
+        let count = digits.iter().take(19).take_while(|b| b.is_ascii_digit()).count();
+        if count == 0 || count > 18 {
+            return None;
+        }
+        let magnitude = digits[..count].iter().fold(0i64, |n, &d| n * 10 + i64::from(d - b'0'));
+        let len = count + usize::from(negative);
+        let value = if negative { -magnitude } else { magnitude };
+        (!continues_token(bytes.get(len))).then_some((value, len))
+    }
+
+    fn token(token: &str) -> Option<i64> {
+        super::lexer::parse_i64(token)
+    }
+}
+
+/// Whether a byte would still belong to a number token (so a prefix is not the whole token).
+fn continues_token(byte: Option<&u8>) -> bool {
+    byte.is_some_and(|&b| b.is_ascii_alphanumeric() || matches!(b, b'-' | b'+' | b'.'))
+}
+
+/// Where `#` comments can be: nowhere in most arrays, which spares every cut a look back to the
+/// start of its line (an array written on one line is megabytes long).
+#[derive(Clone, Copy)]
+pub struct Comments(bool);
+
+impl Comments {
+    pub fn in_text(text: &[u8]) -> Self {
+        Comments(memchr::memchr(b'#', text).is_some())
+    }
+
+    /// Whether byte `at` sits inside a `#` comment (which runs to the end of its line).
+    fn contain(self, text: &[u8], at: usize) -> bool {
+        self.0 && {
+            let line_start = memchr::memrchr(b'\n', &text[..at]).map_or(0, |i| i + 1);
+            memchr::memchr(b'#', &text[line_start..at]).is_some()
+        }
+    }
 }
 
 /// The end of the array in `text`: the offset of its `]`, outside comments.
-pub fn find_close(text: &[u8]) -> Option<usize> {
+pub fn find_close(text: &[u8], comments: Comments) -> Option<usize> {
     let mut from = 0;
     while let Some(i) = memchr::memchr(b']', &text[from..]) {
         let at = from + i;
-        if !in_comment(text, at) {
+        if !comments.contain(text, at) {
             return Some(at);
         }
         from = at + 1;
@@ -33,11 +202,11 @@ pub fn find_close(text: &[u8]) -> Option<usize> {
 
 /// The last element boundary at or before `limit`: just after a tuple's `)` (tuples) or after a
 /// `,` (scalars), outside comments. Returns the offset just past it.
-pub fn boundary_before(text: &[u8], limit: usize, components: usize) -> Option<usize> {
+pub fn boundary_before(text: &[u8], limit: usize, components: usize, comments: Comments) -> Option<usize> {
     let marker = if components == 1 { b',' } else { b')' };
     let mut end = limit;
     while let Some(i) = memchr::memrchr(marker, &text[..end]) {
-        if !in_comment(text, i) {
+        if !comments.contain(text, i) {
             return Some(i + 1);
         }
         end = i;
@@ -51,19 +220,20 @@ pub fn needs_separator_after_cut(components: usize) -> bool {
 }
 
 /// Parses a run of array elements, `need_separator` saying whether a `,` must come before the
-/// first element. Splits big runs across threads. Returns the numbers (flattened) and whether a
-/// separator is due after the last element.
-pub fn parse_segment<N: Copy + Send>(
+/// first element. Splits big runs across threads and hands each piece's numbers (flattened) to
+/// `append` in order. Returns whether a separator is due after the last element.
+pub fn parse_segment<N: Number>(
     text: &[u8],
     components: usize,
     need_separator: bool,
-    number: fn(&str) -> Option<N>,
-) -> Result<(Vec<N>, bool), BulkError> {
+    comments: Comments,
+    mut append: impl FnMut(Vec<N>),
+) -> Result<bool, BulkError> {
     let pieces = (text.len() / MIN_PIECE).clamp(1, 2 * rayon::current_num_threads().max(1));
     let mut cuts = vec![0];
     for k in 1..pieces {
         let target = text.len() * k / pieces;
-        if let Some(cut) = boundary_before(text, target, components) {
+        if let Some(cut) = boundary_before(text, target, components, comments) {
             if cut > *cuts.last().unwrap() {
                 cuts.push(cut);
             }
@@ -75,67 +245,68 @@ pub fn parse_segment<N: Copy + Send>(
         .enumerate()
         .map(|(k, w)| {
             let need = if k == 0 { need_separator } else { needs_separator_after_cut(components) };
-            parse_piece(&text[w[0]..w[1]], components, need, number)
+            parse_piece(&text[w[0]..w[1]], components, need)
                 .map_err(|e| BulkError { offset: w[0] + e.offset, ..e })
         })
         .collect();
-    let mut values = Vec::new();
     let mut need = need_separator;
     for result in results {
         let (piece, piece_need) = result?;
-        if values.is_empty() {
-            values = piece;
-        } else {
-            values.extend_from_slice(&piece);
-        }
+        append(piece);
         need = piece_need;
     }
-    Ok((values, need))
+    Ok(need)
 }
 
-fn parse_piece<N: Copy>(
+fn error(offset: usize, message: String) -> BulkError {
+    BulkError { offset, message }
+}
+
+/// The offset of the first byte at or after `at` that is neither blank nor in a comment.
+#[inline]
+fn skip_blank(text: &[u8], mut at: usize) -> usize {
+    while let Some(&b) = text.get(at) {
+        match b {
+            b' ' | b'\t' | b'\r' | b'\n' => at += 1,
+            b'#' => at = memchr::memchr(b'\n', &text[at..]).map_or(text.len(), |i| at + i),
+            _ => break,
+        }
+    }
+    at
+}
+
+/// Reads the number at `at` into `values`; returns the offset after it.
+#[inline]
+fn read_number<N: Number>(text: &[u8], at: usize, values: &mut Vec<N>) -> Result<usize, BulkError> {
+    if let Some((value, len)) = N::prefix(&text[at..]) {
+        values.push(value);
+        return Ok(at + len);
+    }
+    let len = text[at..].iter().take_while(|&&b| continues_token(Some(&b))).count();
+    if len == 0 {
+        let found = text.get(at).map_or("the end of the array".into(), |&b| super::lexer::describe(b));
+        return Err(error(at, format!("expected a number, found {found}")));
+    }
+    // Letters, digits and signs only: always UTF-8.
+    let token = std::str::from_utf8(&text[at..at + len]).unwrap_or_default();
+    match N::token(token) {
+        Some(value) => {
+            values.push(value);
+            Ok(at + len)
+        }
+        None => Err(error(at, format!("bad number '{token}'"))),
+    }
+}
+
+fn parse_piece<N: Number>(
     text: &[u8],
     components: usize,
     mut need_separator: bool,
-    number: fn(&str) -> Option<N>,
 ) -> Result<(Vec<N>, bool), BulkError> {
     let mut values = Vec::with_capacity(text.len() / 8);
     let mut at = 0;
-    let error = |offset: usize, message: String| BulkError { offset, message };
-    // Checked once per piece (pieces are cut at ASCII bytes), so tokens slice it for free.
-    let text_str = std::str::from_utf8(text)
-        .map_err(|e| error(e.valid_up_to(), "the text is not valid UTF-8".into()))?;
-    let skip_blank = |at: &mut usize| {
-        while *at < text.len() {
-            match text[*at] {
-                b' ' | b'\t' | b'\r' | b'\n' => *at += 1,
-                b'#' => *at = memchr::memchr(b'\n', &text[*at..]).map_or(text.len(), |i| *at + i),
-                _ => break,
-            }
-        }
-    };
-    let read_number = |at: &mut usize, values: &mut Vec<N>| -> Result<(), BulkError> {
-        let start = *at;
-        while *at < text.len()
-            && (text[*at].is_ascii_alphanumeric() || matches!(text[*at], b'-' | b'+' | b'.'))
-        {
-            *at += 1;
-        }
-        if start == *at {
-            let found = text.get(start).map_or("the end of the array".into(), |&b| super::lexer::describe(b));
-            return Err(error(start, format!("expected a number, found {found}")));
-        }
-        let token = &text_str[start..*at];
-        match number(token) {
-            Some(value) => {
-                values.push(value);
-                Ok(())
-            }
-            None => Err(error(start, format!("bad number '{token}'"))),
-        }
-    };
     loop {
-        skip_blank(&mut at);
+        at = skip_blank(text, at);
         if at == text.len() {
             return Ok((values, need_separator));
         }
@@ -151,7 +322,7 @@ fn parse_piece<N: Copy>(
             continue;
         }
         if components == 1 {
-            read_number(&mut at, &mut values)?;
+            at = read_number(text, at, &mut values)?;
         } else {
             let tuple_start = at;
             if text[at] != b'(' {
@@ -163,14 +334,14 @@ fn parse_piece<N: Copy>(
             at += 1;
             let mut count = 0;
             loop {
-                skip_blank(&mut at);
-                if count > 0 && at < text.len() && text[at] == b')' {
+                at = skip_blank(text, at);
+                if count > 0 && text.get(at) == Some(&b')') {
                     at += 1;
                     break;
                 }
-                read_number(&mut at, &mut values)?;
+                at = read_number(text, at, &mut values)?;
                 count += 1;
-                skip_blank(&mut at);
+                at = skip_blank(text, at);
                 match text.get(at) {
                     Some(b',') => at += 1,
                     Some(b')') => {
@@ -194,5 +365,120 @@ fn parse_piece<N: Copy>(
             }
         }
         need_separator = true;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_all<N: Number>(text: &str, components: usize) -> Result<Vec<N>, String> {
+        let mut values = Vec::new();
+        let comments = Comments::in_text(text.as_bytes());
+        parse_segment(text.as_bytes(), components, false, comments, |v: Vec<N>| values.extend(v))
+            .map(|_| values)
+            .map_err(|e| format!("at {}: {}", e.offset, e.message))
+    }
+
+    /// Every spelling the one-pass reader takes must give the bits `str::parse` (through the
+    /// token path) gives, in the shortest, scientific, long and padded forms writers produce.
+    #[test]
+    fn one_pass_floats_equal_the_token_path_bit_for_bit() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut spellings: Vec<String> = [
+            "0",
+            "-0",
+            "0.0",
+            ".5",
+            "5.",
+            "+1.5",
+            "-.25",
+            "1e5",
+            "1E5",
+            "1e+5",
+            "1e-45",
+            "1e-46",
+            "3.4028235e38",
+            "3.4028236e38",
+            "1e39",
+            "0.000001",
+            "1.17549435e-38",
+            "16777217",
+            "0.30000000000000004",
+            "2.0000001192092896",
+            "123456789012345678901234567890",
+            "00012.5000",
+            "7.038531e-26",
+        ]
+        .map(String::from)
+        .to_vec();
+        for _ in 0..20_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let value = f32::from_bits(state as u32);
+            if !value.is_finite() {
+                continue;
+            }
+            spellings.push(zmij::Buffer::new().format_finite(value).to_string());
+            spellings.push(format!("{value:e}"));
+            spellings.push(format!("{:.12}", value as f64 * 1.000_000_1));
+        }
+        for spelling in &spellings {
+            let expected = super::super::lexer::parse_f32(spelling).unwrap();
+            let (value, len) = f32::prefix(spelling.as_bytes()).unwrap_or_else(|| panic!("{spelling}"));
+            assert_eq!(len, spelling.len(), "{spelling}");
+            assert_eq!(value.to_bits(), expected.to_bits(), "{spelling}");
+            let (values, _) = parse_piece::<f32>(format!("{spelling}, {spelling}").as_bytes(), 1, false)
+                .unwrap_or_else(|e| panic!("{spelling}: {}", e.message));
+            assert_eq!(values.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), [expected.to_bits(); 2]);
+        }
+    }
+
+    /// Words and bad tokens leave the one-pass reader to the token path: USD's `inf`/`nan` read,
+    /// anything else is refused naming the whole token, at its offset.
+    #[test]
+    fn non_decimal_tokens_take_the_token_path() {
+        let read = parse_all::<f32>("[inf, -inf, nan]".trim_matches(['[', ']']), 1).unwrap();
+        assert!(read[0] == f32::INFINITY && read[1] == f32::NEG_INFINITY && read[2].is_nan());
+        for bad in ["1.5e", "1.5.3", "0x10", "infinity", "--5", "1e", "nan5", "+", "-", "1f", "1e5e5", "Inf"]
+        {
+            let error = parse_all::<f32>(&format!("1, 2,  {bad}, 3"), 1).unwrap_err();
+            assert_eq!(error, format!("at 7: bad number '{bad}'"), "{bad}");
+            let error = parse_all::<f32>(&format!("(1, 2, 3), (4, {bad}, 6)"), 3).unwrap_err();
+            assert_eq!(error, format!("at 15: bad number '{bad}'"), "{bad}");
+        }
+        assert_eq!(parse_all::<f32>("1, , 2", 1).unwrap_err(), "at 3: expected a number, found ','");
+        assert_eq!(
+            parse_all::<f32>("1, 2 3", 1).unwrap_err(),
+            "at 5: expected ',' or ']' in an array, found '3'"
+        );
+        assert_eq!(parse_all::<f32>("1, é", 1).unwrap_err(), "at 3: expected a number, found byte 0xc3");
+        assert_eq!(
+            parse_all::<f32>("(1, 2), (3, 4, 5)", 2).unwrap_err(),
+            "at 8: expected 2 numbers in a tuple, found 3"
+        );
+    }
+
+    #[test]
+    fn integers_read_in_one_pass_or_through_the_token_path() {
+        let text = "0, -7, 42, +5, true, false, 007, 999999999999999999, -9223372036854775808";
+        let values = parse_all::<i64>(text, 1).unwrap();
+        assert_eq!(values, [0, -7, 42, 5, 1, 0, 7, 999_999_999_999_999_999, i64::MIN]);
+        for bad in ["9223372036854775808", "1.5", "12a", "-", "1e3", "99999999999999999999"] {
+            let error = parse_all::<i64>(&format!("1, {bad}"), 1).unwrap_err();
+            assert_eq!(error, format!("at 3: bad number '{bad}'"), "{bad}");
+        }
+    }
+
+    /// A comment anywhere in a window makes every cut check for comments; a window without one
+    /// cuts at the last marker.
+    #[test]
+    fn cuts_skip_markers_inside_comments() {
+        let text = b"(1, 2, 3), (4, 5, 6) # (7, 8, 9),\n";
+        let comments = Comments::in_text(text);
+        assert_eq!(boundary_before(text, text.len(), 3, comments), Some(20));
+        assert_eq!(find_close(b"1, 2 # ]\n, 3]", Comments::in_text(b"1, 2 # ]\n, 3]")), Some(12));
+        assert_eq!(boundary_before(b"(1, 2), (3, 4)", 14, 2, Comments::in_text(b"(1, 2), (3, 4)")), Some(14));
     }
 }

@@ -372,10 +372,9 @@ impl Lexer<'_> {
     /// After an array's `[`: parses numbers with `components` per element up to and including
     /// the closing `]`, a window at a time on all threads, handing each window's numbers to
     /// `append` in order.
-    pub fn bulk_array<N: Copy + Send>(
+    pub fn bulk_array<N: super::bulk::Number>(
         &mut self,
         components: usize,
-        number: fn(&str) -> Option<N>,
         mut append: impl FnMut(Vec<N>),
     ) -> LexResult<()> {
         /// An element longer than this is not a number tuple.
@@ -387,7 +386,8 @@ impl Lexer<'_> {
             self.fill(want);
             let window = &self.buffer[self.pos..self.end];
             let newlines = |bytes: &[u8]| memchr::memchr_iter(b'\n', bytes).count() as u32;
-            let (len, closed) = match super::bulk::find_close(window) {
+            let comments = super::bulk::Comments::in_text(window);
+            let (len, closed) = match super::bulk::find_close(window, comments) {
                 Some(i) => (i, true),
                 None if self.eof => {
                     let line = self.line + newlines(window);
@@ -398,7 +398,7 @@ impl Lexer<'_> {
                         ),
                     });
                 }
-                None => match super::bulk::boundary_before(window, window.len(), components) {
+                None => match super::bulk::boundary_before(window, window.len(), components, comments) {
                     Some(cut) => (cut, false),
                     None if window.len() < MAX_WINDOW => {
                         want = window.len() * 2;
@@ -408,11 +408,8 @@ impl Lexer<'_> {
                 },
             };
             let segment = &window[..len];
-            match super::bulk::parse_segment(segment, components, need_separator, number) {
-                Ok((values, need)) => {
-                    append(values);
-                    need_separator = need;
-                }
+            match super::bulk::parse_segment(segment, components, need_separator, comments, &mut append) {
+                Ok(need) => need_separator = need,
                 Err(e) => {
                     let line = self.line + newlines(&segment[..e.offset]);
                     return Err(LexError { line, message: e.message });

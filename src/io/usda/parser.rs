@@ -7,7 +7,7 @@ use std::io::Read;
 
 use glam::Vec3;
 
-use super::lexer::{describe, parse_f32, parse_i64, LexError, LexResult, Lexer};
+use super::lexer::{describe, LexError, LexResult, Lexer};
 
 /// A value of a declared type, flattened (tuples and matrices become runs of numbers).
 #[derive(Clone, Debug, PartialEq)]
@@ -563,19 +563,19 @@ impl Parser<'_> {
                 (Kind::F32, 3) => {
                     let mut data = Vec::with_capacity(reserve);
                     self.lexer
-                        .bulk_array(3, parse_f32, |v| data.extend(v.chunks_exact(3).map(Vec3::from_slice)))?;
+                        .bulk_array(3, |v: Vec<f32>| data.extend(v.chunks_exact(3).map(Vec3::from_slice)))?;
                     data.shrink_to_fit();
                     Value::Vec3(data)
                 }
                 (Kind::F32, _) => {
                     let mut data = Vec::with_capacity(reserve * components);
-                    self.lexer.bulk_array(components, parse_f32, |v| data.extend_from_slice(&v))?;
+                    self.lexer.bulk_array(components, |v: Vec<f32>| data.extend_from_slice(&v))?;
                     data.shrink_to_fit();
                     Value::F32(data)
                 }
                 _ => {
                     let mut data = Vec::new();
-                    self.lexer.bulk_array(components, parse_i64, |v| data.extend_from_slice(&v))?;
+                    self.lexer.bulk_array(components, |v: Vec<i64>| data.extend_from_slice(&v))?;
                     Value::Int(data)
                 }
             };

@@ -69,9 +69,26 @@ pub fn groom_from_layer(
 ) -> Result<Groom> {
     let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
-    let mut walker = Walker { path, time, stage, found: Vec::new(), meshes: Vec::new() };
+    let mut walker = Walker { path, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
     for prim in layer.prims {
-        walker.visit(prim, "", DMat4::IDENTITY)?;
+        walker.visit(prim, "", DMat4::IDENTITY, None)?;
+    }
+    // A frame before the first time sample of everything that places the curves and meshes
+    // (their points, the transforms above them) is a frame the animation never reached (0
+    // when it starts at 1): refused, not clamped, as for Alembic. After the last sample the
+    // last value holds, as USD itself (and pxr) defines it: a shot often runs past a groom's
+    // final sample.
+    if let (Some(at), Some(first)) = (time, &walker.first_sample) {
+        if at < first.time {
+            return Err(Error::format(
+                path,
+                format!(
+                    "line {}: frame {at} is before the first time sample ({}) of '{}' and of everything \
+                     else that places the groom",
+                    first.line, first.time, first.attribute
+                ),
+            ));
+        }
     }
     let mut groom = merge(walker.found, path, layer_lines)?;
     groom.meshes = walker.meshes;
@@ -84,10 +101,42 @@ struct Walker<'a> {
     stage: DMat4,
     found: Vec<Curves>,
     meshes: Vec<SurfaceMesh>,
+    /// The earliest time sample kept of anything that places a curve or mesh prim read.
+    first_sample: Option<FirstSample>,
+}
+
+/// The earliest time sample (kept by the parser) of an attribute, and which attribute it is.
+#[derive(Clone)]
+struct FirstSample {
+    time: f64,
+    attribute: String,
+    line: u32,
+}
+
+impl FirstSample {
+    /// The earlier of `a` and the first sample of `prim_path`'s attribute `attribute`.
+    fn earlier(a: Option<FirstSample>, prim_path: &str, attribute: &Attribute) -> Option<FirstSample> {
+        let Some(&(time, _)) = attribute.samples.first() else { return a };
+        match a {
+            Some(a) if a.time <= time => Some(a),
+            _ => Some(FirstSample {
+                time,
+                attribute: format!("{prim_path}.{}", attribute.name),
+                line: attribute.line,
+            }),
+        }
+    }
 }
 
 impl Walker<'_> {
-    fn visit(&mut self, mut prim: Prim, parent_path: &str, parent: DMat4) -> Result<()> {
+    /// `chain_first`: the earliest time sample of the transforms above `prim`.
+    fn visit(
+        &mut self,
+        mut prim: Prim,
+        parent_path: &str,
+        parent: DMat4,
+        chain_first: Option<FirstSample>,
+    ) -> Result<()> {
         if !prim.defined || !prim.active {
             return Ok(());
         }
@@ -96,18 +145,34 @@ impl Walker<'_> {
             local_transform(&prim, self.time).map_err(|m| self.error(&prim_path, prim.line, m))?;
         // `!resetXformStack!`: the ancestors' transforms do not apply to this prim.
         let world = if reset { local } else { parent * local };
+        let transforms = prim.attributes.iter().filter(|a| a.name.starts_with("xformOp"));
+        let chain_first = transforms.fold(if reset { None } else { chain_first }, |first, a| {
+            FirstSample::earlier(first, &prim_path, a)
+        });
         let children = std::mem::take(&mut prim.children);
+        let placed = |prim: &Prim| {
+            let points = prim.attribute("points");
+            points.map_or(chain_first.clone(), |p| FirstSample::earlier(chain_first.clone(), &prim_path, p))
+        };
+        let mut first_here = None;
         if prim.type_name == "BasisCurves" {
+            first_here = placed(&prim);
             if let Some(curves) = self.curves(&mut prim, &prim_path, world)? {
                 self.found.push(curves);
             }
         } else if prim.type_name == "Mesh" {
+            first_here = placed(&prim);
             if let Some(mesh) = self.mesh(&mut prim, &prim_path, world)? {
                 self.meshes.push(mesh);
             }
         }
+        if let Some(first) = first_here {
+            if self.first_sample.as_ref().is_none_or(|f| first.time < f.time) {
+                self.first_sample = Some(first);
+            }
+        }
         for child in children {
-            self.visit(child, &prim_path, world)?;
+            self.visit(child, &prim_path, world, chain_first.clone())?;
         }
         Ok(())
     }
@@ -215,17 +280,6 @@ impl Walker<'_> {
             return Ok(None);
         };
         let points_line = points_attr.line;
-        // A time before the first sample is a frame the animation never reached (0 when it starts
-        // at 1): refused, not clamped. After the last sample the last value holds, as USD itself
-        // (and pxr) defines it: a shot often runs past a groom's final sample.
-        if let (Some(at), Some(first)) = (time, points_attr.samples.iter().map(|s| s.0).reduce(f64::min)) {
-            if at < first {
-                return Err(at_prim(
-                    points_line,
-                    format!("time {at} is before the first time sample of 'points' ({first})"),
-                ));
-            }
-        }
         let points = match take_value(points_attr, time) {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,

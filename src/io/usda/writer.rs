@@ -123,6 +123,7 @@ fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<(
             write_array(out, &tuples, |buf, t| push_tuple(buf, t, |buf, &v| push_int(buf, v)))
         }
         Data::Bools(values) => write_array(out, values, |buf, &v| buf.push(if v { b'1' } else { b'0' })),
+        Data::Int(value) => out.write_all(value.to_string().as_bytes()),
         Data::Floats { values, components: 1 } => write_array(out, values, |buf, &v| push_f32(buf, v)),
         Data::Floats { values, components: 3 } => {
             let tuples: &[[f32; 3]] = bytemuck::cast_slice(values);
@@ -135,7 +136,9 @@ fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<(
     }
 }
 
-/// `[a, b, …]`, formatting chunks of elements in parallel and writing them in order.
+/// `[a, b, …]`, formatting chunks of elements in parallel and writing them in order. The next
+/// batch is formatted on the pool while this thread writes the last one, so disk and formatting
+/// overlap.
 fn write_array<T: Sync>(
     out: &mut (impl Write + ?Sized),
     items: &[T],
@@ -143,8 +146,8 @@ fn write_array<T: Sync>(
 ) -> std::io::Result<()> {
     out.write_all(b"[")?;
     let batch = CHUNK * 2 * rayon::current_num_threads().max(1);
-    for (b, window) in items.chunks(batch).enumerate() {
-        let texts: Vec<Vec<u8>> = window
+    let format_batch = |b: usize, window: &[T]| -> Vec<Vec<u8>> {
+        window
             .par_chunks(CHUNK)
             .enumerate()
             .map(|(c, chunk)| {
@@ -157,11 +160,19 @@ fn write_array<T: Sync>(
                 }
                 buf
             })
-            .collect();
-        for text in texts {
-            out.write_all(&text)?;
-        }
+            .collect()
+    };
+    let mut written: Vec<Vec<u8>> = Vec::new();
+    for (b, window) in items.chunks(batch).enumerate() {
+        let mut formatted = Vec::new();
+        let result = rayon::in_place_scope(|scope| {
+            scope.spawn(|_| formatted = format_batch(b, window));
+            written.iter().try_for_each(|text| out.write_all(text))
+        });
+        result?;
+        written = formatted;
     }
+    written.iter().try_for_each(|text| out.write_all(text))?;
     out.write_all(b"]")
 }
 

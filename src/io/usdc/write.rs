@@ -96,6 +96,7 @@ fn data_rep<W: Write + Seek>(e: &mut Encoder<W>, data: &Data) -> std::io::Result
             let kind = [Type::Int, Type::Vec2i, Type::Vec3i, Type::Vec4i][components.clamp(&1, &4) - 1];
             e.array(kind, values.len() / components, bytemuck::cast_slice(values))
         }
+        Data::Int(value) => Ok(rep::inline(Type::Int, *value as u32 as u64)),
         Data::Bools(values) => {
             let bytes: Vec<u8> = values.iter().map(|&b| b as u8).collect();
             e.array(Type::Bool, bytes.len(), &bytes)

@@ -1,0 +1,50 @@
+//! Epic's groom conventions for Unreal's importers (`--unreal`), as far as they are the same
+//! for both formats: which strand data becomes which `groom_*` attribute. The Alembic writer
+//! names its parameters itself (`alembic::curves_write`); USD output is this groom written as
+//! usual, plus the groom spec version as `userProperties:groom_*` on the root prim.
+//!
+//! What Unreal reads (its Alembic and USD groom translators): only names with the `groom_`
+//! prefix; per strand `groom_guide`, `groom_group_id`, `groom_id` (int), `groom_root_uv`
+//! (float2); per vertex `groom_color` (float3); widths from Alembic `width`/`groom_width` or USD
+//! `widths`, scaled to centimetres by the file's units.
+use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, Groom};
+
+use super::alembic::curves_write::epic;
+
+/// Blender's per-curve surface UV (USD export), the root UV Unreal wants when a groom has none.
+pub const SURFACE_UV: &str = "surface_uv_coordinate";
+
+/// Root UVs from the surface UV when the groom has none of its own (both formats).
+pub fn with_root_uvs(groom: &Groom) -> Option<Groom> {
+    let uv = groom.attribute(SURFACE_UV)?;
+    if groom.root_uvs.is_some() || uv.rate != AttributeRate::Strand || uv.components != 2 {
+        return None;
+    }
+    let mut out = groom.clone();
+    out.root_uvs = Some(uv.data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+    Some(out)
+}
+
+/// The groom as Unreal's USD importer wants its primvars: `groom_group_id` (int per strand),
+/// `groom_root_uv` (float2 per strand), `color` as `groom_color`, every other attribute
+/// prefixed `groom_` (the importer ignores other names). `groom_id` and `groom_guide` are the
+/// names coif writes anyway; widths stay USD `widths`, which the importer reads itself.
+pub fn for_usd(groom: &Groom) -> Groom {
+    let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
+    for attribute in &mut out.attributes {
+        attribute.name = match attribute.name.as_str() {
+            attr::COLOR => epic::COLOR.to_string(),
+            name if name.starts_with(epic::PREFIX) => name.to_string(),
+            name => format!("{}{name}", epic::PREFIX),
+        };
+    }
+    let group_ids = out.group_ids.iter().map(|&g| g as f32).collect();
+    out.set_attribute(
+        Attribute::new(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids).with_kind(AttributeKind::Int),
+    );
+    if let Some(uvs) = &out.root_uvs {
+        let data = uvs.iter().flatten().copied().collect();
+        out.set_attribute(Attribute::new(epic::ROOT_UV, AttributeRate::Strand, 2, data));
+    }
+    out
+}
