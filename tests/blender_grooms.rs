@@ -324,6 +324,133 @@ fn coif_style_uses_the_file_mesh_and_scalp_overrides_it() {
     assert!((other - own).abs() > 0.005, "--scalp replaces the file's mesh: {other} vs {own}");
 }
 
+/// What Blender's own importer makes of a file: its curves objects with their `groom_*`
+/// attributes (tests/blender/bpy_reimport.py), or `None` when bpy is not installed (`make
+/// check-blender` installs it; CI does not).
+fn bpy_reimport(path: &Path) -> Option<serde_json::Value> {
+    let python = Path::new(env!("CARGO_MANIFEST_DIR")).join(".deps/bpy-venv/bin/python");
+    let has_bpy = std::process::Command::new(&python).args(["-c", "import bpy"]).output();
+    if !has_bpy.is_ok_and(|o| o.status.success()) {
+        eprintln!("bpy not installed (make check-blender installs it): Blender's re-import not checked");
+        return None;
+    }
+    let output = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_reimport.py", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let json = stdout.lines().find_map(|l| l.strip_prefix("BPY-JSON "));
+    let json =
+        json.unwrap_or_else(|| panic!("bpy failed on {path:?}: {}", String::from_utf8_lossy(&output.stderr)));
+    Some(serde_json::from_str(json).unwrap())
+}
+
+#[test]
+fn styled_guides_and_children_re_import_in_blender_and_pxr_with_their_interpolation() {
+    use coif::guides::{CLOSEST_GUIDES, GUIDE_WEIGHTS};
+    // Blender's guides simulated (briefly: this is about the files), its children interpolated.
+    let groom = with_blender_guides(load("blender_groom.usda"));
+    let text = "[[obstacles]]\nname = \"head\"\nshape = \"scalp\"\n[[stages]]\nkind = \"process\"\nduration = 0.02\n";
+    let styled = run_text(text, &groom, &StyleOptions::default()).groom;
+    let flags = styled.guides.clone().expect("guides flagged");
+    // What each group must keep: strands, points, guide flags and the interpolation per strand.
+    struct Expected {
+        object: &'static str,
+        points: usize,
+        flags: Vec<f32>,
+        closest: Vec<f32>,
+        weights: Vec<f32>,
+    }
+    let per_strand = |strands: &[usize], name: &str| -> Vec<f32> {
+        let a = styled.attribute(name).unwrap();
+        strands.iter().flat_map(|&s| a.data[s * 3..s * 3 + 3].iter().copied()).collect()
+    };
+    let expected: Vec<Expected> = ["Guides", "Hair"]
+        .into_iter()
+        .map(|object| {
+            let strands = group_strands(&styled, group(&styled, object));
+            assert!(strands.iter().all(|&s| flags[s] == (object == "Guides")), "{object}: guide flags");
+            Expected {
+                object,
+                points: strands.iter().map(|&s| styled.strand_range(s).len()).sum(),
+                flags: strands.iter().map(|&s| flags[s] as u8 as f32).collect(),
+                closest: per_strand(&strands, CLOSEST_GUIDES),
+                weights: per_strand(&strands, GUIDE_WEIGHTS),
+            }
+        })
+        .collect();
+    let close = |got: &[f32], want: &[f32], what: &str| {
+        assert_eq!(got.len(), want.len(), "{what}: length");
+        let worst = got.iter().zip(want).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "{what}: values differ by {worst}");
+    };
+    let values = |v: &serde_json::Value| common::usd::f32s(v);
+
+    let dir = tempfile::tempdir().unwrap();
+    let usda = dir.path().join("styled.usda");
+    coif::io::write_groom(&usda, &styled).unwrap();
+    let stage = common::usd::pxr_dump(&usda, None);
+    for e in &expected {
+        let suffix = format!("/{0}/{0}Data", e.object);
+        let prim = stage["curves"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["path"].as_str().unwrap().ends_with(&suffix))
+            .unwrap_or_else(|| panic!("pxr: no prim {suffix}"));
+        assert_eq!(prim["counts"].as_array().unwrap().len(), e.flags.len(), "pxr {suffix}: curves");
+        assert_eq!(values(&prim["points"]).len(), 3 * e.points, "pxr {suffix}: points");
+        let primvar = |name: &str, type_name: &str| {
+            let p = &prim["primvars"][name];
+            assert_eq!(p["type"], type_name, "pxr {suffix} {name}");
+            assert_eq!(
+                p["interpolation"],
+                if name == "rest" { "vertex" } else { "uniform" },
+                "pxr {suffix} {name}"
+            );
+            values(&p["values"])
+        };
+        close(&primvar("groom_guide", "int[]"), &e.flags, "pxr groom_guide");
+        close(&primvar(CLOSEST_GUIDES, "int3[]"), &e.closest, "pxr groom_closest_guides");
+        close(&primvar(GUIDE_WEIGHTS, "float3[]"), &e.weights, "pxr groom_guide_weights");
+        assert_eq!(primvar("rest", "point3f[]").len(), 3 * e.points, "pxr {suffix}: rest");
+    }
+
+    // Blender: USD keeps counts, the guide flag and the weights as curve-domain attributes, but
+    // drops `groom_closest_guides` (Blender has no int×3 attribute type); its Alembic importer
+    // reads no arbitrary parameters of curves, so only the curves themselves survive there.
+    let abc = dir.path().join("styled.abc");
+    coif::io::write_groom(&abc, &styled).unwrap();
+    for path in [&usda, &abc] {
+        let Some(blender) = bpy_reimport(path) else { return };
+        let objects = blender["objects"].as_array().unwrap();
+        assert_eq!(objects.len(), expected.len(), "{path:?}: Blender's curves objects {objects:?}");
+        for e in &expected {
+            let object = objects
+                .iter()
+                .find(|o| o["name"].as_str().unwrap().starts_with(e.object))
+                .unwrap_or_else(|| panic!("{path:?}: Blender made no {} object", e.object));
+            assert_eq!(object["curves"].as_u64().unwrap() as usize, e.flags.len(), "{path:?} {}", e.object);
+            assert_eq!(object["points"].as_u64().unwrap() as usize, e.points, "{path:?} {}", e.object);
+            let attributes = &object["attributes"];
+            let attribute = |name: &str, data_type: &str| {
+                let a = &attributes[name];
+                assert_eq!(a["domain"], "CURVE", "{path:?} {} {name}: {a}", e.object);
+                assert_eq!(a["type"], data_type, "{path:?} {} {name}", e.object);
+                values(&a["values"])
+            };
+            if path == &usda {
+                close(&attribute("groom_guide", "INT"), &e.flags, "Blender groom_guide");
+                close(&attribute(GUIDE_WEIGHTS, "FLOAT_VECTOR"), &e.weights, "Blender groom_guide_weights");
+            }
+            match attributes.get(CLOSEST_GUIDES) {
+                Some(_) => close(&attribute(CLOSEST_GUIDES, "INT"), &e.closest, "Blender closest"),
+                None => eprintln!("{path:?} {}: Blender dropped {CLOSEST_GUIDES}", e.object),
+            }
+        }
+    }
+}
+
 /// Blender's points of one curve object as pxr evaluates the USD stage at time code `frame`
 /// (world transform at that time), in coif's space: metres (the stage's metersPerUnit), Y up
 /// from Blender's Z up.

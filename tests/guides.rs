@@ -248,3 +248,72 @@ fn impossible_guide_counts_and_reach_exit_2_with_the_numbers() {
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("beyond the reach of 0.0010 m (10 guides for 2990 children)"), "{err}");
 }
+
+/// Mean distance from the mid-length vertex of each strand `which` selects to the nearest
+/// mid-length vertex of any other strand.
+fn mean_mid_spacing(groom: &Groom, which: impl Fn(usize) -> bool) -> f32 {
+    let mid = |s: usize| groom.strand_points(s)[groom.strand_range(s).len() / 2];
+    let mids: Vec<glam::Vec3> = (0..groom.strand_count()).map(mid).collect();
+    let chosen: Vec<usize> = (0..mids.len()).filter(|&s| which(s)).collect();
+    let nearest = |i: usize| {
+        (0..mids.len()).filter(|&j| j != i).map(|j| mids[i].distance(mids[j])).fold(f32::MAX, f32::min)
+    };
+    chosen.iter().map(|&i| nearest(i)).sum::<f32>() / chosen.len() as f32
+}
+
+#[test]
+fn children_clump_in_water_as_a_full_resolution_run_does() {
+    // Control: every strand simulated, wet, with and without droplets. Through guides, the
+    // children must draw together by as much (they meet the droplets that held the guides).
+    let groom = generate(&GenerateParams {
+        strands: 1500,
+        vertices_per_strand: 10,
+        length: 0.18,
+        seed: 11,
+        ..GenerateParams::default()
+    })
+    .unwrap();
+    let stages = "[settings]\nseed = 5\n[[obstacles]]\nname = \"head\"\nshape = \"head\"\n\
+                  [[stages]]\nkind = \"wet\"\nduration = 0.1\n[[stages]]\nkind = \"process\"\nduration = 0.8\n";
+    let water = "[water]\ndroplets = 1000\n";
+    let guides = "[guides]\ncount = 120\n";
+    let run = |text: String, options: &StyleOptions| {
+        style(&groom, &recipe::parse(&text, Path::new("water.toml")).unwrap(), options).unwrap()
+    };
+    let plain = StyleOptions::default();
+    let full = mean_mid_spacing(&run(format!("{water}{stages}"), &plain).groom, |_| true)
+        / mean_mid_spacing(&run(stages.to_string(), &plain).groom, |_| true);
+    let dry = run(format!("{guides}{stages}"), &plain).groom;
+    let framed = StyleOptions { frames_per_second: 24.0, ..Default::default() };
+    let wet = run(format!("{guides}{water}{stages}"), &framed);
+    let children = |g: &Groom| {
+        let flags = flags(g).to_vec();
+        move |s: usize| !flags[s]
+    };
+    let through_guides =
+        mean_mid_spacing(&wet.groom, children(&wet.groom)) / mean_mid_spacing(&dry, children(&dry));
+    eprintln!("spacing at mid-length, with water over without: full resolution {full:.3}, children {through_guides:.3}");
+    assert!(full < 0.9, "the control run did not clump: {full}");
+    // The children meet droplets that settled among the sparser guides, not among every strand:
+    // they draw together by 0.5 to 1 times the control's shrink here (0.84 vs 0.83 on another
+    // head); unclumped children (each keeps its offset from its guides) shrink by 0.06 of it.
+    let (control, children_shrink) = (1.0 - full, 1.0 - through_guides);
+    assert!(
+        children_shrink > 0.4 * control && children_shrink < 1.5 * control,
+        "children shrink by {children_shrink}, the full-resolution control by {control}"
+    );
+
+    // The last frame shows the clumped children, as the output does.
+    assert_eq!(wet.frames.last().unwrap(), &wet.groom.points);
+    let head = Head::default();
+    let inside = (0..wet.groom.strand_count())
+        .filter(|&s| !flags(&wet.groom)[s])
+        .flat_map(|s| &wet.groom.strand_points(s)[1..])
+        .filter(|p| head.implicit(**p) < 1.0)
+        .count();
+    assert_eq!(inside, 0, "clumped child vertices inside the head");
+    // The run above used the default pool (2 threads on CI's 2 cores).
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let again = one.install(|| run(format!("{guides}{water}{stages}"), &framed));
+    assert!(again.groom == wet.groom, "1 thread and the default pool differ");
+}

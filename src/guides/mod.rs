@@ -9,6 +9,7 @@
 //! bond rates and wetness. The output flags the guides and gives children Unreal's
 //! `groom_closest_guides` / `groom_guide_weights`.
 pub mod binding;
+pub mod clump;
 pub mod deform;
 pub mod select;
 
@@ -126,11 +127,35 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         let roots = before.carried_root_frames(&points);
         Curves::new(points, guides.strand_offsets.clone(), Some(&roots))
     };
-    let bound = Children { points: &children.points, offsets: &children.strand_offsets, bindings: &bindings };
+    let bind = |points| Children { points, offsets: &children.strand_offsets, bindings: &bindings };
+    // Where the water clumped the guides, the children are carried to that pose and clumped by
+    // the same droplets; later poses carry them on from there.
+    let mut clumped: Vec<(usize, Vec<Vec3>, Curves)> = Vec::with_capacity(styled.droplets.len());
+    for snapshot in &styled.droplets {
+        let pose = posed(snapshot.hair.clone());
+        let (from, from_pose) = match clumped.last() {
+            Some((_, points, pose)) => (points, pose),
+            None => (&children.points, &before),
+        };
+        let offsets = &children.strand_offsets;
+        let mut points =
+            deform::deform(&Children { points: from, offsets, bindings: &bindings }, from_pose, &pose);
+        let dt = recipe.settings.dt;
+        clump::clump(&mut points, &children.strand_offsets, &snapshot.hair, snapshot, dt);
+        clumped.push((snapshot.frames_before, points, pose));
+    }
+    // The children's points and their guides' pose to deform from, for a frame captured after
+    // `frames` others (the last water clumping before it, else the unstyled children).
+    let start = |frames: usize| match clumped.iter().rev().find(|(before, _, _)| *before <= frames) {
+        Some((_, points, pose)) => (bind(points), pose),
+        None => (bind(&children.points), &before),
+    };
+    let bound = bind(&children.points);
     let after = posed(styled.groom.points.clone());
     let shapes = obstacle_shapes(recipe, &guides, options.scalp.as_deref())?;
     let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
-    let mut child_points = deform::deform(&bound, &before, &after);
+    let (last, last_pose) = start(usize::MAX);
+    let mut child_points = deform::deform(&last, last_pose, &after);
     push_out(&mut child_points, &children.strand_offsets, &radii, &shapes);
 
     // The styled guides' per-vertex attributes, carried to the children.
@@ -138,7 +163,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     for attribute in styled.groom.attributes.iter().filter(|a| a.rate == AttributeRate::Vertex) {
         let data = if attribute.name == "rest" && attribute.components == 3 {
             let rest: Vec<Vec3> = attribute.data.chunks_exact(3).map(Vec3::from_slice).collect();
-            deform::deform(&bound, &before, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
+            deform::deform(&last, last_pose, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
         } else {
             deform::blend_attribute(&bound, &after, &attribute.data, attribute.components)
         };
@@ -173,8 +198,10 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let frames = styled
         .frames
         .into_iter()
-        .map(|frame| {
-            let mut points = deform::deform(&bound, &before, &posed(frame.clone()));
+        .enumerate()
+        .map(|(index, frame)| {
+            let (from, from_pose) = start(index);
+            let mut points = deform::deform(&from, from_pose, &posed(frame.clone()));
             push_out(&mut points, &children.strand_offsets, &radii, &shapes);
             let mut all = out.points.clone();
             scatter(&mut all, &out, &guide_ids, &frame);
@@ -186,7 +213,13 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     report.strands = out.strand_count();
     report.vertices = out.vertex_count();
     report.guides = Some(guide_ids.len());
-    Ok(Styled { groom: out, report, frames, frames_per_second: styled.frames_per_second })
+    Ok(Styled {
+        groom: out,
+        report,
+        frames,
+        frames_per_second: styled.frames_per_second,
+        droplets: Vec::new(),
+    })
 }
 
 /// The bindings a file brought as `groom_closest_guides` / `groom_guide_weights` (per strand,

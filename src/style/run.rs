@@ -22,7 +22,7 @@ use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::mesh_sdf::TriangleMesh;
 use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
-use crate::interact::water::Droplets;
+use crate::interact::water::{Droplets, WaterParams};
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
 use crate::progress::{Progress, ProgressMode};
@@ -104,6 +104,21 @@ pub struct Styled {
     /// Captured positions, one array per frame (empty unless frames were asked for).
     pub frames: Vec<Vec<Vec3>>,
     pub frames_per_second: f32,
+    /// The water droplets among the hair each time they were dried off (and at the end if still
+    /// there), for children interpolated from these strands to clump by the same adhesion.
+    pub(crate) droplets: Vec<DropletSnapshot>,
+}
+
+/// Water droplets and the strands they held, as they were when the droplets went.
+pub(crate) struct DropletSnapshot {
+    pub droplets: Vec<Vec3>,
+    /// The strands' points at that moment.
+    pub hair: Vec<Vec3>,
+    /// How many captured frames came before.
+    pub frames_before: usize,
+    pub params: WaterParams,
+    /// Steps the droplets spent among the hair.
+    pub steps: u64,
 }
 
 /// Styles a groom with a recipe: every strand, or the guides and children interpolated from them.
@@ -169,7 +184,14 @@ pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptio
     session.sim.write_to_groom(&mut out);
     out.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, session.wetness.clone()));
     out.validate()?;
-    Ok(Styled { groom: out, report, frames: session.frames, frames_per_second: options.frames_per_second })
+    session.snapshot_droplets();
+    Ok(Styled {
+        groom: out,
+        report,
+        frames: session.frames,
+        frames_per_second: options.frames_per_second,
+        droplets: session.droplet_snapshots,
+    })
 }
 
 /// The helix a strand is wound onto: around `axis` through `origin`, starting at `e1`.
@@ -254,6 +276,9 @@ struct Session {
     wetness_before: Vec<f32>,
     wetness_params: WetnessParams,
     droplets: Droplets,
+    droplet_snapshots: Vec<DropletSnapshot>,
+    /// The step the droplets were scattered at.
+    droplets_since: u64,
     contacts: Option<HairContacts>,
     dryer: Option<Dryer>,
     /// Evaporation multiplier while drying (0 when not drying).
@@ -337,6 +362,8 @@ impl Session {
             wetness,
             wetness_params,
             droplets: Droplets::default(),
+            droplet_snapshots: Vec::new(),
+            droplets_since: 0,
             contacts,
             dryer: None,
             heat: 0.0,
@@ -606,6 +633,7 @@ impl Session {
                 self.dryer = None;
                 self.heat = 0.0;
                 // Dry hair holds no droplets.
+                self.snapshot_droplets();
                 self.droplets = Droplets::default();
             }
             Stage::Press { obstacle, travel, direction, .. } => {
@@ -794,6 +822,22 @@ impl Session {
         Ok(windings)
     }
 
+    /// Keeps the droplets and the hair they hold, for children to clump by (`crate::guides`).
+    fn snapshot_droplets(&mut self) {
+        if let (Some(water), false) = (&self.recipe.water, self.droplets.positions.is_empty()) {
+            let hair = self.sim.rods().positions().to_vec();
+            // A frame captured at this very moment comes after the snapshot (it shows the clumps).
+            let now = self.frames.last() == Some(&hair);
+            self.droplet_snapshots.push(DropletSnapshot {
+                droplets: self.droplets.positions.clone(),
+                hair,
+                frames_before: self.frames.len() - now as usize,
+                params: water.params,
+                steps: self.sim.steps_taken() - self.droplets_since,
+            });
+        }
+    }
+
     /// Droplets at random masked vertices, nudged off the strand by a seeded offset.
     fn scatter_droplets(&mut self, count: usize, vertices: &[bool], r_min: f32, r_max: f32) {
         let candidates: Vec<usize> = (0..vertices.len()).filter(|&v| vertices[v]).collect();
@@ -812,6 +856,7 @@ impl Session {
             })
             .collect();
         self.droplets = Droplets::new(positions);
+        self.droplets_since = self.sim.steps_taken();
     }
 
     fn stage_report(
