@@ -26,8 +26,12 @@ demo: build
 test: setup
 	$(CARGO) fmt --check
 	$(CARGO) clippy --locked --all-targets -- -D warnings
-	$(CARGO) test --locked
+	@# The fuzz targets build beside the test suite, on the cores its single-threaded tests leave idle.
+	$(MAKE) -j2 test-suite fuzz-build FUZZ_SANITIZER=none
 	$(MAKE) fuzz-smoke
+
+test-suite:
+	$(CARGO) test --locked
 
 # Benchmarks print figures for named configurations (never timed tests).
 bench: setup
@@ -59,14 +63,15 @@ FUZZ_TARGETS := hair_reader usda_reader usdc_reader alembic_reader obj_reader re
 FUZZ_RUNS ?= 10000000
 FUZZ_SANITIZER ?= address
 FUZZ_FLAGS = -runs=$(FUZZ_RUNS) -max_len=65536 -rss_limit_mb=2048 -malloc_limit_mb=2048 -timeout=10
-.PHONY: fuzz fuzz-smoke
-fuzz:
-	bash scripts/fuzz_setup.sh
-	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz build -s $(FUZZ_SANITIZER)
+.PHONY: fuzz fuzz-build fuzz-smoke test-suite
+fuzz: fuzz-build
 	set -e; for target in $(FUZZ_TARGETS); do \
 		mkdir -p fuzz/corpus/$$target; \
 		(cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run -s $(FUZZ_SANITIZER) $$target corpus/$$target seeds/$$target -- $(FUZZ_FLAGS)); \
 	done
+fuzz-build:
+	bash scripts/fuzz_setup.sh
+	cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz build -s $(FUZZ_SANITIZER)
 fuzz-smoke:
 	$(MAKE) fuzz FUZZ_RUNS=100000 FUZZ_SANITIZER=none
 fuzz-alembic:
