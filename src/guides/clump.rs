@@ -17,16 +17,10 @@ use crate::style::run::DropletSnapshot;
 /// The most steps a clumping runs.
 pub const MAX_STEPS: u64 = 400;
 
-/// Moves `children` (strands by `offsets`) towards the droplets of `water`, among `guides` (in
+/// Moves `children` (strands by `offsets`) towards the droplets of `water`, among its guides (in
 /// the pose the water left them), with the styling's time step `dt`. Roots stay; edges keep their
 /// lengths.
-pub(crate) fn clump(
-    children: &mut [Vec3],
-    offsets: &[u32],
-    guides: &[Vec3],
-    water: &DropletSnapshot,
-    dt: f32,
-) {
+pub(crate) fn clump(children: &mut [Vec3], offsets: &[u32], water: &DropletSnapshot, dt: f32) {
     if water.droplets.is_empty() || children.is_empty() {
         return;
     }
@@ -36,7 +30,7 @@ pub(crate) fn clump(
     // The hair the droplets see: the children, then the guides.
     let n = children.len();
     let mut hair = children.to_vec();
-    hair.extend_from_slice(guides);
+    hair.extend_from_slice(&water.hair);
     let mut pulls = vec![Vec3::ZERO; hair.len()];
     let mut droplets = Droplets::new(water.droplets.clone());
     // Settled when no vertex moves a thousandth of a droplet's radius in a step.

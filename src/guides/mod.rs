@@ -21,7 +21,7 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::obstacles::{resolve_contact, Friction, Shape};
 use crate::style::recipe::Recipe;
-use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled};
+use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled, WaterSnapshots};
 use binding::{Binding, GUIDES_PER_CHILD};
 use deform::{Children, Curves};
 
@@ -120,7 +120,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let mut guide_recipe = recipe.clone();
     guide_recipe.settings.max_segment = None; // resampled above, with the children
     guide_recipe.guides = None;
-    let styled = style_strands(&guides, &guide_recipe, options)?;
+    let styled = style_strands(&guides, &guide_recipe, options, WaterSnapshots::Keep)?;
 
     let before = Curves::new(guides.points.clone(), guides.strand_offsets.clone(), None);
     let posed = |points: Vec<Vec3>| {
@@ -137,11 +137,11 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
             Some((_, points, pose)) => (points, pose),
             None => (&children.points, &before),
         };
+        // Not `bind`: a closure's borrow would outlive this iteration's `clumped.last()`.
         let offsets = &children.strand_offsets;
         let mut points =
             deform::deform(&Children { points: from, offsets, bindings: &bindings }, from_pose, &pose);
-        let dt = recipe.settings.dt;
-        clump::clump(&mut points, &children.strand_offsets, &snapshot.hair, snapshot, dt);
+        clump::clump(&mut points, offsets, snapshot, recipe.settings.dt);
         clumped.push((snapshot.frames_before, points, pose));
     }
     // The children's points and their guides' pose to deform from, for a frame captured after

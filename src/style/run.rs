@@ -137,15 +137,29 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let mut styled = if crate::guides::wanted(groom, recipe) {
         crate::guides::style(groom, recipe, options)?
     } else {
-        style_strands(groom, recipe, options)?
+        style_strands(groom, recipe, options, WaterSnapshots::Drop)?
     };
     styled.groom.meshes.clone_from(&groom.meshes);
     Ok(styled)
 }
 
+/// Whether a styling run keeps [`DropletSnapshot`]s: only a guide run, whose children clump by
+/// them, needs them (each holds a copy of every strand's points).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum WaterSnapshots {
+    Keep,
+    Drop,
+}
+
 /// Styles every strand of a groom with a recipe.
-pub(crate) fn style_strands(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+pub(crate) fn style_strands(
+    groom: &Groom,
+    recipe: &Recipe,
+    options: &StyleOptions,
+    snapshots: WaterSnapshots,
+) -> Result<Styled> {
     let mut session = Session::new(groom, recipe, options)?;
+    session.keep_snapshots = snapshots == WaterSnapshots::Keep;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
     let progress = Progress::new(options.progress, "style", total_steps);
@@ -277,6 +291,7 @@ struct Session {
     wetness_params: WetnessParams,
     droplets: Droplets,
     droplet_snapshots: Vec<DropletSnapshot>,
+    keep_snapshots: bool,
     /// The step the droplets were scattered at.
     droplets_since: u64,
     contacts: Option<HairContacts>,
@@ -363,6 +378,7 @@ impl Session {
             wetness_params,
             droplets: Droplets::default(),
             droplet_snapshots: Vec::new(),
+            keep_snapshots: false,
             droplets_since: 0,
             contacts,
             dryer: None,
@@ -824,6 +840,9 @@ impl Session {
 
     /// Keeps the droplets and the hair they hold, for children to clump by (`crate::guides`).
     fn snapshot_droplets(&mut self) {
+        if !self.keep_snapshots {
+            return;
+        }
         if let (Some(water), false) = (&self.recipe.water, self.droplets.positions.is_empty()) {
             let hair = self.sim.rods().positions().to_vec();
             // A frame captured at this very moment comes after the snapshot (it shows the clumps).
