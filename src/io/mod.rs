@@ -265,8 +265,12 @@ fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
 fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
-    if options.unreal {
-        return write_unreal(path, groom, format);
+    if options.unreal && matches!(format, Format::Hair | Format::Usdz) {
+        return Err(Error::Usage(format!(
+            "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
+            path.display(),
+            path.extension().and_then(|e| e.to_str()).unwrap_or("")
+        )));
     }
     match format {
         Format::Hair => {
@@ -277,14 +281,22 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
                 .map(|what| format!("{}: .hair drops {what}", path.display()))
                 .collect())
         }
-        Format::Usda => {
+        Format::Usda | Format::Usdc => {
+            // Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version.
+            let unreal_groom = options.unreal.then(|| unreal::for_usd(groom));
+            let groom = unreal_groom.as_ref().unwrap_or(groom);
             usda::check_writable(groom, path)?;
-            atomic::write_atomically(path, |w| usda::write(groom, w).map_err(|e| Error::io(path, e)))?;
-            Ok(usd_warnings(path, groom))
-        }
-        Format::Usdc => {
-            usda::check_writable(groom, path)?;
-            usdc::write(path, groom)?;
+            let mut stage = usd_stage::plan(groom, None)?;
+            if options.unreal {
+                usd_stage::add_unreal_groom_properties(&mut stage);
+            }
+            if format == Format::Usda {
+                atomic::write_atomically(path, |w| {
+                    usda::write_stage(&stage, w).map_err(|e| Error::io(path, e))
+                })?;
+            } else {
+                usdc::write_stage(path, &stage)?;
+            }
             Ok(usd_warnings(path, groom))
         }
         Format::Usdz => {
@@ -293,41 +305,11 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
             Ok(usd_warnings(path, groom))
         }
         Format::Alembic => {
+            let prepared = options.unreal.then(|| unreal::with_root_uvs(groom)).flatten();
             let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
-            alembic::write(path, groom, &abc_options)?;
-            Ok(Vec::new())
-        }
-    }
-}
-
-/// Epic's groom layout (see [`unreal`]): Alembic or USD (text or crate).
-fn write_unreal(path: &Path, groom: &Groom, format: Format) -> Result<Vec<String>> {
-    match format {
-        Format::Alembic => {
-            let prepared = unreal::with_root_uvs(groom);
-            let abc_options = alembic::AlembicWriteOptions { unreal: true, ..Default::default() };
             alembic::write(path, prepared.as_ref().unwrap_or(groom), &abc_options)?;
             Ok(Vec::new())
         }
-        Format::Usda | Format::Usdc => {
-            let groom = unreal::for_usd(groom);
-            usda::check_writable(&groom, path)?;
-            let mut stage = usd_stage::plan(&groom, None)?;
-            usd_stage::add_unreal_groom_properties(&mut stage);
-            if format == Format::Usda {
-                atomic::write_atomically(path, |w| {
-                    usda::write_stage(&stage, w).map_err(|e| Error::io(path, e))
-                })?;
-            } else {
-                usdc::write_stage(path, &stage)?;
-            }
-            Ok(usd_warnings(path, &groom))
-        }
-        Format::Hair | Format::Usdz => Err(Error::Usage(format!(
-            "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
-            path.display(),
-            path.extension().and_then(|e| e.to_str()).unwrap_or("")
-        ))),
     }
 }
 
