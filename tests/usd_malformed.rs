@@ -76,7 +76,7 @@ fn a_truncated_file_fails_at_every_cut_with_its_line() {
             }
             Err(other) => panic!("cut at {cut}: not a format error: {other}"),
             Ok(ReadOutcome::Groom(_)) => panic!("cut at {cut}: a truncated file read as a groom"),
-            Ok(ReadOutcome::NeedsComposition { .. }) => panic!("cut at {cut}: composition?"),
+            Ok(ReadOutcome::NeedsComposition(_)) => panic!("cut at {cut}: composition?"),
         }
     }
 }

@@ -8,6 +8,7 @@ pub mod hair;
 pub mod input;
 pub mod obj;
 pub mod unreal;
+pub mod usd_compose;
 pub mod usd_interop;
 pub mod usd_stage;
 pub mod usda;
@@ -154,37 +155,26 @@ pub fn read_groom_selected(
             groom
         }
         // USD stages say their own units and up axis; the options only fill in what they omit.
-        // Variants need usd-core to compose the stage, and so does a layer with composition arcs.
-        Format::Usda if selection.variants.is_empty() => {
-            let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-            match usda::read(file, path, options, selection.time)? {
+        // Composition (sublayers, references, payloads, inherits, variants) is native for
+        // both formats: no Python is started. A layer without arcs is read in one pass.
+        Format::Usda | Format::Usdc if !selection.variants.is_empty() => {
+            usd_compose::read_groom(path, options, selection)?
+        }
+        Format::Usda | Format::Usdc => {
+            let outcome = if format == Format::Usda {
+                let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+                usda::read(file, path, options, selection.time)?
+            } else {
+                usdc::read_file(path, options, selection.time)?
+            };
+            match outcome {
                 usda::ReadOutcome::Groom(groom) => groom,
-                usda::ReadOutcome::NeedsComposition { .. } => {
-                    usd_interop::read(path, options, selection.time, &[])?
+                usda::ReadOutcome::NeedsComposition(layer) => {
+                    usd_compose::groom_from_composed(*layer, path, options, selection)?
                 }
             }
         }
-        // Crate files never start Python: what needs composition is refused, naming it.
-        Format::Usdc => {
-            let flatten =
-                "flatten it first (pipeline/usd_interop.py flatten IN OUT.usda [--variant SET=NAME])";
-            if let Some(variant) = selection.variants.first() {
-                return Err(Error::Usage(format!(
-                    "{}: --variant {variant} needs composition, which coif does not do for crate files; {flatten}",
-                    path.display()
-                )));
-            }
-            match usdc::read_file(path, options, selection.time)? {
-                usdc::ReadOutcome::Groom(groom) => groom,
-                usdc::ReadOutcome::NeedsComposition { what } => {
-                    return Err(Error::Usage(format!(
-                        "{}: the layer uses '{what}' (composition), which coif does not resolve in crate files; {flatten}",
-                        path.display()
-                    )))
-                }
-            }
-        }
-        Format::Usda | Format::Usdz => usd_interop::read(path, options, selection.time, &selection.variants)?,
+        Format::Usdz => usd_interop::read(path, options, selection.time, &selection.variants)?,
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;

@@ -101,8 +101,8 @@ pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &
     };
     match usda::read(file, path, options, time).map_err(rename)? {
         usda::ReadOutcome::Groom(groom) => Ok(groom),
-        usda::ReadOutcome::NeedsComposition { line, what } => {
-            Err(Error::External(format!("usd-core left '{what}' (line {line}) in a flattened stage")))
+        usda::ReadOutcome::NeedsComposition(_) => {
+            Err(Error::External("usd-core left composition arcs in a flattened stage".into()))
         }
     }
 }

@@ -158,15 +158,7 @@ impl Shot {
 }
 
 fn read_layer(path: &Path) -> Result<Layer> {
-    let mut magic = [0u8; 8];
-    let head = std::fs::File::open(path)
-        .and_then(|mut f| std::io::Read::read(&mut f, &mut magic))
-        .map_err(|e| Error::io(path, e))?;
-    if magic[..head].starts_with(crate::io::usdc::MAGIC) {
-        crate::io::usdc::read_layer_file(path, None)
-    } else {
-        usda::read_layer_file(path, None)
-    }
+    crate::io::usd_compose::read_stage(path, &Default::default())
 }
 
 // ---- The scene file -------------------------------------------------------------------------
@@ -383,7 +375,7 @@ fn collect<'a>(
     file: &Path,
     found: &mut Vec<Found<'a>>,
 ) -> Result<()> {
-    if !prim.defined || !prim.active {
+    if !prim.is_defined_and_active() {
         return Ok(());
     }
     let path = format!("{parent_path}/{}", prim.name);

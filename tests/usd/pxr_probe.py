@@ -7,6 +7,9 @@
   pxr_probe.py author-transformed OUT    nested Xforms, cm units, Z up, two curve prims, samples
   pxr_probe.py author-composed DIR       a stage that references a layer with a variant set
   pxr_probe.py export IN OUT             IN saved by pxr in OUT's format (e.g. .usda to .usdc)
+  pxr_probe.py batch JOBS.json           several jobs in one run: ["export", IN, OUT] (a layer, arcs
+                                         kept) or ["flatten", IN, OUT, [PRIM_PATH:]SET=NAME...] (the
+                                         composed stage, variants selected in the session layer)
 """
 import json
 import sys
@@ -214,6 +217,33 @@ def author_composed(folder):
     stage.GetRootLayer().Save()
 
 
+def flatten(source, target, variants):
+    stage = Usd.Stage.Open(source)
+    stage.SetEditTarget(stage.GetSessionLayer())
+    for spec in variants:
+        prim_path, _, assignment = spec.rpartition(":") if spec.startswith("/") else ("", "", spec)
+        set_name, _, variant = assignment.partition("=")
+        prims = [stage.GetPrimAtPath(prim_path)] if prim_path else list(stage.Traverse())
+        for prim in prims:
+            if set_name in prim.GetVariantSets().GetNames():
+                prim.GetVariantSets().GetVariantSet(set_name).SetVariantSelection(variant)
+    if not stage.Export(target):
+        sys.exit(f"pxr could not flatten {source}")
+
+
+def batch(jobs_file):
+    with open(jobs_file) as f:
+        jobs = json.load(f)
+    for job in jobs:
+        if job[0] == "export":
+            if not Sdf.Layer.FindOrOpen(job[1]).Export(job[2]):
+                sys.exit(f"pxr could not export {job[1]}")
+        elif job[0] == "flatten":
+            flatten(job[1], job[2], job[3:])
+        else:
+            sys.exit(f"unknown job {job[0]}")
+
+
 if __name__ == "__main__":
     command, target = sys.argv[1], sys.argv[2]
     if command == "dump":
@@ -225,6 +255,8 @@ if __name__ == "__main__":
         author_transformed(target)
     elif command == "author-composed":
         author_composed(target)
+    elif command == "batch":
+        batch(target)
     elif command == "export":
         if not Sdf.Layer.FindOrOpen(target).Export(sys.argv[3]):
             sys.exit(f"pxr could not export {target}")

@@ -6,8 +6,8 @@
 //! topology; the stage is planned by `io::usd_stage` (shared with the `.usdc` writer): one
 //! `BasisCurves` prim per curve group. Reading: [`read`] parses a layer (streaming, never the whole file in memory) and
 //! builds one groom from all its curve prims; a layer that needs composition (references,
-//! variants…) is reported as [`ReadOutcome::NeedsComposition`] so the caller can flatten it
-//! through usd-core first.
+//! variants…) is reported as [`ReadOutcome::NeedsComposition`] with its parsed layer, which
+//! `io::usd_compose` composes natively.
 mod bulk;
 mod lexer;
 mod parser;
@@ -24,7 +24,8 @@ use crate::io::ImportOptions;
 pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_PRIM_PATH};
 pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
-pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, Prim, Value};
+pub(crate) use parser::{offer_sample, wanted};
+pub use parser::{Attribute, Layer, Prim, Specifier, Value};
 pub(crate) use reader::{groom_from_layer, local_transform, stage_transform, value_at};
 
 /// First bytes of every `.usda` file.
@@ -72,17 +73,13 @@ pub struct Selection {
     pub variants: Vec<String>,
 }
 
-/// What reading a `.usda` layer gave.
+/// What reading a `.usda` or `.usdc` layer gave.
 // Returned once per file: boxing the groom would buy nothing.
 #[allow(clippy::large_enum_variant)]
 pub enum ReadOutcome {
     Groom(Groom),
-    /// The layer composes other layers or variants (the arc named, on that line); coif's own
-    /// reader only reads flattened stages.
-    NeedsComposition {
-        line: u32,
-        what: String,
-    },
+    /// The layer composes other layers or variants: the parsed layer, for `io::usd_compose`.
+    NeedsComposition(Box<Layer>),
 }
 
 /// Reads a `.usda` stage. `time` picks time samples (`None`: default values, or the earliest
@@ -94,47 +91,36 @@ pub fn read(
     options: &ImportOptions,
     time: Option<f64>,
 ) -> Result<ReadOutcome> {
-    let layer = match parser::parse(input, time) {
-        Ok(layer) => layer,
-        Err(parser::ParseError::Syntax(e)) => {
-            return Err(Error::format(path, format!("line {}: {}", e.line, e.message)))
-        }
-        Err(parser::ParseError::Io(e)) => return Err(Error::io(path, e)),
-        Err(parser::ParseError::Composition { line, what }) => {
-            return Ok(ReadOutcome::NeedsComposition { line, what })
-        }
-    };
+    let layer = parse(input, path, time)?;
+    if layer.composes() {
+        return Ok(ReadOutcome::NeedsComposition(Box::new(layer)));
+    }
     reader::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom)
 }
 
-/// Parses a `.usda` file into the layer model (for the prims a render reads besides curves:
-/// cameras and lights). A layer that needs composition is an error naming the arc.
+fn parse(input: impl Read, path: &Path, time: Option<f64>) -> Result<Layer> {
+    parser::parse(input, time).map_err(|error| match error {
+        parser::ParseError::Syntax(e) => Error::format(path, format!("line {}: {}", e.line, e.message)),
+        parser::ParseError::Io(e) => Error::io(path, e),
+    })
+}
+
+/// Parses a `.usda` file into the layer model, composition arcs recorded, not resolved.
 pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<Layer> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    match parser::parse(file, time) {
-        Ok(layer) => Ok(layer),
-        Err(parser::ParseError::Syntax(e)) => {
-            Err(Error::format(path, format!("line {}: {}", e.line, e.message)))
-        }
-        Err(parser::ParseError::Io(e)) => Err(Error::io(path, e)),
-        Err(parser::ParseError::Composition { line, what }) => Err(needs_composition(path, line, &what)),
-    }
+    parse(file, path, time)
 }
 
-fn needs_composition(path: &Path, line: u32, what: &str) -> Error {
-    Error::format(
-        path,
-        format!(
-            "line {line}: '{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"
-        ),
-    )
-}
-
-/// Reads a `.usda` file that must not need composition.
+/// Reads a `.usda` file, composing what it references natively (see `io::usd_compose`).
 pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<Groom> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     match read(file, path, options, time)? {
         ReadOutcome::Groom(groom) => Ok(groom),
-        ReadOutcome::NeedsComposition { line, what } => Err(needs_composition(path, line, &what)),
+        ReadOutcome::NeedsComposition(layer) => crate::io::usd_compose::groom_from_composed(
+            *layer,
+            path,
+            options,
+            &Selection { time, variants: vec![] },
+        ),
     }
 }

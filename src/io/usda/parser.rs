@@ -1,13 +1,14 @@
 //! Recursive-descent parser for `.usda` layers: layer metadata, prims (`def`/`over`/`class`)
 //! with their metadata, attributes (default values and time samples), relationships and
 //! dictionaries. Values coif can use (numbers, tokens) are kept typed by their declared USD type;
-//! everything else is parsed for syntax and dropped. Composition arcs (references, payloads,
-//! variants, sublayers…) stop the parse: such a stage must be composed by usd-core first.
+//! everything else is parsed for syntax and dropped. Composition arcs (sublayers, references,
+//! payloads, inherits, variant sets and selections) are recorded for `io::usd_compose`.
 use std::io::Read;
 
 use glam::Vec3;
 
 use super::lexer::{describe, LexError, LexResult, Lexer};
+use crate::io::usd_compose::arcs::{Arcs, AssetArc, LayerOffset, ListEdit, SubLayer};
 
 /// A value of a declared type, flattened (tuples and matrices become runs of numbers).
 #[derive(Clone, Debug, PartialEq)]
@@ -107,21 +108,44 @@ pub struct Attribute {
     pub element_size: Option<i64>,
 }
 
+/// How a prim spec is introduced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Specifier {
+    Def,
+    /// Opinions only: defines nothing unless a weaker layer does.
+    #[default]
+    Over,
+    /// Abstract: never part of the groom, only inherited from.
+    Class,
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Prim {
     pub type_name: String,
     pub name: String,
     pub line: u32,
-    /// `def` (false for `over` and `class`, which define nothing on a flattened stage).
-    pub defined: bool,
-    pub active: bool,
+    pub specifier: Specifier,
+    /// The `active` opinion, if authored.
+    pub active: Option<bool>,
     pub attributes: Vec<Attribute>,
     pub children: Vec<Prim>,
+    /// Composition arcs the spec authors (none on a flattened or composed stage).
+    pub arcs: Option<Box<Arcs>>,
 }
 
 impl Prim {
     pub fn attribute(&self, name: &str) -> Option<&Attribute> {
         self.attributes.iter().find(|a| a.name == name)
+    }
+
+    /// Part of the stage: `def`, and not deactivated.
+    pub fn is_defined_and_active(&self) -> bool {
+        self.specifier == Specifier::Def && self.active != Some(false)
+    }
+
+    /// Whether this spec or one below it authors composition.
+    pub fn composes(&self) -> bool {
+        self.arcs.is_some() || self.children.iter().any(Prim::composes)
     }
 }
 
@@ -131,17 +155,23 @@ pub struct Layer {
     pub lines: u32,
     pub meters_per_unit: Option<f64>,
     pub up_axis: Option<String>,
+    pub default_prim: Option<String>,
+    pub sub_layers: Vec<SubLayer>,
+    /// Layer metadata coif does not compose (`relocates`), named, with its line.
+    pub refused: Option<(u32, String)>,
     pub prims: Vec<Prim>,
+}
+
+impl Layer {
+    /// Whether the layer needs `io::usd_compose` before a groom can be read from it.
+    pub fn composes(&self) -> bool {
+        !self.sub_layers.is_empty() || self.refused.is_some() || self.prims.iter().any(Prim::composes)
+    }
 }
 
 #[derive(Debug)]
 pub enum ParseError {
     Syntax(LexError),
-    /// The layer uses a composition arc; the stage must be flattened by usd-core.
-    Composition {
-        line: u32,
-        what: String,
-    },
     Io(std::io::Error),
 }
 
@@ -153,9 +183,17 @@ impl From<LexError> for ParseError {
 
 type ParseResult<T> = Result<T, ParseError>;
 
-/// Metadata keys whose presence means the layer is not flattened.
-const COMPOSITION_KEYS: &[&str] =
-    &["references", "payload", "inherits", "specializes", "variantSets", "subLayers", "relocates"];
+/// Metadata keys of composition, recorded in [`Arcs`] (or the layer's sublayers).
+const COMPOSITION_KEYS: &[&str] = &[
+    "references",
+    "payload",
+    "inherits",
+    "specializes",
+    "variantSets",
+    "variants",
+    "subLayers",
+    "relocates",
+];
 
 /// A metadata value coif looks at.
 enum Meta {
@@ -170,6 +208,11 @@ pub struct Parser<'a> {
     /// Prims and bracketed values open around the current position: bounded by
     /// [`MAX_NESTING`], so no file can overflow the stack of this recursive-descent parser.
     depth: usize,
+    /// Where the metadata being parsed records composition: a prim's arcs, the layer's
+    /// sublayers, or nowhere (attribute metadata: parsed and dropped).
+    arcs: Option<Arcs>,
+    sub_layers: Option<Vec<SubLayer>>,
+    refused: Option<(u32, String)>,
 }
 
 /// Nesting of prims and of bracketed values a layer may have (real stages nest a few dozen).
@@ -177,7 +220,8 @@ pub const MAX_NESTING: usize = 1000;
 
 /// Parses a whole layer. `time` selects which time samples are kept.
 pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer> {
-    let mut parser = Parser { lexer: Lexer::new(input), time, depth: 0 };
+    let mut parser =
+        Parser { lexer: Lexer::new(input), time, depth: 0, arcs: None, sub_layers: None, refused: None };
     let result = parser.layer();
     if let Some(error) = parser.lexer.take_read_error() {
         return Err(ParseError::Io(error));
@@ -193,11 +237,15 @@ impl Parser<'_> {
         self.lexer.skip_line();
         let mut layer = Layer::default();
         if self.lexer.next_byte() == Some(b'(') {
+            self.sub_layers = Some(Vec::new());
             self.metadata(|key, value, _| match (key, value) {
                 ("metersPerUnit", Meta::Number(v)) => layer.meters_per_unit = Some(v),
                 ("upAxis", Meta::Text(v)) => layer.up_axis = Some(v),
+                ("defaultPrim", Meta::Text(v)) => layer.default_prim = Some(v),
                 _ => {}
             })?;
+            layer.sub_layers = self.sub_layers.take().unwrap_or_default();
+            layer.refused = self.refused.take();
         }
         while !self.lexer.at_eof() {
             self.lexer.skip_ws();
@@ -225,8 +273,167 @@ impl Parser<'_> {
         ParseError::Syntax(LexError { line: self.lexer.line, message: message.into() })
     }
 
-    fn composition(&self, what: &str) -> ParseError {
-        ParseError::Composition { line: self.lexer.line, what: what.to_string() }
+    /// A composition key's value, recorded where the current metadata keeps arcs.
+    fn composition(&mut self, key: &str, edit: ListEdit) -> ParseResult<()> {
+        let line = self.lexer.line;
+        self.lexer.expect(b'=', &format!("'=' after '{key}'"))?;
+        match key {
+            "references" | "payload" => {
+                let items = self.list(Self::asset_arc)?;
+                if let Some(arcs) = self.arcs.as_mut() {
+                    let op = if key == "payload" { &mut arcs.payloads } else { &mut arcs.references };
+                    op.set(edit, items);
+                }
+            }
+            "inherits" => {
+                let items = self.list(|p| Ok(p.lexer.path()?))?;
+                if let Some(arcs) = self.arcs.as_mut() {
+                    arcs.inherits.set(edit, items);
+                }
+            }
+            "variantSets" => {
+                let items = self.list(|p| Ok(p.lexer.string()?))?;
+                if let Some(arcs) = self.arcs.as_mut() {
+                    arcs.variant_set_names.set(edit, items);
+                }
+            }
+            "variants" => {
+                let selections = self.selections()?;
+                if let Some(arcs) = self.arcs.as_mut() {
+                    arcs.selections = selections;
+                }
+            }
+            "subLayers" => {
+                let items = self.list(|p| {
+                    let asset = p.lexer.asset()?;
+                    let offset = if p.lexer.next_byte() == Some(b'(') {
+                        p.layer_offset()?
+                    } else {
+                        Default::default()
+                    };
+                    Ok(SubLayer { asset, offset })
+                })?;
+                if let Some(sub_layers) = self.sub_layers.as_mut() {
+                    *sub_layers = items;
+                }
+            }
+            _ => {
+                // `specializes`, `relocates`: parsed, and refused if the stage is composed.
+                self.skip_value()?;
+                let what = key.to_string();
+                if let Some(arcs) = self.arcs.as_mut() {
+                    arcs.refused.get_or_insert(what);
+                } else if self.sub_layers.is_some() {
+                    self.refused.get_or_insert((line, what));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `None`, one item, or `[item, …]`.
+    fn list<T>(&mut self, mut item: impl FnMut(&mut Self) -> ParseResult<T>) -> ParseResult<Vec<T>> {
+        if self.lexer.at_identifier() {
+            let word = self.lexer.identifier()?;
+            return if word == "None" {
+                Ok(Vec::new())
+            } else {
+                Err(self.unknown(&word, "a list or 'None'"))
+            };
+        }
+        if !self.lexer.eat(b'[') {
+            return Ok(vec![item(self)?]);
+        }
+        let start = self.lexer.line;
+        let mut items = Vec::new();
+        loop {
+            match self.lexer.next_byte() {
+                Some(b']') => {
+                    self.lexer.bump();
+                    return Ok(items);
+                }
+                Some(b',') => self.lexer.bump(),
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: the list opened on line {start} is not closed"
+                    )))
+                }
+                Some(_) => items.push(item(self)?),
+            }
+        }
+    }
+
+    /// `@asset@</Prim> (offset = 1; scale = 2)`, `@asset@` or `</Prim>`.
+    fn asset_arc(&mut self) -> ParseResult<AssetArc> {
+        let asset = if self.lexer.next_byte() == Some(b'@') { self.lexer.asset()? } else { String::new() };
+        let prim_path = if asset.is_empty() || self.lexer.next_byte() == Some(b'<') {
+            Some(self.lexer.path()?)
+        } else {
+            None
+        };
+        let offset =
+            if self.lexer.next_byte() == Some(b'(') { self.layer_offset()? } else { Default::default() };
+        Ok(AssetArc { asset, prim_path, offset })
+    }
+
+    /// `( offset = 1; scale = 2; customData = {…} )`: the offset and scale.
+    fn layer_offset(&mut self) -> ParseResult<LayerOffset> {
+        let mut offset = LayerOffset::default();
+        self.lexer.expect(b'(', "'('")?;
+        loop {
+            match self.lexer.next_byte() {
+                Some(b')') => {
+                    self.lexer.bump();
+                    return Ok(offset);
+                }
+                Some(b';' | b',') => self.lexer.bump(),
+                None => return Err(self.syntax("unexpected end of file in a layer offset ('(' not closed)")),
+                Some(_) => {
+                    let key = self.lexer.identifier()?;
+                    self.lexer.expect(b'=', &format!("'=' after '{key}'"))?;
+                    match key.as_str() {
+                        "offset" => offset.offset = self.lexer.f64()?,
+                        "scale" => offset.scale = self.lexer.f64()?,
+                        _ => self.skip_value()?,
+                    }
+                }
+            }
+        }
+    }
+
+    /// `{ string set = "variant" … }`.
+    fn selections(&mut self) -> ParseResult<Vec<(String, String)>> {
+        let start = self.lexer.line;
+        self.lexer.expect(b'{', "'{' to open variant selections")?;
+        let mut selections = Vec::new();
+        loop {
+            match self.lexer.next_byte() {
+                Some(b'}') => {
+                    self.lexer.bump();
+                    return Ok(selections);
+                }
+                Some(b';' | b',') => self.lexer.bump(),
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: variant selections opened on line {start} are not closed"
+                    )))
+                }
+                Some(_) => {
+                    let kind = self.lexer.identifier()?;
+                    if kind != "string" {
+                        return Err(self.unknown(&kind, "'string' before a variant set name"));
+                    }
+                    let set = if matches!(self.lexer.next_byte(), Some(b'"' | b'\'')) {
+                        self.lexer.string()?
+                    } else {
+                        self.lexer.identifier()?
+                    };
+                    self.lexer.expect(b'=', "'=' after the variant set name")?;
+                    let variant = self.lexer.string()?;
+                    selections.push((set, variant));
+                }
+            }
+        }
     }
 
     /// `( key = value … )`: calls `seen` with every key and the value when it is a number or text.
@@ -245,11 +452,14 @@ impl Parser<'_> {
                 None => return Err(self.syntax("unexpected end of file in metadata ('(' not closed)")),
                 Some(_) => {
                     let mut key = self.lexer.identifier()?;
-                    if matches!(key.as_str(), "add" | "prepend" | "append" | "delete" | "reorder") {
+                    let mut edit = ListEdit::Explicit;
+                    if let Some(qualifier) = ListEdit::from_word(&key) {
+                        edit = qualifier;
                         key = self.lexer.identifier()?;
                     }
                     if COMPOSITION_KEYS.contains(&key.as_str()) {
-                        return Err(self.composition(&key));
+                        self.composition(&key, edit)?;
+                        continue;
                     }
                     let line = self.lexer.line;
                     self.lexer.expect(b'=', &format!("'=' after '{key}'"))?;
@@ -349,27 +559,47 @@ impl Parser<'_> {
 
     fn prim_inner(&mut self, specifier: &str) -> ParseResult<Prim> {
         let line = self.lexer.line;
-        let mut prim = Prim { line, defined: specifier == "def", active: true, ..Default::default() };
+        let specifier = match specifier {
+            "def" => Specifier::Def,
+            "class" => Specifier::Class,
+            _ => Specifier::Over,
+        };
+        let mut prim = Prim { line, specifier, ..Default::default() };
         if self.lexer.at_identifier() {
             prim.type_name = self.lexer.identifier()?;
         }
         prim.name = self.lexer.string()?;
+        self.spec_body(&mut prim)?;
+        Ok(prim)
+    }
+
+    /// `[( metadata )] { statements }` of a prim or a variant.
+    fn spec_body(&mut self, prim: &mut Prim) -> ParseResult<()> {
+        let line = self.lexer.line;
         if self.lexer.next_byte() == Some(b'(') {
-            let mut active = true;
-            self.metadata(|key, value, _| {
+            let mut active = None;
+            let outer = self.arcs.replace(Arcs::default());
+            let result = self.metadata(|key, value, _| {
                 if key == "active" {
-                    active = !matches!(value, Meta::Text(ref t) if t == "false")
-                        && !matches!(value, Meta::Number(n) if n == 0.0);
+                    active = Some(
+                        !matches!(value, Meta::Text(ref t) if t == "false")
+                            && !matches!(value, Meta::Number(n) if n == 0.0),
+                    );
                 }
-            })?;
+            });
+            let arcs = std::mem::replace(&mut self.arcs, outer).unwrap_or_default();
+            result?;
             prim.active = active;
+            if !arcs.is_empty() {
+                prim.arcs = Some(Box::new(arcs));
+            }
         }
         self.lexer.expect(b'{', &format!("'{{' to open prim \"{}\"", prim.name))?;
         loop {
             match self.lexer.next_byte() {
                 Some(b'}') => {
                     self.lexer.bump();
-                    return Ok(prim);
+                    return Ok(());
                 }
                 Some(b';') => self.lexer.bump(),
                 None => {
@@ -378,7 +608,7 @@ impl Parser<'_> {
                         prim.name
                     )))
                 }
-                Some(_) => self.prim_statement(&mut prim)?,
+                Some(_) => self.prim_statement(prim)?,
             }
         }
     }
@@ -391,7 +621,7 @@ impl Parser<'_> {
                 prim.children.push(child);
                 return Ok(());
             }
-            "variantSet" => return Err(self.composition("variantSet")),
+            "variantSet" => return self.nested(|parser| parser.variant_set(prim)),
             "reorder" => {
                 self.lexer.identifier()?;
                 self.lexer.expect(b'=', "'='")?;
@@ -419,6 +649,36 @@ impl Parser<'_> {
             return Ok(());
         }
         self.attribute(prim, word)
+    }
+
+    /// After `variantSet`: `"set" = { "variant" [( metadata )] { body } … }`.
+    fn variant_set(&mut self, prim: &mut Prim) -> ParseResult<()> {
+        let start = self.lexer.line;
+        let name = self.lexer.string()?;
+        self.lexer.expect(b'=', "'=' after the variant set name")?;
+        self.lexer.expect(b'{', "'{' to open the variant set")?;
+        let mut variants = Vec::new();
+        loop {
+            match self.lexer.next_byte() {
+                Some(b'}') => {
+                    self.lexer.bump();
+                    break;
+                }
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: variant set \"{name}\" opened on line {start} is not closed"
+                    )))
+                }
+                Some(_) => {
+                    let line = self.lexer.line;
+                    let mut variant = Prim { line, name: self.lexer.string()?, ..Default::default() };
+                    self.spec_body(&mut variant)?;
+                    variants.push(variant);
+                }
+            }
+        }
+        prim.arcs.get_or_insert_default().variant_set(&name).variants.extend(variants);
+        Ok(())
     }
 
     /// After the type name: `[[]] name[.timeSamples|.connect|.spline] [= value] [( metadata )]`.

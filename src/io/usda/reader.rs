@@ -137,7 +137,7 @@ impl Walker<'_> {
         parent: DMat4,
         chain_first: Option<FirstSample>,
     ) -> Result<()> {
-        if !prim.defined || !prim.active {
+        if !prim.is_defined_and_active() {
             return Ok(());
         }
         let prim_path = format!("{parent_path}/{}", prim.name);
@@ -821,7 +821,7 @@ mod tests {
     fn read_text(text: &str) -> Groom {
         match read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None).unwrap() {
             ReadOutcome::Groom(groom) => groom,
-            ReadOutcome::NeedsComposition { .. } => panic!("no composition here"),
+            ReadOutcome::NeedsComposition(_) => panic!("no composition here"),
         }
     }
 

@@ -9,39 +9,20 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::compress::{decompress_ints, lz4_decompress, CodedInt};
-use super::format::{rep, SpecType, Type, BOOTSTRAP_SIZE, MAGIC, MIN_COMPRESSED_ARRAY, SPECIFIER_DEF};
+use super::format::{
+    rep, SpecType, Type, BOOTSTRAP_SIZE, MAGIC, MIN_COMPRESSED_ARRAY, SPECIFIER_CLASS, SPECIFIER_DEF,
+};
 use crate::error::{Error, Result};
-use crate::groom::Groom;
-use crate::io::usda::{self, Attribute, Layer, Prim, Value};
+use crate::io::usd_compose::arcs::{Arcs, AssetArc, LayerOffset, ListOp, SubLayer};
+use crate::io::usda::{self, Attribute, Layer, Prim, Specifier, Value};
 use crate::io::ImportOptions;
 
-/// What reading a crate file gave.
-// Returned once per file: boxing the groom would buy nothing.
-#[allow(clippy::large_enum_variant)]
-pub enum ReadOutcome {
-    Groom(Groom),
-    /// The layer uses a composition arc (named), which the native reader does not resolve.
-    NeedsComposition {
-        what: String,
-    },
-}
+pub use crate::io::usda::ReadOutcome;
 
 type Checked<T> = std::result::Result<T, String>;
 
 /// Prim nesting deeper than this is refused (the tree is walked recursively).
 const MAX_DEPTH: usize = 512;
-
-/// Fields whose presence means the layer composes other layers or variants.
-const COMPOSITION_FIELDS: &[&str] = &[
-    "references",
-    "payload",
-    "inherits",
-    "specializes",
-    "variantSetNames",
-    "variantSelection",
-    "subLayers",
-    "relocates",
-];
 
 pub fn read(
     bytes: &[u8],
@@ -50,33 +31,34 @@ pub fn read(
     options: &ImportOptions,
     time: Option<f64>,
 ) -> Result<ReadOutcome> {
-    let bad = |message: String| Error::format(path, format!("crate file: {message}"));
-    let mut file_data = Crate::parse(bytes).map_err(bad)?;
-    file_data.file = file;
-    let file = file_data;
-    let layer = match file.layer(time).map_err(bad)? {
-        Ok(layer) => layer,
-        Err(what) => return Ok(ReadOutcome::NeedsComposition { what }),
-    };
-    // The layer model's line numbers mean nothing in a binary file.
-    let unline = |error: Error| match error {
+    let layer = read_layer(bytes, file, path, time)?;
+    if layer.composes() {
+        return Ok(ReadOutcome::NeedsComposition(Box::new(layer)));
+    }
+    usda::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom).map_err(unline)
+}
+
+/// The layer model's line numbers mean nothing in a binary file.
+pub(crate) fn unline(error: Error) -> Error {
+    match error {
         Error::Format { path, message } => {
             Error::Format { message: message.strip_prefix("line 0: ").unwrap_or(&message).to_string(), path }
         }
         other => other,
-    };
-    usda::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom).map_err(unline)
+    }
 }
 
-/// The layer model of crate-file bytes (cameras and lights for a render), or the composition
-/// arc that stops a native read.
+/// The layer model of crate-file bytes, composition arcs recorded, not resolved.
 pub(crate) fn read_layer(
     bytes: &[u8],
+    file: Option<&std::fs::File>,
     path: &Path,
     time: Option<f64>,
-) -> Result<std::result::Result<Layer, String>> {
+) -> Result<Layer> {
     let bad = |message: String| Error::format(path, format!("crate file: {message}"));
-    Crate::parse(bytes).map_err(bad)?.layer(time).map_err(bad)
+    let mut crate_file = Crate::parse(bytes).map_err(bad)?;
+    crate_file.file = file;
+    crate_file.layer(time).map_err(bad)
 }
 
 /// A path: its parent path (`None` for the pseudo-root), its last element, whether a property.
@@ -305,8 +287,15 @@ impl<'a> Crate<'a> {
             if entry.parent.is_none() || parts.len() > MAX_DEPTH {
                 break;
             }
-            let sep = if entry.property { "." } else { "/" };
-            parts.push(format!("{sep}{}", self.tokens[entry.token as usize]));
+            let token = &self.tokens[entry.token as usize];
+            let sep = if entry.property {
+                "."
+            } else if token.starts_with('{') {
+                ""
+            } else {
+                "/"
+            };
+            parts.push(format!("{sep}{token}"));
             at = entry.parent;
         }
         parts.reverse();
@@ -318,60 +307,94 @@ impl<'a> Crate<'a> {
         }
     }
 
-    /// The layer, or the composition arc that stops a native read.
-    fn layer(&self, time: Option<f64>) -> Checked<std::result::Result<Layer, String>> {
+    /// The layer model: prims (and variant bodies) with their attributes and arcs.
+    fn layer(&self, time: Option<f64>) -> Checked<Layer> {
         let mut layer = Layer::default();
         let mut prims: HashMap<u32, Prim> = HashMap::new();
         let mut children: HashMap<u32, Vec<u32>> = HashMap::new();
+        // Variant bodies of a prim: (set, path of the variant spec).
+        let mut variants: HashMap<u32, Vec<(String, u32)>> = HashMap::new();
         let mut order: HashMap<u32, Vec<String>> = HashMap::new();
         let mut attributes: Vec<(u32, Attribute)> = Vec::new();
         for spec in &self.specs {
             let entry = self.paths[spec.path as usize].expect("checked in parse");
             let name = self.tokens[entry.token as usize].clone();
             let at = || self.path_text(spec.path);
-            if spec.kind == SpecType::Variant as u32 || spec.kind == SpecType::VariantSet as u32 {
-                return Ok(Err("variantSet".into()));
-            }
-            if let Some((field, _)) = self.spec_fields(spec).find(|(f, _)| COMPOSITION_FIELDS.contains(f)) {
-                return Ok(Err(field.to_string()));
-            }
             if spec.kind == SpecType::PseudoRoot as u32 {
+                let mut offsets = Vec::new();
                 for (field, value) in self.spec_fields(spec) {
+                    let fail = |e: String| format!("layer metadata {field}: {e}");
                     match field {
-                        "metersPerUnit" => {
-                            layer.meters_per_unit =
-                                self.number(value).map_err(|e| format!("metersPerUnit: {e}"))?
+                        "metersPerUnit" => layer.meters_per_unit = self.number(value).map_err(fail)?,
+                        "upAxis" => layer.up_axis = Some(self.text(value).map_err(fail)?),
+                        "defaultPrim" => layer.default_prim = Some(self.text(value).map_err(fail)?),
+                        "subLayers" => {
+                            layer.sub_layers = self
+                                .string_vector(value)
+                                .map_err(fail)?
+                                .into_iter()
+                                .map(|asset| SubLayer { asset, offset: LayerOffset::default() })
+                                .collect()
                         }
-                        "upAxis" => {
-                            layer.up_axis = Some(self.text(value).map_err(|e| format!("upAxis: {e}"))?)
-                        }
+                        "subLayerOffsets" => offsets = self.layer_offsets(value).map_err(fail)?,
+                        "relocates" | "layerRelocates" => layer.refused = Some((0, field.to_string())),
                         "primChildren" => {
-                            order.insert(
-                                spec.path,
-                                self.token_vector(value).map_err(|e| format!("{}: {e}", at()))?,
-                            );
+                            order.insert(spec.path, self.token_vector(value).map_err(fail)?);
                         }
                         _ => {}
                     }
                 }
-            } else if spec.kind == SpecType::Prim as u32 {
-                let mut prim = Prim { name, defined: true, active: true, ..Default::default() };
+                for (sub_layer, offset) in layer.sub_layers.iter_mut().zip(offsets) {
+                    sub_layer.offset = offset;
+                }
+            } else if spec.kind == SpecType::Prim as u32 || spec.kind == SpecType::Variant as u32 {
+                let variant = spec.kind == SpecType::Variant as u32;
+                let mut prim = Prim { name, specifier: Specifier::Over, ..Default::default() };
+                let mut arcs = Arcs::default();
                 for (field, value) in self.spec_fields(spec) {
                     let fail = |e: String| format!("<{}> {field}: {e}", at());
                     match field {
-                        "specifier" => prim.defined = rep::payload(value) == SPECIFIER_DEF,
+                        "specifier" => {
+                            prim.specifier = match rep::payload(value) {
+                                SPECIFIER_DEF => Specifier::Def,
+                                SPECIFIER_CLASS => Specifier::Class,
+                                _ => Specifier::Over,
+                            }
+                        }
                         "typeName" => prim.type_name = self.text(value).map_err(fail)?,
-                        "active" => prim.active = rep::payload(value) & 0xffff_ffff != 0,
+                        "active" => prim.active = Some(rep::payload(value) & 0xffff_ffff != 0),
                         "primChildren" | "properties" => {
                             let names = self.token_vector(value).map_err(fail)?;
                             order.entry(spec.path).or_default().extend(names);
                         }
+                        "references" => arcs.references = self.asset_arcs(value).map_err(fail)?,
+                        "payload" => arcs.payloads = self.asset_arcs(value).map_err(fail)?,
+                        "inheritPaths" => arcs.inherits = self.path_list_op(value).map_err(fail)?,
+                        "variantSetNames" => {
+                            arcs.variant_set_names = self.string_list_op(value).map_err(fail)?
+                        }
+                        "variantSelection" => arcs.selections = self.selections(value).map_err(fail)?,
+                        "specializes" | "relocates" => arcs.refused = Some(field.to_string()),
                         _ => {}
                     }
                 }
+                if !arcs.is_empty() {
+                    prim.arcs = Some(Box::new(arcs));
+                }
                 // A crafted file may put a prim spec on the pseudo-root's path.
                 let parent = entry.parent.ok_or("a prim spec on the pseudo-root path")?;
-                children.entry(parent).or_default().push(spec.path);
+                if variant {
+                    let (set, selection) = variant_element(&prim.name)
+                        .map(|(set, selection)| (set.to_string(), selection.to_string()))
+                        .ok_or_else(|| format!("<{}>: a variant spec whose path names no variant", at()))?;
+                    prim.name = selection;
+                    variants.entry(parent).or_default().push((set, spec.path));
+                } else {
+                    if prim.name.starts_with('{') {
+                        return Err(format!("<{}>: a prim spec on a variant path", at()));
+                    }
+                    children.entry(parent).or_default().push(spec.path);
+                }
                 prims.insert(spec.path, prim);
             } else if spec.kind == SpecType::Attribute as u32 {
                 let attribute = self.attribute(name, spec, time).map_err(|e| format!("<{}>: {e}", at()))?;
@@ -392,30 +415,132 @@ impl<'a> Crate<'a> {
             prim.attributes.sort_by_key(|a| rank(*path, &a.name));
         }
         let root = self.paths.iter().position(|p| p.is_some_and(|e| e.parent.is_none())).unwrap_or(0) as u32;
-        layer.prims = self.assemble(root, &mut prims, &children, &rank, 0)?;
-        Ok(Ok(layer))
+        let tree = Tree { children: &children, variants: &variants, rank: &rank };
+        layer.prims = self.assemble(root, &mut prims, &tree, 0)?;
+        Ok(layer)
     }
 
     fn assemble(
         &self,
         parent: u32,
         prims: &mut HashMap<u32, Prim>,
-        children: &HashMap<u32, Vec<u32>>,
-        rank: &dyn Fn(u32, &str) -> usize,
+        tree: &Tree,
         depth: usize,
     ) -> Checked<Vec<Prim>> {
         if depth > MAX_DEPTH {
             return Err(format!("PATHS: prims nest deeper than {MAX_DEPTH}"));
         }
         let mut found: Vec<(u32, Prim)> = Vec::new();
-        for &child in children.get(&parent).map(Vec::as_slice).unwrap_or_default() {
+        for &child in tree.children.get(&parent).map(Vec::as_slice).unwrap_or_default() {
             if let Some(mut prim) = prims.remove(&child) {
-                prim.children = self.assemble(child, prims, children, rank, depth + 1)?;
+                self.fill(child, &mut prim, prims, tree, depth)?;
                 found.push((child, prim));
             }
         }
-        found.sort_by_key(|(_, p)| rank(parent, &p.name));
+        found.sort_by_key(|(_, p)| (tree.rank)(parent, &p.name));
         Ok(found.into_iter().map(|(_, p)| p).collect())
+    }
+
+    /// A prim's children and its variant bodies (with theirs).
+    fn fill(
+        &self,
+        path: u32,
+        prim: &mut Prim,
+        prims: &mut HashMap<u32, Prim>,
+        tree: &Tree,
+        depth: usize,
+    ) -> Checked<()> {
+        prim.children = self.assemble(path, prims, tree, depth + 1)?;
+        for (set, variant_path) in tree.variants.get(&path).map(Vec::as_slice).unwrap_or_default() {
+            if let Some(mut variant) = prims.remove(variant_path) {
+                self.fill(*variant_path, &mut variant, prims, tree, depth + 1)?;
+                prim.arcs.get_or_insert_default().variant_set(set).variants.push(variant);
+            }
+        }
+        Ok(())
+    }
+
+    /// A cursor at the out-of-line value `value` points to.
+    fn cursor(&self, value: u64) -> Cursor<'_, 'a> {
+        Cursor { file: self, at: rep::payload(value) }
+    }
+
+    fn string_at(&self, index: u32) -> Checked<String> {
+        let token = self
+            .strings
+            .get(index as usize)
+            .ok_or_else(|| format!("string index {index} is out of range"))?;
+        self.token(*token as u64).map(String::from)
+    }
+
+    /// A path's text; the empty path (which the path tree does not hold) is "".
+    fn path_at(&self, index: u32) -> Checked<String> {
+        match self.paths.get(index as usize) {
+            Some(Some(_)) => Ok(self.path_text(index)),
+            Some(None) => Ok(String::new()),
+            None => Err(format!("path index {index} is out of range")),
+        }
+    }
+
+    fn expect_kind(value: u64, kind: Type) -> Checked<()> {
+        if Self::kind(value)? != kind || rep::is_inline(value) || rep::is_array(value) {
+            return Err(format!("expected a {kind:?} value"));
+        }
+        Ok(())
+    }
+
+    fn string_vector(&self, value: u64) -> Checked<Vec<String>> {
+        Self::expect_kind(value, Type::StringVector)?;
+        let mut cursor = self.cursor(value);
+        cursor.vector(4, |c| c.string())
+    }
+
+    fn layer_offsets(&self, value: u64) -> Checked<Vec<LayerOffset>> {
+        Self::expect_kind(value, Type::LayerOffsetVector)?;
+        let mut cursor = self.cursor(value);
+        cursor.vector(16, Cursor::layer_offset)
+    }
+
+    fn selections(&self, value: u64) -> Checked<Vec<(String, String)>> {
+        Self::expect_kind(value, Type::VariantSelectionMap)?;
+        let mut cursor = self.cursor(value);
+        cursor.vector(8, |c| Ok((c.string()?, c.string()?)))
+    }
+
+    fn path_list_op(&self, value: u64) -> Checked<ListOp<String>> {
+        Self::expect_kind(value, Type::PathListOp)?;
+        self.cursor(value).list_op(4, |c| {
+            let index = c.u32()?;
+            self.path_at(index)
+        })
+    }
+
+    fn string_list_op(&self, value: u64) -> Checked<ListOp<String>> {
+        Self::expect_kind(value, Type::StringListOp)?;
+        self.cursor(value).list_op(4, Cursor::string)
+    }
+
+    /// References (`ReferenceListOp`) or payloads (`PayloadListOp`, or one `Payload` in old files).
+    fn asset_arcs(&self, value: u64) -> Checked<ListOp<AssetArc>> {
+        let kind = Self::kind(value)?;
+        // Payloads carry a layer offset since 0.8.
+        let payload_offset = self.version.1 >= 8;
+        match kind {
+            Type::ReferenceListOp => {
+                Self::expect_kind(value, kind)?;
+                self.cursor(value).list_op(28, |c| c.asset_arc(true, true))
+            }
+            Type::PayloadListOp => {
+                Self::expect_kind(value, kind)?;
+                self.cursor(value).list_op(8, |c| c.asset_arc(payload_offset, false))
+            }
+            Type::Payload => {
+                Self::expect_kind(value, kind)?;
+                let arc = self.cursor(value).asset_arc(payload_offset, false)?;
+                Ok(ListOp { explicit: Some(vec![arc]), ..Default::default() })
+            }
+            other => Err(format!("expected references or payloads, found {other:?}")),
+        }
     }
 
     fn attribute(&self, name: String, spec: &Spec, time: Option<f64>) -> Checked<Attribute> {
@@ -854,6 +979,123 @@ fn half_to_f32(h: u16) -> f32 {
         (e, m) => sign | ((e + 112) << 23) | (m << 13),
     };
     f32::from_bits(bits)
+}
+
+/// Where a prim's children and variant bodies are, and the order its parent lists them in.
+struct Tree<'t> {
+    children: &'t HashMap<u32, Vec<u32>>,
+    variants: &'t HashMap<u32, Vec<(String, u32)>>,
+    rank: &'t dyn Fn(u32, &str) -> usize,
+}
+
+/// `{set=variant}` → (set, variant).
+fn variant_element(token: &str) -> Option<(&str, &str)> {
+    let inner = token.strip_prefix('{')?.strip_suffix('}')?;
+    let (set, variant) = inner.split_once('=')?;
+    (!set.is_empty() && !variant.is_empty()).then_some((set, variant))
+}
+
+/// Sequential reads of an out-of-line value (list ops, vectors, references), every one checked
+/// against the file.
+struct Cursor<'c, 'a> {
+    file: &'c Crate<'a>,
+    at: u64,
+}
+
+impl Cursor<'_, '_> {
+    fn bytes(&mut self, n: usize) -> Checked<&[u8]> {
+        let bytes = self.file.at(self.at, n)?;
+        self.at += n as u64;
+        Ok(bytes)
+    }
+
+    fn u32(&mut self) -> Checked<u32> {
+        Ok(u32::from_le_bytes(self.bytes(4)?.try_into().unwrap()))
+    }
+
+    fn u64(&mut self) -> Checked<u64> {
+        Ok(u64::from_le_bytes(self.bytes(8)?.try_into().unwrap()))
+    }
+
+    fn f64(&mut self) -> Checked<f64> {
+        Ok(f64::from_le_bytes(self.bytes(8)?.try_into().unwrap()))
+    }
+
+    fn string(&mut self) -> Checked<String> {
+        let index = self.u32()?;
+        self.file.string_at(index)
+    }
+
+    fn layer_offset(&mut self) -> Checked<LayerOffset> {
+        Ok(LayerOffset { offset: self.f64()?, scale: self.f64()? })
+    }
+
+    /// `u64` count, then that many items of at least `min_size` bytes each (checked against
+    /// the file before anything is allocated).
+    fn vector<T>(&mut self, min_size: u64, mut item: impl FnMut(&mut Self) -> Checked<T>) -> Checked<Vec<T>> {
+        let count = self.u64()?;
+        let room = (self.file.bytes.len() as u64).saturating_sub(self.at);
+        if count.checked_mul(min_size).is_none_or(|need| need > room) {
+            return Err(format!("{count} items do not fit in the file"));
+        }
+        (0..count).map(|_| item(self)).collect()
+    }
+
+    /// A list op: a header byte (explicit, then which item lists follow), then the lists in the
+    /// order explicit, added, prepended, appended, deleted, ordered.
+    fn list_op<T>(
+        mut self,
+        min_size: u64,
+        mut item: impl FnMut(&mut Self) -> Checked<T>,
+    ) -> Checked<ListOp<T>> {
+        const EXPLICIT: u8 = 1;
+        const EXPLICIT_ITEMS: u8 = 1 << 1;
+        const ADDED: u8 = 1 << 2;
+        const DELETED: u8 = 1 << 3;
+        const ORDERED: u8 = 1 << 4;
+        const PREPENDED: u8 = 1 << 5;
+        const APPENDED: u8 = 1 << 6;
+        let header = self.bytes(1)?[0];
+        let mut op = ListOp::default();
+        if header & EXPLICIT != 0 {
+            op.explicit = Some(Vec::new());
+        }
+        if header & EXPLICIT_ITEMS != 0 {
+            op.explicit = Some(self.vector(min_size, &mut item)?);
+        }
+        let mut added = Vec::new();
+        if header & ADDED != 0 {
+            added = self.vector(min_size, &mut item)?;
+        }
+        if header & PREPENDED != 0 {
+            op.prepended = self.vector(min_size, &mut item)?;
+        }
+        if header & APPENDED != 0 {
+            op.appended = self.vector(min_size, &mut item)?;
+        }
+        if header & DELETED != 0 {
+            op.deleted = self.vector(min_size, &mut item)?;
+        }
+        let _ordered = header & ORDERED != 0; // orders only; nothing follows that coif needs
+        op.appended.extend(added);
+        Ok(op)
+    }
+
+    /// A reference (asset, prim path, layer offset, custom data) or a payload (asset, prim
+    /// path, and a layer offset in newer files).
+    fn asset_arc(&mut self, offset: bool, custom_data: bool) -> Checked<AssetArc> {
+        let asset = self.string()?;
+        let path = self.u32()?;
+        // The empty path (no prim named: the default prim) has its own index.
+        let prim_path = self.file.path_at(path)?;
+        let prim_path = (!prim_path.is_empty() && prim_path != "/").then_some(prim_path);
+        let offset = if offset { self.layer_offset()? } else { LayerOffset::default() };
+        if custom_data {
+            // A dictionary: count, then per entry a string index and an 8-byte jump to its value.
+            self.vector(12, |c| c.bytes(12).map(|_| ()))?;
+        }
+        Ok(AssetArc { asset, prim_path, offset })
+    }
 }
 
 /// Rebuilds path entries from the depth-first tree, refusing repeats, cycles and bad indices.

@@ -51,19 +51,27 @@ pub enum Type {
     Vec4i = 30,
     Dictionary = 31,
     TokenListOp = 32,
+    StringListOp = 33,
+    PathListOp = 34,
+    ReferenceListOp = 35,
     TokenVector = 41,
     Specifier = 42,
     Variability = 44,
+    VariantSelectionMap = 45,
     TimeSamples = 46,
+    Payload = 47,
     DoubleVector = 48,
+    LayerOffsetVector = 49,
+    StringVector = 50,
     ValueBlock = 51,
+    PayloadListOp = 55,
     TimeCode = 56,
 }
 
 impl Type {
     pub fn from_u8(value: u8) -> Option<Type> {
         use Type::*;
-        const ALL: [Type; 39] = [
+        const ALL: [Type; 47] = [
             Bool,
             Uchar,
             Int,
@@ -96,12 +104,20 @@ impl Type {
             Vec4i,
             Dictionary,
             TokenListOp,
+            StringListOp,
+            PathListOp,
+            ReferenceListOp,
             TokenVector,
             Specifier,
             Variability,
+            VariantSelectionMap,
             TimeSamples,
+            Payload,
             DoubleVector,
+            LayerOffsetVector,
+            StringVector,
             ValueBlock,
+            PayloadListOp,
             TimeCode,
         ];
         ALL.into_iter().find(|t| *t as u8 == value)
@@ -115,11 +131,11 @@ pub enum SpecType {
     Prim = 6,
     PseudoRoot = 7,
     Variant = 10,
-    VariantSet = 11,
 }
 
 /// `SdfSpecifier`: only `def` defines a prim on a flattened stage.
 pub const SPECIFIER_DEF: u64 = 0;
+pub const SPECIFIER_CLASS: u64 = 2;
 /// `SdfVariability`.
 pub const VARYING: u64 = 0;
 pub const UNIFORM: u64 = 1;

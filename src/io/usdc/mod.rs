@@ -34,11 +34,20 @@
 //!   table (`'t'`); time samples are an `i64` jump to the times' representation (a double
 //!   vector: `u64` count + `f64`s) followed by an `i64` jump to `u64` count + value reps.
 //!
+//! - **Composition fields**: list ops (`references`, `payload`, `inherits`, `variantSetNames`)
+//!   are a header byte (bit 0 explicit; bits 1–6: explicit, added, deleted, ordered, prepended,
+//!   appended items follow) and then those item vectors (`u64` count + items) in the order
+//!   explicit, added, prepended, appended, deleted, ordered. A reference is a string index
+//!   (asset), a path index (prim), a layer offset (two `f64`: offset, scale) and a dictionary
+//!   (`u64` count, then a string index and an 8-byte jump per entry); a payload has no
+//!   dictionary and, before 0.8, no offset. `variantSelection` is `u64` count + string-index
+//!   pairs; `subLayers` a string vector with `subLayerOffsets` beside it. Variant bodies are
+//!   `Variant` specs at paths whose last element is `{set=variant}`.
+//!
 //! The writer emits version 0.8.0 (what usd-core writes); the reader accepts 0.4.0 to 0.12.x.
-//! Reading builds the same layer model as the `.usda` parser, so both formats give the same
-//! groom. Composition (references, payloads, inherits, specializes, sublayers, variants) is not
-//! resolved: such a layer, or a `--variant`, is refused with exit 2 naming the arc — no Python is
-//! ever started for a crate file.
+//! Reading builds the same layer model as the `.usda` parser, arcs included, so both formats
+//! give the same groom and `io::usd_compose` composes either — no Python is ever started for a
+//! crate file.
 mod compress;
 mod decode;
 mod encode;
@@ -54,6 +63,7 @@ use crate::groom::Groom;
 use crate::io::{atomic, usd_stage, usda, ImportOptions};
 
 pub use decode::ReadOutcome;
+
 pub use format::MAGIC;
 
 /// Writes one groom as a crate file, atomically.
@@ -79,31 +89,33 @@ pub fn write_stage(path: &Path, stage: &usd_stage::Stage) -> Result<()> {
     atomic::commit(path, out)
 }
 
-/// Reads crate-file bytes into a groom (metres, Y up), or says it needs composition.
+/// Reads crate-file bytes into a groom (metres, Y up), or the layer when it needs composition.
 pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
     decode::read(bytes, None, path, options, time)
 }
 
-/// The layer model of a crate file, for the cameras and lights a render reads.
+/// The layer model of a crate file, composition arcs recorded, not resolved.
 pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<usda::Layer> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    decode::read_layer(&bytes, path, time)?.map_err(|what| {
-        Error::format(
-            path,
-            format!("'{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"),
-        )
-    })
+    with_file(path, |bytes, file| decode::read_layer(bytes, file, path, time))
 }
 
 /// Reads a crate file: the structure through a map, large arrays straight from the file.
 pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<ReadOutcome> {
+    with_file(path, |bytes, file| decode::read(bytes, file, path, options, time))
+}
+
+/// Errors of a groom read from composed layers carry no line (they name the prim).
+pub(crate) use decode::unline;
+
+/// Runs `read` over the file's bytes (mapped) and the file itself.
+fn with_file<T>(path: &Path, read: impl FnOnce(&[u8], Option<&std::fs::File>) -> Result<T>) -> Result<T> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    // SAFETY: read-only map; every offset is checked against its length, and coif replaces
-    // files by renaming, never truncating them in place (as for `input::map_file`).
     let empty = file.metadata().map_err(|e| Error::io(path, e))?.len() == 0;
     if empty {
-        return decode::read(&[], None, path, options, time);
+        return read(&[], None);
     }
+    // SAFETY: read-only map; every offset is checked against its length, and coif replaces
+    // files by renaming, never truncating them in place (as for `input::map_file`).
     let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
-    decode::read(&map, Some(&file), path, options, time)
+    read(&map, Some(&file))
 }

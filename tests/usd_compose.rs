@@ -1,0 +1,379 @@
+//! Native USD composition against usd-core (pxr): stages of sublayers (with layer offsets),
+//! references and payloads to `.usda` and `.usdc` files, internal references, inherits and
+//! variant sets are composed by coif and read into the same groom as the stage pxr flattens —
+//! points, counts, widths, primvars, groups, purposes, time samples (shifted by the offsets) and
+//! stage metadata — at several times and with `--variant`. With the usd-core venv hidden, no
+//! Python starts; bad stages exit 2 naming the file, prim and arc.
+mod common;
+use common::usd::*;
+use common::*;
+
+use coif::groom::CurveBasis;
+use coif::io::usda::Selection;
+use std::path::{Path, PathBuf};
+
+/// The layers of a composed groom, as text; `EXT` is the format the arcs name (`usda`/`usdc`).
+/// `groom.usdc` is written by coif (a crate file in both sets).
+const LAYERS: &[(&str, &str)] = &[
+    (
+        "root",
+        r#"#usda 1.0
+(
+    defaultPrim = "Groom"
+    metersPerUnit = 0.01
+    upAxis = "Z"
+    subLayers = [
+        @./over.EXT@ (offset = 5),
+        @base.EXT@
+    ]
+)
+
+def Xform "Groom" (
+    prepend payload = @variants.EXT@
+)
+{
+    def "Internal" (
+        references = </Groom/Extra>
+    )
+    {
+        float3 xformOp:translate = (0, 0, 2)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+
+    def BasisCurves "Extra" (
+        inherits = </_Curves>
+    )
+    {
+        uniform token purpose = "guide"
+    }
+}
+
+class BasisCurves "_Curves"
+{
+    uniform token type = "linear"
+    int[] curveVertexCounts = [3]
+    point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 1)]
+    float[] widths = [0.5, 0.25, 0.125] (
+        interpolation = "vertex"
+    )
+    float[] primvars:wetness = [0.75] (
+        interpolation = "uniform"
+    )
+}
+"#,
+    ),
+    (
+        "over",
+        r#"#usda 1.0
+
+over "Groom"
+{
+    def Xform "Anim" (
+        prepend references = @anim.EXT@ (offset = 10; scale = 2)
+    )
+    {
+    }
+
+    over "Extra"
+    {
+        float[] widths = [0.5, 0.5, 0.5] (
+            interpolation = "vertex"
+        )
+    }
+}
+"#,
+    ),
+    (
+        "base",
+        r#"#usda 1.0
+
+def Xform "Groom" (
+    prepend references = @groom.usdc@
+)
+{
+    over "Extra"
+    {
+        uniform token purpose = "render"
+        float[] widths = [0.1, 0.1, 0.1] (
+            interpolation = "vertex"
+        )
+    }
+}
+"#,
+    ),
+    (
+        "anim",
+        r#"#usda 1.0
+(
+    defaultPrim = "Anim"
+)
+
+def Xform "Anim"
+{
+    def BasisCurves "Curves"
+    {
+        uniform token type = "linear"
+        int[] curveVertexCounts = [2]
+        point3f[] points.timeSamples = {
+            1: [(0, 0, 0), (0, 1, 0)],
+            3: [(0, 0, 0), (2, 3, 0)],
+        }
+        float[] widths = [0.01, 0.02] (
+            interpolation = "vertex"
+        )
+    }
+}
+"#,
+    ),
+    (
+        "variants",
+        r#"#usda 1.0
+(
+    defaultPrim = "Asset"
+)
+
+def Xform "Asset" (
+    variants = {
+        string length = "short"
+    }
+    prepend variantSets = "length"
+)
+{
+    variantSet "length" = {
+        "long" (
+            prepend references = @anim.EXT@
+        ) {
+            def BasisCurves "Tuft"
+            {
+                uniform token type = "linear"
+                int[] curveVertexCounts = [2]
+                point3f[] points = [(1, 0, 0), (1, 4, 0)]
+            }
+        }
+        "short" {
+            def BasisCurves "Tuft"
+            {
+                uniform token type = "linear"
+                int[] curveVertexCounts = [2]
+                point3f[] points = [(1, 0, 0), (1, 1, 0)]
+            }
+        }
+    }
+}
+"#,
+    ),
+];
+
+/// Writes the layers naming `ext` files into `dir` (converted by pxr when `ext` is `usdc`),
+/// with `groom.usdc` written by coif; returns the root layer.
+fn write_layers(dir: &Path, ext: &str, jobs: &mut Vec<Vec<String>>) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    coif::io::write_groom(&dir.join("groom.usdc"), &rich_groom(CurveBasis::Linear)).unwrap();
+    for (name, text) in LAYERS {
+        let text = text.replace("EXT", ext);
+        let target = dir.join(format!("{name}.{ext}"));
+        if ext == "usda" {
+            std::fs::write(&target, text).unwrap();
+        } else {
+            let source = dir.join(format!("{name}.source.usda"));
+            std::fs::write(&source, text).unwrap();
+            jobs.push(vec!["export".into(), source.display().to_string(), target.display().to_string()]);
+        }
+    }
+    dir.join(format!("root.{ext}"))
+}
+
+/// The first field in which two grooms differ (the grooms are too large to print whole).
+fn difference(a: &coif::groom::Groom, b: &coif::groom::Groom) -> Option<String> {
+    let groups = |g: &coif::groom::Groom| {
+        g.groups.iter().map(|g| format!("{}:{:?}", g.name, g.purpose)).collect::<Vec<_>>()
+    };
+    let fields = [
+        ("groups", format!("{:?}", groups(a)), format!("{:?}", groups(b))),
+        ("strand_offsets", format!("{:?}", a.strand_offsets), format!("{:?}", b.strand_offsets)),
+        ("points", format!("{:?}", a.points), format!("{:?}", b.points)),
+        ("widths", format!("{:?}", a.widths), format!("{:?}", b.widths)),
+        ("group_ids", format!("{:?}", a.group_ids), format!("{:?}", b.group_ids)),
+    ];
+    for (name, x, y) in fields {
+        if x != y {
+            return Some(format!("{name}: {x} != {y}"));
+        }
+    }
+    for (x, y) in a.attributes.iter().zip(&b.attributes) {
+        if x != y {
+            return Some(format!("attribute {}: {:?} != {:?}", x.name, x.data, y.data));
+        }
+    }
+    (a != b).then(|| "another field (attribute list, guides, uvs, meshes)".to_string())
+}
+
+fn read(path: &Path, time: Option<f64>, variants: &[&str]) -> coif::Result<coif::groom::Groom> {
+    let selection = Selection { time, variants: variants.iter().map(|v| v.to_string()).collect() };
+    coif::io::read_groom_selected(path, &Default::default(), &selection).map(|loaded| loaded.groom)
+}
+
+#[test]
+fn usda_and_usdc_stages_compose_as_pxr_flattens_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut jobs = Vec::new();
+    let roots = [
+        write_layers(&dir.path().join("a"), "usda", &mut jobs),
+        write_layers(&dir.path().join("c"), "usdc", &mut jobs),
+    ];
+    let selections: [&[&str]; 3] = [&[], &["length=long"], &["/Groom:length=short"]];
+    let mut cases = Vec::new();
+    for root in &roots {
+        for (k, variants) in selections.iter().enumerate() {
+            let flat = root.with_file_name(format!("flat{k}.usda"));
+            let mut job = vec!["flatten".to_string(), root.display().to_string(), flat.display().to_string()];
+            job.extend(variants.iter().map(|v| v.to_string()));
+            jobs.push(job);
+            cases.push((root.clone(), *variants, flat));
+        }
+    }
+    let jobs_file = dir.path().join("jobs.json");
+    std::fs::write(&jobs_file, serde_json::to_string(&jobs).unwrap()).unwrap();
+    probe(&["batch", path_str(&jobs_file)]);
+
+    for (root, variants, flat) in &cases {
+        for time in [None, Some(17.0), Some(19.5), Some(40.0)] {
+            let native =
+                read(root, time, variants).unwrap_or_else(|e| panic!("{root:?} {variants:?} {time:?}: {e}"));
+            let pxr = read(flat, time, &[]).unwrap();
+            if let Some(field) = difference(&native, &pxr) {
+                panic!("{} {variants:?} at {time:?}: {field}", root.display());
+            }
+            // Not vacuous: the coif groom's groups, the inherited and internally referenced
+            // curves, the tuft of the chosen variant and the animated curves all arrive.
+            let names: Vec<&str> = native.groups.iter().map(|g| g.name.as_str()).collect();
+            for expected in
+                ["/Groom/Strands", "/Groom/Extra", "/Groom/Internal", "/Groom/Tuft", "/Groom/Anim/Curves"]
+            {
+                assert!(names.contains(&expected), "{expected} missing from {names:?}");
+            }
+            assert_eq!(names.contains(&"/Groom/Curves"), variants.contains(&"length=long"), "{names:?}");
+        }
+    }
+    // The animated curves: samples at 1 and 3 in anim's time, 17 and 21 on the stage.
+    let anim = |time| {
+        let groom = read(&roots[1], Some(time), &[]).unwrap();
+        let group = groom.groups.iter().position(|g| g.name == "/Groom/Anim/Curves").unwrap();
+        let strand = groom.group_ids.iter().position(|&g| g as usize == group).unwrap();
+        groom.strand_points(strand)[1]
+    };
+    let (at17, at19, at21) = (anim(17.0), anim(19.0), anim(21.0));
+    assert!((at19 - (at17 + at21) * 0.5).length() < 1e-6, "{at17} {at19} {at21}");
+    assert!(at17 != at21);
+}
+
+/// Runs coif with no way to start Python: no venv, no pipeline scripts, no `PATH`.
+fn coif_without_python(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(args)
+        .env("COIF_PYTHON", "/nonexistent/python")
+        .env("COIF_PIPELINE", "/nonexistent")
+        .env("PATH", "/nonexistent")
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn composed_stages_need_no_python() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut jobs = Vec::new();
+    let text_root = write_layers(&dir.path().join("a"), "usda", &mut jobs);
+    let binary_root = write_layers(&dir.path().join("c"), "usdc", &mut jobs);
+    let jobs_file = dir.path().join("jobs.json");
+    std::fs::write(&jobs_file, serde_json::to_string(&jobs).unwrap()).unwrap();
+    probe(&["batch", path_str(&jobs_file)]);
+    let mut outputs = Vec::new();
+    for root in [&text_root, &binary_root] {
+        for variant in [None, Some("length=long")] {
+            let out = dir.path().join(format!("out{}.usda", outputs.len()));
+            let mut args = vec!["convert", path_str(root), path_str(&out)];
+            if let Some(variant) = variant {
+                args.extend(["--variant", variant]);
+            }
+            let result = coif_without_python(&args);
+            assert!(result.status.success(), "{args:?}: {}", stderr(&result));
+            outputs.push(std::fs::read(&out).unwrap());
+        }
+    }
+    assert!(outputs[0] == outputs[2], ".usda and .usdc layers compose to the same groom");
+    assert!(outputs[1] == outputs[3], "and so with --variant");
+    assert!(outputs[0] != outputs[1], "--variant selects another variant");
+}
+
+#[test]
+fn bad_composition_exits_2_naming_file_prim_and_arc() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, format!("#usda 1.0\n{text}")).unwrap();
+        path
+    };
+    let curves =
+        "def BasisCurves \"C\" { int[] curveVertexCounts = [2]\n point3f[] points = [(0,0,0),(0,1,0)] }";
+    write("b.usda", "(\n defaultPrim = \"B\"\n)\ndef \"B\" (\n references = @a.usda@</A>\n) {}\n");
+    write("nodefault.usda", &format!("def Xform \"N\" {{ {curves} }}\n"));
+    write("variants.usda", "def Xform \"V\" (\n variants = { string length = \"short\" }\n prepend variantSets = \"length\"\n) {\n variantSet \"length\" = {\n \"short\" { def BasisCurves \"C\" { int[] curveVertexCounts = [2]\n point3f[] points = [(0,0,0),(0,1,0)] } }\n }\n}\n");
+    let cases: Vec<(PathBuf, Vec<&str>, Vec<&str>)> = vec![
+        (
+            write("a.usda", &format!("def \"A\" (\n references = @b.usda@\n) {{ {curves} }}\n")),
+            vec![],
+            vec!["cycle", "</A>"],
+        ),
+        (
+            write("missing.usda", "def \"M\" (\n references = @gone.usda@\n) {}\n"),
+            vec![],
+            vec!["gone.usda", "</M>", "missing.usda"],
+        ),
+        (
+            write("default.usda", "def \"D\" (\n references = @nodefault.usda@\n) {}\n"),
+            vec![],
+            vec!["defaultPrim", "nodefault.usda", "</D>"],
+        ),
+        (
+            write("noprim.usda", "def \"P\" (\n references = @nodefault.usda@</Nope>\n) {}\n"),
+            vec![],
+            vec!["</Nope>", "</P>"],
+        ),
+        (
+            write(
+                "special.usda",
+                &format!("def \"S\" (\n specializes = </T>\n) {{ {curves} }}\ndef \"T\" {{}}\n"),
+            ),
+            vec![],
+            vec!["specializes", "</S>"],
+        ),
+        (
+            write("self.usda", &format!("(\n subLayers = [@self.usda@]\n)\n{curves}\n")),
+            vec![],
+            vec!["cycle", "self.usda"],
+        ),
+        (
+            write("scale.usda", "def \"O\" (\n references = @nodefault.usda@</N> (scale = -1)\n) {}\n"),
+            vec![],
+            vec!["scale", "</O>"],
+        ),
+        (
+            write("pick.usda", "def \"P\" (\n references = @variants.usda@</V>\n) {}\n"),
+            vec!["--variant", "length=huge"],
+            vec!["huge", "short", "</P>"],
+        ),
+        (dir.path().join("pick.usda"), vec!["--variant", "color=red"], vec!["color"]),
+    ];
+    let out = dir.path().join("out.usda");
+    for (input, extra, named) in &cases {
+        let mut args = vec!["convert", path_str(input), path_str(&out)];
+        args.extend(extra);
+        let result = coif_without_python(&args);
+        let message = stderr(&result);
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {message}");
+        for name in named {
+            assert!(message.contains(name), "{args:?}: {name:?} not in {message}");
+        }
+        assert!(!out.exists());
+    }
+}
