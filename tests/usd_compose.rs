@@ -2,7 +2,8 @@
 //! references and payloads to `.usda` and `.usdc` files, internal references, inherits and
 //! variant sets are composed by coif and read into the same groom as the stage pxr flattens —
 //! points, counts, widths, primvars, groups, purposes, time samples (shifted by the offsets) and
-//! stage metadata — at several times and with `--variant`. With the usd-core venv hidden, no
+//! stage metadata — at several times and with `--variant`; the strength order of sublayers,
+//! inherits, variants, references and payloads, ancestral and direct, is pxr's. With the usd-core venv hidden, no
 //! Python starts; bad stages exit 2 naming the file, prim and arc.
 mod common;
 use common::usd::*;
@@ -45,6 +46,12 @@ def Xform "Groom" (
     )
     {
         uniform token purpose = "guide"
+    }
+
+    over "Probe" (
+        prepend payload = @anim.EXT@</Anim/Curves>
+    )
+    {
     }
 }
 
@@ -139,6 +146,13 @@ def Xform "Asset" (
     prepend variantSets = "length"
 )
 {
+    def BasisCurves "Probe"
+    {
+        uniform token type = "linear"
+        int[] curveVertexCounts = [2]
+        point3f[] points = [(5, 0, 0), (5, 1, 0)]
+    }
+
     variantSet "length" = {
         "long" (
             prepend references = @anim.EXT@
@@ -255,6 +269,14 @@ fn usda_and_usdc_stages_compose_as_pxr_flattens_them() {
             assert_eq!(names.contains(&"/Groom/Curves"), variants.contains(&"length=long"), "{names:?}");
         }
     }
+    // A payload authored on /Groom/Probe is stronger than the one /Groom's payload brings to it.
+    let probe_points = |time| {
+        let groom = read(&roots[0], time, &[]).unwrap();
+        let group = groom.groups.iter().position(|g| g.name == "/Groom/Probe").unwrap();
+        let strand = groom.group_ids.iter().position(|&g| g as usize == group).unwrap();
+        groom.strand_points(strand).to_vec()
+    };
+    assert_ne!(probe_points(None), probe_points(Some(17.0)), "samples of the direct payload win at a time");
     // The animated curves: samples at 1 and 3 in anim's time, 17 and 21 on the stage.
     let anim = |time| {
         let groom = read(&roots[1], Some(time), &[]).unwrap();

@@ -391,7 +391,9 @@ fn composed_crate_files_are_composed_without_python() {
     };
     // The crate stage references the text payload (a variant set), the crate payload is read
     // on its own: the file's selection, or --variant's.
-    for (input, variant, tip) in [(&stage, None, 1.0), (&stage, Some("length=long"), 3.0), (&payload, None, 1.0)] {
+    for (input, variant, tip) in
+        [(&stage, None, 1.0), (&stage, Some("length=long"), 3.0), (&payload, None, 1.0)]
+    {
         let mut args = vec!["convert", path_str(input), path_str(&out)];
         args.extend(variant.iter().flat_map(|v| ["--variant", v]));
         let result = run(&args);
