@@ -1,6 +1,7 @@
-//! Binary and packaged USD (`.usdc`, `.usdz`) and composed stages, through usd-core: coif runs
-//! `pipeline/usd_interop.py` with the project's Python to flatten any stage into a temporary
-//! `.usda` it then reads natively, or to turn the `.usda` it wrote into `.usdc`/`.usdz`.
+//! Packaged USD (`.usdz`), through usd-core: coif runs `pipeline/usd_interop.py` with the
+//! project's Python to flatten a package into a temporary `.usda` it then reads natively, or to
+//! turn the `.usda` it wrote into `.usdz`. (`.usda` and `.usdc`, composed or not, never come
+//! here: see `io::usd_compose`.)
 //!
 //! Python is found as `$COIF_PYTHON`, else `.deps/venv/bin/python` in the project folder (the
 //! nearest ancestor of the executable holding `pipeline/usd_interop.py`, or the folder coif was
@@ -38,7 +39,7 @@ pub fn script() -> Result<PathBuf> {
     }
     project_root().map(|root| root.join("pipeline").join(SCRIPT)).ok_or_else(|| {
         Error::External(format!(
-            "cannot find pipeline/{SCRIPT} (needed for .usdc/.usdz and composed USD); set COIF_PIPELINE to its folder"
+            "cannot find pipeline/{SCRIPT} (needed for .usdz); set COIF_PIPELINE to its folder"
         ))
     })
 }

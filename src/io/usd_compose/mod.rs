@@ -598,7 +598,7 @@ impl Composer {
             .position(|o| o.set == set && o.prim.as_deref().is_none_or(|p| p == stage_path));
         if let Some(i) = index {
             let mut names = Vec::new();
-            visit_ref(root, &mut |node| {
+            visit(root, &mut |node| {
                 for (spec, _, _) in self.specs(node) {
                     for s in spec.arcs.iter().flat_map(|a| &a.variant_sets).filter(|s| s.name == set) {
                         for v in &s.variants {
@@ -626,7 +626,7 @@ impl Composer {
             return Ok(Some(o.variant.clone()));
         }
         let mut chosen = None;
-        visit_ref(root, &mut |node| {
+        visit(root, &mut |node| {
             if chosen.is_some() {
                 return;
             }
@@ -642,7 +642,7 @@ impl Composer {
 
     fn count_nodes(&self, root: &Node, stage_path: &str) -> Result<()> {
         let mut count = 0;
-        visit_ref(root, &mut |_| count += 1);
+        visit(root, &mut |_| count += 1);
         if count > MAX_NODES {
             return Err(self.error(
                 root,
@@ -678,7 +678,7 @@ impl Composer {
         self.count_nodes(&root, &stage_path)?;
 
         let mut opinions: Vec<Opinion> = Vec::new();
-        visit_ref(&root, &mut |node| {
+        visit(&root, &mut |node| {
             for (prim, layer, offset) in self.specs(node) {
                 opinions.push(Opinion { prim, layer, offset, arc: node.arc });
             }
@@ -739,10 +739,6 @@ fn visit<'n>(node: &'n Node, f: &mut impl FnMut(&'n Node)) {
     for child in &node.children {
         visit(child, f);
     }
-}
-
-fn visit_ref<'n>(node: &'n Node, f: &mut impl FnMut(&'n Node)) {
-    visit(node, f)
 }
 
 fn find(node: &mut Node, id: usize) -> Option<&mut Node> {
