@@ -385,7 +385,26 @@ fn bad_composition_exits_2_naming_file_prim_and_arc() {
             vec!["huge", "short", "</P>"],
         ),
         (dir.path().join("pick.usda"), vec!["--variant", "color=red"], vec!["color"]),
+        (
+            write("device.usda", "def \"Z\" (\n references = @/dev/null@</Z>\n) {}\n"),
+            vec![],
+            vec!["/dev/null", "regular file", "</Z>"],
+        ),
     ];
+    // A diamond of internal references: 2^30 paths through 60 prims, refused at the node limit.
+    let mut diamond = String::from("def \"Root\" (\n references = [</A0>, </B0>]\n) {}\n");
+    for level in 0..30 {
+        let next = if level < 29 {
+            format!("references = [</A{}>, </B{}>]", level + 1, level + 1)
+        } else {
+            String::new()
+        };
+        for side in ["A", "B"] {
+            diamond.push_str(&format!("def \"{side}{level}\" (\n {next}\n) {{}}\n"));
+        }
+    }
+    let mut cases = cases;
+    cases.push((write("diamond.usda", &diamond), vec![], vec!["10000 nodes", "</Root>"]));
     let out = dir.path().join("out.usda");
     for (input, extra, named) in &cases {
         let mut args = vec!["convert", path_str(input), path_str(&out)];

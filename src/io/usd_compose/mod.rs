@@ -25,6 +25,7 @@
 //! below (each bounding work a hostile file could otherwise multiply).
 pub mod arcs;
 
+use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
@@ -44,7 +45,7 @@ pub const MAX_NODES: usize = 10_000;
 /// Prims on the composed stage.
 pub const MAX_PRIMS: usize = 1_000_000;
 /// Nodes visited over the whole stage: bounds diamonds of references multiplying the work.
-pub const MAX_WORK: usize = 50_000_000;
+pub const MAX_WORK: usize = 5_000_000;
 /// Namespace depth of the composed stage.
 pub const MAX_NAMESPACE_DEPTH: usize = 512;
 
@@ -90,8 +91,12 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
         prims: 0,
         work: 0,
         next_node: 0,
+        index_nodes: 0,
+        siblings: RefCell::new(HashMap::new()),
     };
-    let canonical = std::fs::canonicalize(path).map_err(|e| Error::io(path, e))?;
+    // The root layer is parsed already: its identity only has to be stable (a layer read from
+    // memory has no file to canonicalize).
+    let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     let meta = (root.meters_per_unit, root.up_axis.clone(), root.default_prim.clone(), root.lines);
     let root_id = composer.add_layer(canonical.clone(), path.to_path_buf(), selection.time, root)?;
     composer.root_layer = root_id;
@@ -104,13 +109,15 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
         ..Default::default()
     };
     let mut names: Vec<String> = Vec::new();
+    let mut seen = HashSet::new();
     for &(layer, _) in composer.stacks[stack].layers.iter().rev() {
         for prim in &composer.layers[layer].layer.prims {
-            if !names.contains(&prim.name) {
+            if seen.insert(prim.name.as_str()) {
                 names.push(prim.name.clone());
             }
         }
     }
+    drop(seen);
     for name in names {
         let node =
             composer.node(stack, vec![Elem::Child(name.clone())], LayerOffset::default(), Arc::Root, 0, 0);
@@ -132,6 +139,10 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
 
 /// Reads one layer file (`.usda` or `.usdc`, told by its first bytes), arcs unresolved.
 fn load(path: &Path, time: Option<f64>) -> Result<Layer> {
+    // A device or a pipe named by an arc could block or never end.
+    if !std::fs::metadata(path).map_err(|e| Error::io(path, e))?.is_file() {
+        return Err(Error::format(path, "not a regular file"));
+    }
     let mut head = [0u8; 8];
     let read = std::fs::File::open(path)
         .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
@@ -241,15 +252,37 @@ struct Composer {
     prims: usize,
     work: usize,
     next_node: usize,
+    /// Nodes in the prim index being built.
+    index_nodes: usize,
+    siblings: SiblingIndex,
+}
+
+/// Sibling lists longer than this are searched through a name index, not one by one (a stage
+/// with a prim per strand has 100,000 siblings).
+const INDEXED_SIBLINGS: usize = 16;
+
+/// Name → position of the prims in long sibling lists, keyed by the list's address (layers are
+/// never changed once loaded, so the address is stable).
+type SiblingIndex = RefCell<HashMap<usize, HashMap<String, usize>>>;
+
+fn child<'l>(siblings: &'l [Prim], name: &str, index: &SiblingIndex) -> Option<&'l Prim> {
+    if siblings.len() <= INDEXED_SIBLINGS {
+        return siblings.iter().find(|p| p.name == name);
+    }
+    let mut index = index.borrow_mut();
+    let names = index
+        .entry(siblings.as_ptr() as usize)
+        .or_insert_with(|| siblings.iter().enumerate().rev().map(|(i, p)| (p.name.clone(), i)).collect());
+    names.get(name).map(|&i| &siblings[i])
 }
 
 /// The spec at `path` in `layer`, through children and variant bodies.
-fn spec_at<'l>(layer: &'l Layer, path: &[Elem]) -> Option<&'l Prim> {
+fn spec_at<'l>(layer: &'l Layer, path: &[Elem], index: &SiblingIndex) -> Option<&'l Prim> {
     let (Elem::Child(first), rest) = path.split_first()? else { return None };
-    let mut prim = layer.prims.iter().find(|p| &p.name == first)?;
+    let mut prim = child(&layer.prims, first, index)?;
     for elem in rest {
         prim = match elem {
-            Elem::Child(name) => prim.children.iter().find(|p| &p.name == name)?,
+            Elem::Child(name) => child(&prim.children, name, index)?,
             Elem::Variant(set, variant) => {
                 let arcs = prim.arcs.as_deref()?;
                 let set = arcs.variant_sets.iter().find(|s| &s.name == set)?;
@@ -374,6 +407,7 @@ impl Composer {
         order: usize,
     ) -> Node {
         self.next_node += 1;
+        self.index_nodes += 1;
         Node { id: self.next_node, stack, path, offset, arc, depth, order, children: Vec::new() }
     }
 
@@ -383,7 +417,8 @@ impl Composer {
             .layers
             .iter()
             .filter_map(|&(layer, offset)| {
-                spec_at(&self.layers[layer].layer, &node.path).map(|p| (p, layer, node.offset.then(offset)))
+                spec_at(&self.layers[layer].layer, &node.path, &self.siblings)
+                    .map(|p| (p, layer, node.offset.then(offset)))
             })
             .collect()
     }
@@ -426,6 +461,13 @@ impl Composer {
         stage_path: &str,
     ) -> Result<()> {
         self.work += 1;
+        if self.index_nodes > MAX_NODES {
+            return Err(self.error(
+                node,
+                stage_path,
+                format!("the prim's index has more than {MAX_NODES} nodes"),
+            ));
+        }
         if self.work > MAX_WORK {
             return Err(self.error(
                 node,
@@ -673,6 +715,8 @@ impl Composer {
             ));
         }
         // Arcs authored at this prim's sites, on every node carried down from the parent.
+        self.index_nodes = 0;
+        visit(&root, &mut |_| self.index_nodes += 1);
         expand_all(self, &mut root, depth, &stage_path)?;
         self.select_variants(&mut root, depth, &stage_path)?;
         self.count_nodes(&root, &stage_path)?;
@@ -688,13 +732,15 @@ impl Composer {
         }
         let mut prim = compose_fields(name, &opinions, self.time, self.root_layer);
         let mut child_names: Vec<String> = Vec::new();
+        let mut seen = HashSet::new();
         for opinion in opinions.iter().rev() {
             for child in &opinion.prim.children {
-                if !child_names.contains(&child.name) {
+                if seen.insert(child.name.as_str()) {
                     child_names.push(child.name.clone());
                 }
             }
         }
+        drop(seen);
         drop(opinions);
         for child in child_names {
             if let Some(node) = derive(self, &root, &child) {
