@@ -236,11 +236,22 @@ impl Groom {
             check_len("guide flags", strands, guides.len())?;
         }
         crate::groups::validate(self)?;
+        // One branch-free pass over everything first (a read groom is checked whole, so this is
+        // on every import's path); only a groom that fails it is searched for the first fault.
+        let finite = all_finite(bytemuck::cast_slice(&self.points));
+        let widths_ok = self.widths.iter().fold(true, |ok, &w| ok & (w.is_finite() & (w >= 0.0)));
         for strand in 0..strands {
             let range = self.strand_range(strand);
             let points = &self.points[range.clone()];
             if points.len() < 2 {
                 return Err(GroomError::TooFewVertices { strand, count: points.len() });
+            }
+            let min_squared = MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH;
+            let long = points
+                .windows(2)
+                .fold(true, |ok, pair| ok & (pair[0].distance_squared(pair[1]) > min_squared));
+            if finite & widths_ok & long {
+                continue;
             }
             for (vertex, p) in points.iter().enumerate() {
                 if !p.is_finite() {
@@ -307,6 +318,14 @@ impl Groom {
 
 /// Segments shorter than this (metres) count as zero-length: a solver cannot give them a direction.
 pub const MIN_SEGMENT_LENGTH: f32 = 1e-9;
+
+/// Whether every value is finite: exponent bits not all set, tested without a branch per value
+/// so the loop vectorizes.
+pub fn all_finite(values: &[f32]) -> bool {
+    values
+        .chunks(4096)
+        .all(|chunk| chunk.iter().fold(true, |ok, v| ok & (v.to_bits() & 0x7f80_0000 != 0x7f80_0000)))
+}
 
 fn check_len(what: &str, expected: usize, found: usize) -> Result<(), GroomError> {
     if expected == found {

@@ -188,6 +188,9 @@ fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
         return Err(Error::format(path, "the file holds no strands"));
     }
     for attribute in &groom.attributes {
+        if crate::groom::all_finite(&attribute.data) {
+            continue;
+        }
         if let Some(index) = attribute.data.iter().position(|v| !v.is_finite()) {
             let element = index / attribute.components.max(1);
             let (rate, strand) = match attribute.rate {

@@ -140,9 +140,7 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
 /// Reads one layer file (`.usda` or `.usdc`, told by its first bytes), arcs unresolved.
 fn load(path: &Path, time: Option<f64>) -> Result<Layer> {
     // A device or a pipe named by an arc could block or never end.
-    if !std::fs::metadata(path).map_err(|e| Error::io(path, e))?.is_file() {
-        return Err(Error::format(path, "not a regular file"));
-    }
+    crate::io::input::check_regular(path)?;
     let mut head = [0u8; 8];
     let read = std::fs::File::open(path)
         .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
