@@ -87,13 +87,16 @@ clean:
 	rm -rf out
 
 # USD export/import: native .usda vs usd-core's .usdc (100,000 x 32 groom; medians of 3 runs).
-# Optional: coif's Chiang lobe against Mitsuba 3's hair BSDF at equal noise (installs Mitsuba into
-# .deps/mitsuba-venv; never part of `make test`). BENCH_PEERS_ARGS passes options, e.g. --runs 5.
+# Optional: coif's Chiang lobe against Mitsuba 3's hair BSDF and Cycles' Principled Hair (Chiang)
+# at equal noise (installs Mitsuba into .deps/mitsuba-venv and bpy into .deps/bpy-venv; never part
+# of `make test`). BENCH_PEERS_ARGS passes options, e.g. --runs 5 or --cycles-python none.
 .PHONY: bench-peers
 bench-peers: setup
 	bash scripts/peers_setup.sh
+	bash scripts/check_blender_setup.sh
 	$(CARGO) build --release --locked
-	.deps/mitsuba-venv/bin/python scripts/bench_peers.py --coif target/release/coif --out out/bench-peers $(BENCH_PEERS_ARGS)
+	.deps/mitsuba-venv/bin/python scripts/bench_peers.py --coif target/release/coif \
+		--cycles-python .deps/bpy-venv/bin/python --out out/bench-peers $(BENCH_PEERS_ARGS)
 
 .PHONY: bench-usd
 bench-usd: setup
