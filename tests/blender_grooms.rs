@@ -411,14 +411,16 @@ fn styled_guides_and_children_re_import_in_blender_and_pxr_with_their_interpolat
             values(&p["values"])
         };
         close(&primvar("groom_guide", "int[]"), &e.flags, "pxr groom_guide");
-        close(&primvar(CLOSEST_GUIDES, "int3[]"), &e.closest, "pxr groom_closest_guides");
+        // float3: the triple Unreal's USD importer reads (it skips int3) and Blender keeps.
+        close(&primvar(CLOSEST_GUIDES, "float3[]"), &e.closest, "pxr groom_closest_guides");
         close(&primvar(GUIDE_WEIGHTS, "float3[]"), &e.weights, "pxr groom_guide_weights");
         assert_eq!(primvar("rest", "point3f[]").len(), 3 * e.points, "pxr {suffix}: rest");
     }
 
-    // Blender: USD keeps counts, the guide flag and the weights as curve-domain attributes, but
-    // drops `groom_closest_guides` (Blender has no int×3 attribute type); its Alembic importer
-    // reads no arbitrary parameters of curves, so only the curves themselves survive there.
+    // Blender: USD keeps counts, the guide flag, the guides' ids and weights as curve-domain
+    // attributes (float3 → FLOAT_VECTOR; an int3 would be dropped: Blender has no int×3 type);
+    // its Alembic importer reads no arbitrary parameters of curves, so only the curves themselves
+    // survive there.
     let abc = dir.path().join("styled.abc");
     coif::io::write_groom(&abc, &styled).unwrap();
     for path in [&usda, &abc] {
@@ -441,11 +443,8 @@ fn styled_guides_and_children_re_import_in_blender_and_pxr_with_their_interpolat
             };
             if path == &usda {
                 close(&attribute("groom_guide", "INT"), &e.flags, "Blender groom_guide");
+                close(&attribute(CLOSEST_GUIDES, "FLOAT_VECTOR"), &e.closest, "Blender groom_closest_guides");
                 close(&attribute(GUIDE_WEIGHTS, "FLOAT_VECTOR"), &e.weights, "Blender groom_guide_weights");
-            }
-            match attributes.get(CLOSEST_GUIDES) {
-                Some(_) => close(&attribute(CLOSEST_GUIDES, "INT"), &e.closest, "Blender closest"),
-                None => eprintln!("{path:?} {}: Blender dropped {CLOSEST_GUIDES}", e.object),
             }
         }
     }

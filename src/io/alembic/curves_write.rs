@@ -430,7 +430,8 @@ fn add_curves<W: Write + Seek>(
                 ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
                 ParamSource::Attribute(a) => {
                     let a = groom.attribute(a).expect("listed from the groom");
-                    (Pod::F32, a.components as u8, a.rate, interpretation(&a.name, a.components))
+                    let pod = if written_as_int32(&a.name) { Pod::I32 } else { Pod::F32 };
+                    (pod, a.components as u8, a.rate, interpretation(&a.name, a.components))
                 }
             };
             let metadata = geom_param_metadata(scope(rate), pod, extent, interp);
@@ -521,6 +522,13 @@ pub fn basis_bytes(basis: CurveBasis) -> [u8; 4] {
     }
 }
 
+/// Attributes held as floats that Alembic readers want as int32: Unreal's Alembic groom spec
+/// gives `groom_closest_guides` as int32×3 (its importer also takes float32×3, other readers may
+/// not).
+fn written_as_int32(name: &str) -> bool {
+    name == crate::guides::CLOSEST_GUIDES
+}
+
 fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'g, [u8]>, u64) {
     fn floats<'g>(values: &'g [f32], factor: f32) -> Cow<'g, [u8]> {
         if factor == 1.0 {
@@ -551,7 +559,11 @@ fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'
             let a = groom.attribute(name).expect("layout is fixed by the first frame");
             // Rest positions are positions: they follow the unit change.
             let factor = if name == "rest" { scale } else { 1.0 };
-            (floats(&a.data, factor), a.len() as u64)
+            if written_as_int32(name) {
+                (Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()), a.len() as u64)
+            } else {
+                (floats(&a.data, factor), a.len() as u64)
+            }
         }
     }
 }
