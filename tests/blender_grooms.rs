@@ -328,6 +328,10 @@ fn coif_style_uses_the_file_mesh_and_scalp_overrides_it() {
 /// attributes (tests/blender/bpy_reimport.py), or `None` when bpy is not installed (`make
 /// check-blender` installs it; CI does not).
 fn bpy_reimport(path: &Path) -> Option<serde_json::Value> {
+    bpy_reimport_args(path, &[])
+}
+
+fn bpy_reimport_args(path: &Path, args: &[&str]) -> Option<serde_json::Value> {
     let python = Path::new(env!("CARGO_MANIFEST_DIR")).join(".deps/bpy-venv/bin/python");
     let has_bpy = std::process::Command::new(&python).args(["-c", "import bpy"]).output();
     if !has_bpy.is_ok_and(|o| o.status.success()) {
@@ -336,6 +340,7 @@ fn bpy_reimport(path: &Path) -> Option<serde_json::Value> {
     }
     let output = std::process::Command::new(&python)
         .args(["tests/blender/bpy_reimport.py", path.to_str().unwrap()])
+        .args(args)
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&output.stdout);
@@ -554,5 +559,157 @@ fn frame_n_is_the_same_moment_in_the_animated_alembic_and_usd() {
             .err()
             .unwrap_or_else(|| panic!("{}: frame 0 accepted", path.display()));
         assert!(error.to_string().contains("is before the"), "{}: {error}", path.display());
+    }
+}
+
+/// pxr's world points (metres, Y up) of each curve prim at every frame `first..=last`, by the
+/// prim path's last two names (`Guides/GuidesData`), with the stage's timeline.
+fn pxr_frames(path: &Path, first: f64, last: f64) -> (serde_json::Value, Vec<Vec<(String, Vec<Vec3>)>>) {
+    let text = common::usd::probe(&["frames", path.to_str().unwrap(), &first.to_string(), &last.to_string()]);
+    let dump: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let frames = dump["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|frame| {
+            let mut prims: Vec<(String, Vec<Vec3>)> = frame["curves"]
+                .as_object()
+                .unwrap()
+                .iter()
+                .map(|(path, points)| {
+                    let tail: Vec<&str> = path.rsplit('/').take(2).collect();
+                    let points = common::usd::f32s(points).chunks_exact(3).map(Vec3::from_slice).collect();
+                    (format!("{}/{}", tail[1], tail[0]), points)
+                })
+                .collect();
+            prims.sort_by(|a, b| a.0.cmp(&b.0));
+            prims
+        })
+        .collect();
+    (dump, frames)
+}
+
+#[test]
+fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
+    // Blender animated the head Xform over frames 1–5 at 24 fps (the hair's parent); `coif
+    // convert` writes the whole timeline as time samples of the world points (the transforms
+    // baked), at the same frame numbers. The reference is pxr's evaluation of Blender's USD.
+    let frames = &manifest()["blender_groom_anim"]["frames"];
+    let (first, last) = (frames["start"].as_f64().unwrap(), frames["end"].as_f64().unwrap());
+    let fps = frames["fps"].as_f64().unwrap();
+    let (_, reference) = pxr_frames(Path::new("tests/data/blender_groom_anim.usda"), first, last);
+    assert_eq!(reference.len(), 5);
+    let moved = worst_distance(&reference[0][0].1, &reference[4][0].1);
+    assert!(moved > 0.01, "the animation moves the hair {moved} m: a held frame would show");
+    let dir = tempfile::tempdir().unwrap();
+    let mut outputs = Vec::new();
+    for (input, output) in [
+        ("blender_groom_anim.abc", "abc_to.usda"),
+        ("blender_groom_anim.abc", "abc_to.usdc"),
+        ("blender_groom_anim.abc", "abc_to.abc"),
+        ("blender_groom_anim.usda", "usd_to.abc"),
+    ] {
+        let out = dir.path().join(output);
+        let input = format!("tests/data/{input}");
+        let report =
+            common::stdout_json(&common::coif(&["convert", &input, common::path_str(&out), "--json"]));
+        assert_eq!(report["frames"]["count"], 5, "{output}: {report}");
+        assert_eq!(
+            (report["frames"]["first"].as_f64(), report["frames"]["last"].as_f64()),
+            (Some(first), Some(last))
+        );
+        outputs.push(out);
+    }
+    let close = |got: &[(String, Vec<Vec3>)], want: &[(String, Vec<Vec3>)], what: &str| {
+        assert_eq!(got.len(), want.len(), "{what}: curve prims");
+        for ((name, p), (wanted, q)) in got.iter().zip(want) {
+            assert_eq!(name, wanted, "{what}");
+            let worst = worst_distance(p, q);
+            assert!(worst < 2e-6, "{what} {name}: {worst} m from Blender's own file");
+        }
+    };
+    // USD output, read by pxr: the time codes are the input's frames, every frame in place.
+    for out in outputs.iter().filter(|o| o.extension().unwrap() != "abc") {
+        let (dump, got) = pxr_frames(out, first, last);
+        assert_eq!(
+            (
+                dump["startTimeCode"].as_f64(),
+                dump["endTimeCode"].as_f64(),
+                dump["timeCodesPerSecond"].as_f64()
+            ),
+            (Some(first), Some(last), Some(fps)),
+            "{out:?}"
+        );
+        for (k, frame) in got.iter().enumerate() {
+            close(frame, &reference[k], &format!("pxr {out:?} frame {}", first + k as f64));
+        }
+    }
+    // Alembic output: its timeline, and each frame as coif reads it (Blender below).
+    for out in outputs.iter().filter(|o| o.extension().unwrap() == "abc") {
+        let bytes = std::fs::read(out).unwrap();
+        let archive = coif::io::alembic::CurvesArchive::open(&bytes).unwrap();
+        assert_eq!(
+            (archive.frame_count(), archive.frame_range(), archive.frames_per_second()),
+            (5, (first, last), fps)
+        );
+        for (k, want) in reference.iter().enumerate() {
+            let frame = first + k as f64;
+            let groom =
+                read_groom(out, &ImportOptions { frame: Some(frame), ..Default::default() }).unwrap().groom;
+            let got: Vec<(String, Vec<Vec3>)> = ["Guides", "Hair"]
+                .into_iter()
+                .map(|o| (format!("{o}/{o}Data"), group_points(&groom, o)))
+                .collect();
+            close(&got, want, &format!("{out:?} frame {frame}"));
+        }
+    }
+    // Blender's importers: the converted files move as Blender's own file does, frame by frame
+    // (Alembic: a cache of P samples on the converted file, an animated object on the original).
+    let range = format!("{first}:{last}");
+    let positions = |path: &Path| -> Option<Vec<Vec<(String, Vec<Vec3>)>>> {
+        let json = bpy_reimport_args(path, &["--frames", &range])?;
+        Some(
+            json["frames"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|frame| {
+                    let mut objects: Vec<(String, Vec<Vec3>)> = frame
+                        .as_object()
+                        .unwrap()
+                        .iter()
+                        .map(|(name, points)| {
+                            let object = if name.starts_with("Guides") { "Guides" } else { "Hair" };
+                            let points = common::usd::f32s(points)
+                                .chunks_exact(3)
+                                .map(|p| Vec3::new(p[0], p[2], -p[1]))
+                                .collect();
+                            (object.to_string(), points)
+                        })
+                        .collect();
+                    objects.sort_by(|a, b| a.0.cmp(&b.0));
+                    objects
+                })
+                .collect(),
+        )
+    };
+    let Some(original) = positions(Path::new("tests/data/blender_groom_anim.abc")) else { return };
+    assert_eq!(original.len(), 5);
+    for out in &outputs {
+        let converted = positions(out).unwrap();
+        assert_eq!(converted.len(), original.len());
+        for (k, (got, want)) in converted.iter().zip(&original).enumerate() {
+            assert_eq!(got.len(), 2, "{out:?}: Blender's curves objects");
+            for ((name, p), (wanted, q)) in got.iter().zip(want) {
+                assert_eq!(name, wanted);
+                let worst = worst_distance(p, q);
+                assert!(
+                    worst < 1e-5,
+                    "Blender {out:?} frame {}: {name} {worst} m from the original",
+                    first + k as f64
+                );
+            }
+        }
+        eprintln!("Blender: {out:?} matches Blender's own file on frames {range}");
     }
 }
