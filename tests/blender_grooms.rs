@@ -150,9 +150,8 @@ fn run_text(text: &str, groom: &Groom, options: &StyleOptions) -> Styled {
     // the groom's own guides).
     let size = groom.bounds().map(|(lo, hi)| (hi - lo).max_element()).unwrap();
     recipe.guides = Some(coif::guides::GuideSpec { reach: Some(size), ..Default::default() });
-    // Blender's guides have 5 to 9 points (8 cm segments), too coarse to wind on a roller; the
-    // water-set and bed-head presets set no `max_segment` (the perm's 4 mm is kept).
-    recipe.settings.max_segment.get_or_insert(0.01);
+    // Blender's guides have 5 to 9 points (8 cm segments): the presets resample them as they
+    // are (the water set and bed-head by their head and rollers, the perm by its own 4 mm).
     style(groom, &recipe, options).unwrap()
 }
 
@@ -564,7 +563,10 @@ fn frame_n_is_the_same_moment_in_the_animated_alembic_and_usd() {
 
 /// pxr's world points (metres, Y up) of each curve prim at every frame `first..=last`, by the
 /// prim path's last two names (`Guides/GuidesData`), with the stage's timeline.
-fn pxr_frames(path: &Path, first: f64, last: f64) -> (serde_json::Value, Vec<Vec<(String, Vec<Vec3>)>>) {
+/// One frame's points per curve prim or object, by name.
+type FramePoints = Vec<(String, Vec<Vec3>)>;
+
+fn pxr_frames(path: &Path, first: f64, last: f64) -> (serde_json::Value, Vec<FramePoints>) {
     let text = common::usd::probe(&["frames", path.to_str().unwrap(), &first.to_string(), &last.to_string()]);
     let dump: serde_json::Value = serde_json::from_str(&text).unwrap();
     let frames = dump["frames"]
@@ -572,7 +574,7 @@ fn pxr_frames(path: &Path, first: f64, last: f64) -> (serde_json::Value, Vec<Vec
         .unwrap()
         .iter()
         .map(|frame| {
-            let mut prims: Vec<(String, Vec<Vec3>)> = frame["curves"]
+            let mut prims: FramePoints = frame["curves"]
                 .as_object()
                 .unwrap()
                 .iter()
@@ -590,7 +592,7 @@ fn pxr_frames(path: &Path, first: f64, last: f64) -> (serde_json::Value, Vec<Vec
 }
 
 #[test]
-fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
+fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() {
     // Blender animated the head Xform over frames 1–5 at 24 fps (the hair's parent); `coif
     // convert` writes the whole timeline as time samples of the world points (the transforms
     // baked), at the same frame numbers. The reference is pxr's evaluation of Blender's USD.
@@ -620,7 +622,7 @@ fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
         );
         outputs.push(out);
     }
-    let close = |got: &[(String, Vec<Vec3>)], want: &[(String, Vec<Vec3>)], what: &str| {
+    let close = |got: &FramePoints, want: &FramePoints, what: &str| {
         assert_eq!(got.len(), want.len(), "{what}: curve prims");
         for ((name, p), (wanted, q)) in got.iter().zip(want) {
             assert_eq!(name, wanted, "{what}");
@@ -656,7 +658,7 @@ fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
             let frame = first + k as f64;
             let groom =
                 read_groom(out, &ImportOptions { frame: Some(frame), ..Default::default() }).unwrap().groom;
-            let got: Vec<(String, Vec<Vec3>)> = ["Guides", "Hair"]
+            let got: FramePoints = ["Guides", "Hair"]
                 .into_iter()
                 .map(|o| (format!("{o}/{o}Data"), group_points(&groom, o)))
                 .collect();
@@ -666,7 +668,7 @@ fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
     // Blender's importers: the converted files move as Blender's own file does, frame by frame
     // (Alembic: a cache of P samples on the converted file, an animated object on the original).
     let range = format!("{first}:{last}");
-    let positions = |path: &Path| -> Option<Vec<Vec<(String, Vec<Vec3>)>>> {
+    let positions = |path: &Path| -> Option<Vec<FramePoints>> {
         let json = bpy_reimport_args(path, &["--frames", &range])?;
         Some(
             json["frames"]
@@ -674,7 +676,7 @@ fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
                 .unwrap()
                 .iter()
                 .map(|frame| {
-                    let mut objects: Vec<(String, Vec<Vec3>)> = frame
+                    let mut objects: FramePoints = frame
                         .as_object()
                         .unwrap()
                         .iter()
@@ -698,6 +700,7 @@ fn animated_convert_writes_every_frame_as_pxr_and_blender_see_the_original() {
     for out in &outputs {
         let converted = positions(out).unwrap();
         assert_eq!(converted.len(), original.len());
+        let mut worst_seen = 0.0f32;
         for (k, (got, want)) in converted.iter().zip(&original).enumerate() {
             assert_eq!(got.len(), 2, "{out:?}: Blender's curves objects");
             for ((name, p), (wanted, q)) in got.iter().zip(want) {
