@@ -42,13 +42,16 @@ grooms: build
 	bash scripts/make_grooms.sh $(COIF)
 
 # Optional, not in CI: Blender's own Alembic importer (bpy, ~370 MB in .deps/bpy-venv) opens a
-# static and an animated file written by coif; counts, positions and radii must match.
+# static and an animated file written by coif; counts, positions and radii must match. Then the
+# blender_grooms tests run with bpy: styled and animated-converted grooms against Blender's own.
 check-blender: setup
 	bash scripts/check_blender_setup.sh
 	$(CARGO) run --release --locked --example alembic_check_files -- out/check-blender
 	$(CARGO) run --release --locked -- convert tests/data/blender_groom.abc out/check-blender/blender_groom.abc
 	$(CARGO) run --release --locked -- convert tests/data/blender_groom.usda out/check-blender/blender_groom_usd.abc
 	.deps/bpy-venv/bin/python scripts/check_blender.py out/check-blender
+	@# The tests that compare Blender's import of coif's files with its own (skipped without bpy).
+	$(CARGO) test --locked --test blender_grooms in_blender
 
 # Fuzzing (cargo-fuzz, installed by scripts/fuzz_setup.sh if missing; libFuzzer needs nightly
 # flags, which RUSTC_BOOTSTRAP=1 unlocks on the stable toolchain). `make fuzz` runs every target

@@ -45,8 +45,10 @@ pub struct AlembicWriteOptions {
     pub unreal: bool,
     /// A parent Xform with this matrix (column-vector convention; translation in column 3).
     pub xform: Option<DMat4>,
-    /// Frame rate of animated output; sample `i` is at time `(i + 1) / fps` (frame 1 first).
+    /// Frame rate of animated output; sample `i` is at time `(first_frame + i) / fps`.
     pub frames_per_second: f64,
+    /// Frame number of an animated output's first sample.
+    pub first_frame: f64,
     /// Written as the archive's `_ai_Application`.
     pub application: String,
     /// Name of the curves object.
@@ -62,6 +64,7 @@ impl Default for AlembicWriteOptions {
             unreal: false,
             xform: None,
             frames_per_second: 24.0,
+            first_frame: 1.0,
             application: format!("coif {}", env!("CARGO_PKG_VERSION")),
             object_name: DEFAULT_OBJECT_NAME.into(),
             velocities: true,
@@ -131,7 +134,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
         let mut archive = ArchiveWriter::new(out, archive_metadata)?;
         let time_sampling = if animated {
             let fps = options.frames_per_second;
-            archive.add_time_sampling(TimeSampling::uniform(fps, 1.0 / fps))
+            archive.add_time_sampling(TimeSampling::uniform(fps, options.first_frame / fps))
         } else {
             0
         };

@@ -24,8 +24,10 @@ use crate::io::ImportOptions;
 pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_PRIM_PATH};
 pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
-pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, Prim, Value};
-pub(crate) use reader::{groom_from_layer, local_transform, stage_transform, value_at};
+pub(crate) use parser::{offer_sample, wanted, Attribute, Layer, LayerTimeline, Prim, Value};
+pub(crate) use reader::{
+    groom_from_layer, local_transform, places_with_time_samples, stage_transform, value_at,
+};
 
 /// First bytes of every `.usda` file.
 pub const MAGIC: &[u8] = b"#usda";
@@ -128,6 +130,32 @@ fn needs_composition(path: &Path, line: u32, what: &str) -> Error {
             "line {line}: '{what}' needs composition; flatten the stage with pipeline/usd_interop.py first"
         ),
     )
+}
+
+/// The timeline metadata of a `.usda` layer (its header only; no prim is parsed).
+pub fn read_header(input: impl Read, path: &Path) -> Result<parser::LayerTimeline> {
+    match parser::parse_header(input) {
+        Ok(layer) => Ok(layer.timeline),
+        Err(parser::ParseError::Syntax(e)) => {
+            Err(Error::format(path, format!("line {}: {}", e.line, e.message)))
+        }
+        Err(parser::ParseError::Io(e)) => Err(Error::io(path, e)),
+        Err(parser::ParseError::Composition { line, what }) => Err(needs_composition(path, line, &what)),
+    }
+}
+
+/// Whether a `.usda` layer time-samples anything that places its curves or meshes (see
+/// [`places_with_time_samples`]); `None` when the layer needs composition to tell.
+pub fn is_animated(path: &Path) -> Result<Option<bool>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    match parser::parse(file, None) {
+        Ok(layer) => Ok(Some(places_with_time_samples(&layer))),
+        Err(parser::ParseError::Syntax(e)) => {
+            Err(Error::format(path, format!("line {}: {}", e.line, e.message)))
+        }
+        Err(parser::ParseError::Io(e)) => Err(Error::io(path, e)),
+        Err(parser::ParseError::Composition { .. }) => Ok(None),
+    }
 }
 
 /// Reads a `.usda` file that must not need composition.

@@ -131,7 +131,29 @@ pub struct Layer {
     pub lines: u32,
     pub meters_per_unit: Option<f64>,
     pub up_axis: Option<String>,
+    /// The stage's frame range and rate (`startTimeCode`, `endTimeCode`, `timeCodesPerSecond`).
+    pub timeline: LayerTimeline,
     pub prims: Vec<Prim>,
+}
+
+/// The timeline metadata a layer authors (each `None` when not authored).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LayerTimeline {
+    pub start: Option<f64>,
+    pub end: Option<f64>,
+    pub per_second: Option<f64>,
+}
+
+impl LayerTimeline {
+    /// Records one layer metadata field, if it is a timeline field.
+    pub fn set(&mut self, key: &str, value: f64) {
+        match key {
+            "startTimeCode" => self.start = Some(value),
+            "endTimeCode" => self.end = Some(value),
+            "timeCodesPerSecond" => self.per_second = Some(value),
+            _ => {}
+        }
+    }
 }
 
 #[derive(Debug)]
@@ -177,8 +199,17 @@ pub const MAX_NESTING: usize = 1000;
 
 /// Parses a whole layer. `time` selects which time samples are kept.
 pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer> {
+    parse_layer(input, time, false)
+}
+
+/// Parses only the layer's metadata (units, up axis, timeline), not its prims.
+pub fn parse_header<'a>(input: impl Read + 'a) -> ParseResult<Layer> {
+    parse_layer(input, None, true)
+}
+
+fn parse_layer<'a>(input: impl Read + 'a, time: Option<f64>, header_only: bool) -> ParseResult<Layer> {
     let mut parser = Parser { lexer: Lexer::new(input), time, depth: 0 };
-    let result = parser.layer();
+    let result = parser.layer(header_only);
     if let Some(error) = parser.lexer.take_read_error() {
         return Err(ParseError::Io(error));
     }
@@ -186,7 +217,7 @@ pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer>
 }
 
 impl Parser<'_> {
-    fn layer(&mut self) -> ParseResult<Layer> {
+    fn layer(&mut self, header_only: bool) -> ParseResult<Layer> {
         if !self.lexer.starts_with(b"#usda ") {
             return Err(self.syntax("not a .usda file: the first line must be '#usda 1.0'"));
         }
@@ -196,10 +227,11 @@ impl Parser<'_> {
             self.metadata(|key, value, _| match (key, value) {
                 ("metersPerUnit", Meta::Number(v)) => layer.meters_per_unit = Some(v),
                 ("upAxis", Meta::Text(v)) => layer.up_axis = Some(v),
+                (key, Meta::Number(v)) => layer.timeline.set(key, v),
                 _ => {}
             })?;
         }
-        while !self.lexer.at_eof() {
+        while !header_only && !self.lexer.at_eof() {
             self.lexer.skip_ws();
             if self.lexer.at_eof() {
                 break;

@@ -12,7 +12,7 @@ use super::compress::{decompress_ints, lz4_decompress, CodedInt};
 use super::format::{rep, SpecType, Type, BOOTSTRAP_SIZE, MAGIC, MIN_COMPRESSED_ARRAY, SPECIFIER_DEF};
 use crate::error::{Error, Result};
 use crate::groom::Groom;
-use crate::io::usda::{self, Attribute, Layer, Prim, Value};
+use crate::io::usda::{self, Attribute, Layer, LayerTimeline, Prim, Value};
 use crate::io::ImportOptions;
 
 /// What reading a crate file gave.
@@ -77,6 +77,12 @@ pub(crate) fn read_layer(
 ) -> Result<std::result::Result<Layer, String>> {
     let bad = |message: String| Error::format(path, format!("crate file: {message}"));
     Crate::parse(bytes).map_err(bad)?.layer(time).map_err(bad)
+}
+
+/// The timeline metadata of a crate file's layer.
+pub(crate) fn read_timeline(bytes: &[u8], path: &Path) -> Result<LayerTimeline> {
+    let bad = |message: String| Error::format(path, format!("crate file: {message}"));
+    Crate::parse(bytes).map_err(bad)?.timeline().map_err(bad)
 }
 
 /// A path: its parent path (`None` for the pseudo-root), its last element, whether a property.
@@ -318,6 +324,21 @@ impl<'a> Crate<'a> {
         }
     }
 
+    /// The timeline the pseudo-root's metadata authors (no prim is decoded).
+    fn timeline(&self) -> Checked<LayerTimeline> {
+        let mut timeline = LayerTimeline::default();
+        for spec in self.specs.iter().filter(|s| s.kind == SpecType::PseudoRoot as u32) {
+            for (field, value) in self.spec_fields(spec) {
+                if matches!(field, "startTimeCode" | "endTimeCode" | "timeCodesPerSecond") {
+                    if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
+                        timeline.set(field, v);
+                    }
+                }
+            }
+        }
+        Ok(timeline)
+    }
+
     /// The layer, or the composition arc that stops a native read.
     fn layer(&self, time: Option<f64>) -> Checked<std::result::Result<Layer, String>> {
         let mut layer = Layer::default();
@@ -344,6 +365,11 @@ impl<'a> Crate<'a> {
                         }
                         "upAxis" => {
                             layer.up_axis = Some(self.text(value).map_err(|e| format!("upAxis: {e}"))?)
+                        }
+                        "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" => {
+                            if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
+                                layer.timeline.set(field, v);
+                            }
                         }
                         "primChildren" => {
                             order.insert(

@@ -84,6 +84,17 @@ pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64
     decode::read(bytes, None, path, options, time)
 }
 
+/// The timeline metadata of a crate file's layer (no prim is decoded).
+pub fn read_timeline(bytes: &[u8], path: &Path) -> Result<usda::LayerTimeline> {
+    decode::read_timeline(bytes, path)
+}
+
+/// Whether a crate file time-samples anything that places its curves or meshes; `None` when
+/// the layer needs composition to tell.
+pub fn is_animated(bytes: &[u8], path: &Path) -> Result<Option<bool>> {
+    Ok(decode::read_layer(bytes, path, None)?.ok().map(|layer| usda::places_with_time_samples(&layer)))
+}
+
 /// The layer model of a crate file, for the cameras and lights a render reads.
 pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<usda::Layer> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
