@@ -42,13 +42,16 @@ grooms: build
 	bash scripts/make_grooms.sh $(COIF)
 
 # Optional, not in CI: Blender's own Alembic importer (bpy, ~370 MB in .deps/bpy-venv) opens a
-# static and an animated file written by coif; counts, positions and radii must match.
+# static and an animated file written by coif; counts, positions and radii must match. Then the
+# blender_grooms tests run with bpy: styled and animated-converted grooms against Blender's own.
 check-blender: setup
 	bash scripts/check_blender_setup.sh
 	$(CARGO) run --release --locked --example alembic_check_files -- out/check-blender
 	$(CARGO) run --release --locked -- convert tests/data/blender_groom.abc out/check-blender/blender_groom.abc
 	$(CARGO) run --release --locked -- convert tests/data/blender_groom.usda out/check-blender/blender_groom_usd.abc
 	.deps/bpy-venv/bin/python scripts/check_blender.py out/check-blender
+	@# The tests that compare Blender's import of coif's files with its own (skipped without bpy).
+	$(CARGO) test --locked --test blender_grooms in_blender
 
 # Fuzzing (cargo-fuzz, installed by scripts/fuzz_setup.sh if missing; libFuzzer needs nightly
 # flags, which RUSTC_BOOTSTRAP=1 unlocks on the stable toolchain). `make fuzz` runs every target
@@ -87,13 +90,16 @@ clean:
 	rm -rf out
 
 # USD export/import: native .usda vs usd-core's .usdc (100,000 x 32 groom; medians of 3 runs).
-# Optional: coif's Chiang lobe against Mitsuba 3's hair BSDF at equal noise (installs Mitsuba into
-# .deps/mitsuba-venv; never part of `make test`). BENCH_PEERS_ARGS passes options, e.g. --runs 5.
+# Optional: coif's Chiang lobe against Mitsuba 3's hair BSDF and Cycles' Principled Hair (Chiang)
+# at equal noise (installs Mitsuba into .deps/mitsuba-venv and bpy into .deps/bpy-venv; never part
+# of `make test`). BENCH_PEERS_ARGS passes options, e.g. --runs 5 or --cycles-python none.
 .PHONY: bench-peers
 bench-peers: setup
 	bash scripts/peers_setup.sh
+	bash scripts/check_blender_setup.sh
 	$(CARGO) build --release --locked
-	.deps/mitsuba-venv/bin/python scripts/bench_peers.py --coif target/release/coif --out out/bench-peers $(BENCH_PEERS_ARGS)
+	.deps/mitsuba-venv/bin/python scripts/bench_peers.py --coif target/release/coif \
+		--cycles-python .deps/bpy-venv/bin/python --out out/bench-peers $(BENCH_PEERS_ARGS)
 
 .PHONY: bench-usd
 bench-usd: setup

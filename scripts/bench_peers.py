@@ -1,5 +1,6 @@
-"""Equal-noise benchmark of coif's Chiang hair lobe against Mitsuba 3's `hair` BSDF (the same
-Chiang et al. 2016 model) on one groom and one shot (`make bench-peers`; never part of `make test`).
+"""Equal-noise benchmark of coif's Chiang hair lobe against Mitsuba 3's `hair` BSDF and Cycles'
+Principled Hair BSDF (Chiang model), the same Chiang et al. 2016 model, on one groom and one shot
+(`make bench-peers`; never part of `make test`).
 
 Both renderers get the same curves: a coif-generated groom, read here from its `.hair` file, whose
 polyline vertices become the control points of cubic B-splines, written to a `.usda` for coif and
@@ -7,12 +8,16 @@ handed to Mitsuba as a `bsplinecurve` (Embree round B-splines in both). Not `lin
 Mitsuba 3.9.1 it sets no surface parameterisation, so the shading frame's tangent is an arbitrary
 direction across the fibre and the `hair` BSDF scatters about the wrong axis (a back-lit fibre
 shows 0.43x the transmission its own BSDF predicts; `bsplinecurve` agrees with coif within 0.4 %).
+Cycles traces only Catmull-Rom curves: it gets Catmull-Rom curves through points of the same
+B-splines (scripts/bench_peers_cycles.py, a bpy worker in .deps/bpy-venv that keeps the scene
+loaded between renders; it prints how far its curves stray from the B-splines).
 The same camera, a distant key light, a constant dome, the
 same pigment and roughness, 8 scattering vertices, 2 threads. Each is measured against its own
 high-spp reference (so bias between the two does not count, only noise): relative RMSE of
 luminance on the full frame and in the dense-hair window (in coif's reference: the densest quarter of the covered pixels), at several sample counts, several seeds each. Time is render time only (coif's
 `seconds` from `--json`, Mitsuba's `mi.render` to evaluated pixels after a warm-up that compiles
-its kernels); scene loading and BVH builds are left out of both.
+its kernels, Cycles' `bpy.ops.render.render` with persistent data after a warm-up render); scene
+loading and BVH builds are left out of all three.
 
 Time to equal noise: the error of each renderer is fitted as c / sqrt(spp) (Monte Carlo), its cost
 as seconds per spp; the time to reach a target error e is (c / e)^2 x seconds-per-spp. The target
@@ -43,6 +48,11 @@ DOME_RADIANCE = 0.25
 EUMELANIN, PHEOMELANIN = 1.3, 0.0
 BETA_M, BETA_N, ALPHA_DEGREES = 0.3, 0.3, 2.0
 MAX_BOUNCES = 8
+KEY_ANGLE_DEGREES = 0.53
+HAIR_IOR = 1.55
+# coif's and Mitsuba's (pbrt's) absorption per unit radius of one unit of each melanin.
+EUMELANIN_SIGMA_A = np.array([0.419, 0.697, 1.37])
+PHEOMELANIN_SIGMA_A = np.array([0.187, 0.4, 1.05])
 
 
 def load():
@@ -119,7 +129,7 @@ class Coif:
             f.write(f"[camera]\nposition = {c['position']}\ntarget = {c['target']}\nfov = {c['fov']}\n")
             f.write(
                 f'[[lights]]\ntype = "distant"\ndirection = {KEY_DIRECTION}\nintensity = {KEY_IRRADIANCE}\n'
-                "angle = 0.53\n"
+                f"angle = {KEY_ANGLE_DEGREES}\n"
             )
             f.write(f'[[lights]]\ntype = "dome"\nintensity = {DOME_RADIANCE}\n')
             f.write("[floor]\nenabled = false\n")
@@ -211,6 +221,62 @@ class Mitsuba:
         return pixels[..., :3], None, seconds
 
 
+class Cycles:
+    name = "Cycles (Principled Hair, Chiang)"
+
+    def __init__(self, python, strands, out, width, height):
+        self.out = out
+        curves = os.path.join(out, "groom_cycles.npz")
+        np.savez(
+            curves,
+            counts=np.array([len(p) for p, _ in strands]),
+            points=np.concatenate([p for p, _ in strands]).astype(np.float64),
+            radii=np.concatenate([r for _, r in strands]).astype(np.float64),
+        )
+        shot = {
+            "curves": curves,
+            "camera_position": CAMERA["position"],
+            "camera_target": CAMERA["target"],
+            "fov": CAMERA["fov"],
+            "key_direction": KEY_DIRECTION,
+            "key_irradiance": KEY_IRRADIANCE,
+            "key_angle_degrees": KEY_ANGLE_DEGREES,
+            "dome_radiance": DOME_RADIANCE,
+            "sigma_a": (EUMELANIN * EUMELANIN_SIGMA_A + PHEOMELANIN * PHEOMELANIN_SIGMA_A).tolist(),
+            "beta_m": BETA_M,
+            "beta_n": BETA_N,
+            "alpha_degrees": ALPHA_DEGREES,
+            "ior": HAIR_IOR,
+            "max_bounces": MAX_BOUNCES,
+            "width": width,
+            "height": height,
+            "threads": 2,
+        }
+        path = os.path.join(out, "shot_cycles.json")
+        with open(path, "w") as f:
+            json.dump(shot, f)
+        worker = os.path.join(os.path.dirname(os.path.abspath(__file__)), "bench_peers_cycles.py")
+        self.process = subprocess.Popen(
+            [python, worker, path], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        )
+
+    def render(self, spp, seed, aov=False):
+        import mitsuba as mi
+
+        path = os.path.join(self.out, f"cycles_{spp}_{seed}.exr")
+        self.process.stdin.write(f"{spp} {seed} {path}\n")
+        self.process.stdin.flush()
+        for line in self.process.stdout:
+            if line.startswith("bench-peers-cycles "):
+                seconds = json.loads(line.split(" ", 1)[1])["seconds"]
+                break
+        else:
+            raise RuntimeError(f"the Cycles worker stopped (exit {self.process.wait()})")
+        pixels = np.array(mi.Bitmap(path), dtype=np.float64)
+        os.remove(path)
+        return pixels[..., :3], None, float(seconds)
+
+
 def measure(renderers, window, spps, runs):
     """Median time and errors per renderer and sample count. The renderers take turns on every
     seed, so a change of the machine's load hits both alike."""
@@ -259,6 +325,11 @@ def main():
     parser.add_argument("--spps", default="4,8,16,32")
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--target-spp", type=int, default=16)
+    parser.add_argument(
+        "--cycles-python",
+        default=".deps/bpy-venv/bin/python",
+        help="a Python with bpy (scripts/check_blender_setup.sh); 'none' leaves Cycles out",
+    )
     args = parser.parse_args()
     width, height = (int(v) for v in args.res.split("x"))
     spps = [int(v) for v in args.spps.split(",")]
@@ -280,26 +351,30 @@ def main():
     )
 
     coif = Coif(args.coif, curves, args.out, width, height)
-    mitsuba = Mitsuba(strands, args.out, width, height)
+    peers = [Mitsuba(strands, args.out, width, height)]
+    if args.cycles_python != "none":
+        peers.append(Cycles(args.cycles_python, strands, args.out, width, height))
     coif_reference, coverage, coif_reference_seconds = coif.render(args.reference_spp, 0)
     # The densest quarter of the pixels the hair covers (thin strands rarely cover a pixel whole).
     covered = coverage[coverage > 0.0]
     window = coverage >= np.quantile(covered, 0.75)
     print(f"dense-hair window: {int(window.sum())} of {width * height} pixels", flush=True)
-    started = time.perf_counter()
-    mitsuba_reference, _, _ = mitsuba.render(args.reference_spp, 0)
-    mitsuba_reference_seconds = time.perf_counter() - started
-    print(
-        f"references: coif {coif_reference_seconds:.1f} s, Mitsuba {mitsuba_reference_seconds:.1f} s;"
-        f" mean luminance in the window coif {luminance(coif_reference)[window].mean():.4f},"
-        f" Mitsuba {luminance(mitsuba_reference)[window].mean():.4f}; full frame"
-        f" coif {luminance(coif_reference).mean():.4f}, Mitsuba {luminance(mitsuba_reference).mean():.4f}",
-        flush=True,
-    )
+    references = [(coif, coif_reference)]
+    for peer in peers:
+        started = time.perf_counter()
+        reference, _, _ = peer.render(args.reference_spp, 0)
+        references.append((peer, reference))
+        print(
+            f"reference {peer.name}: {time.perf_counter() - started:.1f} s; mean luminance in the window"
+            f" {luminance(reference)[window].mean():.4f} (coif {luminance(coif_reference)[window].mean():.4f}),"
+            f" full frame {luminance(reference).mean():.4f} (coif {luminance(coif_reference).mean():.4f})",
+            flush=True,
+        )
+        np.save(os.path.join(args.out, f"{peer.name.split()[0].lower()}_reference.npy"), reference)
+    print(f"reference coif: {coif_reference_seconds:.1f} s", flush=True)
     np.save(os.path.join(args.out, "coif_reference.npy"), coif_reference)
-    np.save(os.path.join(args.out, "mitsuba_reference.npy"), mitsuba_reference)
 
-    results = measure([(coif, coif_reference), (mitsuba, mitsuba_reference)], window, spps, args.runs)
+    results = measure(references, window, spps, args.runs)
 
     coif_rows = results[coif.name]
     summary = {}
@@ -311,6 +386,8 @@ def main():
         print(f"time to coif's {target_row['spp']}-spp {key} ({target:.4f}):")
         for name, (seconds, c, per_spp) in times.items():
             print(f"  {name:32s} {seconds:8.3f} s  (c {c:.3f}, {per_spp:.4f} s/spp)  x{seconds / coif_time:.2f}")
+        fastest = min((t[0], name) for name, t in times.items() if name != coif.name)
+        print(f"  fastest peer {fastest[1]}: coif is {fastest[0] / coif_time:.2f}x as fast (target 3)")
         summary[key] = {name: t[0] for name, t in times.items()}
     with open(os.path.join(args.out, "bench_peers.json"), "w") as f:
         json.dump({"rows": results, "time_to_equal_noise": summary, "load": load()}, f, indent=1)

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs Blender-as-a-Python-module (bpy, ~370 MB) into its own venv, idempotently. Only the
-# optional `make check-blender` needs it; it is not part of `make setup` or CI.
+# optional `make check-blender` and `make bench-peers` (Cycles) need it; it is not part of
+# `make setup` or CI.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BPY_VERSION=5.0.1

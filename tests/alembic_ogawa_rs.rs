@@ -102,3 +102,63 @@ fn ogawa_rs_reads_coif_static_files() {
         assert_eq!(bounds.max, hi.as_dvec3().to_array());
     }
 }
+
+/// The interpolation attributes in the types of Unreal's Alembic groom spec, as an independent
+/// reader sees them: `groom_closest_guides` int32×3 and `groom_guide_weights` float32×3 per
+/// strand (uniform scope), `groom_guide` and `groom_id` int32.
+#[test]
+fn ogawa_rs_reads_the_interpolation_attributes_in_unreals_types() {
+    use coif::guides::{CLOSEST_GUIDES, GUIDE_WEIGHTS};
+    let mut g = groom(CurveBasis::Linear);
+    let strands = g.strand_count();
+    g.guides = Some((0..strands).map(|s| s % 4 == 0).collect());
+    g.strand_ids = (0..strands as u32).map(|s| 16_777_215 - 5 * s).collect();
+    let closest: Vec<f32> = (0..3 * strands).map(|i| g.strand_ids[(i / 12) * 4] as f32).collect();
+    let weights: Vec<f32> = (0..strands).flat_map(|_| [0.5, 0.25, 0.25]).collect();
+    g.set_attribute(Attribute::new(CLOSEST_GUIDES, AttributeRate::Strand, 3, closest.clone()));
+    g.set_attribute(Attribute::new(GUIDE_WEIGHTS, AttributeRate::Strand, 3, weights.clone()));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("guided.abc");
+    write_groom(&path, &g).unwrap();
+
+    let mut reader = FileReader::new(std::fs::File::open(&path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let root = archive.load_root_object(&mut reader).unwrap();
+    let curves =
+        root.load_child(0, &mut reader, &archive.indexed_meta_data, &archive.time_samplings).unwrap();
+    let top = curves.properties().unwrap();
+    let PropertyReader::Compound(geom) = top.load_sub_property(0, &mut reader, &archive).unwrap() else {
+        panic!(".geom is a compound")
+    };
+    let PropertyReader::Compound(arb) =
+        geom.load_sub_property_by_name(".arbGeomParams", &mut reader, &archive).unwrap().unwrap()
+    else {
+        panic!(".arbGeomParams is a compound")
+    };
+    let mut param = |name: &str| {
+        let index = arb.find_sub_property_index(name).unwrap_or_else(|| panic!("no {name}"));
+        let tokens = arb.property_headers[index].meta_data.tokens.clone();
+        let PropertyReader::Array(array) = arb.load_sub_property(index, &mut reader, &archive).unwrap()
+        else {
+            panic!("{name} is an array")
+        };
+        (array.load_sample(0, &mut reader).unwrap(), tokens["podExtent"].clone(), tokens["geoScope"].clone())
+    };
+    let ints = |(values, extent, scope): (ogawa_rs::PodArray, String, String)| match values {
+        ogawa_rs::PodArray::I32(v) => (v, extent, scope),
+        _ => panic!("not int32"),
+    };
+    let expected_ids: Vec<i32> = closest.iter().map(|&v| v as i32).collect();
+    assert_eq!(ints(param(CLOSEST_GUIDES)), (expected_ids, "3".into(), "uni".into()));
+    let ogawa_rs::PodArray::F32(read_weights) = param(GUIDE_WEIGHTS).0 else { panic!("weights not float32") };
+    assert_eq!(read_weights, weights);
+    assert_eq!(param(GUIDE_WEIGHTS).1, "3");
+    let flags: Vec<i32> = g.guides.as_ref().unwrap().iter().map(|&f| f as i32).collect();
+    assert_eq!(ints(param("groom_guide")).0, flags);
+    assert_eq!(ints(param("groom_id")).0, g.strand_ids.iter().map(|&i| i as i32).collect::<Vec<_>>());
+
+    // And coif reads the ids back exactly (the largest exact in f32, 2^24 - 1, included).
+    let back = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
+    assert_eq!(back.attribute(CLOSEST_GUIDES).unwrap().data, closest);
+    assert_eq!(back.strand_ids, g.strand_ids);
+}

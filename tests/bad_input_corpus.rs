@@ -402,6 +402,31 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.abc", "frame 0", "(frame 1"],
     ));
+    let anim = || vec![("in.abc", std::fs::read("tests/data/blender_groom_anim.abc").unwrap())];
+    for (name, args, names) in [
+        ("reversed", &["--frame-range", "5:1"][..], &["--frame-range", "5:1", "after the last"][..]),
+        ("NaN", &["--frame-range", "nan:3"], &["--frame-range", "nan"]),
+        ("infinite", &["--frame-range", "1:inf"], &["--frame-range", "inf"]),
+        ("huge", &["--frame-range", "1:1e8"], &["--frame-range", "more than"]),
+        ("not a range", &["--frame-range", "12"], &["--frame-range", "FIRST:LAST"]),
+        ("before the first sample", &["--frame-range", "0:3"], &["in.abc", "frame 0"]),
+        ("with --frame", &["--frame-range", "1:3", "--frame", "2"], &["--frame"]),
+    ] {
+        cases.push(case(
+            &format!(".abc --frame-range {name}"),
+            anim(),
+            &[&["convert", "in.abc", "out.usda"], args].concat(),
+            2,
+            names,
+        ));
+    }
+    cases.push(case(
+        ".abc --frame-range to .hair",
+        anim(),
+        &["convert", "in.abc", "out.hair", "--frame-range", "1:3"],
+        2,
+        &["out.hair", "time samples"],
+    ));
     for (name, mesh, names) in [
         ("index out of range", "[0, 1, 9]", &["index 2 is 9"][..]),
         ("negative index", "[0, 1, -1]", &["negative"][..]),

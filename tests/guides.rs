@@ -172,7 +172,10 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     for s in 0..FULL.strands {
         let w = &weights.data[s * 3..s * 3 + 3];
         assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-4, "strand {s}: {w:?}");
-        assert!(closest.data[s * 3..s * 3 + 3].iter().all(|&g| g >= 0.0 && (g as usize) < FULL.guides));
+        // Guides are named by strand id (Unreal's groom_id), here the strand index.
+        assert!(closest.data[s * 3..s * 3 + 3]
+            .iter()
+            .all(|&g| g >= 0.0 && flags[groom.strand_ids[g as usize] as usize]));
     }
 }
 
@@ -203,20 +206,95 @@ fn a_files_guides_are_simulated_and_its_weights_used_or_refused() {
     assert_eq!(again.report.guides, Some(SMALL.guides));
     assert_eq!(again.groom.attribute(GUIDE_WEIGHTS), file.attribute(GUIDE_WEIGHTS));
 
-    let child = (0..SMALL.strands).find(|&s| !file.guides.as_ref().unwrap()[s]).unwrap();
-    let mut bad = file.clone();
-    bad.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3] += 0.5;
-    let err = style(&bad, &short, &StyleOptions::default()).err().unwrap();
-    assert_eq!(err.exit_code(), 2);
-    assert!(err.to_string().contains(&format!("strand {child}")), "{err}");
-    let mut bad = file.clone();
-    bad.attribute_mut(CLOSEST_GUIDES).unwrap().data[child * 3] = SMALL.guides as f32;
-    let err = style(&bad, &short, &StyleOptions::default()).err().unwrap();
-    assert!(
-        err.to_string().contains(&format!("strand {child}"))
-            && err.to_string().contains(&format!("{} guides", SMALL.guides)),
-        "{err}"
-    );
+    // Guides are named by groom_id, not by position: renumbered strands (Unreal's ids need not be
+    // 0, 1, 2…) bind the same children to the same guides.
+    let renumber = |id: u32| 9_000_000 - 7 * id;
+    let mut renumbered = file.clone();
+    renumbered.strand_ids.iter_mut().for_each(|id| *id = renumber(*id));
+    renumbered
+        .attribute_mut(CLOSEST_GUIDES)
+        .unwrap()
+        .data
+        .iter_mut()
+        .for_each(|g| *g = renumber(*g as u32) as f32);
+    let moved = style(&renumbered, &short, &StyleOptions::default()).unwrap();
+    assert_eq!(moved.groom.points, again.groom.points);
+    assert_eq!(moved.groom.attribute(CLOSEST_GUIDES), renumbered.attribute(CLOSEST_GUIDES));
+}
+
+/// Bad bindings in every form coif reads (USD float3 and the older int3, Alembic int32×3 and
+/// the older float32×3) exit 2 naming the strand.
+#[test]
+fn bad_bindings_are_refused_with_the_strand_in_every_file_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let short = recipe::parse(
+        "[[obstacles]]\nname = \"head\"\nshape = \"head\"\n[[stages]]\nkind = \"process\"\nduration = 0.004\n",
+        Path::new("short.toml"),
+    )
+    .unwrap();
+    let permed = &SMALL.permed().groom;
+    let child = (0..SMALL.strands).rev().find(|&s| !permed.guides.as_ref().unwrap()[s]).unwrap();
+    let mut heavy = permed.clone();
+    heavy.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3] += 0.5;
+    let mut astray = permed.clone();
+    // The child's own id: no guide has it.
+    astray.attribute_mut(CLOSEST_GUIDES).unwrap().data[child * 3 + 1] = permed.strand_ids[child] as f32;
+    astray.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3 + 1] += 1e-6; // weighted
+    type Patch = fn(&Path);
+    let forms: [(&str, Patch); 4] = [
+        ("new.usda", |_| {}),
+        ("old.usda", |path| {
+            let text = std::fs::read_to_string(path).unwrap();
+            let old: Vec<String> = text
+                .lines()
+                .map(|line| match line.split_once("float3[] primvars:groom_closest_guides") {
+                    // Whole numbers written as ints, as pxr writes int3.
+                    Some((indent, rest)) => {
+                        format!("{indent}int3[] primvars:groom_closest_guides{}", rest.replace(".0", ""))
+                    }
+                    None => line.to_string(),
+                })
+                .collect();
+            let old = old.join("\n");
+            assert_ne!(old, text);
+            std::fs::write(path, old).unwrap();
+        }),
+        ("new.abc", |_| {}),
+        // The older float32×3, written under a same-length name and renamed in the archive.
+        ("old.abc", |path| {
+            let bytes = std::fs::read(path).unwrap();
+            let (from, to) = (b"groom_closest_guidez", b"groom_closest_guides");
+            let at = bytes.windows(from.len()).position(|w| w == from).expect("the stand-in name");
+            let mut bytes = bytes;
+            bytes[at..at + to.len()].copy_from_slice(to);
+            std::fs::write(path, bytes).unwrap();
+        }),
+    ];
+    for (file, patch) in forms {
+        for (bad, what) in [(&heavy, "sum to"), (&astray, "no")] {
+            let mut bad = bad.clone();
+            if file == "old.abc" {
+                bad.attribute_mut(CLOSEST_GUIDES).unwrap().name = "groom_closest_guidez".into();
+            }
+            let path = dir.path().join(file);
+            coif::io::write_groom(&path, &bad).unwrap();
+            patch(&path);
+            let read = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
+            let closest =
+                read.attribute(CLOSEST_GUIDES).unwrap_or_else(|| panic!("{file}: no {CLOSEST_GUIDES}"));
+            assert_eq!(
+                closest.data,
+                bad.attribute(if file == "old.abc" { "groom_closest_guidez" } else { CLOSEST_GUIDES })
+                    .unwrap()
+                    .data,
+                "{file}"
+            );
+            let err = style(&read, &short, &StyleOptions::default()).err().unwrap();
+            assert_eq!(err.exit_code(), 2, "{file}: {err}");
+            let text = err.to_string();
+            assert!(text.contains(&format!("strand {child}:")) && text.contains(what), "{file}: {text}");
+        }
+    }
 }
 
 #[test]

@@ -2,6 +2,9 @@
 //! 2 s under gravity with the recipe's colliders, moves less than 1 mm (its exported
 //! `rest_darboux` and bond rates are the rest state); a groom fresh from a DCC tool moves less than
 //! 1 mm with the sag-free option, while without it, it falls.
+mod common;
+use common::thin;
+
 use std::path::Path;
 
 use coif::generate::{generate, GenerateParams, Style};
@@ -12,13 +15,6 @@ use coif::sim::SimParams;
 use coif::style::run::sim_params;
 use coif::style::{placement, recipe, style, StyleOptions};
 use coif::Groom;
-
-/// Every `step`-th strand of a groom: the presets' recipes on a few strands.
-fn thin(groom: &Groom, step: usize) -> Groom {
-    let strands: Vec<Vec<glam::Vec3>> =
-        (0..groom.strand_count()).step_by(step).map(|s| groom.strand_points(s).to_vec()).collect();
-    Groom::from_strands(&strands, groom.widths[0])
-}
 
 /// Per strand, the largest distance a vertex moved.
 fn moved(a: &Groom, b: &Groom) -> Vec<f32> {

@@ -2,17 +2,12 @@
 //! or rod after any step of any stage — including while strands are wound onto rods around the
 //! head (`wrap`: before, every strand of perm scene 3 went through the head, up to 76 mm deep) and
 //! wound past a rod's end (water set: 18.5 mm into the curlers' end caps).
+mod common;
+use common::thin;
+
 use std::path::Path;
 
 use coif::style::{recipe, style, StyleOptions};
-use coif::Groom;
-
-/// Every `step`-th strand of a groom: the presets' recipes on a few strands.
-fn thin(groom: &Groom, step: usize) -> Groom {
-    let strands: Vec<Vec<glam::Vec3>> =
-        (0..groom.strand_count()).step_by(step).map(|s| groom.strand_points(s).to_vec()).collect();
-    Groom::from_strands(&strands, groom.widths[0])
-}
 
 #[test]
 fn no_vertex_goes_inside_a_collider_at_any_step_of_any_preset() {

@@ -44,6 +44,11 @@ pub(crate) enum Command {
         /// Alembic output for Unreal: centimetres, groom_* attribute names, groom spec version.
         #[arg(long)]
         unreal: bool,
+        /// Animated output of these frames of the input's timeline, FIRST:LAST (every whole
+        /// frame from FIRST). Default: an animated input's whole frame range; `--frame N` writes
+        /// that one frame without time samples.
+        #[arg(long, value_name = "FIRST:LAST", conflicts_with = "frame", allow_hyphen_values = true)]
+        frame_range: Option<String>,
     },
     /// Simulate a groom (gravity, Cosserat rods, side-chain bonds), optionally settle it, and
     /// write it with its rest shape and bond rates as attributes.

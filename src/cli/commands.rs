@@ -29,9 +29,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Convert { input, output, import, json, unreal } => {
-            let loaded = io::read_groom_selected(&input, &import.options()?, &import.selection())?;
-            write_and_report(&output, &loaded.groom, json, &io::ExportOptions { unreal })
+        Command::Convert { input, output, import, json, unreal, frame_range } => {
+            run_convert(&input, &output, &import, json, &io::ExportOptions { unreal }, frame_range.as_deref())
         }
         Command::Simulate(args) => run_simulate(args),
         Command::Style(args) => run_style(args),
@@ -452,6 +451,68 @@ fn run_generate(args: GenerateArgs) -> Result<()> {
     io::Format::from_extension(&args.output)?;
     let groom = generate(&params)?;
     write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
+}
+
+/// One frame, or the frames of a `--frame-range` or of an animated input's whole timeline.
+fn run_convert(
+    input: &Path,
+    output: &Path,
+    import: &super::args::ImportArgs,
+    json: bool,
+    export: &io::ExportOptions,
+    frame_range: Option<&str>,
+) -> Result<()> {
+    use io::timeline::{parse_range, read_timeline, Timeline};
+    let options = import.options()?;
+    let range = frame_range.map(|text| parse_range(text, "--frame-range")).transpose()?;
+    let output_format = io::Format::from_extension(output)?;
+    let timeline = match range {
+        Some((first, last)) => {
+            io::check_animated_output(output)?;
+            // USD's fallback rate when the input says none (or holds one moment).
+            let rate = read_timeline(input)?.map_or(24.0, |t| t.frames_per_second);
+            Some(Timeline { first, last, frames_per_second: rate })
+        }
+        None if import.frame.is_some() => None,
+        None => read_timeline(input)?.filter(|_| {
+            output_format != io::Format::Hair || {
+                eprintln!("coif: warning: {}: .hair holds one frame: writing the input's first (--frame N picks another)", output.display());
+                false
+            }
+        }),
+    };
+    let Some(timeline) = timeline else {
+        let loaded = io::read_groom_selected(input, &options, &import.selection())?;
+        return write_and_report(output, &loaded.groom, json, export);
+    };
+    let read = |frame: f64| -> Result<coif::Groom> {
+        let options = io::ImportOptions { frame: Some(frame), ..options };
+        let selection = io::usda::Selection { time: Some(frame), ..import.selection() };
+        Ok(io::read_groom_selected(input, &options, &selection)?.groom)
+    };
+    let first = read(timeline.first)?;
+    let rest = timeline.frames().skip(1).map(read);
+    let warnings = io::write_frames(output, &first, rest, &timeline, export)?;
+    for warning in &warnings {
+        eprintln!("coif: warning: {warning}");
+    }
+    let info = GroomInfo::of(&first);
+    let frames = json!({ "first": timeline.first, "last": timeline.frame(timeline.frame_count() - 1),
+        "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second });
+    if json {
+        print_json(json!({ "output": output, "groom": info, "frames": frames, "warnings": warnings }));
+    } else {
+        eprintln!(
+            "wrote {} ({} strands, {} vertices, frames {} to {} at {} fps)",
+            output.display(),
+            info.strands,
+            info.vertices,
+            timeline.first,
+            timeline.frame(timeline.frame_count() - 1),
+            timeline.frames_per_second
+        );
+    }
+    Ok(())
 }
 
 fn write_and_report(

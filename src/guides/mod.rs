@@ -25,8 +25,13 @@ use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled, Wa
 use binding::{Binding, GUIDES_PER_CHILD};
 use deform::{Children, Curves};
 
-/// Per strand, the indices (among the guides, in strand order) of a child's guides: int×3.
+/// Per strand, the strand ids (`groom_id`) of a child's guides, as Unreal's groom builder looks
+/// them up among the guides' ids: three per strand, written as float×3 in USD (exact integers
+/// below 2^24; the only triple Unreal's USD importer reads, and one Blender keeps) and int32×3 in
+/// Alembic (Unreal's Alembic spec).
 pub const CLOSEST_GUIDES: &str = "groom_closest_guides";
+/// Guide ids must be exact in the attribute's f32 data (and in USD's float3).
+const EXACT_IDS: u32 = 1 << 24;
 /// Per strand, the weights of those guides: float×3, summing to 1.
 pub const GUIDE_WEIGHTS: &str = "groom_guide_weights";
 
@@ -100,7 +105,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let child_ids: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
     let guide_roots: Vec<Vec3> = guide_ids.iter().map(|&g| roots[g]).collect();
     let child_roots: Vec<Vec3> = child_ids.iter().map(|&c| roots[c]).collect();
-    let bindings = match (&recipe.guides, file_bindings(&groom, &child_ids)) {
+    let bindings = match (&recipe.guides, file_bindings(&groom, &guide_ids, &child_ids)?) {
         (None, Some(bindings)) => {
             binding::check(&bindings, &child_ids, guide_ids.len())?;
             bindings
@@ -189,7 +194,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
             child_attribute,
         ));
     }
-    let (closest, weights) = binding_attributes(strands, &guide_ids, &child_ids, &bindings);
+    let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
     out.set_attribute(closest);
     out.set_attribute(weights);
     out.guides = Some(flags);
@@ -223,52 +228,96 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
 }
 
 /// The bindings a file brought as `groom_closest_guides` / `groom_guide_weights` (per strand,
-/// three components each), for the children.
-fn file_bindings(groom: &Groom, children: &[usize]) -> Option<Vec<Binding>> {
+/// three components each), for the children; `None` when the file has none. A child's guides are
+/// named by their strand ids; a weighted entry naming no guide's id is an error with the
+/// child's strand index.
+fn file_bindings(groom: &Groom, guides: &[usize], children: &[usize]) -> Result<Option<Vec<Binding>>> {
     let per_strand = |name| {
         groom.attribute(name).filter(|a| a.rate == AttributeRate::Strand && a.components == GUIDES_PER_CHILD)
     };
-    let (closest, weights) = (per_strand(CLOSEST_GUIDES)?, per_strand(GUIDE_WEIGHTS)?);
-    Some(
-        children
-            .iter()
-            .map(|&c| {
-                let at = |data: &[f32], k: usize| data[c * GUIDES_PER_CHILD + k];
-                Binding {
-                    // Out-of-range or negative indices saturate and are reported by the check.
-                    guides: std::array::from_fn(|k| {
-                        at(&closest.data, k).max(0.0).min(u32::MAX as f32) as u32
-                    }),
-                    weights: std::array::from_fn(|k| at(&weights.data, k)),
+    let (Some(closest), Some(weights)) = (per_strand(CLOSEST_GUIDES), per_strand(GUIDE_WEIGHTS)) else {
+        return Ok(None);
+    };
+    let mut by_id = std::collections::HashMap::with_capacity(guides.len());
+    for (index, &g) in guides.iter().enumerate() {
+        if let Some(other) = by_id.insert(groom.strand_ids[g], index) {
+            return Err(Error::Usage(format!(
+                "strands {} and {g} are guides with the same groom_id {}: groom_closest_guides cannot tell them apart",
+                guides[other], groom.strand_ids[g]
+            )));
+        }
+    }
+    let mut bindings = Vec::with_capacity(children.len());
+    for &c in children {
+        let mut binding = Binding { guides: [0; GUIDES_PER_CHILD], weights: [0.0; GUIDES_PER_CHILD] };
+        for k in 0..GUIDES_PER_CHILD {
+            let (id, weight) =
+                (closest.data[c * GUIDES_PER_CHILD + k], weights.data[c * GUIDES_PER_CHILD + k]);
+            binding.weights[k] = weight;
+            // An unweighted entry names nothing (Unreal writes 0 or -1 there).
+            if weight == 0.0 {
+                continue;
+            }
+            let guide = (id >= 0.0 && id.fract() == 0.0 && id < EXACT_IDS as f32)
+                .then(|| by_id.get(&(id as u32)))
+                .flatten();
+            binding.guides[k] = match guide {
+                Some(&index) => index as u32,
+                None => {
+                    return Err(Error::Usage(format!(
+                        "strand {c}: groom_closest_guides names groom_id {id} with weight {weight}, but none of the \
+                         groom's {} guides has that id",
+                        guides.len()
+                    )))
                 }
-            })
-            .collect(),
-    )
+            };
+        }
+        // Unweighted slots repeat the first weighted guide, as `binding::bind` writes them.
+        if let Some(first) = (0..GUIDES_PER_CHILD).find(|&k| binding.weights[k] != 0.0) {
+            let guide = binding.guides[first];
+            for k in (0..GUIDES_PER_CHILD).filter(|&k| binding.weights[k] == 0.0) {
+                binding.guides[k] = guide;
+            }
+        }
+        bindings.push(binding);
+    }
+    Ok(Some(bindings))
 }
 
-/// The bindings as per-strand attributes: guides name themselves with weight 1.
+/// The bindings as per-strand attributes, guides named by strand id; guides name themselves with
+/// weight 1.
 fn binding_attributes(
-    strands: usize,
+    strand_ids: &[u32],
     guides: &[usize],
     children: &[usize],
     bindings: &[Binding],
-) -> (Attribute, Attribute) {
+) -> Result<(Attribute, Attribute)> {
+    let id = |g: usize| {
+        match strand_ids[g] {
+        id if id < EXACT_IDS => Ok(id as f32),
+        id => Err(Error::Usage(format!(
+            "strand {g}: a guide's groom_id {id} is too large for groom_closest_guides (ids below {EXACT_IDS} \
+             stay exact in USD's float3)"
+        ))),
+    }
+    };
+    let strands = strand_ids.len();
     let mut closest = vec![0.0; strands * GUIDES_PER_CHILD];
     let mut weights = vec![0.0; strands * GUIDES_PER_CHILD];
-    for (index, &g) in guides.iter().enumerate() {
-        closest[g * GUIDES_PER_CHILD..][..GUIDES_PER_CHILD].fill(index as f32);
+    for &g in guides {
+        closest[g * GUIDES_PER_CHILD..][..GUIDES_PER_CHILD].fill(id(g)?);
         weights[g * GUIDES_PER_CHILD] = 1.0;
     }
     for (b, &c) in bindings.iter().zip(children) {
         for k in 0..GUIDES_PER_CHILD {
-            closest[c * GUIDES_PER_CHILD + k] = b.guides[k] as f32;
+            closest[c * GUIDES_PER_CHILD + k] = id(guides[b.guides[k] as usize])?;
             weights[c * GUIDES_PER_CHILD + k] = b.weights[k];
         }
     }
-    (
+    Ok((
         Attribute::new(CLOSEST_GUIDES, AttributeRate::Strand, GUIDES_PER_CHILD, closest),
         Attribute::new(GUIDE_WEIGHTS, AttributeRate::Strand, GUIDES_PER_CHILD, weights),
-    )
+    ))
 }
 
 /// The strands `which` of a groom (points, widths, ids, UVs and attributes), in that order.

@@ -7,6 +7,7 @@ pub mod cleanup;
 pub mod hair;
 pub mod input;
 pub mod obj;
+pub mod timeline;
 pub mod unreal;
 pub mod usd_compose;
 pub mod usd_interop;
@@ -129,10 +130,7 @@ pub fn read_groom_selected(
     options: &ImportOptions,
     selection: &usda::Selection,
 ) -> Result<Loaded> {
-    let format = match Format::from_magic(&read_head(path)?) {
-        Some(format) => format,
-        None => Format::from_extension(path)?,
-    };
+    let format = format_of(path)?;
     // One frame for every format: a USD time code is the frame number on the stage's timeline.
     let selection =
         &usda::Selection { time: selection.time.or(options.frame), variants: selection.variants.clone() };
@@ -179,6 +177,14 @@ pub fn read_groom_selected(
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;
     Ok(Loaded { groom, format })
+}
+
+/// The format of an existing groom file: its magic bytes, else its extension.
+pub fn format_of(path: &Path) -> Result<Format> {
+    match Format::from_magic(&read_head(path)?) {
+        Some(format) => Ok(format),
+        None => Format::from_extension(path),
+    }
 }
 
 /// What the groom model allows but no job can use: a file without strands, or attribute values
@@ -324,8 +330,81 @@ pub fn write_animated(
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
-    let mut warnings = write_animated_curves(path, groom, frames, frames_per_second, options)?;
+    let times =
+        usda::TimeCodes { start: 1.0, end: frames.len() as f64, per_second: frames_per_second as f64 };
+    let mut warnings = write_animated_curves(path, groom, frames, times, options)?;
     warnings.extend(mesh_warning(path, groom));
+    Ok(warnings)
+}
+
+/// Writes `first` and the frames `rest` yields (with the same topology) at frame numbers
+/// `timeline.first`, `+ 1`, …: Alembic streams them to disk one at a time; USD holds
+/// their points (checked against the memory limit first) until the stage is written. Attributes
+/// other than the points are written once, from `first`. A frame whose strands differ from the
+/// first's is refused, naming its frame number.
+pub fn write_frames(
+    path: &Path,
+    first: &Groom,
+    rest: impl Iterator<Item = Result<Groom>>,
+    timeline: &timeline::Timeline,
+    options: &ExportOptions,
+) -> Result<Vec<String>> {
+    first.validate()?;
+    let format = check_animated_output(path)?;
+    let count = timeline.frame_count();
+    let same_topology = |k: u64, groom: &Groom| -> Result<()> {
+        if groom.strand_offsets != first.strand_offsets || groom.group_ids != first.group_ids {
+            return Err(Error::Usage(format!(
+                "{}: frame {} has other strands than frame {} ({} vs {} vertices); coif writes animation of constant topology",
+                path.display(),
+                timeline.frame(k),
+                timeline.first,
+                groom.vertex_count(),
+                first.vertex_count()
+            )));
+        }
+        Ok(())
+    };
+    let mut warnings = if format == Format::Alembic {
+        let abc_options = alembic::AlembicWriteOptions {
+            unreal: options.unreal,
+            frames_per_second: timeline.frames_per_second,
+            first_frame: timeline.first,
+            ..Default::default()
+        };
+        // Each frame is written as `template` (the first frame's attributes) with its points.
+        let mut template =
+            options.unreal.then(|| unreal::with_root_uvs(first)).flatten().unwrap_or_else(|| first.clone());
+        let mut writer = alembic::AnimationWriter::create(path, &template, &abc_options, true)?;
+        writer.write_frame(&template)?;
+        for (k, groom) in rest.enumerate() {
+            let groom = groom?;
+            same_topology(k as u64 + 1, &groom)?;
+            template.points = groom.points;
+            writer.write_frame(&template)?;
+        }
+        writer.finish()?;
+        Vec::new()
+    } else {
+        crate::limits::check_memory(
+            &format!("holding {count} frames of {} vertices for {}", first.vertex_count(), path.display()),
+            count as f64 * first.vertex_count() as f64 * 12.0,
+        )?;
+        let mut points = Vec::with_capacity(count as usize);
+        points.push(first.points.clone());
+        for (k, groom) in rest.enumerate() {
+            let groom = groom?;
+            same_topology(k as u64 + 1, &groom)?;
+            points.push(groom.points);
+        }
+        let times = usda::TimeCodes {
+            start: timeline.first,
+            end: timeline.frame(points.len().max(1) as u64 - 1),
+            per_second: timeline.frames_per_second,
+        };
+        write_animated_curves(path, first, &points, times, options)?
+    };
+    warnings.extend(mesh_warning(path, first));
     Ok(warnings)
 }
 
@@ -335,7 +414,7 @@ pub fn check_animated_output(path: &Path) -> Result<Format> {
     let format = Format::from_extension(path)?;
     if format == Format::Hair {
         return Err(Error::Usage(format!(
-            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for --frames",
+            "{}: .hair holds no time samples; write .usda, .usdc, .usdz or .abc for animated output",
             path.display()
         )));
     }
@@ -346,32 +425,40 @@ fn write_animated_curves(
     path: &Path,
     groom: &Groom,
     frames: &[Vec<Vec3>],
-    frames_per_second: f32,
+    times: usda::TimeCodes,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
     let format = check_animated_output(path)?;
     match format {
         Format::Hair => unreachable!("refused by check_animated_output"),
         Format::Usda | Format::Usdc | Format::Usdz => {
+            // Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version.
+            let unreal_groom = options.unreal.then(|| unreal::for_usd(groom));
+            let groom = unreal_groom.as_ref().unwrap_or(groom);
             usda::check_writable(groom, path)?;
-            let times = usda::TimeCodes {
-                start: 1.0,
-                end: frames.len() as f64,
-                per_second: frames_per_second as f64,
-            };
+            usd_stage::check_animation(groom, frames, times, path)?;
+            let mut stage = usd_stage::plan(groom, Some((times, frames)))?;
+            if options.unreal {
+                usd_stage::add_unreal_groom_properties(&mut stage);
+            }
             match format {
                 Format::Usda => atomic::write_atomically(path, |out| {
-                    usda::write_animated(groom, frames, times, out, path)
+                    usda::write_stage(&stage, out).map_err(|e| Error::io(path, e))
                 })?,
-                Format::Usdc => usdc::write_animated(path, groom, frames, times)?,
-                _ => {
-                    usd_interop::write_usd(path, |out| usda::write_animated(groom, frames, times, out, path))?
-                }
+                Format::Usdc => usdc::write_stage(path, &stage)?,
+                _ => usd_interop::write_usd(path, |out| {
+                    usda::write_stage(&stage, out).map_err(|e| Error::io(path, e))
+                })?,
             }
             Ok(usd_warnings(path, groom))
         }
         Format::Alembic => {
-            let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
+            let abc_options = alembic::AlembicWriteOptions {
+                unreal: options.unreal,
+                frames_per_second: times.per_second,
+                first_frame: times.start,
+                ..Default::default()
+            };
             let mut writer = alembic::AnimationWriter::create(path, groom, &abc_options, true)?;
             let mut frame = groom.clone();
             for points in frames {

@@ -23,6 +23,7 @@ pub fn parse_triangles(bytes: &[u8], path: &Path) -> Result<(Vec<Vec3>, Vec<[u32
         ignore_lines: true,
         ..Default::default()
     };
+    check_face_indices(bytes, path)?;
     // Material libraries are not read: a mesh obstacle needs only its surface.
     let (models, _) = tobj::load_obj_buf(&mut &bytes[..], &options, |_| Err(tobj::LoadError::OpenFileFailed))
         .map_err(|e| Error::format(path, format!("not a readable Wavefront OBJ file: {e}")))?;
@@ -59,6 +60,71 @@ pub fn parse_triangles(bytes: &[u8], path: &Path) -> Result<(Vec<Vec3>, Vec<[u32
         return Err(Error::format(path, "the OBJ file has no triangles (no `f` faces)"));
     }
     Ok((vertices, triangles))
+}
+
+/// The words of one line of an OBJ file.
+fn line_words(line: &[u8]) -> Vec<&[u8]> {
+    line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty()).collect()
+}
+
+/// The kinds of element a face corner names, in the order of its `v/vt/vn` parts.
+const CORNER_PARTS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+
+/// Refuses a face or line that names an element the file does not have, before `tobj` sees it:
+/// `tobj` multiplies indices by 3 unchecked, so a huge or out-of-range relative index panics on
+/// overflow (or, without overflow checks, wraps past its own bounds check). Indices count from 1;
+/// negative ones count back from the elements defined so far, as in `tobj`.
+fn check_face_indices(bytes: &[u8], path: &Path) -> Result<()> {
+    let kind = |word: &[u8]| match word {
+        b"v" => Some(0),
+        b"vt" => Some(1),
+        b"vn" => Some(2),
+        _ => None,
+    };
+    let mut totals = [0i64; 3];
+    for line in bytes.split(|&b| b == b'\n') {
+        if let Some(k) = line_words(line).first().and_then(|w| kind(w)) {
+            totals[k] += 1;
+        }
+    }
+    let mut defined = [0i64; 3];
+    for (number, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let words = line_words(line);
+        match words.first().copied() {
+            Some(b"f" | b"l") => {}
+            Some(word) => {
+                if let Some(k) = kind(word) {
+                    defined[k] += 1;
+                }
+                continue;
+            }
+            None => continue,
+        }
+        for corner in &words[1..] {
+            for (part, text) in corner.split(|&b| b == b'/').enumerate().take(CORNER_PARTS.len()) {
+                // Unparsable parts are left to tobj, which refuses them.
+                let Some(index) = std::str::from_utf8(text).ok().and_then(|t| t.parse::<i64>().ok()) else {
+                    continue;
+                };
+                let known = index.checked_neg().is_some_and(|back| {
+                    (1..=totals[part]).contains(&index) || (1..=defined[part]).contains(&back)
+                });
+                if !known {
+                    return Err(Error::format(
+                        path,
+                        format!(
+                            "line {}: a face names {} {index}, but the file has {} (indices count from 1, \
+                             or back from -1)",
+                            number + 1,
+                            CORNER_PARTS[part],
+                            totals[part]
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -98,6 +164,25 @@ mod tests {
         let (_dir, path) = write("v 0 0 zero\nf 1 1 1\n");
         let e = read_triangles(&path).unwrap_err();
         assert!(e.to_string().contains("mesh.obj") && e.to_string().contains("OBJ"), "{e}");
+
+        // Indices beyond the file's elements, relative ones reaching before the first, and 0:
+        // tobj would overflow multiplying the first two (found by the obj_reader fuzz target).
+        for (face, names) in [
+            (
+                "f 1//6148914691236517206 2//1 3//1",
+                "line 5: a face names normal 6148914691236517206, but the file has 1",
+            ),
+            ("f 1 2 4", "line 5: a face names vertex 4, but the file has 3"),
+            ("f -1 -2 -4", "line 5: a face names vertex -4"),
+            ("f 1/0 2/1 3/1", "texture coordinate 0"),
+        ] {
+            let (_dir, path) = write(&format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n{face}\nvt 0 0\n"));
+            let e = read_triangles(&path).unwrap_err();
+            assert_eq!(e.exit_code(), 2, "{e}");
+            assert!(e.to_string().contains("mesh.obj") && e.to_string().contains(names), "{e}");
+        }
+        let (_dir, path) = write("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//-1 -1//1\n");
+        assert_eq!(read_triangles(&path).unwrap().1, vec![[0, 1, 2]]);
 
         let missing = Path::new("/nonexistent/head.obj");
         let e = read_triangles(missing).unwrap_err();

@@ -429,26 +429,16 @@ fn primvars<'g>(groom: &'g Groom, group: &CurveGroup, strands: &Strands) -> (Vec
             AttributeRate::Vertex => (strands.per_vertex(groom, &attribute.data, components), "vertex"),
             AttributeRate::Strand => (strands.per_strand(&attribute.data, components), "uniform"),
         };
-        let integer = attribute.name == crate::guides::CLOSEST_GUIDES;
-        let (type_name, data) = if integer {
-            let ints = values.iter().map(|&v| v.round() as i32).collect();
-            (
-                ["int[]", "int2[]", "int3[]", "int4[]"][components.clamp(1, 4) - 1],
-                Data::Ints { values: Cow::Owned(ints), components },
-            )
-        } else {
-            let type_name = usd_type(attribute.kind, &attribute.name, components);
-            let data = match attribute.kind {
-                // Int and bool tuples have no USD type of their own here: they go as floats.
-                AttributeKind::Int if type_name == "int[]" => {
-                    Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
-                }
-                AttributeKind::Bool if type_name == "bool[]" => {
-                    Data::Bools(values.iter().map(|&v| v != 0.0).collect())
-                }
-                _ => floats(values, components),
-            };
-            (type_name, data)
+        let type_name = usd_type(attribute.kind, &attribute.name, components);
+        let data = match attribute.kind {
+            // Int and bool tuples have no USD type of their own here: they go as floats.
+            AttributeKind::Int if type_name == "int[]" => {
+                Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
+            }
+            AttributeKind::Bool if type_name == "bool[]" => {
+                Data::Bools(values.iter().map(|&v| v != 0.0).collect())
+            }
+            _ => floats(values, components),
         };
         used.push(name.clone());
         primvars.push(

@@ -81,7 +81,12 @@ pub struct ChiangParams {
     /// Cuticle tilt α, degrees (positive tilts the highlight towards the root).
     pub alpha_degrees: f32,
     variance: [f32; 4],
+    /// Per lobe, the part of log M_p (narrow lobes) or the divisor of M_p (wide ones) that
+    /// depends on its variance alone: see [`longitudinal`].
+    longitudinal_norm: [f64; 4],
     logistic_scale: f32,
+    /// Mass of the logistic inside [−π, π], the trimmed lobe's normaliser.
+    logistic_mass: f32,
     /// sin and cos of 2^k α, k = 0, 1, 2.
     sin_2k_alpha: [f32; 3],
     cos_2k_alpha: [f32; 3],
@@ -110,7 +115,9 @@ impl ChiangParams {
             beta_n: beta_n_given,
             alpha_degrees,
             variance,
+            longitudinal_norm: variance.map(longitudinal_norm),
             logistic_scale,
+            logistic_mass: logistic_cdf(PI, logistic_scale) - logistic_cdf(-PI, logistic_scale),
             sin_2k_alpha: angles.map(f32::sin),
             cos_2k_alpha: angles.map(f32::cos),
         }
@@ -177,16 +184,30 @@ fn log_bessel_i0(x: f64) -> f64 {
     }
 }
 
-/// The longitudinal lobe M_p (normalised so that `∫ M cos θi dθi = 1`).
-fn longitudinal(cos_i: f32, cos_o: f32, sin_i: f32, sin_o: f32, v: f32) -> f32 {
+/// Variances at or below this evaluate M_p in logarithms: sinh(1/v) and I0(a) overflow.
+const NARROW_LOBE_VARIANCE: f64 = 0.1;
+
+/// The factor of M_p that depends on the variance alone, computed once per render: ln(1/(2v))
+/// for narrow lobes, sinh(1/v)·2v for wide ones.
+fn longitudinal_norm(v: f32) -> f64 {
+    let v = v as f64;
+    if v <= NARROW_LOBE_VARIANCE {
+        (1.0 / (2.0 * v)).ln()
+    } else {
+        (1.0 / v).sinh() * 2.0 * v
+    }
+}
+
+/// The longitudinal lobe M_p (normalised so that `∫ M cos θi dθi = 1`); `norm` is
+/// [`longitudinal_norm`] of `v`.
+fn longitudinal(cos_i: f32, cos_o: f32, sin_i: f32, sin_o: f32, v: f32, norm: f64) -> f32 {
     let v = v as f64;
     let a = cos_i as f64 * cos_o as f64 / v;
     let b = sin_i as f64 * sin_o as f64 / v;
-    let m = if v <= 0.1 {
-        // In logarithms: sinh(1/v) and I0(a) overflow for narrow lobes.
-        (log_bessel_i0(a) - b - 1.0 / v + std::f64::consts::LN_2 + (1.0 / (2.0 * v)).ln()).exp()
+    let m = if v <= NARROW_LOBE_VARIANCE {
+        (log_bessel_i0(a) - b - 1.0 / v + std::f64::consts::LN_2 + norm).exp()
     } else {
-        (-b).exp() * bessel_i0(a) / ((1.0 / v).sinh() * 2.0 * v)
+        (-b).exp() * bessel_i0(a) / norm
     };
     m as f32
 }
@@ -201,13 +222,13 @@ fn logistic_cdf(x: f32, s: f32) -> f32 {
     1.0 / (1.0 + (-x / s).exp())
 }
 
-/// The logistic of scale `s` restricted to [−π, π] and renormalised.
-fn trimmed_logistic(x: f32, s: f32) -> f32 {
-    logistic(x, s) / (logistic_cdf(PI, s) - logistic_cdf(-PI, s))
+/// The logistic of scale `s` restricted to [−π, π] and renormalised by its `mass` there.
+fn trimmed_logistic(x: f32, s: f32, mass: f32) -> f32 {
+    logistic(x, s) / mass
 }
 
-fn sample_trimmed_logistic(u: f32, s: f32) -> f32 {
-    let k = logistic_cdf(-PI, s) + u * (logistic_cdf(PI, s) - logistic_cdf(-PI, s));
+fn sample_trimmed_logistic(u: f32, s: f32, mass: f32) -> f32 {
+    let k = logistic_cdf(-PI, s) + u * mass;
     let x = -s * (1.0 / k - 1.0).ln();
     x.clamp(-PI, PI)
 }
@@ -229,8 +250,8 @@ fn wrap_angle(mut phi: f32) -> f32 {
 }
 
 /// The azimuthal lobe N_p at relative azimuth φ = φi − φo.
-fn azimuthal(phi: f32, p: usize, s: f32, gamma_o: f32, gamma_t: f32) -> f32 {
-    trimmed_logistic(wrap_angle(phi - exit_azimuth(p, gamma_o, gamma_t)), s)
+fn azimuthal(phi: f32, p: usize, s: f32, mass: f32, gamma_o: f32, gamma_t: f32) -> f32 {
+    trimmed_logistic(wrap_angle(phi - exit_azimuth(p, gamma_o, gamma_t)), s, mass)
 }
 
 /// Unpolarised Fresnel reflectance of a dielectric for incidence cosine `cos_i` from outside.
@@ -258,15 +279,21 @@ pub struct ChiangHair<'a> {
     gamma_o: f32,
     sigma_a: Vec3,
     params: &'a ChiangParams,
+    /// The outgoing direction a path's vertex evaluates every light sample and its continuation
+    /// for, with what depends on it alone (see [`ChiangHair::seen_from`]).
+    seen_from: Option<(Vec3, Outgoing)>,
 }
 
 /// Per-outgoing-direction quantities both eval and sample need.
+#[derive(Clone, Copy, Debug)]
 struct Outgoing {
     sin_o: f32,
     cos_o: f32,
     phi_o: f32,
     gamma_t: f32,
     attenuation: [Vec3; 4],
+    /// Probabilities of picking each lobe when sampling: proportional to its attenuation.
+    probabilities: [f32; 4],
 }
 
 fn luminance(c: Vec3) -> f32 {
@@ -280,7 +307,24 @@ impl<'a> ChiangHair<'a> {
         let b1 = tangent.any_orthonormal_vector();
         let b2 = tangent.cross(b1);
         let h = if h.is_finite() { h.clamp(-0.999, 0.999) } else { 0.0 };
-        ChiangHair { tangent, b1, b2, h, gamma_o: h.asin(), sigma_a, params }
+        ChiangHair { tangent, b1, b2, h, gamma_o: h.asin(), sigma_a, params, seen_from: None }
+    }
+
+    /// The same fibre with the terms that depend only on the outgoing direction `wo` (angles,
+    /// refraction, Fresnel and absorption per lobe, lobe probabilities) computed once: a path
+    /// vertex evaluates several light samples and a continuation towards the same `wo`. Results
+    /// are bit-identical to computing them per call.
+    pub fn seen_from(mut self, wo: Vec3) -> ChiangHair<'a> {
+        self.seen_from = Some((wo, self.outgoing(wo)));
+        self
+    }
+
+    /// The outgoing terms for `wo`: the cached ones when `wo` is the vertex's own direction.
+    fn outgoing_for(&self, wo: Vec3) -> Outgoing {
+        match self.seen_from {
+            Some((cached, out)) if cached == wo => out,
+            _ => self.outgoing(wo),
+        }
     }
 
     fn angles(&self, w: Vec3) -> (f32, f32, f32) {
@@ -312,12 +356,20 @@ impl<'a> ChiangHair<'a> {
         // The geometric series of all longer paths.
         let tf = transmittance * f;
         let a3 = a2 * tf / (Vec3::ONE - tf).max(Vec3::splat(1e-6));
-        Outgoing { sin_o, cos_o, phi_o, gamma_t, attenuation: [a0, a1, a2, a3] }
+        let attenuation = [a0, a1, a2, a3];
+        Outgoing {
+            sin_o,
+            cos_o,
+            phi_o,
+            gamma_t,
+            attenuation,
+            probabilities: Self::lobe_probabilities(&attenuation),
+        }
     }
 
     /// Probabilities of picking each lobe when sampling: proportional to its attenuation.
-    fn lobe_probabilities(out: &Outgoing) -> [f32; 4] {
-        let w = out.attenuation.map(luminance);
+    fn lobe_probabilities(attenuation: &[Vec3; 4]) -> [f32; 4] {
+        let w = attenuation.map(luminance);
         let total: f32 = w.iter().sum();
         if total <= 0.0 {
             return [1.0, 0.0, 0.0, 0.0];
@@ -327,25 +379,32 @@ impl<'a> ChiangHair<'a> {
 
     /// `S · cos θi` and the sampling density of `wi`, for light from `wi` leaving towards `wo`.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
-        let out = self.outgoing(wo);
+        let out = self.outgoing_for(wo);
         self.eval_with(&out, wi)
     }
 
     fn eval_with(&self, out: &Outgoing, wi: Vec3) -> (Vec3, f32) {
         let (sin_i, cos_i, phi_i) = self.angles(wi);
         let phi = phi_i - out.phi_o;
-        let probabilities = Self::lobe_probabilities(out);
-        let s = self.params.logistic_scale;
+        let probabilities = out.probabilities;
+        let (s, mass) = (self.params.logistic_scale, self.params.logistic_mass);
         let mut value = Vec3::ZERO;
         let mut pdf = 0.0;
         for (p, probability) in probabilities.iter().enumerate().take(3) {
             let (sin_op, cos_op) = self.params.shifted(p, out.sin_o, out.cos_o);
-            let density = longitudinal(cos_i, cos_op, sin_i, sin_op, self.params.variance[p])
-                * azimuthal(phi, p, s, self.gamma_o, out.gamma_t);
+            let density = longitudinal(
+                cos_i,
+                cos_op,
+                sin_i,
+                sin_op,
+                self.params.variance[p],
+                self.params.longitudinal_norm[p],
+            ) * azimuthal(phi, p, s, mass, self.gamma_o, out.gamma_t);
             value += out.attenuation[p] * density;
             pdf += probability * density;
         }
-        let residual = longitudinal(cos_i, out.cos_o, sin_i, out.sin_o, self.params.variance[3]) / TAU;
+        let (v3, norm3) = (self.params.variance[3], self.params.longitudinal_norm[3]);
+        let residual = longitudinal(cos_i, out.cos_o, sin_i, out.sin_o, v3, norm3) / TAU;
         value += out.attenuation[3] * residual;
         pdf += probabilities[3] * residual;
         (value, pdf)
@@ -354,8 +413,8 @@ impl<'a> ChiangHair<'a> {
     /// Draws an incoming direction: `u_lobe[0]` picks the lobe, `u_lobe[1]` the azimuth within
     /// it, `u` the longitudinal angle.
     pub fn sample(&self, wo: Vec3, u_lobe: [f32; 2], u: [f32; 2]) -> Option<BsdfSample> {
-        let out = self.outgoing(wo);
-        let probabilities = Self::lobe_probabilities(&out);
+        let out = self.outgoing_for(wo);
+        let probabilities = out.probabilities;
         let mut p = 0;
         let mut cumulative = probabilities[0];
         while p < 3 && u_lobe[0] >= cumulative {
@@ -372,7 +431,7 @@ impl<'a> ChiangHair<'a> {
         let cos_i = (1.0 - sin_i * sin_i).max(0.0).sqrt();
         let dphi = if p < 3 {
             exit_azimuth(p, self.gamma_o, out.gamma_t)
-                + sample_trimmed_logistic(u_lobe[1], self.params.logistic_scale)
+                + sample_trimmed_logistic(u_lobe[1], self.params.logistic_scale, self.params.logistic_mass)
         } else {
             TAU * u_lobe[1]
         };
@@ -478,6 +537,36 @@ mod tests {
         }
     }
 
+    /// A vertex's cached outgoing terms change nothing: eval and sample give the same bits as
+    /// the uncached fibre, for its own `wo` and (falling back) for any other.
+    #[test]
+    fn cached_outgoing_terms_are_bit_identical() {
+        let params = ChiangParams::new(0.25, 0.45, 3.0);
+        let mut sampler = Sampler::new(SamplerKind::Independent, 11, 0, 1 << 20);
+        for h in [-0.8f32, 0.0, 0.55] {
+            for theta in [-60.0f32, 5.0, 70.0] {
+                let wo = outgoing(theta);
+                let plain = ChiangHair::new(tangent(), h, sigma_a_from_melanin(1.1, 0.4), &params);
+                let cached = plain.seen_from(wo);
+                for _ in 0..64 {
+                    let wi = uniform_sphere(sampler.get_2d());
+                    let (a, b) = (plain.eval(wo, wi), cached.eval(wo, wi));
+                    assert_eq!(
+                        (a.0.to_array().map(f32::to_bits), a.1.to_bits()),
+                        (b.0.to_array().map(f32::to_bits), b.1.to_bits())
+                    );
+                    assert_eq!(plain.eval(wi, wo).1.to_bits(), cached.eval(wi, wo).1.to_bits());
+                    let (u1, u2) = (sampler.get_2d(), sampler.get_2d());
+                    let (x, y) = (plain.sample(wo, u1, u2), cached.sample(wo, u1, u2));
+                    assert_eq!(
+                        x.map(|s| (s.direction, s.weight, s.pdf)),
+                        y.map(|s| (s.direction, s.weight, s.pdf))
+                    );
+                }
+            }
+        }
+    }
+
     /// Sampled directions follow the evaluated density: a chi-square test over a grid of
     /// (sin θi, φi) cells, expected counts integrated from `pdf` at fine sub-cell resolution.
     #[test]
@@ -554,8 +643,9 @@ mod tests {
     fn reciprocal_where_the_model_is() {
         for v in [0.01f32, 0.09, 0.3, 2.0] {
             for (a, b) in [(0.3f32, -0.5f32), (1.2, 0.1), (-0.9, -0.2)] {
-                let m1 = longitudinal(a.cos(), b.cos(), a.sin(), b.sin(), v);
-                let m2 = longitudinal(b.cos(), a.cos(), b.sin(), a.sin(), v);
+                let norm = longitudinal_norm(v);
+                let m1 = longitudinal(a.cos(), b.cos(), a.sin(), b.sin(), v, norm);
+                let m2 = longitudinal(b.cos(), a.cos(), b.sin(), a.sin(), v, norm);
                 assert!((m1 - m2).abs() <= 1e-5 * m1.abs().max(1e-6), "v {v}: {m1} vs {m2}");
             }
         }

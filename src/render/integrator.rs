@@ -317,12 +317,15 @@ impl Integrator<'_> {
                     None => Pigment::Color(color),
                 };
                 let h = offset_across_fibre(tangent, normal, wo);
-                Bsdf::Chiang(ChiangHair::new(
-                    tangent,
-                    h,
-                    pigment.sigma_a(self.chiang.azimuthal_roughness()),
-                    self.chiang,
-                ))
+                Bsdf::Chiang(
+                    ChiangHair::new(
+                        tangent,
+                        h,
+                        pigment.sigma_a(self.chiang.azimuthal_roughness()),
+                        self.chiang,
+                    )
+                    .seen_from(wo),
+                )
             }
         }
     }

@@ -125,7 +125,6 @@ pub(crate) struct DropletSnapshot {
 /// Without a scalp in `options`, the groom's own mesh under its roots is the scalp
 /// ([`crate::surface_mesh::scalp_of`]); the result keeps the groom's meshes.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
-    crate::limits::check_style(groom, recipe, options.frames_per_second)?;
     let own_scalp;
     let options = match options.scalp.is_none().then(|| crate::surface_mesh::scalp_of(groom)).flatten() {
         Some(mesh) => {
@@ -134,6 +133,20 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         }
         None => options,
     };
+    // A recipe without `max_segment` still gets the resolution its head and rods need.
+    let resolved;
+    let recipe = match super::placement::default_max_segment(recipe, groom, options.scalp.as_deref())? {
+        Some(max) if recipe.settings.max_segment.is_none() => {
+            resolved = {
+                let mut r = recipe.clone();
+                r.settings.max_segment = Some(max);
+                r
+            };
+            &resolved
+        }
+        _ => recipe,
+    };
+    crate::limits::check_style(groom, recipe, options.frames_per_second)?;
     let mut styled = if crate::guides::wanted(groom, recipe) {
         crate::guides::style(groom, recipe, options)?
     } else {

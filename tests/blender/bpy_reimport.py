@@ -1,10 +1,13 @@
 """Test helper: what Blender's own importer (bpy) makes of a groom coif wrote, as JSON.
 
-  bpy_reimport.py FILE      FILE is .abc (wm.alembic_import) or .usd/.usda/.usdc (wm.usd_import)
+  bpy_reimport.py FILE [--frames FIRST:LAST]
+      FILE is .abc (wm.alembic_import) or .usd/.usda/.usdc (wm.usd_import)
 
 For every curves object: its name, curve and point counts, and each attribute whose name starts
 with "groom_" (domain, data type, values flattened) -- the guide flag and Unreal's interpolation
-attributes a DCC needs to re-interpolate children from guides.
+attributes a DCC needs to re-interpolate children from guides. With --frames, also the world
+positions of every curves object's points at each scene frame FIRST..LAST (evaluated: object
+animation, cache modifiers), in Blender's space (Z up, metres).
 """
 import json
 import sys
@@ -23,8 +26,22 @@ def flatten(attribute):
     return out
 
 
+def world_points(obj):
+    evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    matrix = evaluated.matrix_world
+    out = []
+    for p in evaluated.data.attributes["position"].data:
+        out.extend(matrix @ p.vector)
+    return out
+
+
 def main():
-    path = sys.argv[-1]
+    args = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:]
+    path = args[0]
+    frames = None
+    if "--frames" in args:
+        first, last = args[args.index("--frames") + 1].split(":")
+        frames = range(int(first), int(last) + 1)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     if path.endswith(".abc"):
         bpy.ops.wm.alembic_import(filepath=path, as_background_job=False)
@@ -47,7 +64,14 @@ def main():
                 },
             }
         )
-    print("BPY-JSON " + json.dumps({"objects": objects}))
+    result = {"objects": objects}
+    if frames is not None:
+        curves_objects = sorted((o for o in bpy.context.scene.objects if o.type == "CURVES"), key=lambda o: o.name)
+        result["frames"] = []
+        for frame in frames:
+            bpy.context.scene.frame_set(frame)
+            result["frames"].append({o.name: world_points(o) for o in curves_objects})
+    print("BPY-JSON " + json.dumps(result))
 
 
 main()

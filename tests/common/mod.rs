@@ -29,4 +29,12 @@ pub fn dir_listing(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
+
+/// Every `step`-th strand of a groom, with its widths and attributes: a preset's recipe on a few
+/// strands, so a test stays fast while still going through every stage.
+pub fn thin(groom: &coif::Groom, step: usize) -> coif::Groom {
+    let strands: Vec<usize> = (0..groom.strand_count()).step_by(step).collect();
+    coif::groups::assemble(&[(groom, &strands)]).expect("a selection of a valid groom is valid")
+}
+
 pub mod usd;

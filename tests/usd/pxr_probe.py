@@ -4,6 +4,8 @@
   pxr_probe.py blended STAGE T0 T1 W     world points of each curve prim with every Xform's local
                                          matrix blended between T0 and T1 (W = weight of T1):
                                          scale and translation lerped, rotation slerped
+  pxr_probe.py frames STAGE FIRST LAST   the timeline metadata, and the world points of each curve
+                                         prim at every whole frame FIRST..LAST, in metres, Y up
   pxr_probe.py author-transformed OUT    nested Xforms, cm units, Z up, two curve prims, samples
   pxr_probe.py author-composed DIR       a stage that references a layer with a variant set
   pxr_probe.py export IN OUT             IN saved by pxr in OUT's format (e.g. .usda to .usdc)
@@ -86,6 +88,31 @@ def dump(path, time=None):
     result["validationErrors"] = [
         e.GetMessage() for e in findings if e.GetType() == UsdValidation.ValidationErrorType.Error
     ]
+    return result
+
+
+def frames(path, first, last):
+    stage = Usd.Stage.Open(path)
+    metres = UsdGeom.GetStageMetersPerUnit(stage)
+    z_up = UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z
+    result = {
+        "startTimeCode": stage.GetStartTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
+        "endTimeCode": stage.GetEndTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
+        "timeCodesPerSecond": stage.GetTimeCodesPerSecond(),
+        "frames": [],
+    }
+    frame = first
+    while frame <= last:
+        code = Usd.TimeCode(frame)
+        cache = UsdGeom.XformCache(code)
+        prims = {}
+        for prim in stage.Traverse():
+            if prim.IsA(UsdGeom.BasisCurves):
+                world = cache.GetLocalToWorldTransform(prim)
+                points = [world.Transform(Gf.Vec3d(p)) * metres for p in UsdGeom.BasisCurves(prim).GetPointsAttr().Get(code)]
+                prims[str(prim.GetPath())] = floats((p[0], p[2], -p[1]) if z_up else p for p in points)
+        result["frames"].append({"frame": frame, "curves": prims})
+        frame += 1
     return result
 
 
@@ -249,6 +276,8 @@ if __name__ == "__main__":
     if command == "dump":
         time = float(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == "--time" else None
         json.dump(dump(target, time), sys.stdout)
+    elif command == "frames":
+        json.dump(frames(target, float(sys.argv[3]), float(sys.argv[4])), sys.stdout)
     elif command == "blended":
         json.dump(blended(target, *(float(a) for a in sys.argv[3:6])), sys.stdout)
     elif command == "author-transformed":

@@ -392,6 +392,10 @@ impl<'a> CurvesArchive<'a> {
                 _ => {
                     let canonical = match name {
                         epic::COLOR => attr::COLOR.to_string(),
+                        // Unreal's interpolation names are coif's own: they keep their prefix.
+                        n if n == crate::guides::CLOSEST_GUIDES || n == crate::guides::GUIDE_WEIGHTS => {
+                            n.to_string()
+                        }
                         n => n.strip_prefix(epic::PREFIX).unwrap_or(n).to_string(),
                     };
                     let (rate, data) = match param.rate {

@@ -45,8 +45,10 @@ pub struct AlembicWriteOptions {
     pub unreal: bool,
     /// A parent Xform with this matrix (column-vector convention; translation in column 3).
     pub xform: Option<DMat4>,
-    /// Frame rate of animated output; sample `i` is at time `(i + 1) / fps` (frame 1 first).
+    /// Frame rate of animated output; sample `i` is at time `(first_frame + i) / fps`.
     pub frames_per_second: f64,
+    /// Frame number of an animated output's first sample.
+    pub first_frame: f64,
     /// Written as the archive's `_ai_Application`.
     pub application: String,
     /// Name of the curves object.
@@ -62,6 +64,7 @@ impl Default for AlembicWriteOptions {
             unreal: false,
             xform: None,
             frames_per_second: 24.0,
+            first_frame: 1.0,
             application: format!("coif {}", env!("CARGO_PKG_VERSION")),
             object_name: DEFAULT_OBJECT_NAME.into(),
             velocities: true,
@@ -131,7 +134,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
         let mut archive = ArchiveWriter::new(out, archive_metadata)?;
         let time_sampling = if animated {
             let fps = options.frames_per_second;
-            archive.add_time_sampling(TimeSampling::uniform(fps, 1.0 / fps))
+            archive.add_time_sampling(TimeSampling::uniform(fps, options.first_frame / fps))
         } else {
             0
         };
@@ -430,7 +433,8 @@ fn add_curves<W: Write + Seek>(
                 ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
                 ParamSource::Attribute(a) => {
                     let a = groom.attribute(a).expect("listed from the groom");
-                    (Pod::F32, a.components as u8, a.rate, interpretation(&a.name, a.components))
+                    let pod = if written_as_int32(&a.name) { Pod::I32 } else { Pod::F32 };
+                    (pod, a.components as u8, a.rate, interpretation(&a.name, a.components))
                 }
             };
             let metadata = geom_param_metadata(scope(rate), pod, extent, interp);
@@ -521,6 +525,13 @@ pub fn basis_bytes(basis: CurveBasis) -> [u8; 4] {
     }
 }
 
+/// Attributes held as floats that Alembic readers want as int32: Unreal's Alembic groom spec
+/// gives `groom_closest_guides` as int32×3 (its importer also takes float32×3, other readers may
+/// not).
+fn written_as_int32(name: &str) -> bool {
+    name == crate::guides::CLOSEST_GUIDES
+}
+
 fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'g, [u8]>, u64) {
     fn floats<'g>(values: &'g [f32], factor: f32) -> Cow<'g, [u8]> {
         if factor == 1.0 {
@@ -551,7 +562,11 @@ fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'
             let a = groom.attribute(name).expect("layout is fixed by the first frame");
             // Rest positions are positions: they follow the unit change.
             let factor = if name == "rest" { scale } else { 1.0 };
-            (floats(&a.data, factor), a.len() as u64)
+            if written_as_int32(name) {
+                (Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()), a.len() as u64)
+            } else {
+                (floats(&a.data, factor), a.len() as u64)
+            }
         }
     }
 }

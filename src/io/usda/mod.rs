@@ -25,8 +25,10 @@ pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_P
 pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
 pub(crate) use parser::{offer_sample, wanted};
-pub use parser::{Attribute, Layer, Prim, Specifier, Value};
-pub(crate) use reader::{groom_from_layer, local_transform, stage_transform, value_at};
+pub use parser::{Attribute, Layer, LayerTimeline, Prim, Specifier, Value};
+pub(crate) use reader::{
+    groom_from_layer, local_transform, places_with_time_samples, stage_transform, value_at,
+};
 
 /// First bytes of every `.usda` file.
 pub const MAGIC: &[u8] = b"#usda";
@@ -109,6 +111,22 @@ fn parse(input: impl Read, path: &Path, time: Option<f64>) -> Result<Layer> {
 pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<Layer> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     parse(file, path, time)
+}
+
+/// The timeline metadata of a `.usda` layer (its header only; no prim is parsed). The stage's
+/// timeline is its root layer's, so sublayers are not read.
+pub fn read_header(input: impl Read, path: &Path) -> Result<parser::LayerTimeline> {
+    parser::parse_header(input).map(|layer| layer.timeline).map_err(|error| match error {
+        parser::ParseError::Syntax(e) => Error::format(path, format!("line {}: {}", e.line, e.message)),
+        parser::ParseError::Io(e) => Error::io(path, e),
+    })
+}
+
+/// Whether a `.usda` stage (composed, if it needs composition) time-samples anything that
+/// places its curves or meshes (see [`places_with_time_samples`]).
+pub fn is_animated(path: &Path) -> Result<Option<bool>> {
+    let layer = crate::io::usd_compose::read_stage(path, &Selection::default())?;
+    Ok(Some(places_with_time_samples(&layer)))
 }
 
 /// Reads a `.usda` file, composing what it references natively (see `io::usd_compose`).

@@ -159,6 +159,8 @@ pub struct Layer {
     pub sub_layers: Vec<SubLayer>,
     /// Layer metadata coif does not compose (`relocates`), named, with its line.
     pub refused: Option<(u32, String)>,
+    /// The stage's frame range and rate (`startTimeCode`, `endTimeCode`, `timeCodesPerSecond`).
+    pub timeline: LayerTimeline,
     pub prims: Vec<Prim>,
 }
 
@@ -166,6 +168,26 @@ impl Layer {
     /// Whether the layer needs `io::usd_compose` before a groom can be read from it.
     pub fn composes(&self) -> bool {
         !self.sub_layers.is_empty() || self.refused.is_some() || self.prims.iter().any(Prim::composes)
+    }
+}
+
+/// The timeline metadata a layer authors (each `None` when not authored).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LayerTimeline {
+    pub start: Option<f64>,
+    pub end: Option<f64>,
+    pub per_second: Option<f64>,
+}
+
+impl LayerTimeline {
+    /// Records one layer metadata field, if it is a timeline field.
+    pub fn set(&mut self, key: &str, value: f64) {
+        match key {
+            "startTimeCode" => self.start = Some(value),
+            "endTimeCode" => self.end = Some(value),
+            "timeCodesPerSecond" => self.per_second = Some(value),
+            _ => {}
+        }
     }
 }
 
@@ -220,9 +242,18 @@ pub const MAX_NESTING: usize = 1000;
 
 /// Parses a whole layer. `time` selects which time samples are kept.
 pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer> {
+    parse_layer(input, time, false)
+}
+
+/// Parses only the layer's metadata (units, up axis, timeline, sublayers), not its prims.
+pub fn parse_header<'a>(input: impl Read + 'a) -> ParseResult<Layer> {
+    parse_layer(input, None, true)
+}
+
+fn parse_layer<'a>(input: impl Read + 'a, time: Option<f64>, header_only: bool) -> ParseResult<Layer> {
     let mut parser =
         Parser { lexer: Lexer::new(input), time, depth: 0, arcs: None, sub_layers: None, refused: None };
-    let result = parser.layer();
+    let result = parser.layer(header_only);
     if let Some(error) = parser.lexer.take_read_error() {
         return Err(ParseError::Io(error));
     }
@@ -230,7 +261,7 @@ pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer>
 }
 
 impl Parser<'_> {
-    fn layer(&mut self) -> ParseResult<Layer> {
+    fn layer(&mut self, header_only: bool) -> ParseResult<Layer> {
         if !self.lexer.starts_with(b"#usda ") {
             return Err(self.syntax("not a .usda file: the first line must be '#usda 1.0'"));
         }
@@ -242,12 +273,13 @@ impl Parser<'_> {
                 ("metersPerUnit", Meta::Number(v)) => layer.meters_per_unit = Some(v),
                 ("upAxis", Meta::Text(v)) => layer.up_axis = Some(v),
                 ("defaultPrim", Meta::Text(v)) => layer.default_prim = Some(v),
+                (key, Meta::Number(v)) => layer.timeline.set(key, v),
                 _ => {}
             })?;
             layer.sub_layers = self.sub_layers.take().unwrap_or_default();
             layer.refused = self.refused.take();
         }
-        while !self.lexer.at_eof() {
+        while !header_only && !self.lexer.at_eof() {
             self.lexer.skip_ws();
             if self.lexer.at_eof() {
                 break;

@@ -14,7 +14,7 @@ use super::format::{
 };
 use crate::error::{Error, Result};
 use crate::io::usd_compose::arcs::{Arcs, AssetArc, LayerOffset, ListOp, SubLayer};
-use crate::io::usda::{self, Attribute, Layer, Prim, Specifier, Value};
+use crate::io::usda::{self, Attribute, Layer, LayerTimeline, Prim, Specifier, Value};
 use crate::io::ImportOptions;
 
 pub use crate::io::usda::ReadOutcome;
@@ -59,6 +59,12 @@ pub(crate) fn read_layer(
     let mut crate_file = Crate::parse(bytes).map_err(bad)?;
     crate_file.file = file;
     crate_file.layer(time).map_err(bad)
+}
+
+/// The timeline metadata of a crate file's layer.
+pub(crate) fn read_timeline(bytes: &[u8], path: &Path) -> Result<LayerTimeline> {
+    let bad = |message: String| Error::format(path, format!("crate file: {message}"));
+    Crate::parse(bytes).map_err(bad)?.timeline().map_err(bad)
 }
 
 /// A path: its parent path (`None` for the pseudo-root), its last element, whether a property.
@@ -307,6 +313,21 @@ impl<'a> Crate<'a> {
         }
     }
 
+    /// The timeline the pseudo-root's metadata authors (no prim is decoded).
+    fn timeline(&self) -> Checked<LayerTimeline> {
+        let mut timeline = LayerTimeline::default();
+        for spec in self.specs.iter().filter(|s| s.kind == SpecType::PseudoRoot as u32) {
+            for (field, value) in self.spec_fields(spec) {
+                if matches!(field, "startTimeCode" | "endTimeCode" | "timeCodesPerSecond") {
+                    if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
+                        timeline.set(field, v);
+                    }
+                }
+            }
+        }
+        Ok(timeline)
+    }
+
     /// The layer model: prims (and variant bodies) with their attributes and arcs.
     fn layer(&self, time: Option<f64>) -> Checked<Layer> {
         let mut layer = Layer::default();
@@ -338,6 +359,11 @@ impl<'a> Crate<'a> {
                         }
                         "subLayerOffsets" => offsets = self.layer_offsets(value).map_err(fail)?,
                         "relocates" | "layerRelocates" => layer.refused = Some((0, field.to_string())),
+                        "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" => {
+                            if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
+                                layer.timeline.set(field, v);
+                            }
+                        }
                         "primChildren" => {
                             order.insert(spec.path, self.token_vector(value).map_err(fail)?);
                         }

@@ -94,6 +94,21 @@ pub fn read(bytes: &[u8], path: &Path, options: &ImportOptions, time: Option<f64
     decode::read(bytes, None, path, options, time)
 }
 
+/// The timeline metadata of a crate file's layer (no prim is decoded).
+pub fn read_timeline(bytes: &[u8], path: &Path) -> Result<usda::LayerTimeline> {
+    decode::read_timeline(bytes, path)
+}
+
+/// Whether a crate file's stage (composed, if it needs composition) time-samples anything that
+/// places its curves or meshes.
+pub fn is_animated(bytes: &[u8], path: &Path) -> Result<Option<bool>> {
+    let mut layer = decode::read_layer(bytes, None, path, None)?;
+    if layer.composes() {
+        layer = crate::io::usd_compose::compose(layer, path, &Default::default())?;
+    }
+    Ok(Some(usda::places_with_time_samples(&layer)))
+}
+
 /// The layer model of a crate file, composition arcs recorded, not resolved.
 pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<usda::Layer> {
     with_file(path, |bytes, file| decode::read_layer(bytes, file, path, time))

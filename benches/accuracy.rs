@@ -1,0 +1,193 @@
+//! Solver accuracy (issue 15), as figures rather than pass/fail, so the solver's progress can be
+//! followed and compared between branches:
+//! - `invariance`: the bed-head preset on a thin groom (every 20th strand of
+//!   `seed_200x24cm.hair`) styled at Δt 1/240 … 1/1440 and 5, 10, 20 iterations. Mean and largest
+//!   distance of the settled shape and of the `rest` curves to the finest run (Δt 1/1440, 20
+//!   iterations), in % of the strand length; the largest collider penetration of any stage.
+//! - `cantilever`: a clamped horizontal hair of 8 segments of 2 mm … 3 cm, settled under a gravity
+//!   scaled to a small deflection (0.5 % of its length), at the simulation's own iterations. Tip
+//!   sag over Euler–Bernoulli `q·L⁴/(8·E·I)` for the clamp at the root (`L`) and at the first
+//!   frame, half an edge out (`L − l/2`).
+//! - `stretch`: straight and curly strands hanging from the root, simulated 2 s at Δt 1/30 and
+//!   1/360: the largest edge stretch.
+//!
+//! `cargo bench --bench accuracy [-- FILTER]`; `cargo test --locked --bench accuracy -- FILTER`
+//! runs it in the (optimised) test profile without a release build.
+
+use std::path::Path;
+use std::time::Instant;
+
+use coif::generate::{generate, GenerateParams, Style};
+use coif::sim::{Cuticle, Material, NoHooks, SettleOptions, SimParams, Simulation};
+use coif::style::{recipe, style, StyleOptions};
+use coif::Groom;
+use glam::Vec3;
+
+fn main() {
+    let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    let run = |name: &str| filter.as_deref().is_none_or(|f| name.contains(f));
+    if run("invariance") {
+        invariance();
+    }
+    if run("cantilever") {
+        cantilever();
+    }
+    if run("stretch") {
+        stretch();
+    }
+}
+
+/// Every `step`-th strand of a groom, with its widths (as `tests/common::thin`).
+fn thin(groom: &Groom, step: usize) -> Groom {
+    let strands: Vec<usize> = (0..groom.strand_count()).step_by(step).collect();
+    coif::groups::assemble(&[(groom, &strands)]).expect("a selection of a valid groom is valid")
+}
+
+fn vec3_attribute(groom: &Groom, name: &str) -> Vec<Vec3> {
+    groom
+        .attribute(name)
+        .expect("styled attribute")
+        .data
+        .chunks(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect()
+}
+
+/// Mean and largest distance between two point sets, in % of `length`.
+fn difference(a: &[Vec3], b: &[Vec3], length: f32) -> (f32, f32) {
+    let d: Vec<f32> = a.iter().zip(b).map(|(p, q)| p.distance(*q)).collect();
+    let mean = d.iter().sum::<f32>() / d.len().max(1) as f32;
+    let max = d.iter().copied().fold(0.0, f32::max);
+    (100.0 * mean / length, 100.0 * max / length)
+}
+
+fn invariance() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let preset = std::fs::read_to_string(root.join("grooms/recipes/bedhead_scene1.toml")).expect("preset");
+    assert!(preset.contains("dt = 0.0027777778") && preset.contains("iterations = 5"));
+    let groom = coif::io::read_groom(&root.join("grooms/seed_200x24cm.hair"), &Default::default())
+        .expect("seed groom")
+        .groom;
+    let groom = thin(&groom, 20);
+    let length: f32 = groom.strand_points(0).windows(2).map(|w| w[0].distance(w[1])).sum();
+    println!(
+        "invariance: bedhead_scene1 on {} strands of {:.3} m; distances to Δt 1/1440 × 20 iterations, \
+         % of the strand length",
+        groom.strand_count(),
+        length
+    );
+    let styled = |rate: u32, iterations: u32| {
+        let text = preset
+            .replace("dt = 0.0027777778", &format!("dt = {}", 1.0 / rate as f64))
+            .replace("iterations = 5", &format!("iterations = {iterations}"));
+        let recipe = recipe::parse(&text, &root.join("grooms/recipes/bedhead_scene1.toml")).expect("recipe");
+        let start = Instant::now();
+        let out = style(&groom, &recipe, &StyleOptions::default()).expect("style");
+        (out, start.elapsed().as_secs_f64())
+    };
+    let (reference, _) = styled(1440, 20);
+    let (ref_shape, ref_rest) = (reference.groom.points.clone(), vec3_attribute(&reference.groom, "rest"));
+    println!(
+        "  Δt      iter  shape mean/max %   rest mean/max %   deepest mm  settle (converged, s)  wall s"
+    );
+    for rate in [240u32, 360, 720, 1440] {
+        for iterations in [5u32, 10, 20] {
+            let fresh;
+            let (out, wall) = if (rate, iterations) == (1440, 20) {
+                (&reference, 0.0)
+            } else {
+                let (styled, wall) = styled(rate, iterations);
+                fresh = styled;
+                (&fresh, wall)
+            };
+            let shape = difference(&out.groom.points, &ref_shape, length);
+            let rest = difference(&vec3_attribute(&out.groom, "rest"), &ref_rest, length);
+            let deepest = out.report.stages.iter().map(|s| s.max_penetration).fold(0.0, f32::max);
+            let settle =
+                out.report.stages.last().and_then(|s| s.settle.as_ref().map(|r| (r.converged, r.seconds)));
+            println!(
+                "  1/{rate:<5} {iterations:>3}   {:>6.2} / {:>6.2}    {:>6.2} / {:>6.2}   {:>8.2}   {settle:?}  {wall:.1}",
+                shape.0,
+                shape.1,
+                rest.0,
+                rest.1,
+                deepest * 1e3
+            );
+        }
+    }
+}
+
+fn cantilever() {
+    let width = 80e-6f32;
+    // No cuticle gradient, so E·I is uniform.
+    let material = Material { cuticle: Cuticle { share: 0.0, ..Cuticle::default() }, ..Material::default() };
+    let r = 0.5 * width as f64;
+    let ei = material.youngs_modulus as f64 * std::f64::consts::PI * r.powi(4) / 4.0;
+    let weight = material.density as f64 * std::f64::consts::PI * r * r;
+    println!("cantilever: 8 segments, gravity scaled to a 0.5 % deflection; sag / beam theory");
+    println!("  segment   iter  g m/s²     sag/EB(L)  sag/EB(L−l/2)  settled (converged, s)");
+    for segment in [0.002f32, 0.005, 0.01, 0.03] {
+        let vertices = 9usize;
+        let length = segment * (vertices - 1) as f32;
+        let points: Vec<Vec3> = (0..vertices).map(|i| Vec3::new(segment * i as f32, 0.0, 0.0)).collect();
+        let groom = Groom::from_strands(&[points], width);
+        // δ = ρ·A·g·L⁴/(8·E·I) = 0.005·L.
+        let g = 0.005 * length as f64 * 8.0 * ei / (weight * (length as f64).powi(4));
+        let beam = |l: f64| weight * g * l.powi(4) / (8.0 * ei);
+        for iterations in [5u32, 10, 20] {
+            let params = SimParams {
+                material,
+                iterations,
+                gravity: Vec3::new(0.0, -g as f32, 0.0),
+                damping: 20.0,
+                ..SimParams::default()
+            };
+            let mut sim = Simulation::new(&groom, params).expect("cantilever");
+            let report =
+                sim.settle(&SettleOptions { tolerance: 1e-5, max_seconds: 40.0, iterations: None }, &NoHooks);
+            let sag = -sim.rods().positions().last().expect("tip").y as f64;
+            println!(
+                "  {:>5.1} mm  {iterations:>3}  {g:>8.3}   {:>8.3}   {:>8.3}      ({}, {:.2})",
+                segment * 1e3,
+                sag / beam(length as f64),
+                sag / beam(length as f64 - 0.5 * segment as f64),
+                report.converged,
+                report.seconds
+            );
+        }
+    }
+}
+
+fn stretch() {
+    println!("stretch: 20 strands × 32 vertices, 24 cm, hanging 2 s; largest edge strain (stretch > 0)");
+    for (name, style_kind) in
+        [("straight", Style::Straight), ("curly", Style::Curly { radius: 0.01, pitch: 0.03 })]
+    {
+        let groom = generate(&GenerateParams {
+            strands: 20,
+            vertices_per_strand: 32,
+            length: 0.24,
+            style: style_kind,
+            seed: 3,
+            ..GenerateParams::default()
+        })
+        .expect("groom");
+        for rate in [30u32, 360] {
+            let params = SimParams { dt: 1.0 / rate as f32, ..SimParams::default() };
+            let mut sim = Simulation::new(&groom, params).expect("sim");
+            for _ in 0..2 * rate {
+                sim.step();
+            }
+            let p = sim.rods().positions();
+            let rest = &groom.points;
+            let worst = (0..groom.strand_count())
+                .flat_map(|s| {
+                    let range = groom.strand_range(s);
+                    (range.start..range.end - 1)
+                        .map(move |v| p[v].distance(p[v + 1]) / rest[v].distance(rest[v + 1]) - 1.0)
+                })
+                .fold(f32::NEG_INFINITY, f32::max);
+            println!("  {name:<8} Δt 1/{rate:<4} {:>9.4} %", 100.0 * worst);
+        }
+    }
+}
