@@ -237,8 +237,8 @@ pub fn place(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
 
 /// Longest segment, in head units, a groom may have to be styled as it comes when the recipe
 /// sets no `max_segment`: 3.4 cm on coif's 8.5 cm head, above the seed grooms the presets are
-/// tuned on (3 cm segments, whatever the head fitted to their roots). A DCC's coarser guides (Blender: 8 cm segments on a 10 cm head) are
-/// resampled to [`DEFAULT_SEGMENT_HEAD_UNITS`].
+/// tuned on (3 cm segments, whatever the head fitted to their roots). A DCC's coarser guides
+/// (Blender: 8 cm segments on a 10 cm head) are resampled to [`DEFAULT_SEGMENT_HEAD_UNITS`].
 pub const COARSEST_SEGMENT_HEAD_UNITS: f32 = 0.4;
 /// The resolution a too coarse groom is resampled to: 5 mm on a 10 cm head, 1 cm on a head
 /// twice as large. (At 0.12 head units, 2.4 cm segments on the 20 cm test head, the water set
