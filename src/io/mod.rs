@@ -280,24 +280,7 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
                 .map(|what| format!("{}: .hair drops {what}", path.display()))
                 .collect())
         }
-        Format::Usda | Format::Usdc => {
-            // Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version.
-            let unreal_groom = options.unreal.then(|| unreal::for_usd(groom));
-            let groom = unreal_groom.as_ref().unwrap_or(groom);
-            usda::check_writable(groom, path)?;
-            let mut stage = usd_stage::plan(groom, None)?;
-            if options.unreal {
-                usd_stage::add_unreal_groom_properties(&mut stage);
-            }
-            if format == Format::Usda {
-                atomic::write_atomically(path, |w| {
-                    usda::write_stage(&stage, w).map_err(|e| Error::io(path, e))
-                })?;
-            } else {
-                usdc::write_stage(path, &stage)?;
-            }
-            Ok(usd_warnings(path, groom))
-        }
+        Format::Usda | Format::Usdc => write_usd_stage(path, format, groom, None, options),
         Format::Usdz => {
             usda::check_writable(groom, path)?;
             usd_interop::write(path, groom)?;
@@ -372,18 +355,14 @@ pub fn write_frames(
             first_frame: timeline.first,
             ..Default::default()
         };
-        // Each frame is written as `template` (the first frame's attributes) with its points.
-        let mut template =
+        let template =
             options.unreal.then(|| unreal::with_root_uvs(first)).flatten().unwrap_or_else(|| first.clone());
-        let mut writer = alembic::AnimationWriter::create(path, &template, &abc_options, true)?;
-        writer.write_frame(&template)?;
-        for (k, groom) in rest.enumerate() {
+        let points = std::iter::once(Ok(first.points.clone())).chain(rest.enumerate().map(|(k, groom)| {
             let groom = groom?;
             same_topology(k as u64 + 1, &groom)?;
-            template.points = groom.points;
-            writer.write_frame(&template)?;
-        }
-        writer.finish()?;
+            Ok(groom.points)
+        }));
+        stream_alembic_frames(path, template, points, &abc_options)?;
         Vec::new()
     } else {
         crate::limits::check_memory(
@@ -432,25 +411,7 @@ fn write_animated_curves(
     match format {
         Format::Hair => unreachable!("refused by check_animated_output"),
         Format::Usda | Format::Usdc | Format::Usdz => {
-            // Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version.
-            let unreal_groom = options.unreal.then(|| unreal::for_usd(groom));
-            let groom = unreal_groom.as_ref().unwrap_or(groom);
-            usda::check_writable(groom, path)?;
-            usd_stage::check_animation(groom, frames, times, path)?;
-            let mut stage = usd_stage::plan(groom, Some((times, frames)))?;
-            if options.unreal {
-                usd_stage::add_unreal_groom_properties(&mut stage);
-            }
-            match format {
-                Format::Usda => atomic::write_atomically(path, |out| {
-                    usda::write_stage(&stage, out).map_err(|e| Error::io(path, e))
-                })?,
-                Format::Usdc => usdc::write_stage(path, &stage)?,
-                _ => usd_interop::write_usd(path, |out| {
-                    usda::write_stage(&stage, out).map_err(|e| Error::io(path, e))
-                })?,
-            }
-            Ok(usd_warnings(path, groom))
+            write_usd_stage(path, format, groom, Some((times, frames)), options)
         }
         Format::Alembic => {
             let abc_options = alembic::AlembicWriteOptions {
@@ -459,14 +420,53 @@ fn write_animated_curves(
                 first_frame: times.start,
                 ..Default::default()
             };
-            let mut writer = alembic::AnimationWriter::create(path, groom, &abc_options, true)?;
-            let mut frame = groom.clone();
-            for points in frames {
-                frame.points.clone_from(points);
-                writer.write_frame(&frame)?;
-            }
-            writer.finish()?;
+            stream_alembic_frames(path, groom.clone(), frames.iter().map(|p| Ok(p.clone())), &abc_options)?;
             Ok(Vec::new())
         }
     }
+}
+
+/// One USD stage (still, or with `animation`'s time-sampled points) in `format`; `--unreal`
+/// adds Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version.
+fn write_usd_stage(
+    path: &Path,
+    format: Format,
+    groom: &Groom,
+    animation: Option<(usda::TimeCodes, &[Vec<Vec3>])>,
+    options: &ExportOptions,
+) -> Result<Vec<String>> {
+    let unreal_groom = options.unreal.then(|| unreal::for_usd(groom));
+    let groom = unreal_groom.as_ref().unwrap_or(groom);
+    usda::check_writable(groom, path)?;
+    if let Some((times, frames)) = animation {
+        usd_stage::check_animation(groom, frames, times, path)?;
+    }
+    let mut stage = usd_stage::plan(groom, animation)?;
+    if options.unreal {
+        usd_stage::add_unreal_groom_properties(&mut stage);
+    }
+    let write_text =
+        |out: &mut dyn std::io::Write| usda::write_stage(&stage, out).map_err(|e| Error::io(path, e));
+    match format {
+        Format::Usda => atomic::write_atomically(path, write_text)?,
+        Format::Usdc => usdc::write_stage(path, &stage)?,
+        _ => usd_interop::write_usd(path, write_text)?,
+    }
+    Ok(usd_warnings(path, groom))
+}
+
+/// Streams frames to an Alembic file, one at a time: each is `template` (the first frame's
+/// attributes) with that frame's points.
+fn stream_alembic_frames(
+    path: &Path,
+    mut template: Groom,
+    frames: impl Iterator<Item = Result<Vec<Vec3>>>,
+    options: &alembic::AlembicWriteOptions,
+) -> Result<()> {
+    let mut writer = alembic::AnimationWriter::create(path, &template, options, true)?;
+    for points in frames {
+        template.points = points?;
+        writer.write_frame(&template)?;
+    }
+    writer.finish()
 }
