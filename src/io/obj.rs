@@ -62,9 +62,16 @@ pub fn parse_triangles(bytes: &[u8], path: &Path) -> Result<(Vec<Vec3>, Vec<[u32
     Ok((vertices, triangles))
 }
 
-/// The words of one line of an OBJ file.
-fn line_words(line: &[u8]) -> Vec<&[u8]> {
-    line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty()).collect()
+/// The lines of an OBJ file and their words, cut exactly as `tobj` cuts them (`BufRead::lines`,
+/// then Unicode white space: vertical tab and no-break space separate words too), so the check
+/// below sees the indices tobj will use. A line that is not UTF-8 makes tobj refuse the file, so
+/// it has no words here.
+fn lines_and_words(bytes: &[u8]) -> impl Iterator<Item = (usize, Vec<&str>)> {
+    bytes.split(|&b| b == b'\n').enumerate().map(|(number, line)| {
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        let words = std::str::from_utf8(line).map_or_else(|_| Vec::new(), |l| l.split_whitespace().collect());
+        (number, words)
+    })
 }
 
 /// The kinds of element a face corner names, in the order of its `v/vt/vn` parts.
@@ -75,23 +82,22 @@ const CORNER_PARTS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
 /// overflow (or, without overflow checks, wraps past its own bounds check). Indices count from 1;
 /// negative ones count back from the elements defined so far, as in `tobj`.
 fn check_face_indices(bytes: &[u8], path: &Path) -> Result<()> {
-    let kind = |word: &[u8]| match word {
-        b"v" => Some(0),
-        b"vt" => Some(1),
-        b"vn" => Some(2),
+    let kind = |word: &str| match word {
+        "v" => Some(0),
+        "vt" => Some(1),
+        "vn" => Some(2),
         _ => None,
     };
     let mut totals = [0i64; 3];
-    for line in bytes.split(|&b| b == b'\n') {
-        if let Some(k) = line_words(line).first().and_then(|w| kind(w)) {
+    for (_, words) in lines_and_words(bytes) {
+        if let Some(k) = words.first().and_then(|w| kind(w)) {
             totals[k] += 1;
         }
     }
     let mut defined = [0i64; 3];
-    for (number, line) in bytes.split(|&b| b == b'\n').enumerate() {
-        let words = line_words(line);
+    for (number, words) in lines_and_words(bytes) {
         match words.first().copied() {
-            Some(b"f" | b"l") => {}
+            Some("f" | "l") => {}
             Some(word) => {
                 if let Some(k) = kind(word) {
                     defined[k] += 1;
@@ -101,9 +107,9 @@ fn check_face_indices(bytes: &[u8], path: &Path) -> Result<()> {
             None => continue,
         }
         for corner in &words[1..] {
-            for (part, text) in corner.split(|&b| b == b'/').enumerate().take(CORNER_PARTS.len()) {
+            for (part, text) in corner.split('/').enumerate().take(CORNER_PARTS.len()) {
                 // Unparsable parts are left to tobj, which refuses them.
-                let Some(index) = std::str::from_utf8(text).ok().and_then(|t| t.parse::<i64>().ok()) else {
+                let Ok(index) = text.parse::<i64>() else {
                     continue;
                 };
                 let known = index.checked_neg().is_some_and(|back| {
@@ -181,6 +187,11 @@ mod tests {
             assert_eq!(e.exit_code(), 2, "{e}");
             assert!(e.to_string().contains("mesh.obj") && e.to_string().contains(names), "{e}");
         }
+        // Words split as tobj splits them: a vertical tab ends "-8" here (found by the fuzz
+        // target after 5 M runs: tobj saw texture coordinate -8 of 1 and overflowed).
+        let (_dir, path) = write("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-8\u{b} 2/1 3/1\r\n");
+        let e = read_triangles(&path).unwrap_err();
+        assert!(e.to_string().contains("line 5: a face names texture coordinate -8"), "{e}");
         let (_dir, path) = write("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf -3//1 -2//-1 -1//1\n");
         assert_eq!(read_triangles(&path).unwrap().1, vec![[0, 1, 2]]);
 
