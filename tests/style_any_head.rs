@@ -1,8 +1,12 @@
 //! The presets of grooms/recipes/, unchanged, on heads other than the one they were written on:
 //! (a) a small groom on coif's own head, (b) the same groom twice as large, moved and turned Z up,
 //! and (c) a groom on a head of another shape that brings its own scalp mesh. In every case the
-//! perm winds and curls the hair to the radius the bonds predict, the water set curls it, the
-//! bed-head pillow presses one side, and no vertex of the result ends inside the head.
+//! perm winds and curls the hair to the radius the bonds predict, the water set curls it (its
+//! wound tails' rest curves to the wound radius over the hydrogen share), the bed-head pillow
+//! presses one side (the rest shape keeps the hydrogen share of the shape the hair dried in),
+//! and no vertex of the result ends inside the head.
+mod common;
+
 use std::f32::consts::FRAC_PI_2;
 use std::path::Path;
 use std::sync::Arc;
@@ -102,8 +106,13 @@ fn run(preset: &str, case: &Case) -> Styled {
 }
 
 fn run_text(text: &str, case: &Case) -> Styled {
+    run_captured(text, case, 0.0)
+}
+
+/// A styling run that captures `frames_per_second` frames (0: only the result).
+fn run_captured(text: &str, case: &Case, frames_per_second: f32) -> Styled {
     let recipe = recipe::parse(text, Path::new("preset.toml")).unwrap();
-    let options = StyleOptions { scalp: case.scalp.clone(), ..Default::default() };
+    let options = StyleOptions { scalp: case.scalp.clone(), frames_per_second, ..Default::default() };
     style(&case.groom, &recipe, &options).unwrap_or_else(|e| panic!("{}: {e}", case.name))
 }
 
@@ -162,7 +171,8 @@ fn the_water_set_curls_and_the_bed_head_presses_on_any_head() {
 
         // The water set against a control that dries the same wet hair unwound.
         let preset = std::fs::read_to_string("grooms/recipes/water_set.toml").unwrap();
-        let set = run("water_set", &case);
+        let water = recipe::parse(&preset, Path::new("water_set.toml")).unwrap();
+        let set = run_captured(&preset, &case, 10.0);
         let control = run_text(
             &preset
                 .replace("kind = \"wrap\"", "kind = \"process\"")
@@ -200,6 +210,26 @@ fn the_water_set_curls_and_the_bed_head_presses_on_any_head() {
             "{}: the water set left no curl: {set_rest} vs {control_rest}",
             case.name
         );
+        // The hydrogen bonds the water broke re-form on the rollers, so the rest curve of each
+        // wound tail is a helix of the wound radius over their share (model.md §2).
+        let (wet, wrap, dry) = (&set.report.stages[0], &set.report.stages[1], &set.report.stages[2]);
+        let share = common::hydrogen_influence(&water) * (dry.bond_rates.hydrogen - wrap.bond_rates.hydrogen);
+        let held = &set.frames[common::frame_after(&set, water.settings.dt, wet.steps + wrap.steps)];
+        let rods = common::rods_in_world(&water, &frame);
+        let strands: Vec<usize> = (0..set.groom.strand_count()).collect();
+        let curls =
+            common::wound_and_rest_curls(&set.groom, &strands, held, &vec3s(&set.groom, "rest"), &rods);
+        let ratios: Vec<f32> = curls.iter().map(|&(w, r)| r / (w / share)).collect();
+        eprintln!(
+            "{} water set: {} of {} strands wound on the rollers; rest curls {:?} of wound radius / {share:.3}",
+            case.name,
+            curls.len(),
+            strands.len(),
+            ratios
+        );
+        assert!(curls.len() >= 2, "{}: only {} strands wound", case.name, curls.len());
+        let ratio = common::median(ratios);
+        assert!((ratio - 1.0).abs() < 0.1, "{}: rest curls {ratio} of the prediction", case.name);
         case.assert_outside("water set", &set.groom, 2e-4 * size / 0.085);
 
         // The pillow comes from the head's side (+x of the head frame): against a control with
@@ -207,7 +237,8 @@ fn the_water_set_curls_and_the_bed_head_presses_on_any_head() {
         // that side move, those on the other side much less.
         let preset = std::fs::read_to_string("grooms/recipes/bedhead_scene1.toml").unwrap();
         assert!(preset.contains("travel = 2.47"), "the control below must change the preset's travel");
-        let bed = run("bedhead_scene1", &case);
+        let bed_recipe = recipe::parse(&preset, Path::new("bedhead.toml")).unwrap();
+        let bed = run_captured(&preset, &case, 60.0);
         let unpressed = run_text(&preset.replace("travel = 2.47", "travel = 0.0"), &case);
         let (rest, control) = (vec3s(&bed.groom, "rest"), vec3s(&unpressed.groom, "rest"));
         let moved = |side: f32| {
@@ -232,6 +263,28 @@ fn the_water_set_curls_and_the_bed_head_presses_on_any_head() {
         assert!(
             pressed > 0.03 && pressed > 3.0 * other,
             "{}: the pillow did not press: {pressed} vs {other}",
+            case.name
+        );
+        // Hydrogen bonds re-form as the hair dries under the pillow (evenly in time, from the
+        // dry stage's start until the water is gone), in the shapes it has then: the rest shape
+        // keeps their share of those shapes.
+        let (wet, press, dry) = (&bed.report.stages[0], &bed.report.stages[1], &bed.report.stages[2]);
+        let dt = bed_recipe.settings.dt;
+        let drying_steps = common::drying_steps(&bed_recipe);
+        let (first, last) = (
+            common::frame_after(&bed, dt, wet.steps + press.steps),
+            common::frame_after(&bed, dt, wet.steps + press.steps + drying_steps),
+        );
+        let predicted = f64::from(
+            common::hydrogen_influence(&bed_recipe) * (dry.bond_rates.hydrogen - press.bond_rates.hydrogen),
+        );
+        let strands: Vec<usize> = (0..bed.groom.strand_count()).collect();
+        let kept =
+            common::kept_share(&bed.groom, &strands, &bed.frames[0], &bed.frames[first + 1..=last], &rest);
+        eprintln!("{} bed-head: the rest shape keeps {kept:.3} of the shape the hair dried in, {predicted:.3} predicted", case.name);
+        assert!(
+            (kept / predicted - 1.0).abs() < 0.1,
+            "{}: kept {kept} of the dried shape, not {predicted}",
             case.name
         );
         case.assert_outside("bed-head", &bed.groom, 2e-4 * size / 0.085);

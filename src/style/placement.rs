@@ -240,10 +240,12 @@ pub fn place(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
 /// tuned on (3 cm segments, whatever the head fitted to their roots). A DCC's coarser guides
 /// (Blender: 8 cm segments on a 10 cm head) are resampled to [`DEFAULT_SEGMENT_HEAD_UNITS`].
 pub const COARSEST_SEGMENT_HEAD_UNITS: f32 = 0.4;
-/// The resolution a too coarse groom is resampled to: 5 mm on a 10 cm head, 1 cm on a head
-/// twice as large. (At 0.12 head units, 2.4 cm segments on the 20 cm test head, the water set
-/// left a vertex 6 cm inside the head mesh: not understood yet, see issue 14's notes.)
-pub const DEFAULT_SEGMENT_HEAD_UNITS: f32 = 0.05;
+/// The resolution a too coarse groom is resampled to: 1 cm on a 10 cm head, 2 cm on a head
+/// twice as large, about the seed grooms' 3 cm on coif's head relative to the hair's bending
+/// length. Finer is not better with today's solver: at 5 mm segments of Blender's 80 µm hair
+/// the edge frames lag the centreline, so the bonds remember a quarter less of the shape the
+/// hair dried in (0.26 of it kept where the hydrogen share is 0.33; 0.327 at 1 cm and 2 cm).
+pub const DEFAULT_SEGMENT_HEAD_UNITS: f32 = 0.1;
 /// Longest segment per rod diameter a groom may have to be styled as it comes: a segment must
 /// be shorter than the diameter of the rod it winds on (the seed grooms' 3 cm segments wind on
 /// the water set's 5 cm rollers).

@@ -3,6 +3,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use glam::Vec3;
+
 pub fn coif(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_coif")).args(args).output().expect("the coif binary runs")
 }
@@ -35,6 +37,129 @@ pub fn dir_listing(dir: &Path) -> Vec<String> {
 pub fn thin(groom: &coif::Groom, step: usize) -> coif::Groom {
     let strands: Vec<usize> = (0..groom.strand_count()).step_by(step).collect();
     coif::groups::assemble(&[(groom, &strands)]).expect("a selection of a valid groom is valid")
+}
+
+/// Darboux vectors (S1-8) of `points` taken as the shape of `groom`'s strands, in frames
+/// parallel-transported from each root, as coif builds them for an imported groom: the
+/// curvature a shape gives the bonds to remember.
+pub fn darboux(groom: &coif::Groom, points: &[Vec3]) -> Vec<Vec3> {
+    let shape = coif::Groom { points: points.to_vec(), ..groom.clone() };
+    coif::sim::Rods::from_groom(&shape, &coif::sim::Material::default(), 1.0)
+        .expect("a valid shape")
+        .rest_darboux()
+        .to_vec()
+}
+
+/// The share of the shape hair dried in that its rest shape keeps (model.md §2: hydrogen bonds
+/// re-formed in a shape remember it with their influence). `before` is the shape before styling,
+/// `drying` the poses while the bonds re-formed (evenly spaced in time: each re-forms the same
+/// fraction), `rest` the styled rest curves. The least-squares slope, over the `strands`' edge
+/// pairs, of the rest shape's change in Darboux vectors on the mean drying shape's change.
+pub fn kept_share(
+    groom: &coif::Groom,
+    strands: &[usize],
+    before: &[Vec3],
+    drying: &[Vec<Vec3>],
+    rest: &[Vec3],
+) -> f64 {
+    let original = darboux(groom, before);
+    let mut dried = vec![Vec3::ZERO; original.len()];
+    for pose in drying {
+        for (d, (now, was)) in dried.iter_mut().zip(darboux(groom, pose).iter().zip(&original)) {
+            *d += (*now - *was) / drying.len() as f32;
+        }
+    }
+    let kept = darboux(groom, rest);
+    let (mut along, mut squared) = (0.0f64, 0.0f64);
+    for v in strands.iter().flat_map(|&s| groom.strand_range(s)) {
+        along += f64::from((kept[v] - original[v]).dot(dried[v]));
+        squared += f64::from(dried[v].length_squared());
+    }
+    along / squared
+}
+
+/// For each of `strands` whose tail lay on a rod's surface in `wound` (a pose while the rods
+/// held the hair; rods as `(a, b, radius)`), the radius it was wound at and the radius of the
+/// same vertices in `rest` (the rest curves).
+pub fn wound_and_rest_curls(
+    groom: &coif::Groom,
+    strands: &[usize],
+    wound: &[Vec3],
+    rest: &[Vec3],
+    rods: &[(Vec3, Vec3, f32)],
+) -> Vec<(f32, f32)> {
+    let on_a_rod = |p: Vec3| {
+        rods.iter().any(|&(a, b, radius)| {
+            let axis = (b - a).normalize();
+            let along = (p - a).dot(axis);
+            let radial = (p - a - axis * along).length();
+            (0.0..=a.distance(b)).contains(&along) && (radial / radius - 1.0).abs() < 0.02
+        })
+    };
+    strands
+        .iter()
+        .filter_map(|&s| {
+            let range = groom.strand_range(s);
+            let first = range.clone().rev().take_while(|&v| on_a_rod(wound[v])).last()?;
+            let wound_radius = coif::analysis::curl_radius(&wound[first..range.end])?;
+            let rest_radius = coif::analysis::curl_radius(&rest[first..range.end])?;
+            Some((wound_radius, rest_radius))
+        })
+        .collect()
+}
+
+/// The frame a run captured right after simulation step `step` (`StyleOptions::frames_per_second`
+/// frames, at steps of `dt`; frame 0 is the groom before styling).
+pub fn frame_after(styled: &coif::style::Styled, dt: f32, step: u64) -> usize {
+    let every = (1.0 / (styled.frames_per_second * dt)).round() as u64;
+    assert_eq!(step % every, 0, "step {step} falls between frames captured every {every} steps");
+    (step / every) as usize
+}
+
+/// The head frame a styling run placed its recipe in.
+pub fn head_frame(styled: &coif::style::Styled) -> coif::style::head_frame::HeadFrame {
+    let f = styled.report.head_frame.expect("the recipe is written in the head frame");
+    coif::style::head_frame::HeadFrame::new(f.center.into(), f.up.into(), f.front.into(), f.size).unwrap()
+}
+
+/// A head-frame recipe's rods in the world of `frame`, as `(a, b, radius)`.
+pub fn rods_in_world(
+    recipe: &coif::style::recipe::Recipe,
+    frame: &coif::style::head_frame::HeadFrame,
+) -> Vec<(Vec3, Vec3, f32)> {
+    recipe
+        .rods
+        .iter()
+        .map(|r| r.get_ref())
+        .map(|r| (frame.point(r.a.into()), frame.point(r.b.into()), r.radius * frame.size()))
+        .collect()
+}
+
+/// The hydrogen bonds' influence: their share of a recipe's bonds (S1-15's `f_hyd / Σ f`).
+pub fn hydrogen_influence(recipe: &coif::style::recipe::Recipe) -> f32 {
+    let b = &recipe.bonds;
+    b.hydrogen / (b.hydrogen + b.ionic + b.disulfide + b.peptide)
+}
+
+/// Steps a recipe's first dry stage takes to dry hair that is wet through: its evaporation
+/// (per second, times the stage's heat) takes the water from 1 to 0 at an even rate.
+pub fn drying_steps(recipe: &coif::style::recipe::Recipe) -> u64 {
+    let heat = recipe
+        .stages
+        .iter()
+        .find_map(|s| match s.get_ref() {
+            coif::style::recipe::Stage::Dry { heat, .. } => Some(*heat),
+            _ => None,
+        })
+        .expect("the recipe dries the hair");
+    (1.0 / (recipe.wetness.evaporation * heat * recipe.settings.dt)).round() as u64
+}
+
+/// The median of some values.
+pub fn median(mut values: Vec<f32>) -> f32 {
+    assert!(!values.is_empty(), "no values to take the median of");
+    values.sort_by(f32::total_cmp);
+    values[values.len() / 2]
 }
 
 pub mod usd;
