@@ -144,12 +144,10 @@ fn roots_sit_on_the_head_mesh_and_the_frame_is_fitted_to_it() {
 }
 
 fn run_text(text: &str, groom: &Groom, options: &StyleOptions) -> Styled {
-    let mut recipe = recipe::parse(text, Path::new("preset.toml")).unwrap();
-    // Blender's 'Interpolate Hair Curves' binds children to guides farther away than coif's
-    // default reach (four guide spacings): reach across the head (`[guides] reach` alone keeps
-    // the groom's own guides).
-    let size = groom.bounds().map(|(lo, hi)| (hi - lo).max_element()).unwrap();
-    recipe.guides = Some(coif::guides::GuideSpec { reach: Some(size), ..Default::default() });
+    // The preset as it is: the groom's own guides bind every child, however far (Blender's
+    // 'Interpolate Hair Curves' binds children 8.5 cm from their nearest guide on the 10 cm head,
+    // beyond the four guide spacings coif allows guides it chose itself).
+    let recipe = recipe::parse(text, Path::new("preset.toml")).unwrap();
     // Blender's guides have 5 to 9 points (8 cm segments): the presets resample them as they
     // are (the water set and bed-head by their head and rollers, the perm by its own 4 mm).
     style(groom, &recipe, options).unwrap()

@@ -90,16 +90,16 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     groom.validate()?;
     let strands = groom.strand_count();
     let roots: Vec<Vec3> = (0..strands).map(|s| groom.points[groom.strand_range(s).start]).collect();
-    let flags = match &recipe.guides {
+    let (flags, own_guides) = match &recipe.guides {
         // `[guides]` with only a reach keeps the groom's own guides.
         Some(spec) if spec.count.is_some() || spec.fraction.is_some() || groom.guides.is_none() => {
             let mut flags = vec![false; strands];
             for g in select::farthest_points(&roots, spec.count_for(strands)?) {
                 flags[g] = true;
             }
-            flags
+            (flags, false)
         }
-        _ => groom.guides.clone().ok_or_else(|| Error::Usage("the groom has no guides".into()))?,
+        _ => (groom.guides.clone().ok_or_else(|| Error::Usage("the groom has no guides".into()))?, true),
     };
     let guide_ids: Vec<usize> = (0..strands).filter(|&s| flags[s]).collect();
     let child_ids: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
@@ -111,8 +111,14 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
             bindings
         }
         _ => {
-            let reach =
-                recipe.guides.and_then(|g| g.reach).unwrap_or_else(|| binding::default_reach(&guide_roots));
+            let reach = match recipe.guides.and_then(|g| g.reach) {
+                Some(reach) => reach,
+                // The groom's own guides are the artist's choice: each child follows its nearest,
+                // however sparse they are (Blender binds children 8.5 cm from their nearest guide
+                // on a 10 cm head). The default reach guards guides coif chose too few of.
+                None if own_guides => f32::INFINITY,
+                None => binding::default_reach(&guide_roots),
+            };
             let shape = |s: &usize| binding::shape_of(groom.strand_points(*s));
             let guide_shapes: Vec<binding::Shape> = guide_ids.iter().map(shape).collect();
             let child_shapes: Vec<binding::Shape> = child_ids.iter().map(shape).collect();
