@@ -499,9 +499,13 @@ fn run_convert(
     let info = GroomInfo::of(&first);
     let frames = json!({ "first": timeline.first, "last": timeline.frame(timeline.frame_count() - 1),
         "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second });
+    let meshes_output = io::meshes_output(output, &first, export);
     if json {
-        print_json(json!({ "output": output, "groom": info, "frames": frames, "warnings": warnings }));
+        print_json(
+            json!({ "output": output, "meshes_output": meshes_output, "groom": info, "frames": frames, "warnings": warnings }),
+        );
     } else {
+        report_meshes_output(meshes_output.as_deref());
         eprintln!(
             "wrote {} ({} strands, {} vertices, frames {} to {} at {} fps)",
             output.display(),
@@ -526,12 +530,26 @@ fn write_and_report(
         eprintln!("coif: warning: {warning}");
     }
     let info = GroomInfo::of(groom);
+    let meshes_output = io::meshes_output(output, groom, options);
     if json {
-        print_json(json!({ "output": output, "groom": info, "warnings": warnings }));
+        print_json(
+            json!({ "output": output, "meshes_output": meshes_output, "groom": info, "warnings": warnings }),
+        );
     } else {
+        report_meshes_output(meshes_output.as_deref());
         eprintln!("wrote {} ({} strands, {} vertices)", output.display(), info.strands, info.vertices);
     }
     Ok(())
+}
+
+/// Where `--unreal` output put the meshes (Unreal's groom importers refuse a file holding one).
+fn report_meshes_output(path: Option<&Path>) {
+    if let Some(path) = path {
+        eprintln!(
+            "wrote {} (the meshes: Unreal's groom importer refuses a groom file holding a mesh)",
+            path.display()
+        );
+    }
 }
 
 fn print_json(value: serde_json::Value) {

@@ -30,8 +30,9 @@ pub fn write_animated(
     out: &mut dyn Write,
     path: &Path,
 ) -> Result<()> {
-    usd_stage::check_animation(groom, frames, times, path)?;
-    let stage = usd_stage::plan(groom, Some((times, frames)))?;
+    let animation = usd_stage::Animation::of_points(times, frames);
+    usd_stage::check_animation(groom, &animation, path)?;
+    let stage = usd_stage::plan(groom, Some(&animation))?;
     write_stage(&stage, out).map_err(|e| Error::io(path, e))
 }
 
