@@ -20,12 +20,24 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Generate(args) => run_generate(args),
         Command::Info { file, import, json } => {
-            let loaded = io::read_groom_selected(&file, &import.options()?, &import.selection())?;
+            let loaded = io::read_groom_selected(&file, &import.options(&file)?, &import.selection())?;
             let info = GroomInfo::of(&loaded.groom);
+            let timeline = io::timeline::read_timeline(&file)?;
             if json {
-                print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
+                let frames = timeline.map(|t| frames_json(&t));
+                print_json(json!({ "path": file, "format": loaded.format, "frames": frames, "groom": info }));
             } else {
-                print_stdout(&format!("{} ({})\n{info}", file.display(), loaded.format.name()));
+                let frames = match timeline {
+                    Some(t) => format!(
+                        "frames       {} to {} ({} frames at {} fps)\n",
+                        t.first,
+                        t.frame(t.frame_count() - 1),
+                        t.frame_count(),
+                        t.frames_per_second
+                    ),
+                    None => "frames       one moment (not animated)\n".to_string(),
+                };
+                print_stdout(&format!("{} ({})\n{frames}{info}", file.display(), loaded.format.name()));
             }
             Ok(())
         }
@@ -47,7 +59,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
         recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
     }
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.groom, &args.import.options()?)?;
+    let loaded = io::read_groom(&args.groom, &args.import.options(&args.groom)?)?;
     let progress = args.progress.mode(args.quiet, args.json);
     let frames_per_second = args.frames.unwrap_or(0.0);
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
@@ -128,7 +140,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
     super::checks::simulate(&args)?;
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
+    let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
     let defaults = SimParams::default();
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
@@ -293,7 +305,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.scene.floor_albedo = render::parse_vec3(albedo, "--floor-albedo")?;
     }
 
-    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
+    let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
     let progress = Progress::new(args.progress.mode(false, false), "render", 1);
     let report = |done: u64, total: u64| {
         progress.set_total(total);
@@ -463,7 +475,7 @@ fn run_convert(
     frame_range: Option<&str>,
 ) -> Result<()> {
     use io::timeline::{parse_range, read_timeline, Timeline};
-    let options = import.options()?;
+    let options = import.options(input)?;
     let range = frame_range.map(|text| parse_range(text, "--frame-range")).transpose()?;
     let output_format = io::Format::from_extension(output)?;
     let timeline = match range {
@@ -473,7 +485,7 @@ fn run_convert(
             let rate = read_timeline(input)?.map_or(24.0, |t| t.frames_per_second);
             Some(Timeline { first, last, frames_per_second: rate })
         }
-        None if import.frame.is_some() => None,
+        None if import.picks_a_moment() => None,
         None => read_timeline(input)?.filter(|_| {
             output_format != io::Format::Hair || {
                 eprintln!("coif: warning: {}: .hair holds one frame: writing the input's first (--frame N picks another)", output.display());
@@ -497,8 +509,7 @@ fn run_convert(
         eprintln!("coif: warning: {warning}");
     }
     let info = GroomInfo::of(&first);
-    let frames = json!({ "first": timeline.first, "last": timeline.frame(timeline.frame_count() - 1),
-        "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second });
+    let frames = frames_json(&timeline);
     let meshes_output = io::meshes_output(output, &first, export);
     if json {
         print_json(
@@ -517,6 +528,12 @@ fn run_convert(
         );
     }
     Ok(())
+}
+
+/// A timeline in `--json` output: its first and last whole frames, their count and rate.
+fn frames_json(timeline: &io::timeline::Timeline) -> serde_json::Value {
+    json!({ "first": timeline.first, "last": timeline.frame(timeline.frame_count() - 1),
+        "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second })
 }
 
 fn write_and_report(

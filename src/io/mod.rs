@@ -274,7 +274,7 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
         Format::Alembic => {
             let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
             stream_alembic_frames(path, groom, std::iter::empty(), &abc_options, false)?;
-            Ok(Vec::new())
+            Ok(alembic_warnings(path, groom))
         }
     }
 }
@@ -291,6 +291,10 @@ fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
         let names: Vec<&str> = groom.meshes.iter().map(|m| m.path.as_str()).collect();
         format!("{}: .hair holds no meshes (only the curves): {}", path.display(), names.join(", "))
     })
+}
+
+fn alembic_warnings(path: &Path, groom: &Groom) -> Vec<String> {
+    alembic::unsupported(groom).into_iter().map(|what| format!("{}: {what}", path.display())).collect()
 }
 
 fn usd_warnings(path: &Path, groom: &Groom) -> Vec<String> {
@@ -323,7 +327,7 @@ pub fn write_animated(
             Ok(frame.clone())
         });
         stream_alembic_frames(path, groom, frames.skip(1), &abc_options, true)?;
-        return Ok(Vec::new());
+        return Ok(alembic_warnings(path, groom));
     }
     let animation = usd_stage::Animation::of_points(times, frames);
     write_usd_stage(path, format, groom, Some(&animation), options)
@@ -375,7 +379,7 @@ pub fn write_frames(
     if format == Format::Alembic {
         let abc_options = alembic_options(options, timeline.frames_per_second, timeline.first);
         stream_alembic_frames(path, first, rest, &abc_options, true)?;
-        return Ok(Vec::new());
+        return Ok(alembic_warnings(path, first));
     }
     crate::limits::check_memory(
         &format!("holding {count} frames of {} vertices for {}", first.vertex_count(), path.display()),

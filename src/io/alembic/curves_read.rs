@@ -414,7 +414,7 @@ impl<'a> CurvesArchive<'a> {
                 }
             }
         }
-        groom.set_single_group(CurveGroup::new(path.clone(), basis, CurveWrap::Nonperiodic));
+        groom.set_single_group(CurveGroup::new(path.clone(), basis, wrap_of(basis)));
         Ok(groom)
     }
 
@@ -674,6 +674,16 @@ fn required<'o, 'a>(object: &CurvesObject<'o, 'a>, name: &str) -> OgawaResult<&'
 }
 
 /// The curve kind from `curveBasisAndType`: the basis byte decides, as in Blender and Houdini.
+/// The wrap of open curves of `basis`, which Alembic does not record: Catmull-Rom passes
+/// through its end points (`pinned`), as Blender evaluates it and as its USD exporter writes the
+/// same curves; the other bases are read as their files' open curves (`nonperiodic`).
+pub fn wrap_of(basis: CurveBasis) -> CurveWrap {
+    match basis {
+        CurveBasis::CatmullRom => CurveWrap::Pinned,
+        _ => CurveWrap::Nonperiodic,
+    }
+}
+
 fn curve_basis(bytes: &[u8], path: &str) -> OgawaResult<CurveBasis> {
     let [_, wrap, basis, _] =
         bytes.try_into().map_err(|_| OgawaError(format!("{path}: curveBasisAndType is empty")))?;

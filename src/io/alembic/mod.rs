@@ -72,6 +72,26 @@ pub fn read_all_frames(bytes: &[u8], path: &Path, keep_file_units: bool) -> Resu
     Ok(frames)
 }
 
+/// What an Alembic file cannot say about the groom, as warnings: the wrap of a cubic group
+/// whose wrap Alembic readers take otherwise ([`curves_read::wrap_of`]).
+pub fn unsupported(groom: &Groom) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for g in 0..groom.group_count() {
+        let group = groom.group(g);
+        let read_back = curves_read::wrap_of(group.basis);
+        if group.basis != crate::groom::CurveBasis::Linear
+            && group.wrap != crate::groom::CurveWrap::Periodic
+            && group.wrap != read_back
+        {
+            warnings.push(format!(
+                "curve group '{}': Alembic records no {:?} wrap for {:?} curves; its readers (Blender, coif) take them as {:?}",
+                group.name, group.wrap, group.basis, read_back
+            ));
+        }
+    }
+    warnings
+}
+
 /// Writes a static groom (one sample) atomically.
 pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Result<()> {
     let mut writer = AnimationWriter::create(path, groom, options, false)?;
