@@ -76,14 +76,20 @@ fn run_style(args: StyleArgs) -> Result<()> {
         None => None,
     };
     let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
-    let (groom, frames, report) = if args.groups.is_empty() {
-        let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
-        (styled.groom, styled.frames, styled.report)
+    let styled = if args.groups.is_empty() {
+        coif::style::style(&loaded.groom, &recipe, &options)?
     } else {
         style_groups(&loaded.groom, &args.groups, &recipe, &options)?
     };
-    let warnings =
-        io::write_animated(&args.output, &groom, &frames, frames_per_second, &io::ExportOptions::default())?;
+    let (groom, report) = (&styled.groom, &styled.report);
+    let warnings = io::write_animated(
+        &args.output,
+        groom,
+        &styled.frames,
+        &styled.frame_attributes,
+        frames_per_second,
+        &io::ExportOptions::default(),
+    )?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
@@ -116,23 +122,34 @@ fn run_style(args: StyleArgs) -> Result<()> {
 }
 
 /// Styles the groups named by `--group` and puts them back among the untouched ones (frames
-/// too: the other groups stand still in every frame).
+/// too: the other groups stand still in every frame, with their own attribute values).
 fn style_groups(
     groom: &coif::Groom,
     names: &[String],
     recipe: &coif::style::recipe::Recipe,
     options: &coif::style::StyleOptions,
-) -> Result<(coif::Groom, Vec<Vec<glam::Vec3>>, coif::style::StyleReport)> {
+) -> Result<coif::style::Styled> {
     let (selected, selection) = groom.select_groups(names).map_err(Error::Usage)?;
-    let styled = coif::style::style(&selected, recipe, options)?;
+    let mut styled = coif::style::style(&selected, recipe, options)?;
     let merged = groom.merge_back(&selection, &styled.groom)?;
-    let mut frames = Vec::with_capacity(styled.frames.len());
     let mut frame = styled.groom.clone();
-    for points in styled.frames {
+    let frame_attributes = std::mem::take(&mut styled.frame_attributes);
+    for (k, points) in std::mem::take(&mut styled.frames).into_iter().enumerate() {
         frame.points = points;
-        frames.push(groom.merge_back(&selection, &frame)?.points);
+        let attributes = frame_attributes.get(k);
+        for attribute in attributes.into_iter().flatten() {
+            frame.set_attribute(attribute.clone());
+        }
+        let whole = groom.merge_back(&selection, &frame)?;
+        if let Some(attributes) = attributes {
+            let merged_attributes =
+                attributes.iter().filter_map(|a| whole.attribute(&a.name).cloned()).collect();
+            styled.frame_attributes.push(merged_attributes);
+        }
+        styled.frames.push(whole.points);
     }
-    Ok((merged, frames, styled.report))
+    styled.groom = merged;
+    Ok(styled)
 }
 
 fn run_simulate(args: SimulateArgs) -> Result<()> {

@@ -234,9 +234,61 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
         let to_y_up = |p: &mut Vec3| *p = Vec3::new(p.x, p.z, -p.y);
         groom.points.iter_mut().for_each(to_y_up);
         groom.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(to_y_up);
+        let rotation =
+            glam::DMat4::from_cols(glam::DVec4::X, glam::DVec4::NEG_Z, glam::DVec4::Y, glam::DVec4::W);
+        transform_attributes(&mut groom.attributes, rotation);
     }
     if let Some(scale) = options.meters_per_unit {
         groom.scale(scale);
+    }
+}
+
+/// Moves the attributes that are positions or directions with the points, from a file's space to
+/// coif's by `to_coif`: points (`rest`) like the points, normals by the inverse transpose (kept
+/// unit length), vectors (velocities) by the linear part — by kind, or for plain float3 data by
+/// name (Blender's `surface_normal`, `N`, `v`, `velocit*`, `rest`). Every reader uses it.
+pub(crate) fn transform_attributes(attributes: &mut [crate::groom::Attribute], to_coif: glam::DMat4) {
+    use crate::groom::AttributeKind;
+    if to_coif == glam::DMat4::IDENTITY {
+        return;
+    }
+    let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
+    let linear = glam::DMat3::from_mat4(to_coif);
+    for attribute in attributes.iter_mut().filter(|a| a.components == 3) {
+        let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(attribute) {
+            Some(AttributeKind::Point) => Box::new(transform),
+            Some(AttributeKind::Normal) => {
+                let normal_matrix = linear.inverse().transpose();
+                Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
+            }
+            Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
+            None => continue,
+        };
+        for c in attribute.data.chunks_exact_mut(3) {
+            c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
+        }
+    }
+}
+
+/// How a 3-vector attribute follows the points from file space to coif's: by its kind, or for
+/// plain float3 data by its name (Blender's `surface_normal`, velocities…); `None`: not at all.
+fn direction_kind(attribute: &crate::groom::Attribute) -> Option<crate::groom::AttributeKind> {
+    use crate::groom::AttributeKind;
+    match attribute.kind {
+        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(attribute.kind),
+        AttributeKind::Float => {
+            let name = attribute.name.to_ascii_lowercase();
+            if name == usda::names::REST {
+                Some(AttributeKind::Point)
+            } else if name == "n" || name.contains("normal") {
+                Some(AttributeKind::Normal)
+            } else if name == "v" || name.starts_with("velocit") {
+                Some(AttributeKind::Vector)
+            } else {
+                None
+            }
+        }
+        _ => None,
     }
 }
 
@@ -302,13 +354,15 @@ fn usd_warnings(path: &Path, groom: &Groom) -> Vec<String> {
 }
 
 /// Writes a groom whose points move over time: `frames` holds every frame's points (same
-/// topology as `groom`, whose other data and meshes are written once), `frames_per_second` sets
-/// the time codes (frame `k` at time code `k + 1`). USD and Alembic carry time samples; `.hair`
-/// cannot.
+/// topology as `groom`, whose other data and meshes are written once) and `attributes`, when not
+/// empty, every frame's values of attributes of the groom (the same names in each frame); those
+/// whose values change are time-sampled too. `frames_per_second` sets the time codes (frame `k`
+/// at time code `k + 1`). USD and Alembic carry time samples; `.hair` cannot.
 pub fn write_animated(
     path: &Path,
     groom: &Groom,
     frames: &[Vec<Vec3>],
+    attributes: &[Vec<crate::groom::Attribute>],
     frames_per_second: f32,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
@@ -316,20 +370,50 @@ pub fn write_animated(
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
+    if !attributes.is_empty() && attributes.len() != frames.len() {
+        return Err(Error::Usage(format!(
+            "{}: {} frames of points but {} of attributes",
+            path.display(),
+            frames.len(),
+            attributes.len()
+        )));
+    }
+    // Only what changes is sampled; the rest is the groom's, written once.
+    let changing: Vec<Vec<&crate::groom::Attribute>> = match attributes.first() {
+        None => Vec::new(),
+        Some(first) => {
+            let changes = |a: &crate::groom::Attribute| {
+                attributes.iter().any(|f| f.iter().any(|b| b.name == a.name && b.data != a.data))
+            };
+            let names: Vec<&str> = first.iter().filter(|a| changes(a)).map(|a| a.name.as_str()).collect();
+            attributes
+                .iter()
+                .map(|f| f.iter().filter(|a| names.contains(&a.name.as_str())).collect())
+                .collect()
+        }
+    };
     let times =
         usda::TimeCodes { start: 1.0, end: frames.len() as f64, per_second: frames_per_second as f64 };
     let format = check_animated_output(path)?;
     if format == Format::Alembic {
         let abc_options = alembic_options(options, times.per_second, times.start);
-        let mut frame = groom.clone();
-        let frames = frames.iter().map(move |points| {
-            frame.points.clone_from(points);
-            Ok(frame.clone())
-        });
-        stream_alembic_frames(path, groom, frames.skip(1), &abc_options, true)?;
+        // Frame k: the groom with that frame's points and changing attributes.
+        let frame = |k: usize| {
+            let mut frame = groom.clone();
+            frame.points.clone_from(&frames[k]);
+            for &attribute in changing.get(k).into_iter().flatten() {
+                frame.set_attribute(attribute.clone());
+            }
+            Ok(frame)
+        };
+        let first = frame(0)?;
+        stream_alembic_frames(path, &first, (1..frames.len()).map(frame), &abc_options, true)?;
         return Ok(alembic_warnings(path, groom));
     }
-    let animation = usd_stage::Animation::of_points(times, frames);
+    let animation = usd_stage::Animation {
+        attributes: if changing.iter().all(Vec::is_empty) { Vec::new() } else { changing },
+        ..usd_stage::Animation::of_points(times, frames)
+    };
     write_usd_stage(path, format, groom, Some(&animation), options)
 }
 

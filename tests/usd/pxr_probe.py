@@ -81,6 +81,7 @@ def dump(path, time=None):
                 "type": str(primvar.GetTypeName()),
                 "interpolation": primvar.GetInterpolation(),
                 "elementSize": primvar.GetElementSize(),
+                "timeSamples": primvar.GetAttr().GetTimeSamples(),
                 "values": floats(value) if value is not None else None,
             }
         result["curves"].append(entry)
@@ -92,10 +93,10 @@ def dump(path, time=None):
         world = cache.GetLocalToWorldTransform(prim)
         result["meshes"].append({
             "path": str(prim.GetPath()),
-            "counts": list(mesh.GetFaceVertexCountsAttr().Get(code)),
-            "indices": list(mesh.GetFaceVertexIndicesAttr().Get(code)),
-            "points": floats(points),
-            "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points),
+            "counts": list(mesh.GetFaceVertexCountsAttr().Get(code) or []),
+            "indices": list(mesh.GetFaceVertexIndicesAttr().Get(code) or []),
+            "points": floats(points or []),
+            "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points or []),
             "orientation": mesh.GetOrientationAttr().Get(),
             "subdivisionScheme": mesh.GetSubdivisionSchemeAttr().Get(),
             "pointsTimeSamples": mesh.GetPointsAttr().GetTimeSamples(),

@@ -14,7 +14,7 @@ use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
 use super::curves_read::POLYMESH_SCHEMA;
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
-use crate::groom::{attr, AttributeRate, CurveBasis, CurveWrap, Groom};
+use crate::groom::{attr, AttributeKind, AttributeRate, CurveBasis, CurveWrap, Groom};
 use crate::surface_mesh::SurfaceMesh;
 
 pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
@@ -413,12 +413,28 @@ fn scope(rate: AttributeRate) -> &'static str {
     }
 }
 
-fn interpretation(name: &str, components: usize) -> &'static str {
-    match (name, components) {
-        (attr::COLOR, 3) => "rgb",
-        (attr::COLOR, 4) => "rgba",
-        (_, 2) => "vector",
+/// The `interpretation` an attribute is written with: its kind's, or for plain floats the one
+/// coif always gives that name (the reader maps that back to plain floats).
+pub(crate) fn interpretation(kind: AttributeKind, name: &str, components: usize) -> &'static str {
+    match (kind, name, components) {
+        (AttributeKind::Point, _, 3) => "point",
+        (AttributeKind::Normal, _, 3) => "normal",
+        (AttributeKind::Vector, _, 3) => "vector",
+        (AttributeKind::Color, _, 3) | (_, attr::COLOR, 3) => "rgb",
+        (AttributeKind::Color, _, 4) | (_, attr::COLOR, 4) => "rgba",
+        (_, _, 2) => "vector",
         _ => "",
+    }
+}
+
+/// The POD an attribute is written as: int32 for ints (and for the names Unreal wants as ints),
+/// bool for flags, else float32.
+pub(crate) fn pod(kind: AttributeKind, name: &str) -> Pod {
+    match kind {
+        AttributeKind::Int => Pod::I32,
+        AttributeKind::Bool => Pod::Bool,
+        _ if written_as_int32(name) => Pod::I32,
+        _ => Pod::F32,
     }
 }
 
@@ -483,8 +499,8 @@ fn add_curves<W: Write + Seek>(
                 ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
                 ParamSource::Attribute(a) => {
                     let a = groom.attribute(a).expect("listed from the groom");
-                    let pod = if written_as_int32(&a.name) { Pod::I32 } else { Pod::F32 };
-                    (pod, a.components as u8, a.rate, interpretation(&a.name, a.components))
+                    let pod = pod(a.kind, &a.name);
+                    (pod, a.components as u8, a.rate, interpretation(a.kind, &a.name, a.components))
                 }
             };
             let metadata = geom_param_metadata(scope(rate), pod, extent, interp);
@@ -690,10 +706,13 @@ fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'
             let a = groom.attribute(name).expect("layout is fixed by the first frame");
             // Rest positions are positions: they follow the unit change.
             let factor = if name == "rest" { scale } else { 1.0 };
-            if written_as_int32(name) {
-                (Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()), a.len() as u64)
-            } else {
-                (floats(&a.data, factor), a.len() as u64)
+            match pod(a.kind, name) {
+                Pod::I32 => (
+                    Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()),
+                    a.len() as u64,
+                ),
+                Pod::Bool => (Cow::Owned(a.data.iter().map(|&v| (v != 0.0) as u8).collect()), a.len() as u64),
+                _ => (floats(&a.data, factor), a.len() as u64),
             }
         }
     }
