@@ -367,6 +367,12 @@ fn geom_params_keep_types_and_turn_with_the_transform() {
         "anchor placed like the points",
     );
     assert_eq!(attribute(&groom, "mystery").data, vec![0.25, 0.5, 0.75, 1.0], "unknown params pass through");
+    // `--up z` turns them with the points too: (x, y, z) → (x, z, −y).
+    let options = coif::io::ImportOptions { up_axis: Some(coif::io::UpAxis::Z), ..Default::default() };
+    let z_up = coif::io::read_groom(&source, &options).unwrap().groom;
+    let turned: Vec<f32> =
+        attribute(&groom, "N").data.chunks_exact(3).flat_map(|n| [n[0], n[2], -n[1]]).collect();
+    close(&attribute(&z_up, "N").data, &turned, "N turned from Z up");
 
     // Written back: the same PODs and interpretations; read again, the same groom.
     let out = dir.path().join("back.abc");

@@ -440,3 +440,30 @@ fn blender_grooms_convert_round_trips_are_exact_in_pxr() {
         assert_same_meshes(&source, &written, &label);
     }
 }
+
+#[test]
+fn unreal_meshes_file_is_written_with_the_groom_or_not_at_all() {
+    // The groom file cannot be put in place (a directory holds its name): the run fails and
+    // leaves neither the meshes file nor a temporary behind.
+    for ext in ["usda", "abc"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(format!("groom.{ext}"));
+        std::fs::create_dir(&out).unwrap();
+        let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&out), "--unreal"]);
+        assert!(!run.status.success(), ".{ext}: a directory was overwritten");
+        assert_eq!(dir_listing(dir.path()), vec![format!("groom.{ext}")], ".{ext}: {}", stderr(&run));
+    }
+    // A mesh that cannot be written (a face naming a point it lacks) is refused, naming the
+    // mesh, with nothing written in any format, Unreal layout or not.
+    let mut groom = read(&houdini_groom());
+    groom.meshes[0].face_indices[0] = 99;
+    let dir = tempfile::tempdir().unwrap();
+    for (ext, unreal) in [("usda", false), ("usdc", false), ("abc", false), ("usda", true), ("abc", true)] {
+        let path = dir.path().join(format!("bad.{ext}"));
+        let error =
+            coif::io::write_groom_with(&path, &groom, &coif::io::ExportOptions { unreal }).unwrap_err();
+        assert_eq!(error.exit_code(), 2, "{error}");
+        assert!(error.to_string().contains("/skin"), ".{ext}: {error}");
+        assert!(dir_listing(dir.path()).is_empty(), ".{ext}: {:?}", dir_listing(dir.path()));
+    }
+}
