@@ -438,6 +438,30 @@ pub(crate) fn pod(kind: AttributeKind, name: &str) -> Pod {
     }
 }
 
+/// A geometry object of `schema` with what every such schema starts with: its `.geom` compound,
+/// `.selfBnds` and `P` (returned in that order after the object).
+fn add_geom_object<W: Write + Seek>(
+    archive: &mut ArchiveWriter<W>,
+    parent: ObjectId,
+    name: &str,
+    schema: &str,
+    ts: u32,
+) -> (ObjectId, CompoundId, PropertyId, PropertyId) {
+    let object_metadata = MetaData::new()
+        .with("schema", schema)
+        .with("schemaBaseType", GEOM_BASE)
+        .with("schemaObjTitle", &format!("{schema}:.geom"));
+    let object = archive.add_object(parent, name, object_metadata);
+    let top = archive.properties(object);
+    let geom_metadata = MetaData::new().with("schema", schema).with("schemaBaseType", GEOM_BASE);
+    let geom = archive.add_compound(top, ".geom", geom_metadata);
+    let bounds =
+        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
+    let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
+    let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
+    (object, geom, bounds, positions)
+}
+
 fn add_curves<W: Write + Seek>(
     archive: &mut ArchiveWriter<W>,
     parent: ObjectId,
@@ -447,18 +471,7 @@ fn add_curves<W: Write + Seek>(
     (unreal, with_velocities): (bool, bool),
     ts: u32,
 ) -> (ObjectId, CurveProperties) {
-    let object_metadata = MetaData::new()
-        .with("schema", CURVE_SCHEMA)
-        .with("schemaBaseType", GEOM_BASE)
-        .with("schemaObjTitle", &format!("{CURVE_SCHEMA}:.geom"));
-    let object = archive.add_object(parent, name, object_metadata);
-    let top = archive.properties(object);
-    let geom_metadata = MetaData::new().with("schema", CURVE_SCHEMA).with("schemaBaseType", GEOM_BASE);
-    let geom = archive.add_compound(top, ".geom", geom_metadata);
-    let bounds =
-        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
-    let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
-    let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
+    let (object, geom, bounds, positions) = add_geom_object(archive, parent, name, CURVE_SCHEMA, ts);
     let vertex_counts = archive.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, ts);
     let basis = archive.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, ts);
 
@@ -583,18 +596,7 @@ fn add_polymesh<W: Write + Seek>(
     mesh: &SurfaceMesh,
     ts: u32,
 ) -> (ObjectId, MeshObject) {
-    let object_metadata = MetaData::new()
-        .with("schema", POLYMESH_SCHEMA)
-        .with("schemaBaseType", GEOM_BASE)
-        .with("schemaObjTitle", &format!("{POLYMESH_SCHEMA}:.geom"));
-    let object = archive.add_object(parent, name, object_metadata);
-    let top = archive.properties(object);
-    let geom_metadata = MetaData::new().with("schema", POLYMESH_SCHEMA).with("schemaBaseType", GEOM_BASE);
-    let geom = archive.add_compound(top, ".geom", geom_metadata);
-    let bounds =
-        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
-    let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
-    let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
+    let (object, geom, bounds, positions) = add_geom_object(archive, parent, name, POLYMESH_SCHEMA, ts);
     let face_indices = archive.add_array(geom, ".faceIndices", MetaData::new(), Pod::I32, 1, ts);
     let face_counts = archive.add_array(geom, ".faceCounts", MetaData::new(), Pod::I32, 1, ts);
     // coif's meshes are wound counter-clockwise; Alembic's clockwise.
