@@ -304,3 +304,105 @@ fn curves_missing_mandatory_properties_are_rejected() {
         assert!(stderr(&out).contains(missing), "{}", stderr(&out));
     }
 }
+
+/// `.arbGeomParams` of a foreign file keep what they are through coif: an int32 and a bool
+/// flag stay int32 and bool, a normal, a vector and a point (interpretation metadata) turn with
+/// the Xform above the curves (a 90° turn about Z and a ×2 scale: points and vectors scale,
+/// normals stay unit), and a param coif knows nothing about passes through with its values;
+/// written back to `.abc` each keeps its POD and interpretation, and USD output gets the
+/// matching types (`int[]`, `bool[]`, `normal3f[]`, `vector3f[]`, `point3f[]`).
+#[test]
+fn geom_params_keep_types_and_turn_with_the_transform() {
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let top = w.top();
+    // rotateZ 90° (op 6), then scale 2 (op 0).
+    let rig = xform(&mut w, top, "rig", &[0x60, 0x00], &[90.0, 2.0, 2.0, 2.0], Some(true));
+    let geom = curves(&mut w, rig, "hair", &[2, 2], &[line(0.0, 2), line(1.0, 2)].concat(), [1, 0, 0, 0]);
+    let arb = w.add_compound(geom, ".arbGeomParams", MetaData::new());
+    let mut param =
+        |name: &str, pod: Pod, extent: u8, scope: &str, interpretation: &str, bytes: Vec<u8>, n: u64| {
+            let mut md = param_md(scope, pod, extent);
+            if !interpretation.is_empty() {
+                md = md.with("interpretation", interpretation);
+            }
+            let p = w.add_array(arb, name, md, pod, extent, 0);
+            w.set_sample(p, &bytes, n).unwrap();
+        };
+    param("clump_id", Pod::I32, 1, "uni", "", [7i32, -3].iter().flat_map(|v| v.to_le_bytes()).collect(), 2);
+    param("is_long", Pod::Bool, 1, "uni", "", vec![1, 0], 2);
+    param("N", Pod::F32, 3, "uni", "normal", f32s(&[1.0, 0.0, 0.0, 0.0, 0.6, 0.8]), 2);
+    param("comb", Pod::F32, 3, "vtx", "vector", f32s(&[1.0, 0.0, 0.0].repeat(4)), 4);
+    param("anchor", Pod::F32, 3, "uni", "point", f32s(&[1.0, 0.0, 0.0, 0.0, 0.0, 1.0]), 2);
+    param("mystery", Pod::F32, 2, "uni", "", f32s(&[0.25, 0.5, 0.75, 1.0]), 2);
+    let bytes = w.finish().unwrap().into_inner();
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("params.abc");
+    std::fs::write(&source, &bytes).unwrap();
+    let groom = coif::io::read_groom(&source, &Default::default()).unwrap().groom;
+
+    use coif::groom::AttributeKind;
+    let attribute =
+        |g: &coif::Groom, name: &str| g.attribute(name).unwrap_or_else(|| panic!("no {name}")).clone();
+    let close = |a: &[f32], b: &[f32], what: &str| {
+        assert_eq!(a.len(), b.len(), "{what}");
+        assert!(a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6), "{what}: {a:?} vs {b:?}");
+    };
+    // Rotate Z by 90°: (x, y, z) → (−y, x, z); scale 2 first.
+    assert_eq!(
+        (attribute(&groom, "clump_id").kind, attribute(&groom, "clump_id").data),
+        (AttributeKind::Int, vec![7.0, -3.0])
+    );
+    assert_eq!(
+        (attribute(&groom, "is_long").kind, attribute(&groom, "is_long").data),
+        (AttributeKind::Bool, vec![1.0, 0.0])
+    );
+    assert_eq!(attribute(&groom, "N").kind, AttributeKind::Normal);
+    close(&attribute(&groom, "N").data, &[0.0, 1.0, 0.0, -0.6, 0.0, 0.8], "N turned, unit length");
+    assert_eq!(attribute(&groom, "comb").kind, AttributeKind::Vector);
+    close(&attribute(&groom, "comb").data, &[0.0, 2.0, 0.0].repeat(4), "comb turned and scaled");
+    assert_eq!(attribute(&groom, "anchor").kind, AttributeKind::Point);
+    close(
+        &attribute(&groom, "anchor").data,
+        &[0.0, 2.0, 0.0, 0.0, 0.0, 2.0],
+        "anchor placed like the points",
+    );
+    assert_eq!(attribute(&groom, "mystery").data, vec![0.25, 0.5, 0.75, 1.0], "unknown params pass through");
+    // `--up z` turns them with the points too: (x, y, z) → (x, z, −y).
+    let options = coif::io::ImportOptions { up_axis: Some(coif::io::UpAxis::Z), ..Default::default() };
+    let z_up = coif::io::read_groom(&source, &options).unwrap().groom;
+    let turned: Vec<f32> =
+        attribute(&groom, "N").data.chunks_exact(3).flat_map(|n| [n[0], n[2], -n[1]]).collect();
+    close(&attribute(&z_up, "N").data, &turned, "N turned from Z up");
+
+    // Written back: the same PODs and interpretations; read again, the same groom.
+    let out = dir.path().join("back.abc");
+    coif::io::write_groom(&out, &groom).unwrap();
+    let written = std::fs::read(&out).unwrap();
+    let archive = coif::io::alembic::archive_read::Archive::open(&written).unwrap();
+    let curves = &archive.top.children[0].children[0];
+    let geom = curves.properties.compound(".geom").unwrap();
+    let arb = geom.compound(".arbGeomParams").unwrap();
+    for (name, pod, interpretation) in [
+        ("clump_id", Pod::I32, None),
+        ("is_long", Pod::Bool, None),
+        ("N", Pod::F32, Some("normal")),
+        ("comb", Pod::F32, Some("vector")),
+        ("anchor", Pod::F32, Some("point")),
+    ] {
+        let p = arb.sampled(name).unwrap_or_else(|| panic!("{name} not written"));
+        assert_eq!((p.pod, p.metadata.get("interpretation")), (pod, interpretation), "{name}");
+    }
+    assert_eq!(coif::io::read_groom(&out, &Default::default()).unwrap().groom, groom);
+    let usda = dir.path().join("params.usda");
+    coif::io::write_groom(&usda, &groom).unwrap();
+    let text = std::fs::read_to_string(&usda).unwrap();
+    for declaration in [
+        "int[] primvars:clump_id",
+        "bool[] primvars:is_long",
+        "normal3f[] primvars:N",
+        "vector3f[] primvars:comb",
+        "point3f[] primvars:anchor",
+    ] {
+        assert!(text.contains(declaration), "{declaration} missing from the .usda");
+    }
+}

@@ -106,6 +106,10 @@ fn alembic_and_usd_of_one_scene_agree_in_coif_space() {
         for object in ["Guides", "Hair"] {
             let (ga, gu) = (group_strands(&a, group(&a, object)), group_strands(&u, group(&u, object)));
             assert_eq!(ga.len(), gu.len());
+            // Blender's USD says `pinned` for its Catmull-Rom guides; its Alembic cannot, and is
+            // read as Blender reads it, through the end points: the same wrap.
+            let wrap = |g: &Groom| g.groups[group(g, object)].wrap;
+            assert_eq!(wrap(&a), wrap(&u), "{abc} vs {usd} {object}: wrap");
             let worst = ga
                 .iter()
                 .zip(&gu)
@@ -646,6 +650,50 @@ fn frame_n_is_the_same_moment_in_the_animated_alembic_and_usd() {
         assert!(rules < 1e-3, "frame {frame} {object}: Euler lerp and slerp differ by {rules} m");
         eprintln!("frame {frame} {object}: .abc (slerp) and .usda (Euler lerp) differ by {rules} m");
     }
+    // `--time SECONDS` is frame seconds × fps of the file's timeline, in both formats: a
+    // convert at (start + 1.25) / fps holds the points read at frame start + 1.25.
+    let fps = frames["fps"].as_f64().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for path in [abc, usd] {
+        let out = dir.path().join("moment.usda");
+        let seconds = (frame / fps).to_string();
+        let run =
+            common::coif(&["convert", common::path_str(path), common::path_str(&out), "--time", &seconds]);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        let (at_time, at_frame) =
+            (read_groom(&out, &ImportOptions::default()).unwrap().groom, read(path, frame));
+        assert_eq!(at_time.points, at_frame.points, "{}: --time {seconds}", path.display());
+        // Before the first frame, and on a file without a frame rate: exit 2 naming --time.
+        let early = ((start - 1.0) / fps).to_string();
+        let run = common::coif(&["info", common::path_str(path), "--time", &early]);
+        assert_eq!(run.status.code(), Some(2), "{}", common::stderr(&run));
+        assert!(common::stderr(&run).contains("--time"), "{}", common::stderr(&run));
+    }
+    let hair = dir.path().join("still.hair");
+    assert!(common::coif(&["convert", "tests/data/blender_groom.usda", common::path_str(&hair)])
+        .status
+        .success());
+    let run = common::coif(&["info", common::path_str(&hair), "--time", "1"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(common::stderr(&run).contains("--time"), "{}", common::stderr(&run));
+    // `coif info` gives the timeline: frames 1–5 at 24 fps, in both files; a still file has none.
+    for path in [abc, usd] {
+        let report = common::stdout_json(&common::coif(&["info", common::path_str(path), "--json"]));
+        let got = &report["frames"];
+        assert_eq!(
+            (
+                got["first"].as_f64(),
+                got["last"].as_f64(),
+                got["count"].as_u64(),
+                got["frames_per_second"].as_f64()
+            ),
+            (Some(start), Some(end), Some((end - start) as u64 + 1), Some(fps)),
+            "{}: {report}",
+            path.display()
+        );
+    }
+    let still = common::stdout_json(&common::coif(&["info", "tests/data/blender_groom.abc", "--json"]));
+    assert!(still["frames"].is_null(), "{still}");
     // Before the first sample: a frame the animation never reached, refused by both.
     for path in [abc, usd] {
         let options = ImportOptions { frame: Some(start - 1.0), ..Default::default() };
@@ -686,6 +734,21 @@ fn pxr_frames(path: &Path, first: f64, last: f64) -> (serde_json::Value, Vec<Fra
     (dump, frames)
 }
 
+/// pxr's world points (metres, Y up) of the one mesh prim at each frame of a `pxr_frames` dump.
+fn pxr_mesh_frames(dump: &serde_json::Value) -> Vec<Vec<Vec3>> {
+    dump["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|frame| {
+            let meshes = frame["meshes"].as_object().unwrap();
+            assert_eq!(meshes.len(), 1, "one mesh prim");
+            let points = meshes.values().next().unwrap();
+            common::usd::f32s(points).chunks_exact(3).map(Vec3::from_slice).collect()
+        })
+        .collect()
+}
+
 #[test]
 fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() {
     // Blender animated the head Xform over frames 1–5 at 24 fps (the hair's parent); `coif
@@ -694,8 +757,13 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
     let frames = &manifest()["blender_groom_anim"]["frames"];
     let (first, last) = (frames["start"].as_f64().unwrap(), frames["end"].as_f64().unwrap());
     let fps = frames["fps"].as_f64().unwrap();
-    let (_, reference) = pxr_frames(Path::new("tests/data/blender_groom_anim.usda"), first, last);
+    let (reference_dump, reference) =
+        pxr_frames(Path::new("tests/data/blender_groom_anim.usda"), first, last);
     assert_eq!(reference.len(), 5);
+    // The head mesh moves with the hair; converted files carry it frame by frame too.
+    let reference_heads = pxr_mesh_frames(&reference_dump);
+    let head_moved = worst_distance(&reference_heads[0], &reference_heads[4]);
+    assert!(head_moved > 0.01, "the head moves {head_moved} m");
     let moved = worst_distance(&reference[0][0].1, &reference[4][0].1);
     assert!(moved > 0.01, "the animation moves the hair {moved} m: a held frame would show");
     let dir = tempfile::tempdir().unwrap();
@@ -740,6 +808,14 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
         for (k, frame) in got.iter().enumerate() {
             close(frame, &reference[k], &format!("pxr {out:?} frame {}", first + k as f64));
         }
+        for (k, head) in pxr_mesh_frames(&dump).iter().enumerate() {
+            let worst = worst_distance(head, &reference_heads[k]);
+            assert!(
+                worst < 2e-6,
+                "pxr {out:?} frame {}: head mesh {worst} m from Blender's",
+                first + k as f64
+            );
+        }
     }
     // Alembic output: its timeline, and each frame as coif reads it (Blender below).
     for out in outputs.iter().filter(|o| o.extension().unwrap() == "abc") {
@@ -758,6 +834,8 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
                 .map(|o| (format!("{o}/{o}Data"), group_points(&groom, o)))
                 .collect();
             close(&got, want, &format!("{out:?} frame {frame}"));
+            let worst = worst_distance(&groom.meshes[0].points, &reference_heads[k]);
+            assert!(worst < 2e-6, "{out:?} frame {frame}: head mesh {worst} m from Blender's");
         }
     }
     // Blender's importers: the converted files move as Blender's own file does, frame by frame

@@ -119,15 +119,56 @@ fn unstyled_convert_round_trip_is_exact_in_pxr_and_in_coif() {
         "a primvar one prim lacks is not invented for it"
     );
 
-    // coif reads back the groom it read, group for group, and writing again changes nothing.
-    // (Meshes are read but not written yet: the skin mesh is the one thing the copy lacks.)
-    let (mut first, second) = (read(&houdini_groom()), read(&out));
+    assert_same_meshes(&source, &written, "houdini_groom.usda → .usda");
+
+    // coif reads back the groom it read, group for group, meshes included, and writing again
+    // changes nothing.
+    let (first, second) = (read(&houdini_groom()), read(&out));
     assert_eq!(first.meshes.len(), 1, "the skin mesh is read");
-    first.meshes.clear();
     assert_eq!(first, second);
     let again = dir.path().join("again.usda");
     assert!(coif(&["convert", path_str(&out), path_str(&again)]).status.success());
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+}
+
+/// pxr sees the source's `Mesh` prims in the written stage: the same paths (Blender's Alembic has
+/// no `/root`: matched by their ends), faces and world points (metres, Y up in the written
+/// stage), wound the same way, with an extent that holds them.
+fn assert_same_meshes(source: &Value, written: &Value, label: &str) {
+    let mpu = source["metersPerUnit"].as_f64().unwrap() as f32;
+    let z_up = source["upAxis"] == "Z";
+    let (a, b) = (source["meshes"].as_array().unwrap(), written["meshes"].as_array().unwrap());
+    assert_eq!(a.len(), b.len(), "{label}: mesh prims");
+    assert!(!a.is_empty(), "{label}: the source has a mesh");
+    for m in a {
+        let path = m["path"].as_str().unwrap();
+        let tail = path.trim_start_matches("/root");
+        let w = b
+            .iter()
+            .find(|w| w["path"].as_str().unwrap().ends_with(tail))
+            .unwrap_or_else(|| panic!("{label}: no mesh {tail}"));
+        assert_eq!((&m["counts"], &m["indices"]), (&w["counts"], &w["indices"]), "{label} {path}: faces");
+        let expected: Vec<f32> = f32s(&m["world_points"])
+            .chunks_exact(3)
+            .flat_map(|p| {
+                if z_up {
+                    [p[0] * mpu, p[2] * mpu, -p[1] * mpu]
+                } else {
+                    [p[0] * mpu, p[1] * mpu, p[2] * mpu]
+                }
+            })
+            .collect();
+        let got = f32s(&w["world_points"]);
+        assert_eq!(expected.len(), got.len(), "{label} {path}");
+        for (x, y) in expected.iter().zip(&got) {
+            assert!((x - y).abs() <= 2e-6, "{label} {path}: point {x} vs {y}");
+        }
+        assert_eq!(
+            (w["orientation"].as_str(), w["subdivisionScheme"].as_str()),
+            (Some("rightHanded"), Some("none"))
+        );
+        assert_eq!(w["extent"], w["computedExtent"], "{label} {path}: extent");
+    }
 }
 
 #[test]
@@ -137,13 +178,13 @@ fn alembic_round_trip_keeps_objects_bases_and_counts() {
     let result = coif(&["convert", path_str(&houdini_groom()), path_str(&abc)]);
     assert!(result.status.success(), "{}", stderr(&result));
     let (source, back) = (read(&houdini_groom()), read(&abc));
-    let summary = |g: &Groom| {
-        group_summary(g).into_iter().map(|(name, basis, _, s, v)| (name, basis, s, v)).collect::<Vec<_>>()
-    };
-    assert_eq!(summary(&back), summary(&source));
+    // Wraps too: the pinned Catmull-Rom guides come back pinned, the B-spline nonperiodic.
+    assert_eq!(group_summary(&back), group_summary(&source));
     assert_eq!(back.points, source.points);
     assert_eq!(back.widths, source.widths);
     assert_eq!(back.guides, source.guides);
+    // The skin comes back as the PolyMesh it was written as: path, points and faces exactly.
+    assert_eq!(back.meshes, source.meshes);
 }
 
 #[test]
@@ -217,6 +258,13 @@ fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
             !written["prims"].as_array().unwrap().iter().any(|p| p[1] == "Mesh"),
             "{label}: a mesh in the groom file"
         );
+        // The meshes go to the sibling file the run reports, as the same Mesh prims a plain
+        // convert writes.
+        let sibling = dir.path().join(format!("unreal_meshes.{ext}"));
+        let meshes = pxr_dump(&sibling, None);
+        assert_eq!(meshes["validationErrors"], serde_json::json!([]), "{label}: sibling UsdValidation");
+        assert!(meshes["curves"].as_array().unwrap().is_empty(), "{label}: curves in the mesh file");
+        assert_same_meshes(&source, &meshes, &format!("{label} (meshes file)"));
         let root = format!("/{}", written["defaultPrim"].as_str().unwrap());
         for (name, value) in [("groom_version_major", 1), ("groom_version_minor", 5)] {
             let property = &written["userProperties"][format!("{root}.userProperties:{name}")];
@@ -276,12 +324,24 @@ fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
             }
         }
     }
-    // Alembic: Unreal refuses a groom .abc holding a PolyMesh; none is written.
+    // Alembic: Unreal refuses a groom .abc holding a PolyMesh; the mesh goes to the sibling
+    // file, named in --json, in the groom file's centimetres.
     let abc = dir.path().join("unreal.abc");
-    let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&abc), "--unreal"]);
+    let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&abc), "--unreal", "--json"]);
     assert!(run.status.success(), "{}", stderr(&run));
+    let sibling = dir.path().join("unreal_meshes.abc");
+    assert_eq!(stdout_json(&run)["meshes_output"], path_str(&sibling));
     let bytes = std::fs::read(&abc).unwrap();
     assert!(!bytes.windows(18).any(|w| w == b"AbcGeom_PolyMesh_v"), "a PolyMesh in the Unreal .abc");
+    let plain_abc = dir.path().join("plain.abc");
+    assert!(coif(&["convert", "tests/data/blender_groom.usda", path_str(&plain_abc)]).status.success());
+    let plain_mesh = &read(&plain_abc).meshes[0];
+    let (points, counts, indices) = polymesh_via_ogawa_rs(&sibling);
+    assert_eq!(counts, plain_mesh.face_counts.iter().map(|&c| c as i32).collect::<Vec<_>>());
+    assert_eq!(indices.len(), plain_mesh.face_indices.len());
+    for (p, q) in points.iter().zip(&plain_mesh.points) {
+        assert!((glam::Vec3::from(*p) / 100.0 - *q).length() < 1e-6, "{p:?} cm vs {q} m");
+    }
     assert!(
         bytes.windows(14).any(|w| w == b"groom_root_uv\0")
             || bytes.windows(13).any(|w| w == b"groom_root_uv")
@@ -327,13 +387,10 @@ fn blender_grooms_convert_round_trips_are_exact_in_pxr() {
             let tail = path.trim_start_matches("/root");
             let b =
                 wc.iter().find(|(p, _)| p.ends_with(tail)).unwrap_or_else(|| panic!("{label}: no {tail}")).1;
-            // Alembic has no `pinned` wrap (README): from .abc, Catmull-Rom comes back nonperiodic.
+            // Alembic records no `pinned`, but Catmull-Rom read from it is pinned, as Blender
+            // means it: the same wraps and pxr segment counts from every input.
             let from_abc = input.extension().unwrap() == "abc";
-            let keys: &[&str] = if from_abc {
-                &["type", "basis", "counts"]
-            } else {
-                &["type", "basis", "wrap", "counts", "segmentEnds"]
-            };
+            let keys = ["type", "basis", "wrap", "counts", "segmentEnds"];
             for key in keys {
                 assert_eq!(a[key], b[key], "{label} {path}: {key}");
             }
@@ -379,5 +436,34 @@ fn blender_grooms_convert_round_trips_are_exact_in_pxr() {
                 assert!(n > 0 && mean_dot >= 0.999, "{label} {path}: surface_normal mean dot {mean_dot}");
             }
         }
+        // The head mesh comes back as a Mesh prim where Blender put it.
+        assert_same_meshes(&source, &written, &label);
+    }
+}
+
+#[test]
+fn unreal_meshes_file_is_written_with_the_groom_or_not_at_all() {
+    // The groom file cannot be put in place (a directory holds its name): the run fails and
+    // leaves neither the meshes file nor a temporary behind.
+    for ext in ["usda", "abc"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(format!("groom.{ext}"));
+        std::fs::create_dir(&out).unwrap();
+        let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&out), "--unreal"]);
+        assert!(!run.status.success(), ".{ext}: a directory was overwritten");
+        assert_eq!(dir_listing(dir.path()), vec![format!("groom.{ext}")], ".{ext}: {}", stderr(&run));
+    }
+    // A mesh that cannot be written (a face naming a point it lacks) is refused, naming the
+    // mesh, with nothing written in any format, Unreal layout or not.
+    let mut groom = read(&houdini_groom());
+    groom.meshes[0].face_indices[0] = 99;
+    let dir = tempfile::tempdir().unwrap();
+    for (ext, unreal) in [("usda", false), ("usdc", false), ("abc", false), ("usda", true), ("abc", true)] {
+        let path = dir.path().join(format!("bad.{ext}"));
+        let error =
+            coif::io::write_groom_with(&path, &groom, &coif::io::ExportOptions { unreal }).unwrap_err();
+        assert_eq!(error.exit_code(), 2, "{error}");
+        assert!(error.to_string().contains("/skin"), ".{ext}: {error}");
+        assert!(dir_listing(dir.path()).is_empty(), ".{ext}: {:?}", dir_listing(dir.path()));
     }
 }

@@ -260,14 +260,100 @@ fn frames_record_the_whole_process_as_time_samples() {
             let bytes = std::fs::read(&animated).unwrap();
             coif::io::alembic::CurvesArchive::open(&bytes).unwrap().frame_count() as f64
         } else {
-            // One line per frame in each of the points and extent time samples.
-            let text = std::fs::read_to_string(&animated).unwrap();
-            (text.lines().filter(|l| l.starts_with("            ") && l.contains(": ")).count() / 2) as f64
+            let timeline = coif::io::timeline::read_timeline(&animated).unwrap().expect("an animated stage");
+            timeline.frame_count() as f64
         };
         assert_eq!(frames, expected_frames, "{name}: {frames} frames for {steps} steps of styling");
         // Frame numbers mean the same in both formats: the first written is frame 1.
         let (first, last) = (1.0, frames);
         assert_eq!(at(first).points, read(&groom).points, "{name}: first frame is not the input");
         assert_eq!(at(last).points, settled.points, "{name}: last frame is not the settled groom");
+    }
+}
+
+/// `--frames` output time-samples what styling changes besides the points — wetness, bond rates,
+/// `rest`, `rest_darboux` — in `.usda`, `.usdc` and `.abc`. pxr reads a sample per frame, and at
+/// the frame that ends the wet stage (0.5 s = frame 13 at 24 fps, frame 1 being the input) the
+/// mean wetness and hydrogen rate are the report's for that stage; coif reads the same values
+/// from the `.abc`.
+#[test]
+fn frames_time_sample_wetness_bonds_and_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("few.hair");
+    coif::io::write_groom(&groom, &thin(&read(&repo("grooms/seed_200x24cm.hair")), 10)).unwrap();
+    let recipe = repo("grooms/recipes/water_set.toml");
+    let mut reports = Vec::new();
+    for name in ["anim.usda", "anim.usdc", "anim.abc"] {
+        let out = dir.path().join(name);
+        let run = coif(&[
+            "style",
+            path_str(&recipe),
+            "--groom",
+            path_str(&groom),
+            "-o",
+            path_str(&out),
+            "--frames",
+            "24",
+            "--json",
+        ]);
+        reports.push(stdout_json(&run)["report"].clone());
+    }
+    for report in &reports {
+        assert_eq!(report["steps"], reports[0]["steps"], "the same run for every format");
+    }
+    let stage = &reports[0]["stages"][0];
+    assert_eq!(stage["kind"], "wet");
+    let wet_end = 1.0 + stage["seconds"].as_f64().unwrap() * 24.0;
+    assert_eq!(wet_end, 13.0, "the wet stage ends on a frame");
+    let mean = |v: &[f32]| v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64;
+    for name in ["anim.usda", "anim.usdc"] {
+        let path = dir.path().join(name);
+        let at_end = common::usd::pxr_dump(&path, Some(wet_end));
+        let curves = &at_end["curves"][0];
+        let frames = curves["pointsTimeSamples"].as_array().unwrap().len();
+        assert!(frames > 24, "{name}: {frames} frames");
+        for primvar in ["wetness", "bond_hydrogen", "rest", "rest_darboux"] {
+            let samples = curves["primvars"][primvar]["timeSamples"].as_array().unwrap().len();
+            assert_eq!(samples, frames, "{name}: {primvar} has a sample per frame");
+        }
+        // Water breaks hydrogen bonds only: the ionic rate never changes and is written once.
+        assert!(curves["primvars"]["bond_ionic"]["timeSamples"].as_array().unwrap().is_empty(), "{name}");
+        let values = |dump: &serde_json::Value, primvar: &str| {
+            common::usd::f32s(&dump["curves"][0]["primvars"][primvar]["values"])
+        };
+        let wetness = mean(&values(&at_end, "wetness"));
+        assert!(
+            (wetness - stage["wetness"].as_f64().unwrap()).abs() < 1e-6,
+            "{name}: wetness {wetness} at frame 13, report {}",
+            stage["wetness"]
+        );
+        let hydrogen = mean(&values(&at_end, "bond_hydrogen"));
+        let reported = stage["bond_rates"]["hydrogen"].as_f64().unwrap();
+        assert!(
+            (hydrogen - reported).abs() < 1e-6,
+            "{name}: hydrogen {hydrogen} at frame 13, report {reported}"
+        );
+        // Dry at the start, wet at frame 13, drier again at the end, as the report says.
+        let first = common::usd::pxr_dump(&path, Some(1.0));
+        let last_frame = frames as f64;
+        let last = common::usd::pxr_dump(&path, Some(last_frame));
+        let final_wetness =
+            reports[0]["stages"].as_array().unwrap().last().unwrap()["wetness"].as_f64().unwrap();
+        assert!(
+            (mean(&values(&last, "wetness")) - final_wetness).abs() < 1e-6,
+            "{name}: last frame's wetness"
+        );
+        assert!(
+            mean(&values(&first, "wetness")) < wetness && final_wetness < wetness,
+            "{name}: wetness does not rise and fall"
+        );
+        assert_ne!(values(&first, "rest"), values(&last, "rest"), "{name}: rest does not change");
+        if name == "anim.usda" {
+            // coif's .abc holds the same values at the same frame.
+            let options = coif::io::ImportOptions { frame: Some(wet_end), ..Default::default() };
+            let abc = coif::io::read_groom(&dir.path().join("anim.abc"), &options).unwrap().groom;
+            assert_eq!(abc.attribute("wetness").unwrap().data, values(&at_end, "wetness"));
+            assert_eq!(abc.attribute("bond_hydrogen").unwrap().data, values(&at_end, "bond_hydrogen"));
+        }
     }
 }

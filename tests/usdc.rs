@@ -162,7 +162,7 @@ fn animated_usdc_matches_animated_usda(groom: &Groom, dir: &Path) {
         .collect();
     let (text, binary) = (dir.join("anim.usda"), dir.join("anim.usdc"));
     for path in [&text, &binary] {
-        coif::io::write_animated(path, groom, &frames, 30.0, &Default::default()).unwrap();
+        coif::io::write_animated(path, groom, &frames, &[], 30.0, &Default::default()).unwrap();
     }
     for time in [Some(1.0), Some(2.5), Some(3.0)] {
         let (from_text, from_binary) = (pxr_dump(&text, time), pxr_dump(&binary, time));

@@ -17,7 +17,7 @@ fn sample() -> Vec<u8> {
     let path = dir.path().join("ok.usdc");
     let groom = rich_groom(CurveBasis::Linear);
     let frames = vec![groom.points.clone(), groom.points.iter().map(|p| *p + Vec3::Y).collect()];
-    coif::io::write_animated(&path, &groom, &frames, 24.0, &Default::default()).unwrap();
+    coif::io::write_animated(&path, &groom, &frames, &[], 24.0, &Default::default()).unwrap();
     std::fs::read(path).unwrap()
 }
 

@@ -389,23 +389,35 @@ pub(crate) struct ImportArgs {
     /// first sample), Alembic's first sample.
     #[arg(long, value_name = "FRAME", allow_negative_numbers = true)]
     pub(crate) frame: Option<f64>,
+    /// Animated input: the moment to read, in seconds on the file's own timeline (frame =
+    /// seconds × the file's frame rate: USD `timeCodesPerSecond`, Alembic's), the same moment
+    /// in either format.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, conflicts_with = "frame")]
+    pub(crate) time: Option<f64>,
     /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).
     #[arg(long, value_name = "SET=NAME")]
     pub(crate) variant: Vec<String>,
 }
 
 impl ImportArgs {
-    pub(crate) fn options(&self) -> coif::Result<ImportOptions> {
+    /// The import options for reading `input` (`--time` becomes that file's frame number).
+    pub(crate) fn options(&self, input: &std::path::Path) -> coif::Result<ImportOptions> {
         super::checks::import(self)?;
-        Ok(ImportOptions {
-            meters_per_unit: self.units,
-            up_axis: self.up.map(UpAxis::from),
-            frame: self.frame,
-        })
+        let frame = match self.time {
+            Some(seconds) => Some(io::timeline::frame_at_time(input, seconds, "--time")?),
+            None => self.frame,
+        };
+        Ok(ImportOptions { meters_per_unit: self.units, up_axis: self.up.map(UpAxis::from), frame })
     }
 
+    /// Whether a moment was picked (`--frame` or `--time`).
+    pub(crate) fn picks_a_moment(&self) -> bool {
+        self.frame.is_some() || self.time.is_some()
+    }
+
+    /// The variants to select (the time comes from [`Self::options`]).
     pub(crate) fn selection(&self) -> io::usda::Selection {
-        io::usda::Selection { time: self.frame, variants: self.variant.clone() }
+        io::usda::Selection { time: None, variants: self.variant.clone() }
     }
 }
 

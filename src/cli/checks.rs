@@ -16,6 +16,10 @@ pub(crate) fn import(args: &ImportArgs) -> Result<()> {
         // Negative frames are real (a simulation's pre-roll); beyond a billion is a typo.
         flag("--frame", frame, Range::closed(-1e9, 1e9))?;
     }
+    if let Some(seconds) = args.time {
+        // A year either way; the frame it makes is checked against the file's timeline.
+        flag("--time", seconds, Range::closed(-3.2e7, 3.2e7))?;
+    }
     Ok(())
 }
 

@@ -20,12 +20,24 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Generate(args) => run_generate(args),
         Command::Info { file, import, json } => {
-            let loaded = io::read_groom_selected(&file, &import.options()?, &import.selection())?;
+            let loaded = io::read_groom_selected(&file, &import.options(&file)?, &import.selection())?;
             let info = GroomInfo::of(&loaded.groom);
+            let timeline = io::timeline::read_timeline(&file)?;
             if json {
-                print_json(json!({ "path": file, "format": loaded.format, "groom": info }));
+                let frames = timeline.map(|t| frames_json(&t));
+                print_json(json!({ "path": file, "format": loaded.format, "frames": frames, "groom": info }));
             } else {
-                print_stdout(&format!("{} ({})\n{info}", file.display(), loaded.format.name()));
+                let frames = match timeline {
+                    Some(t) => format!(
+                        "frames       {} to {} ({} frames at {} fps)\n",
+                        t.first,
+                        t.frame(t.frame_count() - 1),
+                        t.frame_count(),
+                        t.frames_per_second
+                    ),
+                    None => "frames       one moment (not animated)\n".to_string(),
+                };
+                print_stdout(&format!("{} ({})\n{frames}{info}", file.display(), loaded.format.name()));
             }
             Ok(())
         }
@@ -47,7 +59,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
         recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
     }
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.groom, &args.import.options()?)?;
+    let loaded = io::read_groom(&args.groom, &args.import.options(&args.groom)?)?;
     let progress = args.progress.mode(args.quiet, args.json);
     let frames_per_second = args.frames.unwrap_or(0.0);
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
@@ -64,14 +76,20 @@ fn run_style(args: StyleArgs) -> Result<()> {
         None => None,
     };
     let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
-    let (groom, frames, report) = if args.groups.is_empty() {
-        let styled = coif::style::style(&loaded.groom, &recipe, &options)?;
-        (styled.groom, styled.frames, styled.report)
+    let styled = if args.groups.is_empty() {
+        coif::style::style(&loaded.groom, &recipe, &options)?
     } else {
         style_groups(&loaded.groom, &args.groups, &recipe, &options)?
     };
-    let warnings =
-        io::write_animated(&args.output, &groom, &frames, frames_per_second, &io::ExportOptions::default())?;
+    let (groom, report) = (&styled.groom, &styled.report);
+    let warnings = io::write_animated(
+        &args.output,
+        groom,
+        &styled.frames,
+        &styled.frame_attributes,
+        frames_per_second,
+        &io::ExportOptions::default(),
+    )?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
@@ -104,23 +122,34 @@ fn run_style(args: StyleArgs) -> Result<()> {
 }
 
 /// Styles the groups named by `--group` and puts them back among the untouched ones (frames
-/// too: the other groups stand still in every frame).
+/// too: the other groups stand still in every frame, with their own attribute values).
 fn style_groups(
     groom: &coif::Groom,
     names: &[String],
     recipe: &coif::style::recipe::Recipe,
     options: &coif::style::StyleOptions,
-) -> Result<(coif::Groom, Vec<Vec<glam::Vec3>>, coif::style::StyleReport)> {
+) -> Result<coif::style::Styled> {
     let (selected, selection) = groom.select_groups(names).map_err(Error::Usage)?;
-    let styled = coif::style::style(&selected, recipe, options)?;
+    let mut styled = coif::style::style(&selected, recipe, options)?;
     let merged = groom.merge_back(&selection, &styled.groom)?;
-    let mut frames = Vec::with_capacity(styled.frames.len());
     let mut frame = styled.groom.clone();
-    for points in styled.frames {
+    let frame_attributes = std::mem::take(&mut styled.frame_attributes);
+    for (k, points) in std::mem::take(&mut styled.frames).into_iter().enumerate() {
         frame.points = points;
-        frames.push(groom.merge_back(&selection, &frame)?.points);
+        let attributes = frame_attributes.get(k);
+        for attribute in attributes.into_iter().flatten() {
+            frame.set_attribute(attribute.clone());
+        }
+        let whole = groom.merge_back(&selection, &frame)?;
+        if let Some(attributes) = attributes {
+            let merged_attributes =
+                attributes.iter().filter_map(|a| whole.attribute(&a.name).cloned()).collect();
+            styled.frame_attributes.push(merged_attributes);
+        }
+        styled.frames.push(whole.points);
     }
-    Ok((merged, frames, styled.report))
+    styled.groom = merged;
+    Ok(styled)
 }
 
 fn run_simulate(args: SimulateArgs) -> Result<()> {
@@ -128,7 +157,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
     super::checks::simulate(&args)?;
     io::Format::from_extension(&args.output)?;
-    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
+    let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
     let defaults = SimParams::default();
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
@@ -293,7 +322,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.scene.floor_albedo = render::parse_vec3(albedo, "--floor-albedo")?;
     }
 
-    let loaded = io::read_groom(&args.input, &args.import.options()?)?;
+    let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
     let progress = Progress::new(args.progress.mode(false, false), "render", 1);
     let report = |done: u64, total: u64| {
         progress.set_total(total);
@@ -463,7 +492,7 @@ fn run_convert(
     frame_range: Option<&str>,
 ) -> Result<()> {
     use io::timeline::{parse_range, read_timeline, Timeline};
-    let options = import.options()?;
+    let options = import.options(input)?;
     let range = frame_range.map(|text| parse_range(text, "--frame-range")).transpose()?;
     let output_format = io::Format::from_extension(output)?;
     let timeline = match range {
@@ -473,7 +502,7 @@ fn run_convert(
             let rate = read_timeline(input)?.map_or(24.0, |t| t.frames_per_second);
             Some(Timeline { first, last, frames_per_second: rate })
         }
-        None if import.frame.is_some() => None,
+        None if import.picks_a_moment() => None,
         None => read_timeline(input)?.filter(|_| {
             output_format != io::Format::Hair || {
                 eprintln!("coif: warning: {}: .hair holds one frame: writing the input's first (--frame N picks another)", output.display());
@@ -497,11 +526,14 @@ fn run_convert(
         eprintln!("coif: warning: {warning}");
     }
     let info = GroomInfo::of(&first);
-    let frames = json!({ "first": timeline.first, "last": timeline.frame(timeline.frame_count() - 1),
-        "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second });
+    let frames = frames_json(&timeline);
+    let meshes_output = io::meshes_output(output, &first, export);
     if json {
-        print_json(json!({ "output": output, "groom": info, "frames": frames, "warnings": warnings }));
+        print_json(
+            json!({ "output": output, "meshes_output": meshes_output, "groom": info, "frames": frames, "warnings": warnings }),
+        );
     } else {
+        report_meshes_output(meshes_output.as_deref());
         eprintln!(
             "wrote {} ({} strands, {} vertices, frames {} to {} at {} fps)",
             output.display(),
@@ -515,6 +547,12 @@ fn run_convert(
     Ok(())
 }
 
+/// A timeline in `--json` output: its first and last whole frames, their count and rate.
+fn frames_json(timeline: &io::timeline::Timeline) -> serde_json::Value {
+    json!({ "first": timeline.first, "last": timeline.frame(timeline.frame_count() - 1),
+        "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second })
+}
+
 fn write_and_report(
     output: &Path,
     groom: &coif::Groom,
@@ -526,12 +564,26 @@ fn write_and_report(
         eprintln!("coif: warning: {warning}");
     }
     let info = GroomInfo::of(groom);
+    let meshes_output = io::meshes_output(output, groom, options);
     if json {
-        print_json(json!({ "output": output, "groom": info, "warnings": warnings }));
+        print_json(
+            json!({ "output": output, "meshes_output": meshes_output, "groom": info, "warnings": warnings }),
+        );
     } else {
+        report_meshes_output(meshes_output.as_deref());
         eprintln!("wrote {} ({} strands, {} vertices)", output.display(), info.strands, info.vertices);
     }
     Ok(())
+}
+
+/// Where `--unreal` output put the meshes (Unreal's groom importers refuse a file holding one).
+fn report_meshes_output(path: Option<&Path>) {
+    if let Some(path) = path {
+        eprintln!(
+            "wrote {} (the meshes: Unreal's groom importer refuses a groom file holding a mesh)",
+            path.display()
+        );
+    }
 }
 
 fn print_json(value: serde_json::Value) {

@@ -169,36 +169,32 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let mut child_points = deform::deform(&last, last_pose, &after);
     push_out(&mut child_points, &children.strand_offsets, &radii, &shapes);
 
-    // The styled guides' per-vertex attributes, carried to the children.
-    let mut child_attributes = Vec::new();
-    for attribute in styled.groom.attributes.iter().filter(|a| a.rate == AttributeRate::Vertex) {
-        let data = if attribute.name == "rest" && attribute.components == 3 {
-            let rest: Vec<Vec3> = attribute.data.chunks_exact(3).map(Vec3::from_slice).collect();
-            deform::deform(&last, last_pose, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
-        } else {
-            deform::blend_attribute(&bound, &after, &attribute.data, attribute.components)
-        };
-        child_attributes.push(Attribute::new(
-            attribute.name.clone(),
-            AttributeRate::Vertex,
-            attribute.components,
-            data,
-        ));
-    }
+    // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
+    // points, the others blended; merged with the guides' own over every strand. The same for
+    // each captured frame of `--frames` output, from that frame's guides.
+    let carried = |from: &Children, from_pose: &Curves, after: &Curves, guide_attributes: &[Attribute]| {
+        guide_attributes
+            .iter()
+            .filter(|a| a.rate == AttributeRate::Vertex)
+            .map(|attribute| {
+                let data = if attribute.name == "rest" && attribute.components == 3 {
+                    let rest: Vec<Vec3> = attribute.data.chunks_exact(3).map(Vec3::from_slice).collect();
+                    deform::deform(from, from_pose, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
+                } else {
+                    deform::blend_attribute(&bound, after, &attribute.data, attribute.components)
+                };
+                let child =
+                    Attribute::new(attribute.name.clone(), AttributeRate::Vertex, attribute.components, data);
+                merge_vertex_attribute(&groom, &guide_ids, attribute, &child_ids, &child)
+            })
+            .collect::<Vec<Attribute>>()
+    };
 
     let mut out = groom.clone();
     scatter_points(&mut out, &guide_ids, &styled.groom.points);
     scatter_points(&mut out, &child_ids, &child_points);
-    for guide_attribute in styled.groom.attributes.iter().filter(|a| a.rate == AttributeRate::Vertex) {
-        let child_attribute =
-            child_attributes.iter().find(|a| a.name == guide_attribute.name).expect("blended above");
-        out.set_attribute(merge_vertex_attribute(
-            &groom,
-            &guide_ids,
-            guide_attribute,
-            &child_ids,
-            child_attribute,
-        ));
+    for attribute in carried(&last, last_pose, &after, &styled.groom.attributes) {
+        out.set_attribute(attribute);
     }
     let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
     out.set_attribute(closest);
@@ -206,20 +202,21 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     out.guides = Some(flags);
     out.validate()?;
 
-    let frames = styled
-        .frames
-        .into_iter()
-        .enumerate()
-        .map(|(index, frame)| {
-            let (from, from_pose) = start(index);
-            let mut points = deform::deform(&from, from_pose, &posed(frame.clone()));
-            push_out(&mut points, &children.strand_offsets, &radii, &shapes);
-            let mut all = out.points.clone();
-            scatter(&mut all, &out, &guide_ids, &frame);
-            scatter(&mut all, &out, &child_ids, &points);
-            all
-        })
-        .collect();
+    let mut frames = Vec::with_capacity(styled.frames.len());
+    let mut frame_attributes = Vec::with_capacity(styled.frame_attributes.len());
+    for (index, frame) in styled.frames.into_iter().enumerate() {
+        let (from, from_pose) = start(index);
+        let after = posed(frame.clone());
+        let mut points = deform::deform(&from, from_pose, &after);
+        push_out(&mut points, &children.strand_offsets, &radii, &shapes);
+        let mut all = out.points.clone();
+        scatter(&mut all, &out, &guide_ids, &frame);
+        scatter(&mut all, &out, &child_ids, &points);
+        frames.push(all);
+        if let Some(guide_attributes) = styled.frame_attributes.get(index) {
+            frame_attributes.push(carried(&from, from_pose, &after, guide_attributes));
+        }
+    }
     let mut report = styled.report;
     report.strands = out.strand_count();
     report.vertices = out.vertex_count();
@@ -228,6 +225,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         groom: out,
         report,
         frames,
+        frame_attributes,
         frames_per_second: styled.frames_per_second,
         droplets: Vec::new(),
     })

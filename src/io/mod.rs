@@ -234,9 +234,61 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
         let to_y_up = |p: &mut Vec3| *p = Vec3::new(p.x, p.z, -p.y);
         groom.points.iter_mut().for_each(to_y_up);
         groom.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(to_y_up);
+        let rotation =
+            glam::DMat4::from_cols(glam::DVec4::X, glam::DVec4::NEG_Z, glam::DVec4::Y, glam::DVec4::W);
+        transform_attributes(&mut groom.attributes, rotation);
     }
     if let Some(scale) = options.meters_per_unit {
         groom.scale(scale);
+    }
+}
+
+/// Moves the attributes that are positions or directions with the points, from a file's space to
+/// coif's by `to_coif`: points (`rest`) like the points, normals by the inverse transpose (kept
+/// unit length), vectors (velocities) by the linear part — by kind, or for plain float3 data by
+/// name (Blender's `surface_normal`, `N`, `v`, `velocit*`, `rest`). Every reader uses it.
+pub(crate) fn transform_attributes(attributes: &mut [crate::groom::Attribute], to_coif: glam::DMat4) {
+    use crate::groom::AttributeKind;
+    if to_coif == glam::DMat4::IDENTITY {
+        return;
+    }
+    let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
+    let linear = glam::DMat3::from_mat4(to_coif);
+    for attribute in attributes.iter_mut().filter(|a| a.components == 3) {
+        let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(attribute) {
+            Some(AttributeKind::Point) => Box::new(transform),
+            Some(AttributeKind::Normal) => {
+                let normal_matrix = linear.inverse().transpose();
+                Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
+            }
+            Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
+            None => continue,
+        };
+        for c in attribute.data.chunks_exact_mut(3) {
+            c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
+        }
+    }
+}
+
+/// How a 3-vector attribute follows the points from file space to coif's: by its kind, or for
+/// plain float3 data by its name (Blender's `surface_normal`, velocities…); `None`: not at all.
+fn direction_kind(attribute: &crate::groom::Attribute) -> Option<crate::groom::AttributeKind> {
+    use crate::groom::AttributeKind;
+    match attribute.kind {
+        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(attribute.kind),
+        AttributeKind::Float => {
+            let name = attribute.name.to_ascii_lowercase();
+            if name == usda::names::REST {
+                Some(AttributeKind::Point)
+            } else if name == "n" || name.contains("normal") {
+                Some(AttributeKind::Normal)
+            } else if name == "v" || name.starts_with("velocit") {
+                Some(AttributeKind::Vector)
+            } else {
+                None
+            }
+        }
+        _ => None,
     }
 }
 
@@ -246,22 +298,10 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
     write_groom_with(path, groom, &ExportOptions::default())
 }
 
-/// [`write_groom`] with format-specific choices.
+/// [`write_groom`] with format-specific choices. USD and Alembic carry the groom's meshes beside
+/// the curves; with `--unreal` they go to the sibling file [`unreal::meshes_path`] instead,
+/// written together with the groom (both or neither).
 pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
-    let mut warnings = write_curves(path, groom, options)?;
-    warnings.extend(mesh_warning(path, groom));
-    Ok(warnings)
-}
-
-/// No writer carries meshes yet: say so rather than drop them silently.
-fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
-    (!groom.meshes.is_empty()).then(|| {
-        let names: Vec<&str> = groom.meshes.iter().map(|m| m.path.as_str()).collect();
-        format!("{}: meshes are not written (only the curves): {}", path.display(), names.join(", "))
-    })
-}
-
-fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
     let format = Format::from_extension(path)?;
     if options.unreal && matches!(format, Format::Hair | Format::Usdz) {
@@ -275,24 +315,38 @@ fn write_curves(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<V
         Format::Hair => {
             hair::check_writable(groom, path)?;
             atomic::write_atomically(path, |w| hair::write(groom, w).map_err(|e| Error::io(path, e)))?;
-            Ok(hair::unsupported(groom)
+            let mut warnings: Vec<String> = hair::unsupported(groom)
                 .into_iter()
                 .map(|what| format!("{}: .hair drops {what}", path.display()))
-                .collect())
+                .collect();
+            warnings.extend(mesh_warning(path, groom));
+            Ok(warnings)
         }
-        Format::Usda | Format::Usdc => write_usd_stage(path, format, groom, None, options),
-        Format::Usdz => {
-            usda::check_writable(groom, path)?;
-            usd_interop::write(path, groom)?;
-            Ok(usd_warnings(path, groom))
-        }
+        Format::Usda | Format::Usdc | Format::Usdz => write_usd_stage(path, format, groom, None, options),
         Format::Alembic => {
-            let prepared = options.unreal.then(|| unreal::with_root_uvs(groom)).flatten();
             let abc_options = alembic::AlembicWriteOptions { unreal: options.unreal, ..Default::default() };
-            alembic::write(path, prepared.as_ref().unwrap_or(groom), &abc_options)?;
-            Ok(Vec::new())
+            stream_alembic_frames(path, groom, std::iter::empty(), &abc_options, false)?;
+            Ok(alembic_warnings(path, groom))
         }
     }
+}
+
+/// The file a write of `groom` to `path` puts the meshes in when that is not `path` itself: the
+/// sibling [`unreal::meshes_path`] of `--unreal` output.
+pub fn meshes_output(path: &Path, groom: &Groom, options: &ExportOptions) -> Option<std::path::PathBuf> {
+    (options.unreal && !groom.meshes.is_empty()).then(|| unreal::meshes_path(path))
+}
+
+/// `.hair` holds curves only: say so rather than drop the meshes silently.
+fn mesh_warning(path: &Path, groom: &Groom) -> Option<String> {
+    (!groom.meshes.is_empty()).then(|| {
+        let names: Vec<&str> = groom.meshes.iter().map(|m| m.path.as_str()).collect();
+        format!("{}: .hair holds no meshes (only the curves): {}", path.display(), names.join(", "))
+    })
+}
+
+fn alembic_warnings(path: &Path, groom: &Groom) -> Vec<String> {
+    alembic::unsupported(groom).into_iter().map(|what| format!("{}: {what}", path.display())).collect()
 }
 
 fn usd_warnings(path: &Path, groom: &Groom) -> Vec<String> {
@@ -300,12 +354,15 @@ fn usd_warnings(path: &Path, groom: &Groom) -> Vec<String> {
 }
 
 /// Writes a groom whose points move over time: `frames` holds every frame's points (same
-/// topology as `groom`, whose other data is written once), `frames_per_second` sets the time
-/// codes (frame `k` at time code `k + 1`). USD and Alembic carry time samples; `.hair` cannot.
+/// topology as `groom`, whose other data and meshes are written once) and `attributes`, when not
+/// empty, every frame's values of attributes of the groom (the same names in each frame); those
+/// whose values change are time-sampled too. `frames_per_second` sets the time codes (frame `k`
+/// at time code `k + 1`). USD and Alembic carry time samples; `.hair` cannot.
 pub fn write_animated(
     path: &Path,
     groom: &Groom,
     frames: &[Vec<Vec3>],
+    attributes: &[Vec<crate::groom::Attribute>],
     frames_per_second: f32,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
@@ -313,17 +370,57 @@ pub fn write_animated(
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
+    if !attributes.is_empty() && attributes.len() != frames.len() {
+        return Err(Error::Usage(format!(
+            "{}: {} frames of points but {} of attributes",
+            path.display(),
+            frames.len(),
+            attributes.len()
+        )));
+    }
+    // Only what changes is sampled; the rest is the groom's, written once.
+    let changing: Vec<Vec<&crate::groom::Attribute>> = match attributes.first() {
+        None => Vec::new(),
+        Some(first) => {
+            let changes = |a: &crate::groom::Attribute| {
+                attributes.iter().any(|f| f.iter().any(|b| b.name == a.name && b.data != a.data))
+            };
+            let names: Vec<&str> = first.iter().filter(|a| changes(a)).map(|a| a.name.as_str()).collect();
+            attributes
+                .iter()
+                .map(|f| f.iter().filter(|a| names.contains(&a.name.as_str())).collect())
+                .collect()
+        }
+    };
     let times =
         usda::TimeCodes { start: 1.0, end: frames.len() as f64, per_second: frames_per_second as f64 };
-    let mut warnings = write_animated_curves(path, groom, frames, times, options)?;
-    warnings.extend(mesh_warning(path, groom));
-    Ok(warnings)
+    let format = check_animated_output(path)?;
+    if format == Format::Alembic {
+        let abc_options = alembic_options(options, times.per_second, times.start);
+        // Frame k: the groom with that frame's points and changing attributes.
+        let frame = |k: usize| {
+            let mut frame = groom.clone();
+            frame.points.clone_from(&frames[k]);
+            for &attribute in changing.get(k).into_iter().flatten() {
+                frame.set_attribute(attribute.clone());
+            }
+            Ok(frame)
+        };
+        let first = frame(0)?;
+        stream_alembic_frames(path, &first, (1..frames.len()).map(frame), &abc_options, true)?;
+        return Ok(alembic_warnings(path, groom));
+    }
+    let animation = usd_stage::Animation {
+        attributes: if changing.iter().all(Vec::is_empty) { Vec::new() } else { changing },
+        ..usd_stage::Animation::of_points(times, frames)
+    };
+    write_usd_stage(path, format, groom, Some(&animation), options)
 }
 
 /// Writes `first` and the frames `rest` yields (with the same topology) at frame numbers
-/// `timeline.first`, `+ 1`, …: Alembic streams them to disk one at a time; USD holds
-/// their points (checked against the memory limit first) until the stage is written. Attributes
-/// other than the points are written once, from `first`. A frame whose strands differ from the
+/// `timeline.first`, `+ 1`, …: Alembic streams them to disk one at a time; USD holds what
+/// changes (points, mesh points, attributes that differ from the first frame's; checked against
+/// the memory limit first) until the stage is written. A frame whose strands differ from the
 /// first's is refused, naming its frame number.
 pub fn write_frames(
     path: &Path,
@@ -346,45 +443,127 @@ pub fn write_frames(
                 first.vertex_count()
             )));
         }
+        let meshes =
+            |g: &Groom| g.meshes.iter().map(|m| (m.path.clone(), m.points.len())).collect::<Vec<_>>();
+        if meshes(groom) != meshes(first) {
+            return Err(Error::Usage(format!(
+                "{}: frame {} has other meshes than frame {}; coif writes animation of constant topology",
+                path.display(),
+                timeline.frame(k),
+                timeline.first,
+            )));
+        }
         Ok(())
     };
-    let mut warnings = if format == Format::Alembic {
-        let abc_options = alembic::AlembicWriteOptions {
-            unreal: options.unreal,
-            frames_per_second: timeline.frames_per_second,
-            first_frame: timeline.first,
-            ..Default::default()
-        };
-        let template =
-            options.unreal.then(|| unreal::with_root_uvs(first)).flatten().unwrap_or_else(|| first.clone());
-        let points = std::iter::once(Ok(first.points.clone())).chain(rest.enumerate().map(|(k, groom)| {
-            let groom = groom?;
-            same_topology(k as u64 + 1, &groom)?;
-            Ok(groom.points)
-        }));
-        stream_alembic_frames(path, template, points, &abc_options)?;
-        Vec::new()
-    } else {
-        crate::limits::check_memory(
-            &format!("holding {count} frames of {} vertices for {}", first.vertex_count(), path.display()),
-            count as f64 * first.vertex_count() as f64 * 12.0,
-        )?;
-        let mut points = Vec::with_capacity(count as usize);
-        points.push(first.points.clone());
-        for (k, groom) in rest.enumerate() {
-            let groom = groom?;
-            same_topology(k as u64 + 1, &groom)?;
-            points.push(groom.points);
-        }
-        let times = usda::TimeCodes {
-            start: timeline.first,
-            end: timeline.frame(points.len().max(1) as u64 - 1),
-            per_second: timeline.frames_per_second,
-        };
-        write_animated_curves(path, first, &points, times, options)?
+    let rest = rest.enumerate().map(|(k, groom)| {
+        let groom = groom?;
+        same_topology(k as u64 + 1, &groom)?;
+        Ok(groom)
+    });
+    if format == Format::Alembic {
+        let abc_options = alembic_options(options, timeline.frames_per_second, timeline.first);
+        stream_alembic_frames(path, first, rest, &abc_options, true)?;
+        return Ok(alembic_warnings(path, first));
+    }
+    crate::limits::check_memory(
+        &format!("holding {count} frames of {} vertices for {}", first.vertex_count(), path.display()),
+        count as f64 * first.vertex_count() as f64 * 12.0,
+    )?;
+    let changes = FrameChanges::collect(first, rest)?;
+    let times = usda::TimeCodes {
+        start: timeline.first,
+        end: timeline.frame(changes.points.len().max(1) as u64 - 1),
+        per_second: timeline.frames_per_second,
     };
-    warnings.extend(mesh_warning(path, first));
-    Ok(warnings)
+    write_usd_stage(path, format, first, Some(&changes.animation(first, times)), options)
+}
+
+/// What differs from the first frame in each frame of an animation (the first included): the
+/// points, the mesh points and the attributes that change anywhere.
+struct FrameChanges {
+    points: Vec<Vec<Vec3>>,
+    /// Each frame's mesh points when they differ from the first frame's.
+    meshes: Vec<Option<Vec<Vec<Vec3>>>>,
+    /// Each frame's attributes whose values differ from the first frame's.
+    attributes: Vec<Vec<crate::groom::Attribute>>,
+}
+
+impl FrameChanges {
+    fn collect(first: &Groom, rest: impl Iterator<Item = Result<Groom>>) -> Result<Self> {
+        let mut changes = FrameChanges {
+            points: vec![first.points.clone()],
+            meshes: vec![None],
+            attributes: vec![Vec::new()],
+        };
+        for groom in rest {
+            let mut groom = groom?;
+            let moved = groom.meshes.iter().zip(&first.meshes).any(|(a, b)| a.points != b.points);
+            changes.meshes.push(
+                moved.then(|| groom.meshes.iter_mut().map(|m| std::mem::take(&mut m.points)).collect()),
+            );
+            let attributes = std::mem::take(&mut groom.attributes);
+            changes.attributes.push(
+                attributes
+                    .into_iter()
+                    .filter(|a| first.attribute(&a.name).is_some_and(|f| f.data != a.data))
+                    .collect(),
+            );
+            changes.points.push(groom.points);
+        }
+        Ok(changes)
+    }
+
+    /// The animation to write: every frame lists the same changing attributes and, when any
+    /// mesh moves, every mesh (a frame that matches the first borrows the first's values).
+    fn animation<'g>(&'g self, first: &'g Groom, times: usda::TimeCodes) -> usd_stage::Animation<'g> {
+        let mut names: Vec<&str> = self.attributes.iter().flatten().map(|a| a.name.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        let attributes = self
+            .attributes
+            .iter()
+            .map(|own| {
+                let named = |name: &str| {
+                    own.iter()
+                        .find(|a| a.name == name)
+                        .or_else(|| first.attribute(name))
+                        .expect("a groom attribute")
+                };
+                names.iter().map(|name| named(name)).collect()
+            })
+            .collect();
+        let first_meshes: Vec<&[Vec3]> = first.meshes.iter().map(|m| m.points.as_slice()).collect();
+        let meshes = if self.meshes.iter().any(Option::is_some) {
+            self.meshes
+                .iter()
+                .map(|own| {
+                    own.as_ref()
+                        .map_or_else(|| first_meshes.clone(), |m| m.iter().map(Vec::as_slice).collect())
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        usd_stage::Animation {
+            times,
+            points: self.points.iter().map(Vec::as_slice).collect(),
+            meshes,
+            attributes: if names.is_empty() { Vec::new() } else { attributes },
+        }
+    }
+}
+
+fn alembic_options(
+    options: &ExportOptions,
+    frames_per_second: f64,
+    first_frame: f64,
+) -> alembic::AlembicWriteOptions {
+    alembic::AlembicWriteOptions {
+        unreal: options.unreal,
+        frames_per_second,
+        first_frame,
+        ..Default::default()
+    }
 }
 
 /// The format of an animated output, refusing one that holds no time samples (`.hair`): callers
@@ -400,73 +579,100 @@ pub fn check_animated_output(path: &Path) -> Result<Format> {
     Ok(format)
 }
 
-fn write_animated_curves(
-    path: &Path,
-    groom: &Groom,
-    frames: &[Vec<Vec3>],
-    times: usda::TimeCodes,
-    options: &ExportOptions,
-) -> Result<Vec<String>> {
-    let format = check_animated_output(path)?;
-    match format {
-        Format::Hair => unreachable!("refused by check_animated_output"),
-        Format::Usda | Format::Usdc | Format::Usdz => {
-            write_usd_stage(path, format, groom, Some((times, frames)), options)
-        }
-        Format::Alembic => {
-            let abc_options = alembic::AlembicWriteOptions {
-                unreal: options.unreal,
-                frames_per_second: times.per_second,
-                first_frame: times.start,
-                ..Default::default()
-            };
-            stream_alembic_frames(path, groom.clone(), frames.iter().map(|p| Ok(p.clone())), &abc_options)?;
-            Ok(Vec::new())
-        }
-    }
-}
-
-/// One USD stage (still, or with `animation`'s time-sampled points) in `format`; `--unreal`
-/// adds Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version.
+/// One USD stage (still, or animated) in `format`, with the groom's meshes; `--unreal` adds
+/// Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version, and the meshes go
+/// to the sibling file [`unreal::meshes_path`], committed after the groom file.
 fn write_usd_stage(
     path: &Path,
     format: Format,
     groom: &Groom,
-    animation: Option<(usda::TimeCodes, &[Vec<Vec3>])>,
+    animation: Option<&usd_stage::Animation>,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
-    let unreal_groom = options.unreal.then(|| unreal::for_usd(groom));
-    let groom = unreal_groom.as_ref().unwrap_or(groom);
-    usda::check_writable(groom, path)?;
-    if let Some((times, frames)) = animation {
-        usd_stage::check_animation(groom, frames, times, path)?;
+    if let Some(animation) = animation {
+        usd_stage::check_animation(groom, animation, path)?;
     }
-    let mut stage = usd_stage::plan(groom, animation)?;
+    let mut meshes_file = None;
     if options.unreal {
+        let mut unreal_groom = unreal::for_usd(groom);
+        let meshes = std::mem::take(&mut unreal_groom.meshes);
+        usda::check_writable(&unreal_groom, path)?;
+        if !meshes.is_empty() {
+            let sibling = unreal::meshes_path(path);
+            let stage = usd_stage::plan_meshes(&meshes, animation)?;
+            meshes_file = Some((usd_to_temp(&sibling, format, &stage)?, sibling));
+        }
+        // Unreal's names for the attributes that change, like the groom's own.
+        let renamed: Vec<Vec<crate::groom::Attribute>> = animation
+            .map(|a| {
+                a.attributes
+                    .iter()
+                    .map(|f| f.iter().map(|&a| unreal::renamed_for_usd(a.clone())).collect())
+                    .collect()
+            })
+            .unwrap_or_default();
+        let animation = animation.map(|a| usd_stage::Animation {
+            times: a.times,
+            points: a.points.clone(),
+            meshes: Vec::new(),
+            attributes: renamed.iter().map(|f| f.iter().collect()).collect(),
+        });
+        let mut stage = usd_stage::plan(&unreal_groom, animation.as_ref())?;
         usd_stage::add_unreal_groom_properties(&mut stage);
+        let out = usd_to_temp(path, format, &stage)?;
+        atomic::commit(path, out)?;
+        if let Some((out, sibling)) = meshes_file {
+            atomic::commit(&sibling, out)?;
+        }
+        return Ok(usd_warnings(path, &unreal_groom));
     }
-    let write_text =
-        |out: &mut dyn std::io::Write| usda::write_stage(&stage, out).map_err(|e| Error::io(path, e));
-    match format {
-        Format::Usda => atomic::write_atomically(path, write_text)?,
-        Format::Usdc => usdc::write_stage(path, &stage)?,
-        _ => usd_interop::write_usd(path, write_text)?,
+    usda::check_writable(groom, path)?;
+    let stage = usd_stage::plan(groom, animation)?;
+    if format == Format::Usdz {
+        let write_text =
+            |out: &mut dyn std::io::Write| usda::write_stage(&stage, out).map_err(|e| Error::io(path, e));
+        usd_interop::write_usd(path, write_text)?;
+    } else {
+        atomic::commit(path, usd_to_temp(path, format, &stage)?)?;
     }
     Ok(usd_warnings(path, groom))
 }
 
-/// Streams frames to an Alembic file, one at a time: each is `template` (the first frame's
-/// attributes) with that frame's points.
+/// A planned stage as `.usda` or `.usdc` in a temporary file beside `path`, not yet committed.
+fn usd_to_temp(
+    path: &Path,
+    format: Format,
+    stage: &usd_stage::Stage,
+) -> Result<std::io::BufWriter<atomic::TempFile>> {
+    let mut out = atomic::create_beside(path)?;
+    match format {
+        Format::Usda => usda::write_stage(stage, &mut out).map_err(|e| Error::io(path, e))?,
+        Format::Usdc => out = usdc::write::encode(stage, out).map_err(|e| Error::io(path, e))?,
+        _ => unreachable!("only .usda and .usdc are written natively"),
+    }
+    Ok(out)
+}
+
+/// Streams `first` and the frames `rest` yields to an Alembic file, one at a time (`animated`
+/// false: `first` alone, as a static file). With `--unreal` the meshes stream to the sibling
+/// file [`unreal::meshes_path`], committed after the groom file.
 fn stream_alembic_frames(
     path: &Path,
-    mut template: Groom,
-    frames: impl Iterator<Item = Result<Vec<Vec3>>>,
+    first: &Groom,
+    rest: impl Iterator<Item = Result<Groom>>,
     options: &alembic::AlembicWriteOptions,
+    animated: bool,
 ) -> Result<()> {
-    let mut writer = alembic::AnimationWriter::create(path, &template, options, true)?;
-    for points in frames {
-        template.points = points?;
-        writer.write_frame(&template)?;
+    // Unreal's root UVs come from Blender's surface UV when the groom has none.
+    let prepare = |groom: &Groom| options.unreal.then(|| unreal::with_root_uvs(groom)).flatten();
+    let prepared = prepare(first);
+    let first = prepared.as_ref().unwrap_or(first);
+    let mut writer = alembic::AnimationWriter::create(path, first, options, animated)?;
+    writer.write_frame(first)?;
+    for groom in rest {
+        let groom = groom?;
+        let prepared = prepare(&groom);
+        writer.write_frame(prepared.as_ref().unwrap_or(&groom))?;
     }
     writer.finish()
 }

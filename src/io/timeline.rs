@@ -100,6 +100,61 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
     }
 }
 
+/// The frames per second of a groom file's own timeline, whether or not it moves: USD's
+/// `timeCodesPerSecond` (24 when unauthored), Alembic's frame rate; `None` for `.hair` and
+/// `.usdz` (read through usd-core), which say none coif can read.
+pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
+    match super::format_of(path)? {
+        Format::Hair | Format::Usdz => Ok(None),
+        Format::Alembic => {
+            let bytes = input::map_file(path)?;
+            let archive = alembic::CurvesArchive::open(&bytes).map_err(|e| Error::format(path, e.0))?;
+            Ok(Some(archive.frames_per_second()))
+        }
+        format => {
+            let layer = if format == Format::Usdc {
+                usdc::read_timeline(&input::map_file(path)?, path)?
+            } else {
+                usda::read_header(std::fs::File::open(path).map_err(|e| Error::io(path, e))?, path)?
+            };
+            let rate = layer.per_second.unwrap_or(USD_DEFAULT_TIME_CODES_PER_SECOND);
+            if !(rate.is_finite() && rate > 0.0) {
+                return Err(Error::format(path, format!("timeCodesPerSecond {rate} is not a frame rate")));
+            }
+            Ok(Some(rate))
+        }
+    }
+}
+
+/// The frame number `seconds` is on `path`'s own timeline (seconds × its frame rate), refused
+/// (naming `flag`) for files without a frame rate, and before the first frame of an animated
+/// file (as a frame number is; after the last, the last frame holds).
+pub fn frame_at_time(path: &Path, seconds: f64, flag: &str) -> Result<f64> {
+    let Some(rate) = frame_rate(path)? else {
+        return Err(Error::Usage(format!(
+            "{}: {flag} needs the file's frame rate: it applies to .usda, .usdc and .abc input",
+            path.display()
+        )));
+    };
+    let frame = seconds * rate;
+    if !(frame.is_finite() && frame.abs() <= MAX_FRAME_NUMBER) {
+        return Err(Error::Usage(format!(
+            "{flag} {seconds}: frame {frame} at {rate} fps is outside -1e9 to 1e9"
+        )));
+    }
+    if let Some(timeline) = read_timeline(path)? {
+        if frame < timeline.first - 1e-6 {
+            return Err(Error::Usage(format!(
+                "{}: {flag} {seconds} is frame {frame} at {rate} fps, before the file's first frame {} ({} s)",
+                path.display(),
+                timeline.first,
+                timeline.first / rate
+            )));
+        }
+    }
+    Ok(frame)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

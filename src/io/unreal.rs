@@ -7,6 +7,8 @@
 //! prefix; per strand `groom_guide`, `groom_group_id`, `groom_id` (int), `groom_root_uv`
 //! (float2); per vertex `groom_color` (float3); widths from Alembic `width`/`groom_width` or USD
 //! `widths`, scaled to centimetres by the file's units.
+use std::path::{Path, PathBuf};
+
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, Groom};
 
 use super::alembic::curves_write::epic;
@@ -25,19 +27,36 @@ pub fn with_root_uvs(groom: &Groom) -> Option<Groom> {
     Some(out)
 }
 
+/// An attribute under the name Unreal's USD importer reads: `color` as `groom_color`, every other
+/// name prefixed `groom_` unless it has the prefix.
+pub fn renamed_for_usd(mut attribute: Attribute) -> Attribute {
+    attribute.name = match attribute.name.as_str() {
+        attr::COLOR => epic::COLOR.to_string(),
+        name if name.starts_with(epic::PREFIX) => name.to_string(),
+        name => format!("{}{name}", epic::PREFIX),
+    };
+    attribute
+}
+
+/// Where `--unreal` output puts the groom's meshes (a scalp, head or body): Unreal's groom
+/// importers refuse a file that holds a mesh, so they go to a sibling file in the same format,
+/// `NAME_meshes.EXT` beside `NAME.EXT` (import it as a static or skeletal mesh).
+pub fn meshes_path(groom_path: &Path) -> PathBuf {
+    let stem = groom_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = match groom_path.extension() {
+        Some(ext) => format!("{stem}_meshes.{}", ext.to_string_lossy()),
+        None => format!("{stem}_meshes"),
+    };
+    groom_path.with_file_name(name)
+}
+
 /// The groom as Unreal's USD importer wants its primvars: `groom_group_id` (int per strand),
 /// `groom_root_uv` (float2 per strand), `color` as `groom_color`, every other attribute
 /// prefixed `groom_` (the importer ignores other names). `groom_id` and `groom_guide` are the
 /// names coif writes anyway; widths stay USD `widths`, which the importer reads itself.
 pub fn for_usd(groom: &Groom) -> Groom {
     let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
-    for attribute in &mut out.attributes {
-        attribute.name = match attribute.name.as_str() {
-            attr::COLOR => epic::COLOR.to_string(),
-            name if name.starts_with(epic::PREFIX) => name.to_string(),
-            name => format!("{}{name}", epic::PREFIX),
-        };
-    }
+    out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
     let group_ids = out.group_ids.iter().map(|&g| g as f32).collect();
     out.set_attribute(
         Attribute::new(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids).with_kind(AttributeKind::Int),

@@ -8,7 +8,11 @@
 //! (`/Groom/Strands` for a groom without groups) with `Xform`s above. Each curve prim holds
 //! `basis` (cubic only), `purpose` (when the group has one), `type`, `wrap`,
 //! `curveVertexCounts`, `widths` (vertex), the primvars, `points` and `extent` — default values,
-//! or time samples of `points` and `extent` when animated.
+//! or time samples of `points`, `extent` and of every primvar that changes when animated. Then
+//! one `Mesh` prim per groom mesh (a scalp, head or body) at the path it was read from: its faces,
+//! `points` (time-sampled when they move) and `extent`, wound counter-clockwise as
+//! `rightHanded` says, `subdivisionScheme = "none"` (coif collides with the polygons as they
+//! are). Everything is in the stage's space (metres, Y up); transforms were applied on reading.
 //!
 //! Large arrays are borrowed from the groom (and from the animation's frames) whenever a group's
 //! strands are contiguous, which they are for every groom a reader built; only small per-strand
@@ -21,8 +25,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::groom::{AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::io::usda::names;
+use crate::surface_mesh::SurfaceMesh;
 
 /// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
 pub const DEFAULT_PRIM_PATH: &str = "/Groom/Strands";
@@ -36,6 +41,41 @@ pub struct TimeCodes {
     pub start: f64,
     pub end: f64,
     pub per_second: f64,
+}
+
+/// What an animated stage samples: frame `k` at time code `times.start + k`. Everything not
+/// listed here is written once, from the groom.
+pub struct Animation<'g> {
+    pub times: TimeCodes,
+    /// Every frame's curve points (as many as the groom's).
+    pub points: Vec<&'g [Vec3]>,
+    /// Every frame's mesh points, one slice per groom mesh; empty when the meshes stand still.
+    pub meshes: Vec<Vec<&'g [Vec3]>>,
+    /// Every frame's values of the attributes that change over the animation (each frame
+    /// lists the same names, each as the groom's attribute of that name is laid out); empty
+    /// when none does.
+    pub attributes: Vec<Vec<&'g Attribute>>,
+}
+
+impl<'g> Animation<'g> {
+    /// Only the curve points move.
+    pub fn of_points(times: TimeCodes, frames: &'g [Vec<Vec3>]) -> Self {
+        Animation {
+            times,
+            points: frames.iter().map(Vec::as_slice).collect(),
+            meshes: Vec::new(),
+            attributes: Vec::new(),
+        }
+    }
+
+    fn time(&self, frame: usize) -> f64 {
+        self.times.start + frame as f64
+    }
+
+    /// Frame `k`'s value of the sampled attribute `name`, if it is one.
+    fn attribute(&self, frame: usize, name: &str) -> Option<&'g Attribute> {
+        self.attributes.get(frame)?.iter().copied().find(|a| a.name == name)
+    }
 }
 
 /// A whole stage: layer metadata and the prim tree.
@@ -145,8 +185,10 @@ pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Checks an animation before any output: sane time codes, at least one frame, constant topology.
-pub fn check_animation(groom: &Groom, frames: &[Vec<Vec3>], times: TimeCodes, path: &Path) -> Result<()> {
+/// Checks an animation before any output: sane time codes, at least one frame, constant topology
+/// (curve points, mesh points) and attribute layout.
+pub fn check_animation(groom: &Groom, animation: &Animation, path: &Path) -> Result<()> {
+    let times = animation.times;
     if !(times.start.is_finite()
         && times.end.is_finite()
         && times.start <= times.end
@@ -155,16 +197,41 @@ pub fn check_animation(groom: &Groom, frames: &[Vec<Vec3>], times: TimeCodes, pa
     {
         return Err(Error::Usage(format!("{}: bad time codes {times:?}", path.display())));
     }
+    let frames = &animation.points;
     if frames.is_empty() {
         return Err(Error::Usage(format!("{}: an animated stage needs at least one frame", path.display())));
     }
+    let changed = |k: usize, what: String| {
+        Err(Error::Usage(format!(
+            "{}: frame {k} has {what} (topology and attributes must stay constant)",
+            path.display()
+        )))
+    };
     if let Some(k) = frames.iter().position(|f| f.len() != groom.vertex_count()) {
-        return Err(Error::Usage(format!(
-            "{}: frame {k} has {} points; the groom has {} (topology must stay constant)",
-            path.display(),
-            frames[k].len(),
-            groom.vertex_count()
-        )));
+        return changed(k, format!("{} points; the groom has {}", frames[k].len(), groom.vertex_count()));
+    }
+    for (k, meshes) in animation.meshes.iter().enumerate() {
+        let same = meshes.len() == groom.meshes.len()
+            && meshes.iter().zip(&groom.meshes).all(|(p, m)| p.len() == m.points.len());
+        if !same {
+            return changed(k, "other meshes than the groom".into());
+        }
+    }
+    if !animation.meshes.is_empty() && animation.meshes.len() != frames.len() {
+        return changed(animation.meshes.len(), "no mesh points".into());
+    }
+    if !animation.attributes.is_empty() && animation.attributes.len() != frames.len() {
+        return changed(animation.attributes.len(), "no attribute values".into());
+    }
+    for (k, attributes) in animation.attributes.iter().enumerate() {
+        for a in attributes {
+            let same = groom.attribute(&a.name).is_some_and(|g| {
+                (g.rate, g.components, g.data.len(), g.kind) == (a.rate, a.components, a.data.len(), a.kind)
+            });
+            if !same {
+                return changed(k, format!("attribute '{}' laid out unlike the groom's", a.name));
+            }
+        }
     }
     Ok(())
 }
@@ -172,14 +239,71 @@ pub fn check_animation(groom: &Groom, frames: &[Vec<Vec3>], times: TimeCodes, pa
 /// What the writers rename or drop, as warnings for the user.
 pub fn unsupported(groom: &Groom) -> Vec<String> {
     let strands = Strands::Range(0..groom.strand_count());
-    let mut warnings = primvars(groom, &CurveGroup::default(), &strands).1;
+    let mut warnings = primvars(groom, &CurveGroup::default(), &strands, None).1;
     warnings.sort();
     warnings.dedup();
     warnings
 }
 
-/// Plans the stage for `groom`; with `animation`, frame `k`'s points at time `times.start + k`.
-pub fn plan<'g>(groom: &'g Groom, animation: Option<(TimeCodes, &'g [Vec<Vec3>])>) -> Result<Stage<'g>> {
+/// Plans the stage for `groom`, with its meshes; with `animation`, frame `k` at time code
+/// `times.start + k`.
+pub fn plan<'g>(groom: &'g Groom, animation: Option<&Animation<'g>>) -> Result<Stage<'g>> {
+    let mut stage = plan_curves(groom, animation)?;
+    add_meshes(&mut stage, &groom.meshes, animation)?;
+    Ok(stage)
+}
+
+/// A stage of meshes only (`--unreal` output's sibling file); `animation`'s mesh points index
+/// `meshes`.
+pub fn plan_meshes<'g>(meshes: &'g [SurfaceMesh], animation: Option<&Animation<'g>>) -> Result<Stage<'g>> {
+    let mut stage = Stage {
+        default_prim: String::new(),
+        doc: concat!("Written by coif ", env!("CARGO_PKG_VERSION")).to_string(),
+        meters_per_unit: 1.0,
+        up_axis: "Y",
+        times: animation.map(|a| a.times),
+        roots: Vec::new(),
+    };
+    add_meshes(&mut stage, meshes, animation)?;
+    stage.default_prim = stage.roots.first().map(|p| p.name.clone()).unwrap_or_else(|| "Meshes".into());
+    Ok(stage)
+}
+
+/// One `Mesh` prim per mesh at its own path (made unique: a mesh never takes another prim's
+/// place, nor that of an Xform above curves).
+fn add_meshes<'g>(
+    stage: &mut Stage<'g>,
+    meshes: &'g [SurfaceMesh],
+    animation: Option<&Animation<'g>>,
+) -> Result<()> {
+    for (index, mesh) in meshes.iter().enumerate() {
+        let mut components = prim_components(&mesh.path);
+        let Some(last) = components.last().cloned() else {
+            return Err(Error::Usage(format!("mesh '{}' has no prim name", mesh.path)));
+        };
+        let mut n = 1;
+        while find(&stage.roots, &components) {
+            n += 1;
+            *components.last_mut().unwrap() = format!("{last}_{n}");
+        }
+        insert(&mut stage.roots, &components, mesh_prim(mesh, index, animation));
+    }
+    Ok(())
+}
+
+/// The prim names of a path (`/root/Head/HeadMesh`), each made a valid USD name.
+fn prim_components(path: &str) -> Vec<String> {
+    path.split('/').filter(|c| !c.is_empty()).map(|c| valid_name(c).replace(':', "_")).collect()
+}
+
+/// Whether a prim exists at `path` (prim names) under `nodes`.
+fn find(nodes: &[Prim], path: &[String]) -> bool {
+    let Some((first, rest)) = path.split_first() else { return false };
+    nodes.iter().find(|n| n.name == *first).is_some_and(|n| rest.is_empty() || find(&n.children, rest))
+}
+
+/// The stage without meshes: one curves prim per group.
+fn plan_curves<'g>(groom: &'g Groom, animation: Option<&Animation<'g>>) -> Result<Stage<'g>> {
     let mut roots: Vec<Prim<'g>> = Vec::new();
     let mut taken: Vec<Vec<String>> = Vec::new();
     for g in 0..groom.group_count() {
@@ -189,8 +313,7 @@ pub fn plan<'g>(groom: &'g Groom, animation: Option<(TimeCodes, &'g [Vec<Vec3>])
         }
         let group = groom.group(g);
         let path = if group.name.is_empty() { DEFAULT_PRIM_PATH } else { group.name.as_str() };
-        let mut components: Vec<String> =
-            path.split('/').filter(|c| !c.is_empty()).map(|c| valid_name(c).replace(':', "_")).collect();
+        let mut components = prim_components(path);
         let Some(last) = components.last().cloned() else {
             return Err(Error::Usage(format!("curve group '{}' has no prim name", group.name)));
         };
@@ -210,7 +333,7 @@ pub fn plan<'g>(groom: &'g Groom, animation: Option<(TimeCodes, &'g [Vec<Vec3>])
         doc: concat!("Written by coif ", env!("CARGO_PKG_VERSION")).to_string(),
         meters_per_unit: 1.0,
         up_axis: "Y",
-        times: animation.map(|(times, _)| times),
+        times: animation.map(|a| a.times),
         roots,
     })
 }
@@ -316,7 +439,7 @@ fn curves_prim<'g>(
     groom: &'g Groom,
     group: &CurveGroup,
     strands: &Strands,
-    animation: Option<(TimeCodes, &'g [Vec<Vec3>])>,
+    animation: Option<&Animation<'g>>,
 ) -> Prim<'g> {
     let mut properties = Vec::new();
     let (curve_type, basis) = curve_type_and_basis(group.basis);
@@ -339,30 +462,45 @@ fn curves_prim<'g>(
     let half_width = widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5;
     properties
         .push(Property::new("widths", "float[]", Value::Default(floats(widths, 1))).interpolated("vertex"));
-    properties.extend(primvars(groom, group, strands).0);
+    properties.extend(primvars(groom, group, strands, animation).0);
 
+    let positions = match animation {
+        Some(a) => Positions::Frames(a, a.points.iter().map(|f| strands.per_vertex(groom, f, 1)).collect()),
+        None => Positions::Still(strands.per_vertex(groom, &groom.points, 1)),
+    };
+    properties.extend(points_and_extent(positions, half_width));
+    Prim { name: String::new(), type_name: "BasisCurves", properties, children: Vec::new() }
+}
+
+/// A prim's points: one set, or one per frame of an animation.
+enum Positions<'a, 'g> {
+    Still(Cow<'g, [Vec3]>),
+    Frames(&'a Animation<'g>, Vec<Cow<'g, [Vec3]>>),
+}
+
+/// `points` and `extent` (the bounds grown by `half_width`): default values, or a time sample
+/// per frame.
+fn points_and_extent<'g>(positions: Positions<'_, 'g>, half_width: f32) -> Vec<Property<'g>> {
     let extent = |points: &[Vec3]| -> Option<Data<'g>> {
         let (lo, hi) = bounds(points)?;
         let grown = [lo - Vec3::splat(half_width), hi + Vec3::splat(half_width)];
         Some(floats(Cow::Owned(bytemuck::cast_slice(&grown).to_vec()), 3))
     };
-    match animation {
-        None => {
-            let points = strands.per_vertex(groom, &groom.points, 1);
-            let extent = extent(&points);
-            properties.push(Property::new("points", "point3f[]", Value::Default(floats(vec3s(points), 3))));
+    let mut properties = Vec::with_capacity(2);
+    match positions {
+        Positions::Still(still) => {
+            let extent = extent(&still);
+            properties.push(Property::new("points", "point3f[]", Value::Default(floats(vec3s(still), 3))));
             if let Some(extent) = extent {
                 properties.push(Property::new("extent", "float3[]", Value::Default(extent)));
             }
         }
-        Some((times, frames)) => {
-            let time = |k: usize| times.start + k as f64;
+        Positions::Frames(animation, frames) => {
             let mut points = Vec::with_capacity(frames.len());
             let mut extents = Vec::with_capacity(frames.len());
-            for (k, frame) in frames.iter().enumerate() {
-                let frame = strands.per_vertex(groom, frame, 1);
-                extents.extend(extent(&frame).map(|e| (time(k), e)));
-                points.push((time(k), floats(vec3s(frame), 3)));
+            for (k, frame) in frames.into_iter().enumerate() {
+                extents.extend(extent(&frame).map(|e| (animation.time(k), e)));
+                points.push((animation.time(k), floats(vec3s(frame), 3)));
             }
             properties.push(Property::new("points", "point3f[]", Value::TimeSamples(points)));
             if !extents.is_empty() {
@@ -370,7 +508,27 @@ fn curves_prim<'g>(
             }
         }
     }
-    Prim { name: String::new(), type_name: "BasisCurves", properties, children: Vec::new() }
+    properties
+}
+
+/// One groom mesh's `Mesh` prim (mesh `index` of the groom, for its animated points).
+fn mesh_prim<'g>(mesh: &'g SurfaceMesh, index: usize, animation: Option<&Animation<'g>>) -> Prim<'g> {
+    let ints = |values: &'g [u32]| Data::Ints {
+        values: Cow::Owned(values.iter().map(|&v| v as i32).collect()),
+        components: 1,
+    };
+    let mut properties = vec![
+        Property::new("faceVertexCounts", "int[]", Value::Default(ints(&mesh.face_counts))),
+        Property::new("faceVertexIndices", "int[]", Value::Default(ints(&mesh.face_indices))),
+    ];
+    let positions = match animation.filter(|a| !a.meshes.is_empty()) {
+        Some(a) => Positions::Frames(a, a.meshes.iter().map(|f| Cow::Borrowed(f[index])).collect()),
+        None => Positions::Still(Cow::Borrowed(&mesh.points)),
+    };
+    properties.extend(points_and_extent(positions, 0.0));
+    properties.push(Property::uniform_token("orientation", "rightHanded"));
+    properties.push(Property::uniform_token("subdivisionScheme", "none"));
+    Prim { name: String::new(), type_name: "Mesh", properties, children: Vec::new() }
 }
 
 /// USD's `type` and `basis` tokens for a curve basis.
@@ -384,7 +542,12 @@ pub(crate) fn curve_type_and_basis(basis: CurveBasis) -> (&'static str, Option<&
 }
 
 /// The primvars a group's strands become, and warnings for attributes renamed or dropped.
-fn primvars<'g>(groom: &'g Groom, group: &CurveGroup, strands: &Strands) -> (Vec<Property<'g>>, Vec<String>) {
+fn primvars<'g>(
+    groom: &'g Groom,
+    group: &CurveGroup,
+    strands: &Strands,
+    animation: Option<&Animation<'g>>,
+) -> (Vec<Property<'g>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
     // Names the reader gives a meaning of their own are never taken by attributes.
@@ -424,29 +587,45 @@ fn primvars<'g>(groom: &'g Groom, group: &CurveGroup, strands: &Strands) -> (Vec
                 attribute.name
             ));
         }
-        let components = attribute.components;
-        let (values, interpolation) = match attribute.rate {
-            AttributeRate::Vertex => (strands.per_vertex(groom, &attribute.data, components), "vertex"),
-            AttributeRate::Strand => (strands.per_strand(&attribute.data, components), "uniform"),
+        let type_name = usd_type(attribute.kind, &attribute.name, attribute.components);
+        let interpolation = match attribute.rate {
+            AttributeRate::Vertex => "vertex",
+            AttributeRate::Strand => "uniform",
         };
-        let type_name = usd_type(attribute.kind, &attribute.name, components);
-        let data = match attribute.kind {
-            // Int and bool tuples have no USD type of their own here: they go as floats.
-            AttributeKind::Int if type_name == "int[]" => {
-                Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
-            }
-            AttributeKind::Bool if type_name == "bool[]" => {
-                Data::Bools(values.iter().map(|&v| v != 0.0).collect())
-            }
-            _ => floats(values, components),
+        let data = |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name);
+        let sampled = animation.filter(|a| a.attribute(0, &attribute.name).is_some());
+        let value = match sampled {
+            Some(a) => Value::TimeSamples(
+                (0..a.points.len())
+                    .map(|k| (a.time(k), data(a.attribute(k, &attribute.name).unwrap_or(attribute))))
+                    .collect(),
+            ),
+            None => Value::Default(data(attribute)),
         };
         used.push(name.clone());
-        primvars.push(
-            Property::new(format!("primvars:{name}"), type_name, Value::Default(data))
-                .interpolated(interpolation),
-        );
+        primvars
+            .push(Property::new(format!("primvars:{name}"), type_name, value).interpolated(interpolation));
     }
     (primvars, warnings)
+}
+
+/// A group's values of an attribute, as `type_name` holds them.
+fn primvar_data<'g>(groom: &Groom, strands: &Strands, attribute: &'g Attribute, type_name: &str) -> Data<'g> {
+    let components = attribute.components;
+    let values = match attribute.rate {
+        AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, components),
+        AttributeRate::Strand => strands.per_strand(&attribute.data, components),
+    };
+    match attribute.kind {
+        // Int and bool tuples have no USD type of their own here: they go as floats.
+        AttributeKind::Int if type_name == "int[]" => {
+            Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
+        }
+        AttributeKind::Bool if type_name == "bool[]" => {
+            Data::Bools(values.iter().map(|&v| v != 0.0).collect())
+        }
+        _ => floats(values, components),
+    }
 }
 
 /// The USD array type an attribute is written as: its kind's, or for plain floats the type coif

@@ -320,26 +320,32 @@ impl Simulation {
     }
 
     /// Writes the simulated state into `groom` (which must be the groom the simulation was built
-    /// from, or one with the same strands): current positions as points, and the attributes
-    /// `rest` (zero-stress rest curves), `rest_darboux` (Ω0) and `bond_*` (rates per kind).
+    /// from, or one with the same strands): current positions as points, and the
+    /// [`Self::state_attributes`].
     pub fn write_to_groom(&self, groom: &mut Groom) {
         groom.points.clear();
         groom.points.extend_from_slice(self.rods.positions());
+        for attribute in self.state_attributes() {
+            groom.set_attribute(attribute);
+        }
+    }
+
+    /// The simulated state beside the positions, as per-vertex attributes: `rest` (zero-stress
+    /// rest curves), `rest_darboux` (Ω0) and `bond_*` (rates per kind).
+    pub fn state_attributes(&self) -> Vec<Attribute> {
         let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
-        groom.set_attribute(Attribute::new("rest", AttributeRate::Vertex, 3, flat(&self.rest_curves())));
-        groom.set_attribute(Attribute::new(
-            "rest_darboux",
-            AttributeRate::Vertex,
-            3,
-            flat(&self.zero_stress_darboux()),
-        ));
+        let mut attributes = vec![
+            Attribute::new("rest", AttributeRate::Vertex, 3, flat(&self.rest_curves())),
+            Attribute::new("rest_darboux", AttributeRate::Vertex, 3, flat(&self.zero_stress_darboux())),
+        ];
         for kind in BondKind::ALL {
-            groom.set_attribute(Attribute::new(
+            attributes.push(Attribute::new(
                 kind.attribute_name(),
                 AttributeRate::Vertex,
                 1,
                 self.bonds.rates(kind).to_vec(),
             ));
         }
+        attributes
     }
 }

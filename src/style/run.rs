@@ -103,6 +103,9 @@ pub struct Styled {
     pub report: StyleReport,
     /// Captured positions, one array per frame (empty unless frames were asked for).
     pub frames: Vec<Vec<Vec3>>,
+    /// The attributes styling changes (`rest`, `rest_darboux`, `bond_*`, `wetness`) at each
+    /// captured frame, as the groom holds them at the end.
+    pub frame_attributes: Vec<Vec<Attribute>>,
     pub frames_per_second: f32,
     /// The water droplets among the hair each time they were dried off (and at the end if still
     /// there), for children interpolated from these strands to clump by the same adhesion.
@@ -205,17 +208,20 @@ pub(crate) fn style_strands(
     if session.frame_interval.is_some()
         && session.frames.last().map(Vec::as_slice) != Some(session.sim.rods().positions())
     {
-        session.frames.push(session.sim.rods().positions().to_vec());
+        session.capture_frame();
     }
     let mut out = session.groom.clone();
-    session.sim.write_to_groom(&mut out);
-    out.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, session.wetness.clone()));
+    out.points = session.sim.rods().positions().to_vec();
+    for attribute in session.state() {
+        out.set_attribute(attribute);
+    }
     out.validate()?;
     session.snapshot_droplets();
     Ok(Styled {
         groom: out,
         report,
         frames: session.frames,
+        frame_attributes: session.frame_attributes,
         frames_per_second: options.frames_per_second,
         droplets: session.droplet_snapshots,
     })
@@ -320,6 +326,7 @@ struct Session {
     dv: Vec<Vec3>,
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
+    frame_attributes: Vec<Vec<Attribute>>,
     frame_interval: Option<u64>,
     /// Deepest penetration of the current stage so far (metres).
     penetration: f32,
@@ -403,6 +410,7 @@ impl Session {
             dv: vec![Vec3::ZERO; n],
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
+            frame_attributes: Vec::new(),
             frame_interval,
             penetration: 0.0,
             head_frame: placed.frame,
@@ -414,9 +422,22 @@ impl Session {
             session.apply_mass();
         }
         if frame_interval.is_some() {
-            session.frames.push(session.sim.rods().positions().to_vec());
+            session.capture_frame();
         }
         Ok(session)
+    }
+
+    /// Records a frame of `--frames` output: the positions and the [`Self::state`].
+    fn capture_frame(&mut self) {
+        self.frames.push(self.sim.rods().positions().to_vec());
+        self.frame_attributes.push(self.state());
+    }
+
+    /// What styling changes beside the positions: the simulation's state attributes and wetness.
+    fn state(&self) -> Vec<Attribute> {
+        let mut state = self.sim.state_attributes();
+        state.push(Attribute::new("wetness", AttributeRate::Vertex, 1, self.wetness.clone()));
+        state
     }
 
     fn steps_for(&self, seconds: f32) -> u64 {
@@ -460,7 +481,7 @@ impl Session {
         self.update_wetness(dt);
         if let Some(every) = self.frame_interval {
             if self.sim.steps_taken() % every == 0 {
-                self.frames.push(self.sim.rods().positions().to_vec());
+                self.capture_frame();
             }
         }
     }

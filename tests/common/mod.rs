@@ -162,4 +162,30 @@ pub fn median(mut values: Vec<f32>) -> f32 {
     values[values.len() / 2]
 }
 
+/// The one PolyMesh of an Alembic file as ogawa-rs (an independent reader) sees it: points,
+/// face counts and face indices.
+pub fn polymesh_via_ogawa_rs(path: &Path) -> (Vec<[f32; 3]>, Vec<i32>, Vec<i32>) {
+    use ogawa_rs::{Archive, FileReader, Schema};
+    let mut reader = FileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let mut stack = vec![archive.load_root_object(&mut reader).unwrap()];
+    while let Some(object) = stack.pop() {
+        if let Ok(Schema::PolyMesh(mesh)) = Schema::parse(&object, &mut reader, &archive) {
+            return (
+                mesh.load_vertices_sample(0, &mut reader).unwrap(),
+                mesh.load_facecounts_sample(0, &mut reader).unwrap(),
+                mesh.load_faceindices_sample(0, &mut reader).unwrap(),
+            );
+        }
+        for i in 0..object.child_count() {
+            stack.push(
+                object
+                    .load_child(i, &mut reader, &archive.indexed_meta_data, &archive.time_samplings)
+                    .unwrap(),
+            );
+        }
+    }
+    panic!("{}: ogawa-rs finds no PolyMesh", path.display());
+}
+
 pub mod usd;

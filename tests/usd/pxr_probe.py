@@ -41,6 +41,7 @@ def dump(path, time=None):
         "endTimeCode": stage.GetEndTimeCode() if stage.HasAuthoredTimeCodeRange() else None,
         "timeCodesPerSecond": stage.GetTimeCodesPerSecond(),
         "curves": [],
+        "meshes": [],
         "prims": [[str(p.GetPath()), str(p.GetTypeName())] for p in stage.Traverse()],
         "userProperties": {
             str(a.GetPath()): {"type": str(a.GetTypeName()), "value": a.Get(code)}
@@ -80,9 +81,28 @@ def dump(path, time=None):
                 "type": str(primvar.GetTypeName()),
                 "interpolation": primvar.GetInterpolation(),
                 "elementSize": primvar.GetElementSize(),
+                "timeSamples": primvar.GetAttr().GetTimeSamples(),
                 "values": floats(value) if value is not None else None,
             }
         result["curves"].append(entry)
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdGeom.Mesh):
+            continue
+        mesh = UsdGeom.Mesh(prim)
+        points = mesh.GetPointsAttr().Get(code)
+        world = cache.GetLocalToWorldTransform(prim)
+        result["meshes"].append({
+            "path": str(prim.GetPath()),
+            "counts": list(mesh.GetFaceVertexCountsAttr().Get(code) or []),
+            "indices": list(mesh.GetFaceVertexIndicesAttr().Get(code) or []),
+            "points": floats(points or []),
+            "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points or []),
+            "orientation": mesh.GetOrientationAttr().Get(),
+            "subdivisionScheme": mesh.GetSubdivisionSchemeAttr().Get(),
+            "pointsTimeSamples": mesh.GetPointsAttr().GetTimeSamples(),
+            "extent": floats(mesh.GetExtentAttr().Get(code) or []),
+            "computedExtent": floats(UsdGeom.Boundable.ComputeExtentFromPlugins(mesh, code) or []),
+        })
     validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
     findings = UsdValidation.ValidationContext(validators).Validate(stage)
     result["validationErrors"] = [
@@ -105,13 +125,14 @@ def frames(path, first, last):
     while frame <= last:
         code = Usd.TimeCode(frame)
         cache = UsdGeom.XformCache(code)
-        prims = {}
+        prims, meshes = {}, {}
         for prim in stage.Traverse():
-            if prim.IsA(UsdGeom.BasisCurves):
+            if prim.IsA(UsdGeom.BasisCurves) or prim.IsA(UsdGeom.Mesh):
                 world = cache.GetLocalToWorldTransform(prim)
-                points = [world.Transform(Gf.Vec3d(p)) * metres for p in UsdGeom.BasisCurves(prim).GetPointsAttr().Get(code)]
-                prims[str(prim.GetPath())] = floats((p[0], p[2], -p[1]) if z_up else p for p in points)
-        result["frames"].append({"frame": frame, "curves": prims})
+                points = [world.Transform(Gf.Vec3d(p)) * metres for p in UsdGeom.PointBased(prim).GetPointsAttr().Get(code)]
+                kind = meshes if prim.IsA(UsdGeom.Mesh) else prims
+                kind[str(prim.GetPath())] = floats((p[0], p[2], -p[1]) if z_up else p for p in points)
+        result["frames"].append({"frame": frame, "curves": prims, "meshes": meshes})
         frame += 1
     return result
 

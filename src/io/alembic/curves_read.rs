@@ -9,7 +9,7 @@ use super::archive_read::{Archive, Compound, Object, Property, Sampled};
 use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
-use crate::groom::{attr, Attribute, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::surface_mesh::SurfaceMesh;
 
 /// Alembic's polygon-mesh schema (a scalp or head beside the curves).
@@ -390,31 +390,20 @@ impl<'a> CurvesArchive<'a> {
                 // One value for the whole object: the object is the group (coif writes that).
                 epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
-                    let canonical = match name {
-                        epic::COLOR => attr::COLOR.to_string(),
-                        // Unreal's interpolation names are coif's own: they keep their prefix.
-                        n if n == crate::guides::CLOSEST_GUIDES || n == crate::guides::GUIDE_WEIGHTS => {
-                            n.to_string()
-                        }
-                        n => n.strip_prefix(epic::PREFIX).unwrap_or(n).to_string(),
-                    };
+                    let canonical = canonical_name(name);
                     let (rate, data) = match param.rate {
                         Rate::Vertex => (AttributeRate::Vertex, param.values),
                         _ => (AttributeRate::Strand, param.to_strands(&groom)),
                     };
-                    let mut attribute = Attribute::new(canonical, rate, extent as usize, data);
-                    if attribute.name == "rest" && attribute.components == 3 && matrix != DMat4::IDENTITY {
-                        for c in attribute.data.chunks_exact_mut(3) {
-                            let p =
-                                matrix.transform_point3(DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64));
-                            c.copy_from_slice(&p.as_vec3().to_array());
-                        }
-                    }
+                    let kind = param_kind(member, extent);
+                    let mut attribute =
+                        Attribute::new(canonical, rate, extent as usize, data).with_kind(kind);
+                    crate::io::transform_attributes(std::slice::from_mut(&mut attribute), matrix);
                     groom.set_attribute(attribute);
                 }
             }
         }
-        groom.set_single_group(CurveGroup::new(path.clone(), basis, CurveWrap::Nonperiodic));
+        groom.set_single_group(CurveGroup::new(path.clone(), basis, wrap_of(basis)));
         Ok(groom)
     }
 
@@ -658,6 +647,57 @@ impl Param {
     }
 }
 
+/// What a geometry parameter's values are, from its POD and `interpretation`, so writers give
+/// the same type back and transforms move points and directions: integer and bool PODs, float
+/// triples interpreted as a point, normal or vector, colours, and float pairs interpreted as
+/// vectors (Alembic's texture coordinates).
+fn param_kind(property: &Property<'_>, extent: u8) -> AttributeKind {
+    let (pod, interpretation) = match property {
+        Property::Sampled(s) => (s.pod, s.metadata.get("interpretation").map(str::to_string)),
+        Property::Compound(c) => match c.sampled(".vals") {
+            Some(v) => (
+                v.pod,
+                c.metadata.get("interpretation").or(v.metadata.get("interpretation")).map(str::to_string),
+            ),
+            None => return AttributeKind::Float,
+        },
+    };
+    let kind = match (pod, interpretation.as_deref(), extent) {
+        (Pod::Bool, _, 1) => AttributeKind::Bool,
+        (Pod::I8 | Pod::U8 | Pod::I16 | Pod::U16 | Pod::I32 | Pod::U32 | Pod::I64 | Pod::U64, _, 1) => {
+            AttributeKind::Int
+        }
+        (Pod::F16 | Pod::F32 | Pod::F64, Some("point"), 3) => AttributeKind::Point,
+        (Pod::F16 | Pod::F32 | Pod::F64, Some("normal"), 3) => AttributeKind::Normal,
+        (Pod::F16 | Pod::F32 | Pod::F64, Some("vector"), 3) => AttributeKind::Vector,
+        (Pod::F16 | Pod::F32 | Pod::F64, Some("vector"), 2) => AttributeKind::TexCoord,
+        (Pod::F16 | Pod::F32 | Pod::F64, Some("rgb" | "rgba"), 3 | 4) => AttributeKind::Color,
+        _ => AttributeKind::Float,
+    };
+    // What coif's writer gives a plain float attribute of this name reads back as plain floats.
+    let (name, plain) = (property.name(), AttributeKind::Float);
+    let name = canonical_name(name);
+    let written_plain = super::curves_write::pod(plain, &name) == pod
+        && super::curves_write::interpretation(plain, &name, extent as usize)
+            == interpretation.as_deref().unwrap_or("");
+    if written_plain {
+        AttributeKind::Float
+    } else {
+        kind
+    }
+}
+
+/// The groom attribute an `.arbGeomParams` member becomes: Epic's `groom_` names without their
+/// prefix (`groom_color` is `color`), Unreal's interpolation names as they are.
+fn canonical_name(name: &str) -> String {
+    match name {
+        epic::COLOR => attr::COLOR.to_string(),
+        // Unreal's interpolation names are coif's own: they keep their prefix.
+        n if n == crate::guides::CLOSEST_GUIDES || n == crate::guides::GUIDE_WEIGHTS => n.to_string(),
+        n => n.strip_prefix(epic::PREFIX).unwrap_or(n).to_string(),
+    }
+}
+
 fn param_extent(property: &Property<'_>) -> Option<u8> {
     match property {
         Property::Sampled(s) if s.pod.size() > 0 => Some(s.extent),
@@ -674,6 +714,16 @@ fn required<'o, 'a>(object: &CurvesObject<'o, 'a>, name: &str) -> OgawaResult<&'
 }
 
 /// The curve kind from `curveBasisAndType`: the basis byte decides, as in Blender and Houdini.
+/// The wrap of open curves of `basis`, which Alembic does not record: Catmull-Rom passes
+/// through its end points (`pinned`), as Blender evaluates it and as its USD exporter writes the
+/// same curves; the other bases are read as their files' open curves (`nonperiodic`).
+pub fn wrap_of(basis: CurveBasis) -> CurveWrap {
+    match basis {
+        CurveBasis::CatmullRom => CurveWrap::Pinned,
+        _ => CurveWrap::Nonperiodic,
+    }
+}
+
 fn curve_basis(bytes: &[u8], path: &str) -> OgawaResult<CurveBasis> {
     let [_, wrap, basis, _] =
         bytes.try_into().map_err(|_| OgawaError(format!("{path}: curveBasisAndType is empty")))?;

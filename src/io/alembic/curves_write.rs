@@ -1,8 +1,9 @@
 //! Writing grooms as AbcGeom Curves (`AbcGeom_Curve_v2`): `P`, `nVertices`,
 //! `curveBasisAndType`, `.selfBnds`, `width`, `uv`, `.velocities` when animated, and every groom
-//! attribute in `.arbGeomParams`; optionally under an Xform parent, optionally following Epic's
-//! Alembic-for-grooms conventions. Static files hold one sample; animated files one sample per
-//! frame on a uniform time sampling, with constant topology.
+//! attribute in `.arbGeomParams`; the groom's meshes as PolyMesh objects (`P`, `.faceIndices`,
+//! `.faceCounts`, wound clockwise as Alembic is); optionally under an Xform parent, optionally
+//! following Epic's Alembic-for-grooms conventions. Static files hold one sample; animated files
+//! one sample per frame on a uniform time sampling, with constant topology.
 use std::borrow::Cow;
 use std::io::{self, Seek, Write};
 
@@ -10,9 +11,11 @@ use glam::{DMat4, Vec3};
 use rayon::prelude::*;
 
 use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
+use super::curves_read::POLYMESH_SCHEMA;
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
-use crate::groom::{attr, AttributeRate, CurveBasis, CurveWrap, Groom};
+use crate::groom::{attr, AttributeKind, AttributeRate, CurveBasis, CurveWrap, Groom};
+use crate::surface_mesh::SurfaceMesh;
 
 pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
 pub const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
@@ -56,6 +59,20 @@ pub struct AlembicWriteOptions {
     /// Animated output carries `.velocities` (central differences of the frames, units per
     /// second) for motion blur.
     pub velocities: bool,
+    /// Which of the groom's objects the file holds.
+    pub objects: Objects,
+}
+
+/// Which of a groom's objects an Alembic file holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Objects {
+    /// The curves and the meshes.
+    #[default]
+    All,
+    /// The curves only (Unreal's groom importer refuses a file holding a PolyMesh).
+    Curves,
+    /// The meshes only (the sibling file of an Unreal groom).
+    Meshes,
 }
 
 impl Default for AlembicWriteOptions {
@@ -68,6 +85,7 @@ impl Default for AlembicWriteOptions {
             application: format!("coif {}", env!("CARGO_PKG_VERSION")),
             object_name: DEFAULT_OBJECT_NAME.into(),
             velocities: true,
+            objects: Objects::All,
         }
     }
 }
@@ -96,6 +114,17 @@ enum ParamSource {
     Attribute(String),
 }
 
+/// The property handles of one PolyMesh object, and which groom mesh fills them.
+struct MeshObject {
+    mesh: usize,
+    bounds: PropertyId,
+    positions: PropertyId,
+    face_indices: PropertyId,
+    face_counts: PropertyId,
+    /// The faces wound clockwise (the file's convention), fixed by the first frame.
+    clockwise_indices: Vec<i32>,
+}
+
 /// The curves object of one group: its properties, the group's index and, when the groom has
 /// several groups, the group's strands.
 struct GroupObject {
@@ -111,12 +140,16 @@ pub struct CurvesWriter<W: Write + Seek> {
     archive: ArchiveWriter<W>,
     /// One curves object per curve group.
     objects: Vec<GroupObject>,
+    /// One PolyMesh object per groom mesh.
+    meshes: Vec<MeshObject>,
     animated: bool,
     scale: f32,
     frames_per_second: f64,
     /// Topology every frame must share.
     strand_offsets: Vec<u32>,
     basis: CurveBasis,
+    /// Points per mesh, which every frame must share.
+    mesh_sizes: Vec<usize>,
     attribute_layout: Vec<(String, AttributeRate, usize)>,
     previous_points: Option<Vec<Vec3>>,
     pending: Option<Groom>,
@@ -139,60 +172,53 @@ impl<W: Write + Seek> CurvesWriter<W> {
             0
         };
         let mut parent = archive.top();
-        if options.unreal {
+        let with_curves = options.objects != Objects::Meshes;
+        if options.unreal && with_curves {
             parent = add_xform(&mut archive, parent, "groom", None)?;
             add_groom_version(&mut archive, parent)?;
         }
         if let Some(matrix) = options.xform {
             parent = add_xform(&mut archive, parent, "xform", Some(matrix))?;
         }
-        let parts = first.split_groups().map_err(io::Error::other)?;
+        let parts = if with_curves { first.split_groups().map_err(io::Error::other)? } else { Vec::new() };
         let several = parts.len() > 1;
-        let mut xforms: Vec<(String, ObjectId)> = Vec::new();
+        let mut tree = Tree { parent, nodes: Vec::new() };
         let mut objects = Vec::with_capacity(parts.len());
         for (group, curve_group, part) in &parts {
             // A group's path becomes Xforms above a curves object named after its last part.
-            let components: Vec<&str> = curve_group.name.split('/').filter(|c| !c.is_empty()).collect();
-            let (object_parent, name) = match components.split_last() {
-                None => (parent, options.object_name.as_str()),
-                Some((last, above)) => {
-                    let mut at = parent;
-                    let mut path = String::new();
-                    for component in above {
-                        path.push('/');
-                        path.push_str(component);
-                        at = match xforms.iter().find(|(p, _)| *p == path) {
-                            Some((_, id)) => *id,
-                            None => {
-                                let id = add_xform(&mut archive, at, component, None)?;
-                                xforms.push((path.clone(), id));
-                                id
-                            }
-                        };
-                    }
-                    (at, *last)
-                }
-            };
-            let properties = add_curves(
-                &mut archive,
-                object_parent,
-                name,
-                part,
-                (*group, several),
-                (options.unreal, animated && options.velocities),
-                time_sampling,
-            );
+            let properties =
+                tree.place(&mut archive, &curve_group.name, &options.object_name, |a, at, name| {
+                    add_curves(
+                        a,
+                        at,
+                        name,
+                        part,
+                        (*group, several),
+                        (options.unreal, animated && options.velocities),
+                        time_sampling,
+                    )
+                })?;
             let strands = several.then(|| first.group_strands(*group));
             objects.push(GroupObject { properties, group: *group, strands });
+        }
+        let mut meshes = Vec::new();
+        if options.objects != Objects::Curves {
+            for (index, mesh) in first.meshes.iter().enumerate() {
+                meshes.push(tree.place(&mut archive, &mesh.path, "mesh", |a, at, name| {
+                    add_polymesh(a, at, name, index, mesh, time_sampling)
+                })?);
+            }
         }
         Ok(CurvesWriter {
             archive,
             objects,
+            meshes,
             animated,
             scale: if options.unreal { epic::UNITS_PER_METRE } else { 1.0 },
             frames_per_second: options.frames_per_second,
             strand_offsets: first.strand_offsets.clone(),
             basis: first.basis,
+            mesh_sizes: first.meshes.iter().map(|m| m.points.len()).collect(),
             attribute_layout: layout(first),
             previous_points: None,
             pending: None,
@@ -216,7 +242,10 @@ impl<W: Write + Seek> CurvesWriter<W> {
         if !self.animated && self.frames > 0 {
             return invalid("a static Alembic file holds one frame".into());
         }
-        if self.objects[0].properties.velocities.is_none() {
+        if !groom.meshes.iter().map(|m| m.points.len()).eq(self.mesh_sizes.iter().copied()) {
+            return invalid(format!("frame {} has other meshes than the first frame", self.frames));
+        }
+        if self.objects.first().is_none_or(|o| o.properties.velocities.is_none()) {
             // Nothing needs the next frame: write this one now, without keeping a copy.
             self.frames += 1;
             return self.write_sample(groom, None);
@@ -247,6 +276,27 @@ impl<W: Write + Seek> CurvesWriter<W> {
     }
 
     fn write_sample(&mut self, groom: &Groom, velocities: Option<&[Vec3]>) -> io::Result<()> {
+        for object in &self.meshes {
+            let mesh = &groom.meshes[object.mesh];
+            let points: Vec<Vec3> = mesh.points.iter().map(|p| *p * self.scale).collect();
+            let samples: [(PropertyId, Cow<[u8]>, u64); 4] = [
+                (object.bounds, Cow::Owned(bounds_bytes(&points)), 1),
+                (object.positions, Cow::Borrowed(bytemuck::cast_slice(&points)), points.len() as u64),
+                (
+                    object.face_indices,
+                    Cow::Borrowed(bytemuck::cast_slice(&object.clockwise_indices)),
+                    object.clockwise_indices.len() as u64,
+                ),
+                (
+                    object.face_counts,
+                    Cow::Owned(mesh.face_counts.iter().flat_map(|&c| (c as i32).to_le_bytes()).collect()),
+                    mesh.face_counts.len() as u64,
+                ),
+            ];
+            for (id, bytes, elements) in samples {
+                self.archive.set_sample(id, &bytes, elements)?;
+            }
+        }
         for k in 0..self.objects.len() {
             let Some(strands) = &self.objects[k].strands else {
                 self.write_object_sample(k, groom, velocities)?;
@@ -363,13 +413,53 @@ fn scope(rate: AttributeRate) -> &'static str {
     }
 }
 
-fn interpretation(name: &str, components: usize) -> &'static str {
-    match (name, components) {
-        (attr::COLOR, 3) => "rgb",
-        (attr::COLOR, 4) => "rgba",
-        (_, 2) => "vector",
+/// The `interpretation` an attribute is written with: its kind's, or for plain floats the one
+/// coif always gives that name (the reader maps that back to plain floats).
+pub(crate) fn interpretation(kind: AttributeKind, name: &str, components: usize) -> &'static str {
+    match (kind, name, components) {
+        (AttributeKind::Point, _, 3) => "point",
+        (AttributeKind::Normal, _, 3) => "normal",
+        (AttributeKind::Vector, _, 3) => "vector",
+        (AttributeKind::Color, _, 3) | (_, attr::COLOR, 3) => "rgb",
+        (AttributeKind::Color, _, 4) | (_, attr::COLOR, 4) => "rgba",
+        (_, _, 2) => "vector",
         _ => "",
     }
+}
+
+/// The POD an attribute is written as: int32 for ints (and for the names Unreal wants as ints),
+/// bool for flags, else float32.
+pub(crate) fn pod(kind: AttributeKind, name: &str) -> Pod {
+    match kind {
+        AttributeKind::Int => Pod::I32,
+        AttributeKind::Bool => Pod::Bool,
+        _ if written_as_int32(name) => Pod::I32,
+        _ => Pod::F32,
+    }
+}
+
+/// A geometry object of `schema` with what every such schema starts with: its `.geom` compound,
+/// `.selfBnds` and `P` (returned in that order after the object).
+fn add_geom_object<W: Write + Seek>(
+    archive: &mut ArchiveWriter<W>,
+    parent: ObjectId,
+    name: &str,
+    schema: &str,
+    ts: u32,
+) -> (ObjectId, CompoundId, PropertyId, PropertyId) {
+    let object_metadata = MetaData::new()
+        .with("schema", schema)
+        .with("schemaBaseType", GEOM_BASE)
+        .with("schemaObjTitle", &format!("{schema}:.geom"));
+    let object = archive.add_object(parent, name, object_metadata);
+    let top = archive.properties(object);
+    let geom_metadata = MetaData::new().with("schema", schema).with("schemaBaseType", GEOM_BASE);
+    let geom = archive.add_compound(top, ".geom", geom_metadata);
+    let bounds =
+        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
+    let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
+    let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
+    (object, geom, bounds, positions)
 }
 
 fn add_curves<W: Write + Seek>(
@@ -380,19 +470,8 @@ fn add_curves<W: Write + Seek>(
     (group, several_groups): (usize, bool),
     (unreal, with_velocities): (bool, bool),
     ts: u32,
-) -> CurveProperties {
-    let object_metadata = MetaData::new()
-        .with("schema", CURVE_SCHEMA)
-        .with("schemaBaseType", GEOM_BASE)
-        .with("schemaObjTitle", &format!("{CURVE_SCHEMA}:.geom"));
-    let object = archive.add_object(parent, name, object_metadata);
-    let top = archive.properties(object);
-    let geom_metadata = MetaData::new().with("schema", CURVE_SCHEMA).with("schemaBaseType", GEOM_BASE);
-    let geom = archive.add_compound(top, ".geom", geom_metadata);
-    let bounds =
-        archive.add_scalar(geom, ".selfBnds", MetaData::new().with("interpretation", "box"), Pod::F64, 6, ts);
-    let point_metadata = MetaData::new().with("geoScope", "vtx").with("interpretation", "point");
-    let positions = archive.add_array(geom, "P", point_metadata, Pod::F32, 3, ts);
+) -> (ObjectId, CurveProperties) {
+    let (object, geom, bounds, positions) = add_geom_object(archive, parent, name, CURVE_SCHEMA, ts);
     let vertex_counts = archive.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, ts);
     let basis = archive.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, ts);
 
@@ -433,8 +512,8 @@ fn add_curves<W: Write + Seek>(
                 ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
                 ParamSource::Attribute(a) => {
                     let a = groom.attribute(a).expect("listed from the groom");
-                    let pod = if written_as_int32(&a.name) { Pod::I32 } else { Pod::F32 };
-                    (pod, a.components as u8, a.rate, interpretation(&a.name, a.components))
+                    let pod = pod(a.kind, &a.name);
+                    (pod, a.components as u8, a.rate, interpretation(a.kind, &a.name, a.components))
                 }
             };
             let metadata = geom_param_metadata(scope(rate), pod, extent, interp);
@@ -457,7 +536,74 @@ fn add_curves<W: Write + Seek>(
     });
     let width =
         archive.add_array(geom, "width", geom_param_metadata("vtx", Pod::F32, 1, ""), Pod::F32, 1, ts);
-    CurveProperties { bounds, positions, vertex_counts, basis, velocities, uv, width, params }
+    (object, CurveProperties { bounds, positions, vertex_counts, basis, velocities, uv, width, params })
+}
+
+/// The objects placed so far under the writer's parent: a path becomes Xforms above a leaf
+/// object (an object already at a path on the way serves as the parent instead).
+struct Tree {
+    parent: ObjectId,
+    /// Every object made, by path.
+    nodes: Vec<(String, ObjectId)>,
+}
+
+impl Tree {
+    /// Makes a leaf object at `path` (`/root/Head/HeadMesh`) with `make(archive, parent,
+    /// name)`, Xforms made on the way, its name made unique; `fallback` names an object whose
+    /// path is empty.
+    fn place<W: Write + Seek, T>(
+        &mut self,
+        archive: &mut ArchiveWriter<W>,
+        path: &str,
+        fallback: &str,
+        make: impl FnOnce(&mut ArchiveWriter<W>, ObjectId, &str) -> (ObjectId, T),
+    ) -> io::Result<T> {
+        let components: Vec<&str> = path.split('/').filter(|c| !c.is_empty()).collect();
+        let (last, above) = components.split_last().map_or((fallback, &[][..]), |(l, a)| (*l, a));
+        let mut at = self.parent;
+        let mut prefix = String::new();
+        for component in above {
+            prefix.push('/');
+            prefix.push_str(component);
+            at = match self.nodes.iter().find(|(p, _)| *p == prefix) {
+                Some((_, id)) => *id,
+                None => {
+                    let id = add_xform(archive, at, component, None)?;
+                    self.nodes.push((prefix.clone(), id));
+                    id
+                }
+            };
+        }
+        // Sibling names are unique in Alembic: a second object at a path gets a suffix.
+        let mut name = last.to_string();
+        let mut n = 1;
+        while self.nodes.iter().any(|(p, _)| *p == format!("{prefix}/{name}")) {
+            n += 1;
+            name = format!("{last}_{n}");
+        }
+        let (object, made) = make(archive, at, &name);
+        self.nodes.push((format!("{prefix}/{name}"), object));
+        Ok(made)
+    }
+}
+
+/// A PolyMesh object for groom mesh `index`, its properties in the C++ writer's order.
+fn add_polymesh<W: Write + Seek>(
+    archive: &mut ArchiveWriter<W>,
+    parent: ObjectId,
+    name: &str,
+    index: usize,
+    mesh: &SurfaceMesh,
+    ts: u32,
+) -> (ObjectId, MeshObject) {
+    let (object, geom, bounds, positions) = add_geom_object(archive, parent, name, POLYMESH_SCHEMA, ts);
+    let face_indices = archive.add_array(geom, ".faceIndices", MetaData::new(), Pod::I32, 1, ts);
+    let face_counts = archive.add_array(geom, ".faceCounts", MetaData::new(), Pod::I32, 1, ts);
+    // coif's meshes are wound counter-clockwise; Alembic's clockwise.
+    let mut clockwise = mesh.clone();
+    clockwise.flip_winding();
+    let clockwise_indices = clockwise.face_indices.iter().map(|&i| i as i32).collect();
+    (object, MeshObject { mesh: index, bounds, positions, face_indices, face_counts, clockwise_indices })
 }
 
 /// An Xform object; `matrix` `None` is the identity (an empty `.xform`).
@@ -562,10 +708,13 @@ fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'
             let a = groom.attribute(name).expect("layout is fixed by the first frame");
             // Rest positions are positions: they follow the unit change.
             let factor = if name == "rest" { scale } else { 1.0 };
-            if written_as_int32(name) {
-                (Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()), a.len() as u64)
-            } else {
-                (floats(&a.data, factor), a.len() as u64)
+            match pod(a.kind, name) {
+                Pod::I32 => (
+                    Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()),
+                    a.len() as u64,
+                ),
+                Pod::Bool => (Cow::Owned(a.data.iter().map(|&v| (v != 0.0) as u8).collect()), a.len() as u64),
+                _ => (floats(&a.data, factor), a.len() as u64),
             }
         }
     }

@@ -23,7 +23,7 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
 pub use curves_read::CurvesArchive;
-pub use curves_write::{AlembicWriteOptions, CurvesWriter};
+pub use curves_write::{AlembicWriteOptions, CurvesWriter, Objects};
 
 use super::atomic;
 use crate::error::{Error, Result};
@@ -72,6 +72,26 @@ pub fn read_all_frames(bytes: &[u8], path: &Path, keep_file_units: bool) -> Resu
     Ok(frames)
 }
 
+/// What an Alembic file cannot say about the groom, as warnings: the wrap of a cubic group
+/// whose wrap Alembic readers take otherwise ([`curves_read::wrap_of`]).
+pub fn unsupported(groom: &Groom) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for g in 0..groom.group_count() {
+        let group = groom.group(g);
+        let read_back = curves_read::wrap_of(group.basis);
+        if group.basis != crate::groom::CurveBasis::Linear
+            && group.wrap != crate::groom::CurveWrap::Periodic
+            && group.wrap != read_back
+        {
+            warnings.push(format!(
+                "curve group '{}': Alembic records no {:?} wrap for {:?} curves; its readers (Blender, coif) take them as {:?}",
+                group.name, group.wrap, group.basis, read_back
+            ));
+        }
+    }
+    warnings
+}
+
 /// Writes a static groom (one sample) atomically.
 pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Result<()> {
     let mut writer = AnimationWriter::create(path, groom, options, false)?;
@@ -81,10 +101,13 @@ pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Resul
 
 /// Writes an animated groom frame by frame (uniform time sampling at the options' frame rate,
 /// one sample per frame, constant topology), streaming each frame to disk. The file appears
-/// under its name only when [`AnimationWriter::finish`] succeeds.
+/// under its name only when [`AnimationWriter::finish`] succeeds. With `--unreal` the meshes
+/// stream to their own file ([`crate::io::unreal::meshes_path`]), committed after the groom's.
 pub struct AnimationWriter {
     path: PathBuf,
     writer: CurvesWriter<BufWriter<atomic::TempFile>>,
+    /// The meshes' own file and its writer, in Unreal layout.
+    meshes: Option<(PathBuf, CurvesWriter<BufWriter<atomic::TempFile>>)>,
 }
 
 impl AnimationWriter {
@@ -92,22 +115,52 @@ impl AnimationWriter {
     /// pass it to [`AnimationWriter::write_frame`] too). `animated` false makes a static file.
     pub fn create(path: &Path, first: &Groom, options: &AlembicWriteOptions, animated: bool) -> Result<Self> {
         first.validate()?;
-        let out = atomic::create_beside(path)?;
-        let writer = CurvesWriter::new(out, first, options, animated).map_err(|e| Error::io(path, e))?;
-        Ok(AnimationWriter { path: path.to_path_buf(), writer })
+        let start = |path: &Path, options: &AlembicWriteOptions| -> Result<CurvesWriter<_>> {
+            let out = atomic::create_beside(path)?;
+            CurvesWriter::new(out, first, options, animated).map_err(|e| Error::io(path, e))
+        };
+        let sibling = options.unreal && !first.meshes.is_empty();
+        let meshes = match sibling {
+            true => {
+                let meshes_path = crate::io::unreal::meshes_path(path);
+                let options = AlembicWriteOptions { objects: Objects::Meshes, ..options.clone() };
+                Some((meshes_path.clone(), start(&meshes_path, &options)?))
+            }
+            false => None,
+        };
+        let objects = if sibling { Objects::Curves } else { options.objects };
+        let writer = start(path, &AlembicWriteOptions { objects, ..options.clone() })?;
+        Ok(AnimationWriter { path: path.to_path_buf(), writer, meshes })
     }
 
     pub fn write_frame(&mut self, groom: &Groom) -> Result<()> {
         groom.validate()?;
-        self.writer.write_frame(groom).map_err(|e| match e.kind() {
-            std::io::ErrorKind::InvalidInput => Error::Usage(format!("{}: {e}", self.path.display())),
-            // A full disk or a failing device is the environment, not the input.
-            _ => Error::io(&self.path, e),
-        })
+        self.writer.write_frame(groom).map_err(|e| frame_error(&self.path, e))?;
+        if let Some((path, writer)) = &mut self.meshes {
+            writer.write_frame(groom).map_err(|e| frame_error(path, e))?;
+        }
+        Ok(())
     }
 
     pub fn finish(self) -> Result<()> {
         let out = self.writer.finish().map_err(|e| Error::io(&self.path, e))?;
-        atomic::commit(&self.path, out)
+        let meshes = match self.meshes {
+            Some((path, writer)) => Some((writer.finish().map_err(|e| Error::io(&path, e))?, path)),
+            None => None,
+        };
+        atomic::commit(&self.path, out)?;
+        if let Some((out, path)) = meshes {
+            atomic::commit(&path, out)?;
+        }
+        Ok(())
+    }
+}
+
+/// A frame the writer refused is bad input; anything else (a full disk, a failing device) is
+/// the environment.
+fn frame_error(path: &Path, e: std::io::Error) -> Error {
+    match e.kind() {
+        std::io::ErrorKind::InvalidInput => Error::Usage(format!("{}: {e}", path.display())),
+        _ => Error::io(path, e),
     }
 }

@@ -428,21 +428,7 @@ impl Walker<'_> {
             let width_scale = to_coif.determinant().abs().cbrt() as f32;
             let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
             curves.points.iter_mut().for_each(|p| *p = transform(*p));
-            let linear = glam::DMat3::from_mat4(to_coif);
-            for attribute in curves.attributes.iter_mut().filter(|a| a.components == 3) {
-                let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(attribute) {
-                    Some(AttributeKind::Point) => Box::new(transform),
-                    Some(AttributeKind::Normal) => {
-                        let normal_matrix = linear.inverse().transpose();
-                        Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
-                    }
-                    Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
-                    None => continue,
-                };
-                for c in attribute.data.chunks_exact_mut(3) {
-                    c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
-                }
-            }
+            crate::io::transform_attributes(&mut curves.attributes, to_coif);
             curves.widths = match widths {
                 Some(mut w) => {
                     w.iter_mut().for_each(|w| *w *= width_scale);
@@ -475,27 +461,6 @@ fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKi
         AttributeKind::Float
     } else {
         kind
-    }
-}
-
-/// How a 3-vector attribute follows the points from file space to coif's: by its kind, or for
-/// plain float3 data by its name (Blender's `surface_normal`, velocities…); `None`: not at all.
-fn direction_kind(attribute: &GroomAttribute) -> Option<AttributeKind> {
-    match attribute.kind {
-        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(attribute.kind),
-        AttributeKind::Float => {
-            let name = attribute.name.to_ascii_lowercase();
-            if name == names::REST {
-                Some(AttributeKind::Point)
-            } else if name == "n" || name.contains("normal") {
-                Some(AttributeKind::Normal)
-            } else if name == "v" || name.starts_with("velocit") {
-                Some(AttributeKind::Vector)
-            } else {
-                None
-            }
-        }
-        _ => None,
     }
 }
 

@@ -30,8 +30,9 @@ pub fn write_animated(
     out: &mut dyn Write,
     path: &Path,
 ) -> Result<()> {
-    usd_stage::check_animation(groom, frames, times, path)?;
-    let stage = usd_stage::plan(groom, Some((times, frames)))?;
+    let animation = usd_stage::Animation::of_points(times, frames);
+    usd_stage::check_animation(groom, &animation, path)?;
+    let stage = usd_stage::plan(groom, Some(&animation))?;
     write_stage(&stage, out).map_err(|e| Error::io(path, e))
 }
 
@@ -88,12 +89,20 @@ fn write_prim(prim: &Prim, out: &mut (impl Write + ?Sized), depth: usize) -> std
 fn write_property(property: &Property, out: &mut (impl Write + ?Sized), indent: &str) -> std::io::Result<()> {
     let uniform = if property.uniform { "uniform " } else { "" };
     let declaration = format!("{indent}{uniform}{} {}", property.type_name, property.name);
+    let metadata = property
+        .interpolation
+        .map(|interpolation| format!(" (\n{indent}    interpolation = \"{interpolation}\"\n{indent})"));
     match &property.value {
         Value::Default(data) => {
             out.write_all(format!("{declaration} = ").as_bytes())?;
             write_data(data, out)?;
+            out.write_all(metadata.unwrap_or_default().as_bytes())?;
         }
         Value::TimeSamples(samples) => {
+            // Metadata goes on a declaration of its own: a `.timeSamples` line takes none.
+            if let Some(metadata) = metadata {
+                out.write_all(format!("{declaration}{metadata}\n").as_bytes())?;
+            }
             out.write_all(format!("{declaration}.timeSamples = {{\n").as_bytes())?;
             for (time, data) in samples {
                 let mut label = format!("{indent}    ");
@@ -106,12 +115,7 @@ fn write_property(property: &Property, out: &mut (impl Write + ?Sized), indent: 
             out.write_all(format!("{indent}}}").as_bytes())?;
         }
     }
-    match property.interpolation {
-        Some(interpolation) => out.write_all(
-            format!(" (\n{indent}    interpolation = \"{interpolation}\"\n{indent})\n").as_bytes(),
-        ),
-        None => out.write_all(b"\n"),
-    }
+    out.write_all(b"\n")
 }
 
 fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {

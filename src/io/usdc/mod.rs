@@ -52,7 +52,7 @@ mod compress;
 mod decode;
 mod encode;
 mod format;
-mod write;
+pub(crate) mod write;
 
 use std::path::Path;
 
@@ -78,8 +78,9 @@ pub fn write_animated(
     frames: &[Vec<Vec3>],
     times: usda::TimeCodes,
 ) -> Result<()> {
-    usd_stage::check_animation(groom, frames, times, path)?;
-    write_stage(path, &usd_stage::plan(groom, Some((times, frames)))?)
+    let animation = usd_stage::Animation::of_points(times, frames);
+    usd_stage::check_animation(groom, &animation, path)?;
+    write_stage(path, &usd_stage::plan(groom, Some(&animation))?)
 }
 
 /// Writes a planned stage as a crate file, atomically.
