@@ -236,38 +236,29 @@ impl Groom {
             check_len("guide flags", strands, guides.len())?;
         }
         crate::groups::validate(self)?;
-        // One branch-free pass over everything first (a read groom is checked whole, so this is
-        // on every import's path); only a groom that fails it is searched for the first fault.
+        // Branch-free passes over the whole arrays first (a read groom is checked whole, so this
+        // is on every import's path); only a groom that fails one is searched for the first fault.
         let finite = all_finite(bytemuck::cast_slice(&self.points));
-        let widths_ok = self.widths.iter().fold(true, |ok, &w| ok & (w.is_finite() & (w >= 0.0)));
-        for strand in 0..strands {
-            let range = self.strand_range(strand);
-            let points = &self.points[range.clone()];
-            if points.len() < 2 {
-                return Err(GroomError::TooFewVertices { strand, count: points.len() });
-            }
-            let min_squared = MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH;
-            let long = points
-                .windows(2)
-                .fold(true, |ok, pair| ok & (pair[0].distance_squared(pair[1]) > min_squared));
-            if finite & widths_ok & long {
-                continue;
-            }
-            for (vertex, p) in points.iter().enumerate() {
-                if !p.is_finite() {
-                    return Err(GroomError::NonFinite { strand, vertex });
-                }
-            }
-            for (segment, pair) in points.windows(2).enumerate() {
-                if pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH {
-                    return Err(GroomError::ZeroLengthSegment { strand, segment });
-                }
-            }
-            for (vertex, &width) in self.widths[range].iter().enumerate() {
-                if !(width.is_finite() && width >= 0.0) {
-                    return Err(GroomError::BadWidth { strand, vertex, width });
-                }
-            }
+        // Finite and not negative: below +inf's bits, or -0.
+        let widths_ok =
+            self.widths.iter().fold(true, |ok, &w| ok & ((w.to_bits() < 0x7f80_0000) | (w == 0.0)));
+        let counts_ok = self.strand_offsets.windows(2).fold(true, |ok, w| ok & (w[1] - w[0] >= 2));
+        let min_squared = MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH;
+        let short = |a: &Vec3, b: &Vec3| (a.distance_squared(*b) <= min_squared) as usize;
+        // Segments are all long when the only short pairs of consecutive points are pairs that
+        // straddle two strands (a strand's tip and the next one's root).
+        let long = strands == 0
+            || (counts_ok && {
+                let pairs: usize =
+                    self.points.iter().zip(self.points.iter().skip(1)).map(|(a, b)| short(a, b)).sum();
+                let straddling = self.strand_offsets[1..strands]
+                    .iter()
+                    .map(|&o| short(&self.points[o as usize - 1], &self.points[o as usize]))
+                    .sum::<usize>();
+                pairs == straddling
+            });
+        if !(finite & widths_ok & long) {
+            self.find_fault()?;
         }
         for (i, attribute) in self.attributes.iter().enumerate() {
             if !(1..=4).contains(&attribute.components) {
@@ -284,6 +275,34 @@ impl Groom {
         }
         for mesh in &self.meshes {
             mesh.check().map_err(|problem| GroomError::Mesh { path: mesh.path.clone(), problem })?;
+        }
+        Ok(())
+    }
+
+    /// The first bad strand: too few vertices, a point not finite, a zero-length segment or a
+    /// bad width, in strand order.
+    fn find_fault(&self) -> Result<(), GroomError> {
+        for strand in 0..self.strand_count() {
+            let range = self.strand_range(strand);
+            let points = &self.points[range.clone()];
+            if points.len() < 2 {
+                return Err(GroomError::TooFewVertices { strand, count: points.len() });
+            }
+            for (vertex, p) in points.iter().enumerate() {
+                if !p.is_finite() {
+                    return Err(GroomError::NonFinite { strand, vertex });
+                }
+            }
+            for (segment, pair) in points.windows(2).enumerate() {
+                if pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH {
+                    return Err(GroomError::ZeroLengthSegment { strand, segment });
+                }
+            }
+            for (vertex, &width) in self.widths[range].iter().enumerate() {
+                if !(width.is_finite() && width >= 0.0) {
+                    return Err(GroomError::BadWidth { strand, vertex, width });
+                }
+            }
         }
         Ok(())
     }

@@ -37,6 +37,14 @@ impl Value {
         }
     }
 
+    /// [`Value::to_f32`], moving single floats rather than copying them.
+    pub fn into_f32(self) -> Option<Vec<f32>> {
+        match self {
+            Value::F32(v) => Some(v),
+            other => other.to_f32(),
+        }
+    }
+
     pub fn to_f64(&self) -> Option<Vec<f64>> {
         match self {
             Value::F32(v) => Some(v.iter().map(|&x| x as f64).collect()),

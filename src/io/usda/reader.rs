@@ -338,7 +338,7 @@ impl Walker<'_> {
                     None => None,
                     Some(value) => {
                         let values = value
-                            .to_f32()
+                            .into_f32()
                             .ok_or_else(|| at_prim(line, "'widths' must be a float[] array".into()))?;
                         let (rate, data) = layout
                             .resolve(values, 1, &interpolation)
@@ -382,7 +382,7 @@ impl Walker<'_> {
             let (kind_components, element_size) =
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
             let Some(value) = take_value(attr, time) else { continue };
-            let Some(mut values) = value.to_f32() else { continue }; // strings, tokens: not groom data
+            let Some(mut values) = value.into_f32() else { continue }; // strings, tokens: not groom data
             let components = kind_components * element_size.max(1) as usize;
             if components > 4 {
                 continue; // the groom model carries at most 4 components per element

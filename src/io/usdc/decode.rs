@@ -833,12 +833,11 @@ impl<'a> Crate<'a> {
                     let n = self.u64_at(packed_at)?;
                     let bytes = self.at(packed_at + 8, usize::try_from(n).unwrap_or(usize::MAX))?;
                     let indices = decompress_ints::<u32>(bytes, scalars)?;
-                    let values = indices.into_iter().map(|i| {
-                        lut.get(i as usize)
-                            .copied()
-                            .ok_or_else(|| format!("lookup index {i} beyond the table of {lut_len}"))
-                    });
-                    return Ok(ArrayData::Floats(values.collect::<Checked<_>>()?));
+                    if let Some(i) = indices.iter().copied().max().filter(|&i| i as usize >= lut_len) {
+                        return Err(format!("lookup index {i} beyond the table of {lut_len}"));
+                    }
+                    // Collected in place: the indices' memory becomes the floats'.
+                    return Ok(ArrayData::Floats(indices.into_iter().map(|i| lut[i as usize]).collect()));
                 }
                 b't' => {
                     let lut_len = u32::from_le_bytes(self.at(at + 1, 4)?.try_into().unwrap()) as usize;
