@@ -249,8 +249,7 @@ impl Groom {
         // straddle two strands (a strand's tip and the next one's root).
         let long = strands == 0
             || (counts_ok && {
-                let pairs: usize =
-                    self.points.iter().zip(self.points.iter().skip(1)).map(|(a, b)| short(a, b)).sum();
+                let pairs = short_pairs(&self.points, min_squared);
                 let straddling = self.strand_offsets[1..strands]
                     .iter()
                     .map(|&o| short(&self.points[o as usize - 1], &self.points[o as usize]))
@@ -335,15 +334,37 @@ impl Groom {
     }
 }
 
+/// How many pairs of consecutive points lie within `min_squared` of each other (squared
+/// distance), in blocks whose squared differences are computed as flat arrays (vectorized).
+fn short_pairs(points: &[Vec3], min_squared: f32) -> usize {
+    const BLOCK: usize = 64;
+    let flat: &[f32] = bytemuck::cast_slice(points);
+    let pairs = points.len().saturating_sub(1);
+    let mut count = 0;
+    let mut first = 0;
+    while first + BLOCK <= pairs {
+        let from = &flat[3 * first..3 * (first + BLOCK)];
+        let to = &flat[3 * first + 3..3 * (first + BLOCK) + 3];
+        let mut squares = [0f32; 3 * BLOCK];
+        for ((square, a), b) in squares.iter_mut().zip(from).zip(to) {
+            *square = (b - a) * (b - a);
+        }
+        count += squares.chunks_exact(3).map(|s| u32::from(s[0] + s[1] + s[2] <= min_squared)).sum::<u32>()
+            as usize;
+        first += BLOCK;
+    }
+    count + (first..pairs).filter(|&i| points[i].distance_squared(points[i + 1]) <= min_squared).count()
+}
+
 /// Segments shorter than this (metres) count as zero-length: a solver cannot give them a direction.
 pub const MIN_SEGMENT_LENGTH: f32 = 1e-9;
 
 /// Whether every value is finite: exponent bits not all set, tested without a branch per value
 /// so the loop vectorizes.
 pub fn all_finite(values: &[f32]) -> bool {
-    values
-        .chunks(4096)
-        .all(|chunk| chunk.iter().fold(true, |ok, v| ok & (v.to_bits() & 0x7f80_0000 != 0x7f80_0000)))
+    values.chunks(4096).all(|chunk| {
+        chunk.iter().map(|v| u32::from(v.to_bits() & 0x7f80_0000 == 0x7f80_0000)).sum::<u32>() == 0
+    })
 }
 
 fn check_len(what: &str, expected: usize, found: usize) -> Result<(), GroomError> {
@@ -410,6 +431,44 @@ mod tests {
         let mut groom = two_strands();
         groom.strand_offsets = vec![0, 3, 6];
         assert!(matches!(groom.validate(), Err(GroomError::BadOffsets(_))));
+    }
+
+    /// The whole-array checks against the strand-by-strand search, on grooms long enough for the
+    /// blocked pass (64 segments a block) and with faults at every position of a block.
+    #[test]
+    fn whole_array_checks_agree_with_the_strand_by_strand_search() {
+        let strands: Vec<Vec<Vec3>> =
+            (0..7).map(|s| (0..40).map(|k| Vec3::new(s as f32, k as f32 * 0.01, 0.0)).collect()).collect();
+        let groom = Groom::from_strands(&strands, 1e-4);
+        assert!(groom.validate().is_ok());
+        // A strand starting where the previous one ends is fine: that pair is no segment.
+        let mut touching = groom.clone();
+        touching.points[40] = touching.points[39];
+        assert!(touching.validate().is_ok());
+        for vertex in 1..groom.vertex_count() {
+            let (strand, k) = (vertex / 40, vertex % 40);
+            if k == 0 {
+                continue;
+            }
+            let mut bad = groom.clone();
+            bad.points[vertex] = bad.points[vertex - 1];
+            assert_eq!(bad.validate(), Err(GroomError::ZeroLengthSegment { strand, segment: k - 1 }));
+            let mut bad = groom.clone();
+            bad.points[vertex].z = f32::INFINITY;
+            assert_eq!(bad.validate(), Err(GroomError::NonFinite { strand, vertex: k }));
+            let mut bad = groom.clone();
+            bad.widths[vertex] = f32::NAN;
+            assert!(
+                matches!(bad.validate(), Err(GroomError::BadWidth { strand: s, vertex: v, .. }) if (s, v) == (strand, k))
+            );
+        }
+        // Zero widths, of either sign, are allowed; the smallest negative is not.
+        let mut zero = groom.clone();
+        zero.widths[5] = -0.0;
+        zero.widths[6] = 0.0;
+        assert!(zero.validate().is_ok());
+        zero.widths[7] = -f32::from_bits(1);
+        assert!(matches!(zero.validate(), Err(GroomError::BadWidth { strand: 0, vertex: 7, .. })));
     }
 
     #[test]

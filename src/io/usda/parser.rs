@@ -37,10 +37,11 @@ impl Value {
         }
     }
 
-    /// [`Value::to_f32`], moving single floats rather than copying them.
+    /// [`Value::to_f32`], moving floats and vectors rather than copying them.
     pub fn into_f32(self) -> Option<Vec<f32>> {
         match self {
             Value::F32(v) => Some(v),
+            Value::Vec3(v) => Some(bytemuck::allocation::cast_vec(v)),
             other => other.to_f32(),
         }
     }
