@@ -45,7 +45,7 @@ fn compressible_groom() -> Groom {
     groom
 }
 
-/// A groom whose arrays take every path of the crate writer's coding: 1,500 strands of 3 to 40
+/// A groom whose arrays take every path of the crate writer's coding: 600 strands of 3 to 40
 /// vertices (counts with many different steps), tapered widths (a lookup table with index steps
 /// of every sign), a vertex attribute of 300 values in a scattered order (a table of 300 whose
 /// index steps take more values than the counting table holds, so the most common is found by
@@ -59,7 +59,7 @@ fn coded_groom() -> Groom {
         state ^= state << 17;
         state
     };
-    let strands: Vec<Vec<Vec3>> = (0..1500)
+    let strands: Vec<Vec<Vec3>> = (0..600)
         .map(|s| {
             let count = 3 + (next() % 38) as usize;
             (0..count)
@@ -84,7 +84,7 @@ fn coded_groom() -> Groom {
         "melanin",
         AttributeRate::Strand,
         1,
-        (0..s).map(|i| (i as f32 * 0.7071).fract()).collect(),
+        (0..s).map(|i| (i as f32 * 0.6180).fract()).collect(),
     ));
     groom.validate().unwrap();
     groom
