@@ -318,7 +318,8 @@ impl<'a> Crate<'a> {
         let mut timeline = LayerTimeline::default();
         for spec in self.specs.iter().filter(|s| s.kind == SpecType::PseudoRoot as u32) {
             for (field, value) in self.spec_fields(spec) {
-                if matches!(field, "startTimeCode" | "endTimeCode" | "timeCodesPerSecond") {
+                if matches!(field, "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" | "framesPerSecond")
+                {
                     if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
                         timeline.set(field, v);
                     }
@@ -359,7 +360,7 @@ impl<'a> Crate<'a> {
                         }
                         "subLayerOffsets" => offsets = self.layer_offsets(value).map_err(fail)?,
                         "relocates" | "layerRelocates" => layer.refused = Some((0, field.to_string())),
-                        "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" => {
+                        "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" | "framesPerSecond" => {
                             if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
                                 layer.timeline.set(field, v);
                             }
