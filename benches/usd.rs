@@ -84,6 +84,12 @@ fn cpu_seconds() -> f64 {
     ticks / 100.0
 }
 
+/// The 1-, 5- and 15-minute load averages: CPU figures are comparable only at similar load.
+fn load() -> String {
+    let text = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    text.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+}
+
 /// One measurement in this (child) process; prints the same JSON as the pxr script.
 fn child(command: &str, path: &Path) {
     // `-plain` commands use the groom without style attributes.
@@ -210,9 +216,10 @@ fn main() {
         ("coif .usda read, issue-18 groom", Box::new(|| ours("read-plain", &plain_usda)), &plain_usda),
     ];
     println!(
-        "USD benchmark: {} strands x {VERTICES} vertices, groom in memory {groom_mb:.1} MB, {} threads, median of {runs} runs",
+        "USD benchmark: {} strands x {VERTICES} vertices, groom in memory {groom_mb:.1} MB, {} threads, median of {runs} runs, load {}",
         strands(),
-        rayon::current_num_threads()
+        rayon::current_num_threads(),
+        load()
     );
     println!(
         "{:<38} {:>8} {:>8} {:>8} {:>8} {:>8} {:>10} {:>8}",
@@ -251,6 +258,7 @@ fn main() {
         "native .usdc vs pxr .usdc (pxr time / coif time, wall and CPU): write {:.2}x / {:.2}x, read {:.2}x / {:.2}x (target: > 1x)",
         write.0, write.1, read.0, read.1
     );
+    println!("load at the end: {}", load());
     // Issue 18 measured the native .usda at 0.69 s write and 0.49 s read (wall) for this groom
     // without style attributes, at commit edb97b9; the issue asks for at least twice as fast.
     let (write, read) = (medians[7].0, medians[8].0);

@@ -236,38 +236,28 @@ impl Groom {
             check_len("guide flags", strands, guides.len())?;
         }
         crate::groups::validate(self)?;
-        // One branch-free pass over everything first (a read groom is checked whole, so this is
-        // on every import's path); only a groom that fails it is searched for the first fault.
+        // Branch-free passes over the whole arrays first (a read groom is checked whole, so this
+        // is on every import's path); only a groom that fails one is searched for the first fault.
         let finite = all_finite(bytemuck::cast_slice(&self.points));
-        let widths_ok = self.widths.iter().fold(true, |ok, &w| ok & (w.is_finite() & (w >= 0.0)));
-        for strand in 0..strands {
-            let range = self.strand_range(strand);
-            let points = &self.points[range.clone()];
-            if points.len() < 2 {
-                return Err(GroomError::TooFewVertices { strand, count: points.len() });
-            }
-            let min_squared = MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH;
-            let long = points
-                .windows(2)
-                .fold(true, |ok, pair| ok & (pair[0].distance_squared(pair[1]) > min_squared));
-            if finite & widths_ok & long {
-                continue;
-            }
-            for (vertex, p) in points.iter().enumerate() {
-                if !p.is_finite() {
-                    return Err(GroomError::NonFinite { strand, vertex });
-                }
-            }
-            for (segment, pair) in points.windows(2).enumerate() {
-                if pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH {
-                    return Err(GroomError::ZeroLengthSegment { strand, segment });
-                }
-            }
-            for (vertex, &width) in self.widths[range].iter().enumerate() {
-                if !(width.is_finite() && width >= 0.0) {
-                    return Err(GroomError::BadWidth { strand, vertex, width });
-                }
-            }
+        // Finite and not negative: below +inf's bits, or -0.
+        let widths_ok =
+            self.widths.iter().fold(true, |ok, &w| ok & ((w.to_bits() < 0x7f80_0000) | (w == 0.0)));
+        let counts_ok = self.strand_offsets.windows(2).fold(true, |ok, w| ok & (w[1] - w[0] >= 2));
+        let min_squared = MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH;
+        let short = |a: &Vec3, b: &Vec3| (a.distance_squared(*b) <= min_squared) as usize;
+        // Segments are all long when the only short pairs of consecutive points are pairs that
+        // straddle two strands (a strand's tip and the next one's root).
+        let long = strands == 0
+            || (counts_ok && {
+                let pairs = short_pairs(&self.points, min_squared);
+                let straddling = self.strand_offsets[1..strands]
+                    .iter()
+                    .map(|&o| short(&self.points[o as usize - 1], &self.points[o as usize]))
+                    .sum::<usize>();
+                pairs == straddling
+            });
+        if !(finite & widths_ok & long) {
+            self.find_fault()?;
         }
         for (i, attribute) in self.attributes.iter().enumerate() {
             if !(1..=4).contains(&attribute.components) {
@@ -284,6 +274,34 @@ impl Groom {
         }
         for mesh in &self.meshes {
             mesh.check().map_err(|problem| GroomError::Mesh { path: mesh.path.clone(), problem })?;
+        }
+        Ok(())
+    }
+
+    /// The first bad strand: too few vertices, a point not finite, a zero-length segment or a
+    /// bad width, in strand order.
+    fn find_fault(&self) -> Result<(), GroomError> {
+        for strand in 0..self.strand_count() {
+            let range = self.strand_range(strand);
+            let points = &self.points[range.clone()];
+            if points.len() < 2 {
+                return Err(GroomError::TooFewVertices { strand, count: points.len() });
+            }
+            for (vertex, p) in points.iter().enumerate() {
+                if !p.is_finite() {
+                    return Err(GroomError::NonFinite { strand, vertex });
+                }
+            }
+            for (segment, pair) in points.windows(2).enumerate() {
+                if pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH {
+                    return Err(GroomError::ZeroLengthSegment { strand, segment });
+                }
+            }
+            for (vertex, &width) in self.widths[range].iter().enumerate() {
+                if !(width.is_finite() && width >= 0.0) {
+                    return Err(GroomError::BadWidth { strand, vertex, width });
+                }
+            }
         }
         Ok(())
     }
@@ -316,15 +334,37 @@ impl Groom {
     }
 }
 
+/// How many pairs of consecutive points lie within `min_squared` of each other (squared
+/// distance), in blocks whose squared differences are computed as flat arrays (vectorized).
+fn short_pairs(points: &[Vec3], min_squared: f32) -> usize {
+    const BLOCK: usize = 64;
+    let flat: &[f32] = bytemuck::cast_slice(points);
+    let pairs = points.len().saturating_sub(1);
+    let mut count = 0;
+    let mut first = 0;
+    while first + BLOCK <= pairs {
+        let from = &flat[3 * first..3 * (first + BLOCK)];
+        let to = &flat[3 * first + 3..3 * (first + BLOCK) + 3];
+        let mut squares = [0f32; 3 * BLOCK];
+        for ((square, a), b) in squares.iter_mut().zip(from).zip(to) {
+            *square = (b - a) * (b - a);
+        }
+        count += squares.chunks_exact(3).map(|s| u32::from(s[0] + s[1] + s[2] <= min_squared)).sum::<u32>()
+            as usize;
+        first += BLOCK;
+    }
+    count + (first..pairs).filter(|&i| points[i].distance_squared(points[i + 1]) <= min_squared).count()
+}
+
 /// Segments shorter than this (metres) count as zero-length: a solver cannot give them a direction.
 pub const MIN_SEGMENT_LENGTH: f32 = 1e-9;
 
 /// Whether every value is finite: exponent bits not all set, tested without a branch per value
 /// so the loop vectorizes.
 pub fn all_finite(values: &[f32]) -> bool {
-    values
-        .chunks(4096)
-        .all(|chunk| chunk.iter().fold(true, |ok, v| ok & (v.to_bits() & 0x7f80_0000 != 0x7f80_0000)))
+    values.chunks(4096).all(|chunk| {
+        chunk.iter().map(|v| u32::from(v.to_bits() & 0x7f80_0000 == 0x7f80_0000)).sum::<u32>() == 0
+    })
 }
 
 fn check_len(what: &str, expected: usize, found: usize) -> Result<(), GroomError> {
@@ -391,6 +431,44 @@ mod tests {
         let mut groom = two_strands();
         groom.strand_offsets = vec![0, 3, 6];
         assert!(matches!(groom.validate(), Err(GroomError::BadOffsets(_))));
+    }
+
+    /// The whole-array checks against the strand-by-strand search, on grooms long enough for the
+    /// blocked pass (64 segments a block) and with faults at every position of a block.
+    #[test]
+    fn whole_array_checks_agree_with_the_strand_by_strand_search() {
+        let strands: Vec<Vec<Vec3>> =
+            (0..7).map(|s| (0..40).map(|k| Vec3::new(s as f32, k as f32 * 0.01, 0.0)).collect()).collect();
+        let groom = Groom::from_strands(&strands, 1e-4);
+        assert!(groom.validate().is_ok());
+        // A strand starting where the previous one ends is fine: that pair is no segment.
+        let mut touching = groom.clone();
+        touching.points[40] = touching.points[39];
+        assert!(touching.validate().is_ok());
+        for vertex in 1..groom.vertex_count() {
+            let (strand, k) = (vertex / 40, vertex % 40);
+            if k == 0 {
+                continue;
+            }
+            let mut bad = groom.clone();
+            bad.points[vertex] = bad.points[vertex - 1];
+            assert_eq!(bad.validate(), Err(GroomError::ZeroLengthSegment { strand, segment: k - 1 }));
+            let mut bad = groom.clone();
+            bad.points[vertex].z = f32::INFINITY;
+            assert_eq!(bad.validate(), Err(GroomError::NonFinite { strand, vertex: k }));
+            let mut bad = groom.clone();
+            bad.widths[vertex] = f32::NAN;
+            assert!(
+                matches!(bad.validate(), Err(GroomError::BadWidth { strand: s, vertex: v, .. }) if (s, v) == (strand, k))
+            );
+        }
+        // Zero widths, of either sign, are allowed; the smallest negative is not.
+        let mut zero = groom.clone();
+        zero.widths[5] = -0.0;
+        zero.widths[6] = 0.0;
+        assert!(zero.validate().is_ok());
+        zero.widths[7] = -f32::from_bits(1);
+        assert!(matches!(zero.validate(), Err(GroomError::BadWidth { strand: 0, vertex: 7, .. })));
     }
 
     #[test]

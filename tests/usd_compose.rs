@@ -2,9 +2,10 @@
 //! references and payloads to `.usda` and `.usdc` files, internal references, inherits and
 //! variant sets are composed by coif and read into the same groom as the stage pxr flattens —
 //! points, counts, widths, primvars, groups, purposes, time samples (shifted by the offsets) and
-//! stage metadata — at several times and with `--variant`; the strength order of sublayers,
-//! inherits, variants, references and payloads, ancestral and direct, is pxr's. With the usd-core venv hidden, no
-//! Python starts; bad stages exit 2 naming the file, prim and arc.
+//! stage metadata — at several times and with `--variant`; layers of other time code rates are
+//! retimed as pxr retimes them; the strength order of sublayers, inherits, variants, references
+//! and payloads, ancestral and direct, is pxr's. With the usd-core venv hidden, no Python starts;
+//! bad stages exit 2 naming the file, prim and arc.
 mod common;
 use common::usd::*;
 use common::*;
@@ -417,4 +418,128 @@ fn bad_composition_exits_2_naming_file_prim_and_arc() {
         }
         assert!(!out.exists());
     }
+}
+
+/// A curve whose one strand moves between time codes 0 and 24 of its layer, in a layer of the
+/// given timeline metadata.
+fn timed_curves_layer(metadata: &str) -> String {
+    format!(
+        r#"#usda 1.0
+(
+    defaultPrim = "Curves"
+    {metadata}
+)
+
+def BasisCurves "Curves"
+{{
+    uniform token type = "linear"
+    int[] curveVertexCounts = [2]
+    point3f[] points.timeSamples = {{
+        0: [(0, 0, 0), (0, 1, 0)],
+        24: [(2, 0, 0), (2, 1, 0)],
+    }}
+    float[] widths = [0.01, 0.01] (
+        interpolation = "vertex"
+    )
+}}
+"#
+    )
+}
+
+#[test]
+fn layers_of_other_time_code_rates_are_retimed_as_pxr_retimes_them() {
+    // A 48-per-second stage: a 24-per-second sublayer (with its own offset) that references a
+    // 12-per-second layer, and references to layers at 24 per second, at 12 frames per second
+    // (no timeCodesPerSecond) and with no rate at all (24), one of them with an offset.
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+    write("a.usda", &timed_curves_layer("timeCodesPerSecond = 24"));
+    write("f.usda", &timed_curves_layer("framesPerSecond = 12"));
+    write("n.usda", &timed_curves_layer(""));
+    write("t.usda", &timed_curves_layer("timeCodesPerSecond = 12"));
+    write(
+        "sub.usda",
+        r#"#usda 1.0
+(
+    timeCodesPerSecond = 24
+)
+
+over "Groom"
+{
+    def "P" (
+        references = @t.usda@ (offset = 10)
+    )
+    {
+    }
+}
+"#,
+    );
+    write(
+        "root.usda",
+        r#"#usda 1.0
+(
+    defaultPrim = "Groom"
+    metersPerUnit = 1
+    timeCodesPerSecond = 48
+    subLayers = [
+        @sub.usda@ (offset = 5; scale = 3)
+    ]
+)
+
+def Xform "Groom"
+{
+    def "A" (
+        references = @a.usda@
+    )
+    {
+    }
+
+    def "F" (
+        references = @f.usda@
+    )
+    {
+    }
+
+    def "N" (
+        references = @n.usda@
+    )
+    {
+    }
+
+    def "O" (
+        references = @a.usda@ (offset = 10; scale = 2)
+    )
+    {
+    }
+}
+"#,
+    );
+    let root = dir.path().join("root.usda");
+    let flat = dir.path().join("flat.usda");
+    let jobs = dir.path().join("jobs.json");
+    std::fs::write(&jobs, serde_json::to_string(&[["flatten", path_str(&root), path_str(&flat)]]).unwrap())
+        .unwrap();
+    probe(&["batch", path_str(&jobs)]);
+    for time in [0.0, 10.0, 24.0, 30.0, 57.5, 96.0, 106.0, 200.0, 353.0, 400.0] {
+        let native = read(&root, Some(time), &[]).unwrap_or_else(|e| panic!("at {time}: {e}"));
+        let pxr = read(&flat, Some(time), &[]).unwrap();
+        if let Some(field) = difference(&native, &pxr) {
+            panic!("at {time}: {field}");
+        }
+    }
+    // Not vacuous: /Groom/A (24 per second) reaches its last sample at stage time 48, not 24.
+    let x_of = |group: &str, time: f64| {
+        let groom = read(&root, Some(time), &[]).unwrap();
+        let g = groom.groups.iter().position(|g| g.name == group).unwrap_or_else(|| panic!("no {group}"));
+        let strand = groom.group_ids.iter().position(|&id| id as usize == g).unwrap();
+        groom.strand_points(strand)[0].x
+    };
+    assert!((x_of("/Groom/A", 24.0) - 1.0).abs() < 1e-6, "halfway at 24");
+    assert!((x_of("/Groom/A", 48.0) - 2.0).abs() < 1e-6, "last sample at 48");
+    // 12 frames per second: the last sample at 96. Through the 24-per-second sublayer (offset 5,
+    // scale 3, rate ×2) and its reference (offset 10, rate ×2), time 24 of the 12-per-second
+    // t.usda is 5 + 3 × 2 × (10 + 2 × 24) = 353.
+    assert!((x_of("/Groom/F", 48.0) - 1.0).abs() < 1e-6);
+    assert!((x_of("/Groom/P", 353.0) - 2.0).abs() < 1e-6);
+    assert!(x_of("/Groom/P", 352.0) < 2.0);
 }

@@ -45,6 +45,51 @@ fn compressible_groom() -> Groom {
     groom
 }
 
+/// A groom whose arrays take every path of the crate writer's coding: 600 strands of 3 to 40
+/// vertices (counts with many different steps), tapered widths (a lookup table with index steps
+/// of every sign), a vertex attribute of 300 values in a scattered order (a table of 300 whose
+/// index steps take more values than the counting table holds, so the most common is found by
+/// sorting), scattered strand ids (integer deltas of every width) and a float per strand that
+/// never repeats (written plain).
+fn coded_groom() -> Groom {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let strands: Vec<Vec<Vec3>> = (0..600)
+        .map(|s| {
+            let count = 3 + (next() % 38) as usize;
+            (0..count)
+                .map(|k| Vec3::new(s as f32 * 0.001, -(k as f32) * 0.004, (s % 7) as f32 * 0.01))
+                .collect()
+        })
+        .collect();
+    let mut groom = Groom::from_strands(&strands, 80e-6);
+    for s in 0..groom.strand_count() {
+        let range = groom.strand_range(s);
+        let len = range.len() as f32;
+        for (k, w) in groom.widths[range].iter_mut().enumerate() {
+            *w = 80e-6 * (1.0 - 0.5 * k as f32 / len);
+        }
+    }
+    groom.strand_ids = (0..groom.strand_count()).map(|_| (next() % 2_000_000_000) as u32).collect();
+    let n = groom.vertex_count();
+    let scattered: Vec<f32> = (0..n).map(|_| (next() % 300) as f32 * 0.01 + 0.005).collect();
+    groom.set_attribute(Attribute::new("wetness", AttributeRate::Vertex, 1, scattered));
+    let s = groom.strand_count();
+    groom.set_attribute(Attribute::new(
+        "melanin",
+        AttributeRate::Strand,
+        1,
+        (0..s).map(|i| (i as f32 * 0.6180).fract()).collect(),
+    ));
+    groom.validate().unwrap();
+    groom
+}
+
 #[test]
 fn pxr_sees_coif_usdc_exactly_as_coif_usda_and_validates_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -53,6 +98,7 @@ fn pxr_sees_coif_usdc_exactly_as_coif_usda_and_validates_it() {
         rich_groom(CurveBasis::Bezier),
         rich_groom(CurveBasis::BSpline),
         compressible_groom(),
+        coded_groom(),
     ];
     for (k, groom) in grooms.iter().enumerate() {
         let (text, binary) = (dir.path().join(format!("{k}.usda")), dir.path().join(format!("{k}.usdc")));

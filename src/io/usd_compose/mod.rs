@@ -11,7 +11,9 @@
 //!   `Usd.Stage.Open` does by default);
 //! - **inherits** within the layer stack that authors them;
 //! - **variant sets**, with the selection from `--variant` first, else the strongest selection
-//!   authored anywhere in the prim's index.
+//!   authored anywhere in the prim's index;
+//! - **time code rates**: a sublayer or referenced layer of another `timeCodesPerSecond` (else
+//!   `framesPerSecond`, else 24) than the layer naming it has its times scaled by the ratio.
 //!
 //! Each prim's index is a tree of nodes (sites: a layer stack and a path in it). Its children
 //! are ordered by arc (inherits, variants, references, payloads) and then by the namespace depth
@@ -355,6 +357,28 @@ impl Composer {
         self.stack_with_root(root, &canonical, time, chain)
     }
 
+    /// The layer stack of `path` reached through `offset` from a layer of `rate` time codes per
+    /// second, read at the time `time` of that layer maps to, and the offset from its time: when
+    /// its own rate differs, its times are scaled by the ratio, as USD does (a 24-per-second
+    /// layer's time 24 is time 48 of a 48-per-second stage). The rate is known once the layer is
+    /// read, so a layer of another rate is read again at the time it then maps to.
+    fn stack_in_time(
+        &mut self,
+        path: &Path,
+        offset: LayerOffset,
+        rate: f64,
+        time: Option<f64>,
+        chain: &mut Vec<PathBuf>,
+    ) -> Result<(usize, LayerOffset)> {
+        let stack = self.stack(path, time.map(|t| offset.invert(t)), chain)?;
+        let own_rate = self.layers[self.stacks[stack].root].layer.timeline.codes_per_second();
+        if own_rate == rate {
+            return Ok((stack, offset));
+        }
+        let offset = offset.then(LayerOffset { offset: 0.0, scale: rate / own_rate });
+        Ok((self.stack(path, time.map(|t| offset.invert(t)), chain)?, offset))
+    }
+
     fn stack_with_root(
         &mut self,
         root: usize,
@@ -378,14 +402,16 @@ impl Composer {
         let mut layers = vec![(root, LayerOffset::default())];
         let sub_layers = self.layers[root].layer.sub_layers.clone();
         let display = self.layers[root].display.clone();
+        let rate = self.layers[root].layer.timeline.codes_per_second();
         for sub in sub_layers {
             let target = resolve(&display, &sub.asset);
             let arc = || format!("subLayer @{}@", sub.asset);
             check_offset(sub.offset, &display, &arc)?;
-            let local = time.map(|t| sub.offset.invert(t));
-            let stack = self.stack(&target, local, chain).map_err(|e| in_arc(e, &display, &arc()))?;
-            for &(layer, offset) in &self.stacks[stack].layers {
-                layers.push((layer, sub.offset.then(offset)));
+            let (stack, offset) = self
+                .stack_in_time(&target, sub.offset, rate, time, chain)
+                .map_err(|e| in_arc(e, &display, &arc()))?;
+            for &(layer, inner) in &self.stacks[stack].layers {
+                layers.push((layer, offset.then(inner)));
             }
         }
         chain.pop();
@@ -549,14 +575,18 @@ impl Composer {
         );
         let authored_in = self.layers[layer].display.clone();
         check_offset(target.offset, &authored_in, &|| format!("prim <{stage_path}>: {arc}"))?;
-        let offset = layer_offset.then(target.offset);
+        let mut offset = layer_offset.then(target.offset);
         let stack = if target.asset.is_empty() {
             node.stack
         } else {
             let file = resolve(&authored_in, &target.asset);
-            let local = self.time.map(|t| offset.invert(t));
-            self.stack(&file, local, &mut Vec::new())
-                .map_err(|e| in_arc(e, &authored_in, &format!("prim <{stage_path}>: {arc}")))?
+            // The target's times scale by its rate against the layer that authors the arc.
+            let rate = self.layers[layer].layer.timeline.codes_per_second();
+            let (stack, scaled) = self
+                .stack_in_time(&file, offset, rate, self.time, &mut Vec::new())
+                .map_err(|e| in_arc(e, &authored_in, &format!("prim <{stage_path}>: {arc}")))?;
+            offset = scaled;
+            stack
         };
         let root_layer = &self.layers[self.stacks[stack].root];
         let prim_path = match &target.prim_path {

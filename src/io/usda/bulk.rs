@@ -3,10 +3,11 @@
 //! appended in order. Same grammar and errors as the element-by-element path, same values.
 //!
 //! Each number is read in one pass where it starts: a plain decimal (what every writer emits) is
-//! scanned into its digits and power of ten, and converted exactly (Clinger's fast path) or, for
-//! long or extreme spellings, by `fast-float2` (Eisel-Lemire): correctly rounded, as
-//! `str::parse` is. Anything else — `inf`, `nan`, a bad token — goes through the token path the
-//! element-by-element reader uses, so its value and error message are the same.
+//! scanned into its digits (eight bytes at a time) and power of ten, and converted exactly
+//! (Clinger's fast path) or, for long or extreme spellings, by `fast-float2` (Eisel-Lemire):
+//! correctly rounded, as `str::parse` is. Anything else — `inf`, `nan`, a bad token — goes
+//! through the token path the element-by-element reader uses, so its value and error message
+//! are the same.
 use rayon::prelude::*;
 
 /// Pieces smaller than this are not worth a thread.
@@ -28,7 +29,7 @@ pub trait Number: Copy + Send {
 }
 
 impl Number for f32 {
-    #[inline]
+    #[inline(always)]
     fn prefix(bytes: &[u8]) -> Option<(f32, usize)> {
         let decimal = Decimal::scan(bytes)?;
         if let Some(value) = decimal.exact_f32() {
@@ -58,7 +59,7 @@ struct Decimal {
 impl Decimal {
     /// The decimal at the start of `bytes`, or `None` if that is not a whole plain decimal
     /// (a word such as `inf`, a lone `.`, `1e`, `1.5.3`): those take the token path.
-    #[inline]
+    #[inline(always)]
     fn scan(bytes: &[u8]) -> Option<Decimal> {
         let (negative, mut at) = match bytes.first()? {
             b'-' => (true, 1),
@@ -68,22 +69,14 @@ impl Decimal {
         let mut mantissa = 0u64;
         let mut digits = 0;
         let mut exponent = 0i64;
-        let mut read_digits = |at: &mut usize| {
-            let start = *at;
-            while *at < bytes.len() {
-                let digit = bytes[*at].wrapping_sub(b'0');
-                if digit > 9 {
-                    break;
-                }
-                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit));
-                *at += 1;
-            }
-            *at - start
-        };
-        digits += read_digits(&mut at);
+        let integer_start = at;
+        (mantissa, at) = read_digits(bytes, at, mantissa);
+        digits += at - integer_start;
         if bytes.get(at) == Some(&b'.') {
             at += 1;
-            let fraction = read_digits(&mut at);
+            let fraction_start = at;
+            (mantissa, at) = read_digits(bytes, at, mantissa);
+            let fraction = at - fraction_start;
             digits += fraction;
             exponent -= fraction as i64;
         }
@@ -141,6 +134,59 @@ impl Decimal {
     }
 }
 
+/// Appends the decimal digits at `at` to `mantissa` (wrapping: the caller counts the digits);
+/// returns it and the offset after the digits.
+#[inline(always)]
+fn read_digits(bytes: &[u8], mut at: usize, mut mantissa: u64) -> (u64, usize) {
+    loop {
+        let Some(eight) = bytes.get(at..at + 8) else {
+            return tail_digits(bytes, at, mantissa);
+        };
+        let (value, count) = leading_digits(u64::from_le_bytes(eight.try_into().unwrap()));
+        mantissa = mantissa.wrapping_mul(POWERS_OF_TEN[count]).wrapping_add(value);
+        at += count;
+        // Eight digits usually end a fraction: look at one byte before eight more.
+        if count < 8 || !bytes.get(at).is_some_and(u8::is_ascii_digit) {
+            return (mantissa, at);
+        }
+    }
+}
+
+/// [`read_digits`] in the last eight bytes of the text, one byte at a time.
+#[cold]
+fn tail_digits(bytes: &[u8], mut at: usize, mut mantissa: u64) -> (u64, usize) {
+    while let Some(digit) = bytes.get(at).map(|b| b.wrapping_sub(b'0')).filter(|&d| d < 10) {
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit));
+        at += 1;
+    }
+    (mantissa, at)
+}
+
+const POWERS_OF_TEN: [u64; 9] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000, 100_000_000];
+
+/// The decimal digits at the start of eight bytes (little-endian in `word`): their value and
+/// how many there are (0 to 8), found and converted eight at a time (SWAR).
+#[inline(always)]
+fn leading_digits(word: u64) -> (u64, usize) {
+    const HIGH: u64 = 0xf0f0_f0f0_f0f0_f0f0;
+    const ZEROS: u64 = 0x3030_3030_3030_3030;
+    // Non-zero in every byte that is not a digit: its high nibble is not 3, or it is past '9'
+    // (adding 6 carries it out of the 3x range). A carry out of a non-digit byte can spoil the
+    // test of the bytes after it, never of those before, so the first non-digit is exact.
+    let not_digit = ((word & HIGH) ^ ZEROS) | ((word.wrapping_add(0x0606_0606_0606_0606) & HIGH) ^ ZEROS);
+    let count = (not_digit.trailing_zeros() / 8) as usize;
+    if count == 0 {
+        return (0, 0);
+    }
+    // The digits' values moved to the top bytes (leading zeros in front), then combined in
+    // pairs, fours and eights by multiply-and-shift.
+    let mut value = (word.wrapping_sub(ZEROS)) << (8 * (8 - count));
+    value = value.wrapping_mul(10).wrapping_add(value >> 8) & 0x00ff_00ff_00ff_00ff;
+    value = (value.wrapping_mul(1 + (100 << 16)) >> 16) & 0x0000_ffff_0000_ffff;
+    value = value.wrapping_mul(1 + (10_000 << 32)) >> 32;
+    (value, count)
+}
+
 impl Number for i64 {
     fn prefix(bytes: &[u8]) -> Option<(i64, usize)> {
         let (negative, digits) = match bytes.first()? {
@@ -164,8 +210,19 @@ impl Number for i64 {
 }
 
 /// Whether a byte would still belong to a number token (so a prefix is not the whole token).
+#[inline(always)]
 fn continues_token(byte: Option<&u8>) -> bool {
-    byte.is_some_and(|&b| b.is_ascii_alphanumeric() || matches!(b, b'-' | b'+' | b'.'))
+    const TABLE: [bool; 256] = {
+        let mut table = [false; 256];
+        let mut b = 0;
+        while b < 256 {
+            let c = b as u8;
+            table[b] = c.is_ascii_alphanumeric() || matches!(c, b'-' | b'+' | b'.');
+            b += 1;
+        }
+        table
+    };
+    byte.is_some_and(|&b| TABLE[b as usize])
 }
 
 /// Where `#` comments can be: nowhere in most arrays, which spares every cut a look back to the
@@ -276,7 +333,7 @@ fn skip_blank(text: &[u8], mut at: usize) -> usize {
 }
 
 /// Reads the number at `at` into `values`; returns the offset after it.
-#[inline]
+#[inline(always)]
 fn read_number<N: Number>(text: &[u8], at: usize, values: &mut Vec<N>) -> Result<usize, BulkError> {
     if let Some((value, len)) = N::prefix(&text[at..]) {
         values.push(value);
@@ -378,6 +435,26 @@ mod tests {
         parse_segment(text.as_bytes(), components, false, comments, |v: Vec<N>| values.extend(v))
             .map(|_| values)
             .map_err(|e| format!("at {}: {}", e.offset, e.message))
+    }
+
+    /// Eight bytes at a time: every count of leading digits, followed by every kind of byte.
+    #[test]
+    fn leading_digits_count_and_convert_like_a_byte_loop() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..50_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let mut bytes = [0u8; 8];
+            let count = (state % 9) as usize;
+            for (k, b) in bytes.iter_mut().enumerate() {
+                let r = (state >> (8 * k)) as u8;
+                *b = if k < count { b'0' + r % 10 } else { r };
+            }
+            let expected_count = bytes.iter().take_while(|b| b.is_ascii_digit()).count();
+            let expected = bytes[..expected_count].iter().fold(0u64, |n, &d| n * 10 + u64::from(d - b'0'));
+            assert_eq!(leading_digits(u64::from_le_bytes(bytes)), (expected, expected_count), "{bytes:?}");
+        }
     }
 
     /// Every spelling the one-pass reader takes must give the bits `str::parse` (through the

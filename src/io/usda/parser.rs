@@ -37,6 +37,15 @@ impl Value {
         }
     }
 
+    /// [`Value::to_f32`], moving floats and vectors rather than copying them.
+    pub fn into_f32(self) -> Option<Vec<f32>> {
+        match self {
+            Value::F32(v) => Some(v),
+            Value::Vec3(v) => Some(bytemuck::allocation::cast_vec(v)),
+            other => other.to_f32(),
+        }
+    }
+
     pub fn to_f64(&self) -> Option<Vec<f64>> {
         match self {
             Value::F32(v) => Some(v.iter().map(|&x| x as f64).collect()),
@@ -177,6 +186,8 @@ pub struct LayerTimeline {
     pub start: Option<f64>,
     pub end: Option<f64>,
     pub per_second: Option<f64>,
+    /// `framesPerSecond`: the time codes' rate where `timeCodesPerSecond` is not authored.
+    pub frames_per_second: Option<f64>,
 }
 
 impl LayerTimeline {
@@ -186,8 +197,16 @@ impl LayerTimeline {
             "startTimeCode" => self.start = Some(value),
             "endTimeCode" => self.end = Some(value),
             "timeCodesPerSecond" => self.per_second = Some(value),
+            "framesPerSecond" => self.frames_per_second = Some(value),
             _ => {}
         }
+    }
+
+    /// Time codes per second as USD resolves them: `timeCodesPerSecond`, else `framesPerSecond`,
+    /// else 24 (a rate that is not a positive number counts as not authored).
+    pub fn codes_per_second(&self) -> f64 {
+        let valid = |rate: &f64| rate.is_finite() && *rate > 0.0;
+        self.per_second.filter(valid).or(self.frames_per_second.filter(valid)).unwrap_or(24.0)
     }
 }
 

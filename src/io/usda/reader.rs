@@ -338,7 +338,7 @@ impl Walker<'_> {
                     None => None,
                     Some(value) => {
                         let values = value
-                            .to_f32()
+                            .into_f32()
                             .ok_or_else(|| at_prim(line, "'widths' must be a float[] array".into()))?;
                         let (rate, data) = layout
                             .resolve(values, 1, &interpolation)
@@ -382,7 +382,19 @@ impl Walker<'_> {
             let (kind_components, element_size) =
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
             let Some(value) = take_value(attr, time) else { continue };
-            let Some(mut values) = value.to_f32() else { continue }; // strings, tokens: not groom data
+            // Strand ids one per curve, as integers: through `f32` ids past 2^24 would round.
+            if let (names::GROOM_ID, "uniform", None, Value::Int(ids)) =
+                (name.as_str(), interpolation.as_str(), &indices, &value)
+            {
+                if ids.len() == counts.len() {
+                    let ids = ids.iter().map(|&v| u32::try_from(v).ok()).collect::<Option<_>>();
+                    curves.strand_ids = Some(ids.ok_or_else(|| {
+                        at_prim(line, "groom_id values must be non-negative integers".into())
+                    })?);
+                    continue;
+                }
+            }
+            let Some(mut values) = value.into_f32() else { continue }; // strings, tokens: not groom data
             let components = kind_components * element_size.max(1) as usize;
             if components > 4 {
                 continue; // the groom model carries at most 4 components per element

@@ -62,7 +62,7 @@ pub fn lz4_decompress(input: &[u8], max_output: usize) -> Result<Vec<u8>, String
 }
 
 /// An integer type the integer coding handles.
-pub trait CodedInt: Copy {
+pub trait CodedInt: Copy + Default {
     /// 4 or 8.
     const BYTES: usize;
     fn to_i64(self) -> i64;
@@ -98,22 +98,26 @@ pub fn compress_ints<T: CodedInt>(values: &[T]) -> Vec<u8> {
     lz4_compress(&encode_ints(values))
 }
 
+/// The deltas the coding stores: from the previous value (0 before the first), wrapping in the
+/// integer's width as the decoder's sums do.
+fn deltas<T: CodedInt>(values: &[T]) -> impl Iterator<Item = i64> + Clone + '_ {
+    let wide = T::BYTES == 8;
+    let mut previous = 0i64;
+    values.iter().map(move |v| {
+        let v = v.to_i64();
+        let delta =
+            if wide { v.wrapping_sub(previous) } else { (v as i32).wrapping_sub(previous as i32) as i64 };
+        previous = v;
+        delta
+    })
+}
+
 fn encode_ints<T: CodedInt>(values: &[T]) -> Vec<u8> {
     if values.is_empty() {
         return Vec::new();
     }
     let wide = T::BYTES == 8;
-    let mut deltas = Vec::with_capacity(values.len());
-    let mut previous = 0i64;
-    for v in values {
-        let v = v.to_i64();
-        // 32-bit deltas wrap in 32 bits, as the decoder's sums do.
-        let delta =
-            if wide { v.wrapping_sub(previous) } else { (v as i32).wrapping_sub(previous as i32) as i64 };
-        deltas.push(delta);
-        previous = v;
-    }
-    let common = most_common(&deltas);
+    let common = most_common(deltas(values));
     let code = |d: i64| -> u8 {
         let fits = |bits: u32| d >= -(1i64 << (bits - 1)) && d < (1i64 << (bits - 1));
         match (d == common, wide) {
@@ -125,16 +129,27 @@ fn encode_ints<T: CodedInt>(values: &[T]) -> Vec<u8> {
             _ => 3,
         }
     };
-    let mut out = Vec::with_capacity(max_coded_size::<T>(values.len()));
-    out.extend_from_slice(&common.to_le_bytes()[..T::BYTES]);
-    let codes_at = out.len();
-    out.resize(codes_at + values.len().div_ceil(4), 0);
-    for (i, &d) in deltas.iter().enumerate() {
-        let c = code(d);
-        out[codes_at + i / 4] |= c << (2 * (i % 4));
-        let width = code_width(c, wide);
-        out.extend_from_slice(&d.to_le_bytes()[..width]);
+    // Every delta is stored as 8 bytes and the end moved by its width (fixed-size stores, no
+    // per-value copy of a variable length); the 8 bytes of slack are cut at the end.
+    let mut out = vec![0u8; max_coded_size::<T>(values.len()) + 8];
+    out[..T::BYTES].copy_from_slice(&common.to_le_bytes()[..T::BYTES]);
+    let codes_at = T::BYTES;
+    let mut end = codes_at + values.len().div_ceil(4);
+    let mut deltas = deltas(values);
+    for k in 0..values.len().div_ceil(4) {
+        // One code byte per four values; only deltas other than the common one are stored.
+        let mut byte = 0;
+        for (shift, d) in (0..8).step_by(2).zip(&mut deltas) {
+            let c = code(d);
+            if c != 0 {
+                out[end..end + 8].copy_from_slice(&d.to_le_bytes());
+                end += code_width(c, wide);
+                byte |= c << shift;
+            }
+        }
+        out[codes_at + k] = byte;
     }
+    out.truncate(end);
     out
 }
 
@@ -149,9 +164,39 @@ fn code_width(code: u8, wide: bool) -> usize {
     }
 }
 
-/// The most frequent delta; ties go to the smaller value so output is deterministic.
-fn most_common(deltas: &[i64]) -> i64 {
-    let mut sorted = deltas.to_vec();
+/// The most frequent delta; ties go to the smaller value so output is deterministic. Counted in
+/// a small open-addressed table (deltas of real data take few values); when they take more than
+/// it holds, by sorting.
+fn most_common(deltas: impl Iterator<Item = i64> + Clone) -> i64 {
+    const SLOTS: usize = 1024;
+    const MAX_DISTINCT: usize = SLOTS / 2;
+    let mut keys = [0i64; SLOTS];
+    let mut counts = [0u32; SLOTS];
+    let mut distinct = 0;
+    for d in deltas.clone() {
+        let mut slot = (d as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) as usize >> (64 - 10);
+        while counts[slot] != 0 && keys[slot] != d {
+            slot = (slot + 1) % SLOTS;
+        }
+        if counts[slot] == 0 {
+            if distinct == MAX_DISTINCT {
+                return most_common_sorted(deltas.collect());
+            }
+            distinct += 1;
+            keys[slot] = d;
+        }
+        counts[slot] += 1;
+    }
+    let (mut best, mut best_count) = (0, 0);
+    for (&key, &count) in keys.iter().zip(&counts) {
+        if count > best_count || (count == best_count && count > 0 && key < best) {
+            (best, best_count) = (key, count);
+        }
+    }
+    best
+}
+
+fn most_common_sorted(mut sorted: Vec<i64>) -> i64 {
     sorted.sort_unstable();
     let (mut best, mut best_count) = (sorted[0], 0);
     for run in sorted.chunk_by(|a, b| a == b) {
@@ -160,6 +205,47 @@ fn most_common(deltas: &[i64]) -> i64 {
         }
     }
     best
+}
+
+/// The deltas of [`decode_ints`] being summed: where the next one is and the running value.
+struct Cursor<'d> {
+    data: &'d [u8],
+    at: usize,
+    previous: i64,
+    common: i64,
+    widths: [usize; 4],
+}
+
+impl Cursor<'_> {
+    /// The next value: the running sum plus `delta`, wrapping in the integer's width.
+    #[inline(always)]
+    fn add<T: CodedInt>(&mut self, delta: i64) -> T {
+        self.previous = if T::BYTES == 8 {
+            self.previous.wrapping_add(delta)
+        } else {
+            (self.previous as i32).wrapping_add(delta as i32) as i64
+        };
+        T::from_i64(self.previous)
+    }
+
+    /// Values for the 2-bit codes of `byte`, lowest first (the data was checked to hold them).
+    #[inline(always)]
+    fn decode<T: CodedInt>(&mut self, values: &mut [T], mut byte: u8) {
+        let data = self.data;
+        for value in values {
+            let at = self.at;
+            let delta = match (byte & 3, T::BYTES == 8) {
+                (0, _) => self.common,
+                (1, false) => data[at] as i8 as i64,
+                (1, true) | (2, false) => i16::from_le_bytes([data[at], data[at + 1]]) as i64,
+                (2, true) | (3, false) => i32::from_le_bytes(data[at..at + 4].try_into().unwrap()) as i64,
+                _ => i64::from_le_bytes(data[at..at + 8].try_into().unwrap()),
+            };
+            self.at += self.widths[byte as usize & 3];
+            byte >>= 2;
+            *value = self.add::<T>(delta);
+        }
+    }
 }
 
 /// Undoes [`compress_ints`] for exactly `count` integers.
@@ -188,30 +274,35 @@ fn decode_ints<T: CodedInt>(coded: &[u8], count: usize) -> Result<Vec<T>, String
         i32::from_le_bytes(coded[..4].try_into().unwrap()) as i64
     };
     let codes = &coded[T::BYTES..T::BYTES + codes_len];
-    let mut data = &coded[T::BYTES + codes_len..];
-    let mut out = Vec::with_capacity(count);
-    let mut previous = 0i64;
-    for i in 0..count {
-        let c = (codes[i / 4] >> (2 * (i % 4))) & 3;
-        let width = code_width(c, wide);
-        let delta = if width == 0 {
-            common
-        } else {
-            let bytes = data.get(..width).ok_or("integer data is cut short")?;
-            data = &data[width..];
-            let mut buf = [0u8; 8];
-            buf[..width].copy_from_slice(bytes);
-            // Sign-extend from `width` bytes.
-            let shift = 64 - 8 * width as u32;
-            (i64::from_le_bytes(buf) << shift) >> shift
-        };
-        previous = if wide {
-            previous.wrapping_add(delta)
-        } else {
-            (previous as i32).wrapping_add(delta as i32) as i64
-        };
-        out.push(T::from_i64(previous));
+    let data = &coded[T::BYTES + codes_len..];
+    // The bytes the codes ask for, checked once, so the loop below reads without running out.
+    let widths: [usize; 4] = std::array::from_fn(|c| code_width(c as u8, wide));
+    let byte_widths: [u8; 256] =
+        std::array::from_fn(|b| (0..4).map(|k| widths[(b >> (2 * k)) & 3] as u8).sum());
+    let mut needed: usize = codes.iter().map(|&b| byte_widths[b as usize] as usize).sum();
+    // Codes past the last value (in the last byte) are not read.
+    let last = codes[codes_len - 1];
+    for k in (count - 4 * (codes_len - 1))..4 {
+        needed -= widths[(last >> (2 * k)) as usize & 3];
     }
+    if data.len() < needed {
+        return Err("integer data is cut short".into());
+    }
+    let mut out = vec![T::default(); count];
+    let mut cursor = Cursor { data, at: 0, previous: 0, common, widths };
+    // Whole code bytes (four values each), then the values of a last, partial one.
+    let mut groups = out.chunks_exact_mut(4);
+    for (values, &byte) in (&mut groups).zip(codes) {
+        if byte == 0 {
+            // Four common deltas (a run of equal steps): the usual case.
+            for value in values {
+                *value = cursor.add::<T>(common);
+            }
+        } else {
+            cursor.decode(values, byte);
+        }
+    }
+    cursor.decode(groups.into_remainder(), codes[codes_len - 1]);
     Ok(out)
 }
 
@@ -229,6 +320,31 @@ mod tests {
         assert_eq!(decompress_ints::<i64>(&compress_ints(&wide), wide.len()).unwrap(), wide);
         let unsigned: Vec<u32> = vec![u32::MAX, 0, 1, u32::MAX];
         assert_eq!(decompress_ints::<u32>(&compress_ints(&unsigned), 4).unwrap(), unsigned);
+    }
+
+    /// Data of every shape: few distinct deltas (the counting table), many (the sort), runs,
+    /// extremes, and lengths that end in a partial code byte.
+    #[test]
+    fn random_data_round_trips_and_the_common_delta_is_the_most_frequent() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for case in 0..200 {
+            let len = (next() % 3000) as usize + 1;
+            let spread = [1, 3, 40, 1000, 1 << 20, u64::MAX][case % 6];
+            let values: Vec<i32> = (0..len)
+                .map(|i| if next() % 4 == 0 { (next() % spread) as i32 } else { i as i32 * 3 })
+                .collect();
+            assert_eq!(decompress_ints::<i32>(&compress_ints(&values), len).unwrap(), values, "case {case}");
+            let wide: Vec<i64> = values.iter().map(|&v| (i64::from(v) * (next() % 3) as i64) << 20).collect();
+            assert_eq!(decompress_ints::<i64>(&compress_ints(&wide), len).unwrap(), wide, "case {case}");
+            let deltas: Vec<i64> = super::deltas(&values).collect();
+            assert_eq!(most_common(deltas.iter().copied()), most_common_sorted(deltas), "case {case}");
+        }
     }
 
     #[test]

@@ -318,7 +318,8 @@ impl<'a> Crate<'a> {
         let mut timeline = LayerTimeline::default();
         for spec in self.specs.iter().filter(|s| s.kind == SpecType::PseudoRoot as u32) {
             for (field, value) in self.spec_fields(spec) {
-                if matches!(field, "startTimeCode" | "endTimeCode" | "timeCodesPerSecond") {
+                if matches!(field, "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" | "framesPerSecond")
+                {
                     if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
                         timeline.set(field, v);
                     }
@@ -359,7 +360,7 @@ impl<'a> Crate<'a> {
                         }
                         "subLayerOffsets" => offsets = self.layer_offsets(value).map_err(fail)?,
                         "relocates" | "layerRelocates" => layer.refused = Some((0, field.to_string())),
-                        "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" => {
+                        "startTimeCode" | "endTimeCode" | "timeCodesPerSecond" | "framesPerSecond" => {
                             if let Some(v) = self.number(value).map_err(|e| format!("{field}: {e}"))? {
                                 layer.timeline.set(field, v);
                             }
@@ -833,12 +834,11 @@ impl<'a> Crate<'a> {
                     let n = self.u64_at(packed_at)?;
                     let bytes = self.at(packed_at + 8, usize::try_from(n).unwrap_or(usize::MAX))?;
                     let indices = decompress_ints::<u32>(bytes, scalars)?;
-                    let values = indices.into_iter().map(|i| {
-                        lut.get(i as usize)
-                            .copied()
-                            .ok_or_else(|| format!("lookup index {i} beyond the table of {lut_len}"))
-                    });
-                    return Ok(ArrayData::Floats(values.collect::<Checked<_>>()?));
+                    if let Some(i) = indices.iter().copied().max().filter(|&i| i as usize >= lut_len) {
+                        return Err(format!("lookup index {i} beyond the table of {lut_len}"));
+                    }
+                    // Collected in place: the indices' memory becomes the floats'.
+                    return Ok(ArrayData::Floats(indices.into_iter().map(|i| lut[i as usize]).collect()));
                 }
                 b't' => {
                     let lut_len = u32::from_le_bytes(self.at(at + 1, 4)?.try_into().unwrap()) as usize;
@@ -975,8 +975,10 @@ impl Crate<'_> {
     /// Plain little-endian elements copied out of `bytes`, a part of the file (which need not
     /// be aligned), read from the file itself when there is one.
     fn copy_out<T: bytemuck::Pod>(&self, bytes: &[u8]) -> Checked<Vec<T>> {
-        let mut out = vec![T::zeroed(); bytes.len() / std::mem::size_of::<T>()];
+        // Zeroed by the allocator (fresh pages, untouched until the copy), not element by element.
+        let mut out: Vec<T> = bytemuck::zeroed_vec(bytes.len() / std::mem::size_of::<T>());
         let target = bytemuck::cast_slice_mut::<T, u8>(&mut out);
+        advise_huge_pages(target);
         match self.file {
             Some(file) => {
                 use std::os::unix::fs::FileExt;
@@ -988,6 +990,26 @@ impl Crate<'_> {
         Ok(out)
     }
 }
+
+/// Asks the kernel to back a large, not yet touched buffer with huge pages: the copy into it
+/// then takes one page fault per 2 MB instead of per 4 kB (a third of a read's system time on a
+/// 100 MB groom). Advisory; ignored where unsupported.
+#[cfg(target_os = "linux")]
+fn advise_huge_pages(buffer: &mut [u8]) {
+    const HUGE: usize = 2 << 20;
+    let start = (buffer.as_ptr() as usize).next_multiple_of(HUGE);
+    let end = (buffer.as_ptr() as usize + buffer.len()) / HUGE * HUGE;
+    if end > start {
+        // SAFETY: the range lies inside `buffer`, which we borrow mutably; MADV_HUGEPAGE changes
+        // how pages are backed, never their contents.
+        unsafe {
+            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
+        }
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn advise_huge_pages(_buffer: &mut [u8]) {}
 
 /// IEEE half to single precision.
 fn half_to_f32(h: u16) -> f32 {

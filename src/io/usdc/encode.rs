@@ -317,20 +317,19 @@ fn lookup_table(values: &[f32]) -> Option<(Vec<f32>, Vec<u32>)> {
     }
     let limit = (values.len() / 4).min(1024);
     let mut table = Vec::new();
-    let mut index: HashMap<u32, u32> = HashMap::new();
+    let mut index = BitsIndex::default();
     let mut indices = Vec::with_capacity(values.len());
     let mut last = None;
     for &v in values {
         let bits = v.to_bits();
-        // Runs of one value (a strand's constant width) skip the hash.
+        // Runs of one value (a strand's constant width) skip the lookup.
         let i = match last {
             Some((b, i)) if b == bits => i,
-            _ => match index.get(&bits) {
-                Some(&i) => i,
+            _ => match index.find_or_add(bits, table.len() as u32) {
+                Some(i) => i,
                 None if table.len() == limit => return None,
                 None => {
                     table.push(v);
-                    index.insert(bits, table.len() as u32 - 1);
                     table.len() as u32 - 1
                 }
             },
@@ -339,6 +338,43 @@ fn lookup_table(values: &[f32]) -> Option<(Vec<f32>, Vec<u32>)> {
         indices.push(i);
     }
     Some((table, indices))
+}
+
+/// Float bits → table index for [`lookup_table`]: open addressing over 4 × its 1024 entries at
+/// most, with a multiplicative hash (SipHash cost more than the rest of the crate writer).
+struct BitsIndex {
+    keys: Box<[u32; BitsIndex::SLOTS]>,
+    /// Index + 1; 0 marks an empty slot.
+    values: Box<[u32; BitsIndex::SLOTS]>,
+}
+
+impl Default for BitsIndex {
+    fn default() -> Self {
+        BitsIndex { keys: Box::new([0; Self::SLOTS]), values: Box::new([0; Self::SLOTS]) }
+    }
+}
+
+impl BitsIndex {
+    const SLOTS: usize = 4096;
+
+    /// The index stored for `bits`; if there is none, stores `next` (unless the table is
+    /// full at 1024 entries, which [`lookup_table`] never passes) and returns `None`.
+    fn find_or_add(&mut self, bits: u32, next: u32) -> Option<u32> {
+        let mut slot = (bits.wrapping_mul(0x9E37_79B1) >> 20) as usize;
+        loop {
+            match self.values[slot] {
+                0 => {
+                    if next < 1024 {
+                        self.keys[slot] = bits;
+                        self.values[slot] = next + 1;
+                    }
+                    return None;
+                }
+                v if self.keys[slot] == bits => return Some(v - 1),
+                _ => slot = (slot + 1) % Self::SLOTS,
+            }
+        }
+    }
 }
 
 fn u64s(values: &[u64]) -> Vec<u8> {
