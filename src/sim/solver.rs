@@ -235,7 +235,7 @@ pub(crate) fn step_all(
 /// block Thomas elimination solves it in linear time. Gauss–Seidel alone carries a correction one
 /// edge per sweep, so under a load the strand keeps a stretch and a shear that shrink only like
 /// 1/iterations: finely cut strands sagged several times beam theory at 5 iterations and a strand
-/// hanging at Δt 1/30 stretched to twice its length.
+/// hanging at Δt 1/30 stretched to three times its length.
 fn solve_stretch_shear(s: &mut Strand<'_>) {
     let edges = s.x.len() - 1;
     let start = free_tail(s.kinematic);
