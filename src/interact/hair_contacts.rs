@@ -34,11 +34,15 @@ const BUILD_CHUNK: usize = 2048;
 
 /// A piece of an edge, carrying what a query needs so candidates are read contiguously: the
 /// whole edge (every piece of an edge computes the same closest point, so exactly one claims
-/// it), its vertex index and strand, its mean radius, and which piece of how many it is.
+/// it), its vertex index and strand, its mean radius, which piece of how many it is, and its own
+/// middle and reach (mean radius plus half its length): a vertex farther than its reach plus
+/// its own radius and the skin from the middle cannot be listed through this piece.
 #[derive(Clone, Copy, Debug, Default)]
 struct Piece {
     a: Vec3,
     b: Vec3,
+    mid: Vec3,
+    reach: f32,
     edge: u32,
     strand: u32,
     radius: f32,
@@ -288,14 +292,20 @@ impl HairContacts {
 
     fn piece(&self, points: &[Vec3], radii: &[f32], e: usize, index: u32) -> Piece {
         let j = self.edges[e] as usize;
+        let (a, b) = (points[j], points[j + 1]);
+        let count = self.first_piece[e + 1] - self.first_piece[e];
+        let radius = 0.5 * (radii[j] + radii[j + 1]);
         Piece {
-            a: points[j],
-            b: points[j + 1],
+            a,
+            b,
+            mid: a.lerp(b, (index as f32 + 0.5) / count as f32),
+            // A closest point rounded just past the piece's end still counts as in it.
+            reach: radius + a.distance(b) / count as f32 * 0.505 + 1e-6,
             edge: j as u32,
             strand: self.strand_of[j],
-            radius: 0.5 * (radii[j] + radii[j + 1]),
+            radius,
             index,
-            count: self.first_piece[e + 1] - self.first_piece[e],
+            count,
         }
     }
 
@@ -342,7 +352,7 @@ impl HairContacts {
                         e += 1;
                     }
                     *piece = this.piece(points, radii, e, k as u32 - this.first_piece[e]);
-                    *mid = piece.a.lerp(piece.b, (piece.index as f32 + 0.5) / piece.count as f32);
+                    *mid = piece.mid;
                 }
             },
         );
@@ -456,9 +466,13 @@ impl HairContacts {
     fn candidates_of(&self, i: usize, points: &[Vec3], radii: &[f32], out: &mut Vec<u32>) {
         let p = points[i];
         let strand = self.strand_of[i];
+        let own = radii[i] + self.skin;
         self.grid.for_each_near_run(p, |run| {
             for piece in &self.sorted_pieces[run] {
-                if piece.strand == strand {
+                // Most pieces in the cells around are beyond reach of their middle: a cheap test
+                // before the closest point.
+                let near = own + piece.reach;
+                if piece.strand == strand || p.distance_squared(piece.mid) >= near * near {
                     continue;
                 }
                 let ab = piece.b - piece.a;
@@ -547,40 +561,69 @@ mod tests {
             .collect()
     }
 
+    /// Applies one step of `contacts` and checks every vertex's push against [`brute_force`] (held
+    /// vertices feel none); returns how many vertices touch another strand.
+    fn matches_brute_force(
+        contacts: &mut HairContacts,
+        offsets: &[u32],
+        points: &[Vec3],
+        radii: &[f32],
+        fixed: &[bool],
+        step: usize,
+    ) -> usize {
+        let dt = 1.0 / 360.0;
+        let mut v = vec![Vec3::ZERO; points.len()];
+        contacts.apply(points, radii, fixed, &mut v, dt);
+        let expected = brute_force(offsets, points, radii, contacts.stiffness, dt);
+        let mut touching = 0;
+        for i in 0..points.len() {
+            let want = if fixed[i] { Vec3::ZERO } else { expected[i] };
+            assert!(v[i].abs_diff_eq(want, 1e-6), "step {step}, vertex {i}: {:?} vs {want:?}", v[i]);
+            touching += (want != Vec3::ZERO) as usize;
+        }
+        touching
+    }
+
+    /// A random offset, each coordinate in [-0.5, 0.5).
+    fn jitter(rng: &mut rand_pcg::Pcg64Mcg) -> Vec3 {
+        Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5)
+    }
+
+    /// `strands` random walks of `per_strand` vertices, each starting anywhere in the box from
+    /// the origin to `extent` and stepping by `step` times a [`jitter`]; and their offsets.
+    fn random_walks(
+        rng: &mut rand_pcg::Pcg64Mcg,
+        strands: usize,
+        per_strand: usize,
+        extent: Vec3,
+        step: f32,
+    ) -> (Vec<Vec3>, Vec<u32>) {
+        let (mut points, mut offsets) = (Vec::new(), vec![0u32]);
+        for _ in 0..strands {
+            let mut p = Vec3::new(rng.random(), rng.random(), rng.random()) * extent;
+            for _ in 0..per_strand {
+                points.push(p);
+                p += jitter(rng) * step;
+            }
+            offsets.push(points.len() as u32);
+        }
+        (points, offsets)
+    }
+
     #[test]
     fn reused_lists_find_exactly_the_contacts_of_a_full_search_while_strands_move() {
         // 200 random-walk strands crammed into a 2 cm box, thick enough to touch often; they
         // drift each step by up to a quarter of the starting skin, so lists are reused and rebuilt.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
-        let (strands, per_strand) = (200, 8);
-        let mut points = Vec::new();
-        let mut offsets = vec![0u32];
-        for _ in 0..strands {
-            let mut p = Vec3::new(rng.random(), rng.random(), rng.random()) * 0.02;
-            for _ in 0..per_strand {
-                points.push(p);
-                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
-                p += step * 0.006;
-            }
-            offsets.push(points.len() as u32);
-        }
+        let (mut points, offsets) = random_walks(&mut rng, 200, 8, Vec3::splat(0.02), 0.006);
         let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
         let fixed: Vec<bool> = (0..points.len()).map(|i| i % 11 == 0).collect();
         let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
-        let dt = 1.0 / 360.0;
         let mut touching = 0;
-        for _ in 0..20 {
-            let mut v = vec![Vec3::ZERO; points.len()];
-            contacts.apply(&points, &radii, &fixed, &mut v, dt);
-            let expected = brute_force(&offsets, &points, &radii, 50.0, dt);
-            for i in 0..points.len() {
-                let want = if fixed[i] { Vec3::ZERO } else { expected[i] };
-                assert!(v[i].abs_diff_eq(want, 1e-6), "vertex {i}: {:?} vs {want:?}", v[i]);
-                touching += (want != Vec3::ZERO) as usize;
-            }
+        for step in 0..20 {
+            touching += matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, step);
             for p in points.iter_mut() {
-                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
-                *p += step * (0.3 * HairContacts::DEFAULT_SKIN);
+                *p += jitter(&mut rng) * (0.3 * HairContacts::DEFAULT_SKIN);
             }
         }
         let builds = contacts.builds();
@@ -596,43 +639,25 @@ mod tests {
         // the strands rooted in the first 5 mm also jitter, and only the vertices near them may
         // be queried again, while every step still finds exactly the contacts of a full search.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
-        let (strands, per_strand) = (200, 8);
-        let mut points = Vec::new();
-        let mut offsets = vec![0u32];
-        for _ in 0..strands {
-            let mut p = Vec3::new(rng.random(), rng.random(), rng.random()) * Vec3::new(0.4, 0.01, 0.01);
-            for _ in 0..per_strand {
-                points.push(p);
-                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
-                p += step * 0.002;
-            }
-            offsets.push(points.len() as u32);
-        }
+        let per_strand = 8;
+        let (mut points, offsets) =
+            random_walks(&mut rng, 200, per_strand, Vec3::new(0.4, 0.01, 0.01), 0.002);
         let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
         let fixed: Vec<bool> = (0..points.len()).map(|i| i % 13 == 0).collect();
         let movable = fixed.iter().filter(|&&f| !f).count() as u64;
         let jittering: Vec<bool> =
             (0..points.len()).map(|i| points[offsets[i / per_strand] as usize].x < 0.005).collect();
         let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
-        let dt = 1.0 / 360.0;
         let mut touching = 0;
         for step in 0..20 {
-            let mut v = vec![Vec3::ZERO; points.len()];
-            contacts.apply(&points, &radii, &fixed, &mut v, dt);
-            let expected = brute_force(&offsets, &points, &radii, 50.0, dt);
-            for i in 0..points.len() {
-                let want = if fixed[i] { Vec3::ZERO } else { expected[i] };
-                assert!(v[i].abs_diff_eq(want, 1e-6), "step {step}, vertex {i}: {:?} vs {want:?}", v[i]);
-                touching += (want != Vec3::ZERO) as usize;
-            }
+            touching += matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, step);
             if step < 8 {
                 assert_eq!(contacts.builds(), 1, "a rigid motion rebuilt the lists at step {step}");
             }
-            for (p, &jitter) in points.iter_mut().zip(&jittering) {
+            for (p, &jitters) in points.iter_mut().zip(&jittering) {
                 *p += Vec3::new(0.003, -0.001, 0.0);
-                if step >= 8 && jitter {
-                    let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
-                    *p += step * (0.5 * HairContacts::DEFAULT_SKIN);
+                if step >= 8 && jitters {
+                    *p += jitter(&mut rng) * (0.5 * HairContacts::DEFAULT_SKIN);
                 }
             }
         }
