@@ -4,11 +4,19 @@
 //!
 //! Finding the pairs is the whole cost: `2r` is a hair's width, far smaller than the segments and
 //! the spacing of strands. So candidates are kept in Verlet lists: each movable vertex lists the
-//! edges of other strands within `2r + skin`, and the lists are reused until some vertex has moved
-//! `skin / 2` since they were built (then no pair can have closed from beyond `2r + skin` to
-//! within `2r`), or until the set of movable vertices changes. Each step only re-measures the
-//! listed pairs, exactly. The skin follows the motion: thick while hair creeps or is held (lists
-//! last many steps), thin while it springs or in dense hair (cheap rebuilds, short lists).
+//! edges of other strands within `2r + skin`, and the lists are reused until the pairs that could
+//! touch may have closed by `skin` since they were built, or until the set of movable vertices
+//! changes. Each step only re-measures the listed pairs, exactly.
+//!
+//! A pair closes only by the motion of its vertex *relative* to the edge's ends (the distance
+//! to a segment moves by at most the larger of the two relative displacements). So the lists'
+//! age is measured by how far apart the displacements of nearby vertices are — any vertex and
+//! edge that touch now lie within a segment length of each other — not by how far any vertex
+//! moved: hair swinging or falling as a lock keeps its lists. The bound is kept per vertex, so
+//! when a few vertices' bounds reach their skin only their lists are built again; the others keep
+//! theirs, with what the motion has left of their skin (when more than an eighth must be built
+//! again, all are). The skin follows the relative motion: thick while hair creeps or is held
+//! (lists last many steps), thin while it springs or in dense hair (cheap rebuilds, short lists).
 //!
 //! Lists are built from a neighbour grid over pieces of the edges (at most `spacing` long), so
 //! the grid's cells span the search distance plus half a piece however long the segments are. A
@@ -18,7 +26,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::grid::{NeighbourGrid, Occupancy};
+use super::grid::{NeighbourGrid, NeighbourSpread, Occupancy};
 
 /// Movable vertices handled per parallel task while building lists (fixed, so lists do not
 /// depend on the thread count).
@@ -26,11 +34,15 @@ const BUILD_CHUNK: usize = 2048;
 
 /// A piece of an edge, carrying what a query needs so candidates are read contiguously: the
 /// whole edge (every piece of an edge computes the same closest point, so exactly one claims
-/// it), its vertex index and strand, its mean radius, and which piece of how many it is.
+/// it), its vertex index and strand, its mean radius, which piece of how many it is, and its own
+/// middle and reach (mean radius plus half its length): a vertex farther than its reach plus
+/// its own radius and the skin from the middle cannot be listed through this piece.
 #[derive(Clone, Copy, Debug, Default)]
 struct Piece {
     a: Vec3,
     b: Vec3,
+    mid: Vec3,
+    reach: f32,
     edge: u32,
     strand: u32,
     radius: f32,
@@ -64,12 +76,26 @@ pub struct HairContacts {
     list_edges: Vec<u32>,
     built_positions: Vec<Vec3>,
     built_fixed: Vec<bool>,
+    /// Per movable vertex: how far beyond contact every edge missing from its list was at the
+    /// last build — the skin it was listed with, less the relative motion it has outlived since.
+    skin_left: Vec<f32>,
+    /// Scratch: each vertex's displacement since the last build, a bound on how much its pairs
+    /// have closed since then (from the displacements' spread between neighbours), and whether
+    /// it is queried in this build.
+    displacements: Vec<Vec3>,
+    closing: Vec<f32>,
+    spread: NeighbourSpread,
+    queried: Vec<bool>,
+    /// Scratch: the lists before this build, kept for the vertices it does not query.
+    kept_starts: Vec<u32>,
+    kept_edges: Vec<u32>,
     built: bool,
     builds: u64,
-    /// Steps the current lists have served.
+    queries_made: u64,
+    /// Steps since the last build.
     lifetime: u32,
-    /// Where the movable vertices are, to skip edges far from all of them.
-    movable: Occupancy,
+    /// Where the queried vertices are, to skip edges far from all of them.
+    queried_cells: Occupancy,
 }
 
 impl HairContacts {
@@ -114,10 +140,18 @@ impl HairContacts {
             list_edges: Vec::new(),
             built_positions: Vec::new(),
             built_fixed: Vec::new(),
+            skin_left: Vec::new(),
+            displacements: Vec::new(),
+            closing: Vec::new(),
+            spread: NeighbourSpread::default(),
+            queried: Vec::new(),
+            kept_starts: Vec::new(),
+            kept_edges: Vec::new(),
             built: false,
             builds: 0,
+            queries_made: 0,
             lifetime: 0,
-            movable: Occupancy::default(),
+            queried_cells: Occupancy::default(),
         }
     }
 
@@ -137,20 +171,21 @@ impl HairContacts {
         self.grid = NeighbourGrid::new(Self::cell_size(self.max_radius, self.skin, self.spacing));
     }
 
-    /// Sets the skin for the next lists from the motion the last ones saw (`largest_move` over
-    /// their `lifetime` steps): thick enough that lists last about eight steps at that pace (growing
-    /// at most twofold at a time), but thinner than before while lists run long (dense hair: there
-    /// a thicker skin costs more candidates than the rebuilds it saves) or when hair outruns
-    /// the skin within a step (fast motion: lists are rebuilt every step anyway, and thinner ones
-    /// build faster). Depends only on the simulation's history, so runs
-    /// stay deterministic.
-    fn adapt_skin(&mut self, largest_move: f32) {
-        let pairs_per_query = self.list_edges.len() as f32 / self.queries.len().max(1) as f32;
-        let per_step = largest_move / self.lifetime.max(1) as f32;
-        let skin = if pairs_per_query > 4.0 || per_step > 2.0 * self.skin {
+    /// Sets the skin for the next lists from the motion the last ones saw (pairs closing by
+    /// `closing` over their `lifetime` steps): thick enough that lists last about eight steps at
+    /// that pace (growing at most twofold at a time), but thinner than before while lists run
+    /// long (dense hair: there a thicker skin costs more candidates than the rebuilds it saves)
+    /// or when hair outruns the skin within a step (fast motion: lists are rebuilt every step
+    /// anyway, and thinner ones build faster). Depends only on the simulation's history, so
+    /// runs stay deterministic.
+    fn adapt_skin(&mut self, closing: f32) {
+        let listed = self.built_fixed.iter().filter(|&&f| !f).count();
+        let pairs_per_query = self.list_edges.len() as f32 / listed.max(1) as f32;
+        let per_step = closing / self.lifetime.max(1) as f32;
+        let skin = if pairs_per_query > 4.0 || per_step > self.skin {
             0.5 * self.skin
         } else {
-            (16.0 * per_step).min(2.0 * self.skin)
+            (8.0 * per_step).min(2.0 * self.skin)
         };
         // Never below the contact distance: growing back needs lists that outlast a step.
         self.set_skin(skin.max(2.0 * self.max_radius));
@@ -160,9 +195,14 @@ impl HairContacts {
         2.0 * max_radius + skin + 0.5 * spacing + 1e-6
     }
 
-    /// How many times the lists have been built.
+    /// How many times the lists have been built, wholly or in part.
     pub fn builds(&self) -> u64 {
         self.builds
+    }
+
+    /// How many vertices' lists have been built, over all builds.
+    pub fn queries_made(&self) -> u64 {
+        self.queries_made
     }
 
     /// Adds the penalty velocity change to every movable vertex (not `fixed`) touching another
@@ -178,19 +218,23 @@ impl HairContacts {
         if self.max_radius <= 0.0 {
             return;
         }
-        let rebuild = if !self.built || fixed != self.built_fixed.as_slice() {
-            true
+        if !self.built || fixed != self.built_fixed.as_slice() {
+            self.build(points, radii, fixed, false);
         } else {
-            // A pair closes by at most twice the largest move since the build.
-            let largest_move = self.largest_move(points);
-            let stale = 2.0 * largest_move >= self.skin;
-            if stale {
-                self.adapt_skin(largest_move);
+            let closing = self.closing_since_build(points);
+            let this = &*self;
+            let stale = (0..points.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .filter(|&i| !fixed[i] && this.closing[i] >= this.skin_left[i])
+                .count();
+            if stale > 0 {
+                self.adapt_skin(closing);
+                // Every build cuts the pieces near the vertices it queries: where much of the
+                // hair moves, a whole build costs little more and gives every list a whole skin.
+                let movable = fixed.iter().filter(|&&f| !f).count();
+                self.build(points, radii, fixed, stale * 8 < movable);
             }
-            stale
-        };
-        if rebuild {
-            self.build(points, radii, fixed);
         }
         self.lifetime += 1;
         let this = &*self;
@@ -217,14 +261,29 @@ impl HairContacts {
         });
     }
 
-    /// The largest distance a vertex has moved since the lists were built.
-    fn largest_move(&self, points: &[Vec3]) -> f32 {
-        points
+    /// Bounds, per vertex, how much it has closed since the last build on any edge now within
+    /// its contact distance plus skin (`closing`), and returns the largest bound. The distance
+    /// from a point to a segment changes by at most the larger of the point's displacements
+    /// relative to the segment's ends, and such an edge's ends lie within the contact distance,
+    /// the skin and the edge's length of the vertex: cells that wide bound the relative
+    /// displacements that matter.
+    fn closing_since_build(&mut self, points: &[Vec3]) -> f32 {
+        let longest_edge = self
+            .edges
             .par_iter()
-            .zip(self.built_positions.par_iter())
-            .map(|(p, q)| p.distance_squared(*q))
+            .map(|&j| points[j as usize].distance_squared(points[j as usize + 1]))
             .reduce(|| 0.0, f32::max)
-            .sqrt()
+            .sqrt();
+        // Slightly wider than needed, so rounding never splits a touching pair across cells
+        // that are not neighbours.
+        let cell = (2.0 * self.max_radius + Self::MAX_SKIN + longest_edge) * 1.001 + 1e-6;
+        self.displacements.resize(points.len(), Vec3::ZERO);
+        self.displacements
+            .par_iter_mut()
+            .zip(points.par_iter().zip(self.built_positions.par_iter()))
+            .for_each(|(d, (p, q))| *d = *p - *q);
+        self.closing.resize(points.len(), 0.0);
+        self.spread.bound(cell, points, &self.displacements, &mut self.closing)
     }
 
     fn pieces_of(&self, points: &[Vec3], j: usize) -> u32 {
@@ -233,25 +292,31 @@ impl HairContacts {
 
     fn piece(&self, points: &[Vec3], radii: &[f32], e: usize, index: u32) -> Piece {
         let j = self.edges[e] as usize;
+        let (a, b) = (points[j], points[j + 1]);
+        let count = self.first_piece[e + 1] - self.first_piece[e];
+        let radius = 0.5 * (radii[j] + radii[j + 1]);
         Piece {
-            a: points[j],
-            b: points[j + 1],
+            a,
+            b,
+            mid: a.lerp(b, (index as f32 + 0.5) / count as f32),
+            // A closest point rounded just past the piece's end still counts as in it.
+            reach: radius + a.distance(b) / count as f32 * 0.505 + 1e-6,
             edge: j as u32,
             strand: self.strand_of[j],
-            radius: 0.5 * (radii[j] + radii[j + 1]),
+            radius,
             index,
-            count: self.first_piece[e + 1] - self.first_piece[e],
+            count,
         }
     }
 
-    /// Cuts the edges into pieces and sorts them into the grid. While most vertices are held
-    /// (wound on rods), only edges near a movable vertex are cut: no other can be a candidate.
-    fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
-        let movable = fixed.iter().filter(|&&f| !f).count();
-        let cull = movable < points.len() / 2;
+    /// Cuts the edges into pieces and sorts them into the grid. While most vertices are not
+    /// queried (held on rods, or their lists still good), only edges near a queried vertex are
+    /// cut: no other can be a candidate.
+    fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], queried: usize) {
+        let cull = queried < points.len() / 2;
         if cull {
             // Cells a few segments wide: a query reaches no further than reach + skin.
-            self.movable.mark(0.02, points, |i| !fixed[i]);
+            self.queried_cells.mark(0.02, points, |i| self.queried[i]);
         }
         let reach = 2.0 * self.max_radius + self.skin;
         let this = &*self;
@@ -261,7 +326,7 @@ impl HairContacts {
             .map(|&j| {
                 let j = j as usize;
                 let (a, b) = (points[j], points[j + 1]);
-                if cull && !this.movable.any_in_box(a.min(b) - reach, a.max(b) + reach) {
+                if cull && !this.queried_cells.any_in_box(a.min(b) - reach, a.max(b) + reach) {
                     return 0;
                 }
                 this.pieces_of(points, j)
@@ -287,7 +352,7 @@ impl HairContacts {
                         e += 1;
                     }
                     *piece = this.piece(points, radii, e, k as u32 - this.first_piece[e]);
-                    *mid = piece.a.lerp(piece.b, (piece.index as f32 + 0.5) / piece.count as f32);
+                    *mid = piece.mid;
                 }
             },
         );
@@ -300,16 +365,26 @@ impl HairContacts {
         (self.pieces, self.piece_mids, self.sorted_pieces) = (pieces, mids, sorted);
     }
 
-    fn build(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
-        self.cut_pieces(points, radii, fixed);
-        // Query the movable vertices in the grid's spatial order, so consecutive queries read
-        // the same buckets.
+    /// Builds the lists of every movable vertex, or (`partial`) only of those whose pairs may
+    /// have closed by their skin left; the others keep their lists, with the skin they have left.
+    fn build(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool], partial: bool) {
+        let n = points.len();
+        self.skin_left.resize(n, 0.0);
+        self.queried.resize(n, false);
+        let (closing, skin_left) = (&self.closing, &self.skin_left);
+        self.queried.par_iter_mut().enumerate().for_each(|(i, q)| {
+            *q = !fixed[i] && (!partial || closing[i] >= skin_left[i]);
+        });
+        let count = self.queried.iter().filter(|&&q| q).count();
+        self.cut_pieces(points, radii, count);
+        // Query in the grid's spatial order, so consecutive queries read the same buckets.
         let grid = &self.grid;
+        let queried = &self.queried;
         self.queries.clear();
         self.queries.par_extend(
-            (0..points.len() as u32)
+            (0..n as u32)
                 .into_par_iter()
-                .filter(|&i| !fixed[i as usize])
+                .filter(|&i| queried[i as usize])
                 .map(|i| (grid.bucket_of(points[i as usize]) as u64) << 32 | i as u64),
         );
         self.queries.par_sort_unstable();
@@ -328,19 +403,35 @@ impl HairContacts {
                 (counts, edges)
             })
             .collect();
-        // Gather the lists by vertex.
+        // Gather the lists by vertex: the new ones, and the kept ones of a partial build.
+        std::mem::swap(&mut self.list_starts, &mut self.kept_starts);
+        std::mem::swap(&mut self.list_edges, &mut self.kept_edges);
         self.list_starts.clear();
-        self.list_starts.resize(points.len() + 1, 0);
+        self.list_starts.resize(n + 1, 0);
+        if partial {
+            for i in 0..n {
+                if !self.queried[i] {
+                    self.list_starts[i + 1] = self.kept_starts[i + 1] - self.kept_starts[i];
+                }
+            }
+        }
         for (queries, (counts, _)) in self.queries.chunks(BUILD_CHUNK).zip(&chunks) {
             for (&query, &count) in queries.iter().zip(counts) {
                 self.list_starts[query as u32 as usize + 1] = count;
             }
         }
-        for i in 0..points.len() {
+        for i in 0..n {
             self.list_starts[i + 1] += self.list_starts[i];
         }
         self.list_edges.clear();
-        self.list_edges.resize(self.list_starts[points.len()] as usize, 0);
+        self.list_edges.resize(self.list_starts[n] as usize, 0);
+        if partial {
+            for i in (0..n).filter(|&i| !self.queried[i]) {
+                let kept = self.kept_starts[i] as usize..self.kept_starts[i + 1] as usize;
+                let start = self.list_starts[i] as usize;
+                self.list_edges[start..start + kept.len()].copy_from_slice(&self.kept_edges[kept]);
+            }
+        }
         for (queries, (counts, edges)) in self.queries.chunks(BUILD_CHUNK).zip(&chunks) {
             let mut read = 0;
             for (&query, &count) in queries.iter().zip(counts) {
@@ -350,12 +441,23 @@ impl HairContacts {
                 read += count;
             }
         }
+        // New lists have the whole skin; kept ones what their pairs' closing left of theirs.
+        let skin = self.skin;
+        let (queried, closing) = (&self.queried, &self.closing);
+        self.skin_left.par_iter_mut().enumerate().for_each(|(i, left)| {
+            if queried[i] {
+                *left = skin;
+            } else if partial {
+                *left -= closing[i];
+            }
+        });
         self.built_positions.clear();
         self.built_positions.extend_from_slice(points);
         self.built_fixed.clear();
         self.built_fixed.extend_from_slice(fixed);
         self.built = true;
         self.builds += 1;
+        self.queries_made += count as u64;
         self.lifetime = 0;
     }
 
@@ -364,9 +466,13 @@ impl HairContacts {
     fn candidates_of(&self, i: usize, points: &[Vec3], radii: &[f32], out: &mut Vec<u32>) {
         let p = points[i];
         let strand = self.strand_of[i];
+        let own = radii[i] + self.skin;
         self.grid.for_each_near_run(p, |run| {
             for piece in &self.sorted_pieces[run] {
-                if piece.strand == strand {
+                // Most pieces in the cells around are beyond reach of their middle: a cheap test
+                // before the closest point.
+                let near = own + piece.reach;
+                if piece.strand == strand || p.distance_squared(piece.mid) >= near * near {
                     continue;
                 }
                 let ab = piece.b - piece.a;
@@ -455,45 +561,113 @@ mod tests {
             .collect()
     }
 
+    /// Applies one step of `contacts` and checks every vertex's push against [`brute_force`] (held
+    /// vertices feel none); returns how many vertices touch another strand.
+    fn matches_brute_force(
+        contacts: &mut HairContacts,
+        offsets: &[u32],
+        points: &[Vec3],
+        radii: &[f32],
+        fixed: &[bool],
+        step: usize,
+    ) -> usize {
+        let dt = 1.0 / 360.0;
+        let mut v = vec![Vec3::ZERO; points.len()];
+        contacts.apply(points, radii, fixed, &mut v, dt);
+        let expected = brute_force(offsets, points, radii, contacts.stiffness, dt);
+        let mut touching = 0;
+        for i in 0..points.len() {
+            let want = if fixed[i] { Vec3::ZERO } else { expected[i] };
+            assert!(v[i].abs_diff_eq(want, 1e-6), "step {step}, vertex {i}: {:?} vs {want:?}", v[i]);
+            touching += (want != Vec3::ZERO) as usize;
+        }
+        touching
+    }
+
+    /// A random offset, each coordinate in [-0.5, 0.5).
+    fn jitter(rng: &mut rand_pcg::Pcg64Mcg) -> Vec3 {
+        Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5)
+    }
+
+    /// `strands` random walks of `per_strand` vertices, each starting anywhere in the box from
+    /// the origin to `extent` and stepping by `step` times a [`jitter`]; and their offsets.
+    fn random_walks(
+        rng: &mut rand_pcg::Pcg64Mcg,
+        strands: usize,
+        per_strand: usize,
+        extent: Vec3,
+        step: f32,
+    ) -> (Vec<Vec3>, Vec<u32>) {
+        let (mut points, mut offsets) = (Vec::new(), vec![0u32]);
+        for _ in 0..strands {
+            let mut p = Vec3::new(rng.random(), rng.random(), rng.random()) * extent;
+            for _ in 0..per_strand {
+                points.push(p);
+                p += jitter(rng) * step;
+            }
+            offsets.push(points.len() as u32);
+        }
+        (points, offsets)
+    }
+
     #[test]
     fn reused_lists_find_exactly_the_contacts_of_a_full_search_while_strands_move() {
         // 200 random-walk strands crammed into a 2 cm box, thick enough to touch often; they
         // drift each step by up to a quarter of the starting skin, so lists are reused and rebuilt.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
-        let (strands, per_strand) = (200, 8);
-        let mut points = Vec::new();
-        let mut offsets = vec![0u32];
-        for _ in 0..strands {
-            let mut p = Vec3::new(rng.random(), rng.random(), rng.random()) * 0.02;
-            for _ in 0..per_strand {
-                points.push(p);
-                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
-                p += step * 0.006;
-            }
-            offsets.push(points.len() as u32);
-        }
+        let (mut points, offsets) = random_walks(&mut rng, 200, 8, Vec3::splat(0.02), 0.006);
         let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
         let fixed: Vec<bool> = (0..points.len()).map(|i| i % 11 == 0).collect();
         let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
-        let dt = 1.0 / 360.0;
         let mut touching = 0;
-        for _ in 0..20 {
-            let mut v = vec![Vec3::ZERO; points.len()];
-            contacts.apply(&points, &radii, &fixed, &mut v, dt);
-            let expected = brute_force(&offsets, &points, &radii, 50.0, dt);
-            for i in 0..points.len() {
-                let want = if fixed[i] { Vec3::ZERO } else { expected[i] };
-                assert!(v[i].abs_diff_eq(want, 1e-6), "vertex {i}: {:?} vs {want:?}", v[i]);
-                touching += (want != Vec3::ZERO) as usize;
-            }
+        for step in 0..20 {
+            touching += matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, step);
             for p in points.iter_mut() {
-                let step = Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5);
-                *p += step * (0.3 * HairContacts::DEFAULT_SKIN);
+                *p += jitter(&mut rng) * (0.3 * HairContacts::DEFAULT_SKIN);
             }
         }
         let builds = contacts.builds();
         assert!(touching > 100, "too few contacts to test: {touching}");
         eprintln!("{touching} contacts, lists built {builds} times in 20 steps");
         assert!(builds > 1 && builds < 20, "lists built {builds} times in 20 steps");
+    }
+
+    #[test]
+    fn lists_follow_relative_motion_only_and_rebuild_where_hair_moves() {
+        // 200 random-walk strands along a 40 × 1 × 1 cm box. The whole groom moves as one by
+        // 3 mm a step (six times the skin): no pair closes, so the lists must survive it. Then
+        // the strands rooted in the first 5 mm also jitter, and only the vertices near them may
+        // be queried again, while every step still finds exactly the contacts of a full search.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
+        let per_strand = 8;
+        let (mut points, offsets) =
+            random_walks(&mut rng, 200, per_strand, Vec3::new(0.4, 0.01, 0.01), 0.002);
+        let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
+        let fixed: Vec<bool> = (0..points.len()).map(|i| i % 13 == 0).collect();
+        let movable = fixed.iter().filter(|&&f| !f).count() as u64;
+        let jittering: Vec<bool> =
+            (0..points.len()).map(|i| points[offsets[i / per_strand] as usize].x < 0.005).collect();
+        let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
+        let mut touching = 0;
+        for step in 0..20 {
+            touching += matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, step);
+            if step < 8 {
+                assert_eq!(contacts.builds(), 1, "a rigid motion rebuilt the lists at step {step}");
+            }
+            for (p, &jitters) in points.iter_mut().zip(&jittering) {
+                *p += Vec3::new(0.003, -0.001, 0.0);
+                if step >= 8 && jitters {
+                    *p += jitter(&mut rng) * (0.5 * HairContacts::DEFAULT_SKIN);
+                }
+            }
+        }
+        let (builds, queries) = (contacts.builds(), contacts.queries_made());
+        eprintln!("{touching} contacts; {builds} builds queried {queries} of {movable} vertices each time");
+        assert!(touching > 100, "too few contacts to test: {touching}");
+        assert!(builds > 2, "the jitter never rebuilt the lists ({builds} builds)");
+        assert!(
+            queries < movable + (builds - 1) * movable / 2,
+            "rebuilt far from the jitter: {queries} queries"
+        );
     }
 }
