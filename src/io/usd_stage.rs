@@ -160,10 +160,11 @@ pub fn add_unreal_groom_properties(stage: &mut Stage) {
     }
 }
 
-/// Checks what USD cannot store: cubic strands with too few control points for their basis.
+/// Checks what USD cannot store: strand ids past `int` (`groom_id`), cubic strands with too few
+/// control points for their basis.
 pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
     // `groom_id` is USD's `int` (what Unreal's importer reads): a larger id would be written
-    // negative, which pxr reads as such and coif's reader refuses.
+    // negative, and coif's own reader refuses negative ids.
     if let Some((strand, id)) =
         groom.strand_ids.iter().enumerate().find(|(_, &id)| i32::try_from(id).is_err())
     {
