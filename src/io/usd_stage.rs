@@ -160,8 +160,20 @@ pub fn add_unreal_groom_properties(stage: &mut Stage) {
     }
 }
 
-/// Checks what USD cannot store: cubic strands with too few control points for their basis.
+/// Checks what USD cannot store: strand ids past `int` (`groom_id`), cubic strands with too few
+/// control points for their basis.
 pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
+    // `groom_id` is USD's `int` (what Unreal's importer reads): a larger id would be written
+    // negative, and coif's own reader refuses negative ids.
+    if let Some((strand, id)) =
+        groom.strand_ids.iter().enumerate().find(|(_, &id)| i32::try_from(id).is_err())
+    {
+        return Err(Error::Usage(format!(
+            "{}: strand {strand} has groom_id {id}; USD's int primvar holds ids up to {}",
+            path.display(),
+            i32::MAX
+        )));
+    }
     if groom.groups.is_empty() && groom.basis == CurveBasis::Linear {
         return Ok(());
     }
@@ -557,6 +569,7 @@ fn primvars<'g>(
         Property::new(format!("primvars:{name}"), "int[]", Value::Default(data)).interpolated("uniform")
     };
     let ids = strands.per_strand(&groom.strand_ids, 1);
+    // `check_writable` refused ids past `i32::MAX`.
     primvars.push(uniform_ints(names::GROOM_ID, ids.iter().map(|&i| i as i32).collect()));
     if let Some(guides) = &groom.guides {
         let guides = strands.per_strand(guides, 1);
