@@ -1124,8 +1124,9 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
             assert!(worst < 2e-6, "{out:?} frame {frame}: head mesh {worst} m from Blender's");
         }
     }
-    // Blender's importers: the converted files move as Blender's own file does, frame by frame
-    // (Alembic: a cache of P samples on the converted file, an animated object on the original).
+    // Blender's importers: the converted files move as Blender's own file does, frame by frame,
+    // hair and head mesh (Alembic: a cache of P samples on the converted file, an animated
+    // object on the original).
     let range = format!("{first}:{last}");
     let positions = |path: &Path| -> Option<Vec<FramePoints>> {
         let json = bpy_reimport_args(path, &["--frames", &range])?;
@@ -1139,9 +1140,11 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
                         .as_object()
                         .unwrap()
                         .iter()
-                        .filter(|(name, _)| !name.starts_with("Head"))
                         .map(|(name, points)| {
-                            let object = if name.starts_with("Guides") { "Guides" } else { "Hair" };
+                            let object = ["Guides", "Hair", "Head"]
+                                .into_iter()
+                                .find(|o| name.starts_with(o))
+                                .unwrap_or_else(|| panic!("{path:?}: Blender's object {name}"));
                             let points = common::usd::f32s(points)
                                 .chunks_exact(3)
                                 .map(|p| Vec3::new(p[0], p[2], -p[1]))
@@ -1162,7 +1165,7 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
         assert_eq!(converted.len(), original.len());
         let mut worst_seen = 0.0f32;
         for (k, (got, want)) in converted.iter().zip(&original).enumerate() {
-            assert_eq!(got.len(), 2, "{out:?}: Blender's curves objects");
+            assert_eq!(got.len(), 3, "{out:?}: Blender's curves objects and head mesh");
             for ((name, p), (wanted, q)) in got.iter().zip(want) {
                 assert_eq!(name, wanted);
                 let worst = worst_distance(p, q);
