@@ -521,3 +521,69 @@ fn nonperiodic_catmull_rom_to_alembic_warns_naming_the_file_and_object() {
     assert!(run.status.success());
     assert!(!stderr(&run).contains("warning"), "{}", stderr(&run));
 }
+
+#[test]
+fn constant_and_varying_primvars_keep_their_interpolation_through_convert() {
+    // Constant and varying primvars on a linear and a pinned Catmull-Rom prim (where varying is
+    // one value per vertex), and varying on a nonperiodic B-spline (fewer segment ends than
+    // points: read spread over the points, so written back per vertex). pxr must see the source's
+    // interpolation, type and values again in coif's .usda and .usdc.
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("interpolations.usda");
+    let prim = |name: &str, head: &str, counts: &str, points: &str, stiffness: f32, clump: &str| {
+        format!(
+            "    def BasisCurves \"{name}\"\n    {{\n{head}        int[] curveVertexCounts = [{counts}]\n        point3f[] points = [{points}]\n        float[] primvars:stiffness = [{stiffness}] (\n            interpolation = \"constant\"\n        )\n        color3f[] primvars:tint = [(0.1, 0.2, 0.3)] (\n            interpolation = \"constant\"\n        )\n        float[] primvars:clump = [{clump}] (\n            interpolation = \"varying\"\n        )\n    }}\n"
+        )
+    };
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef Xform \"G\"\n{{\n{}{}{}}}\n",
+        prim(
+            "lin",
+            "        uniform token type = \"linear\"\n",
+            "3, 4",
+            "(0, 0, 0), (0, 1, 0), (0, 2, 0), (1, 0, 0), (1, 1, 0), (1, 2, 0), (1, 3, 0)",
+            0.5,
+            "0, 1, 2, 3, 4, 5, 6"
+        ),
+        prim(
+            "crom",
+            "        uniform token type = \"cubic\"\n        uniform token basis = \"catmullRom\"\n        uniform token wrap = \"pinned\"\n",
+            "4",
+            "(2, 0, 0), (2, 1, 0), (2, 2, 0), (2, 3, 0)",
+            0.25,
+            "7, 8, 9, 10"
+        ),
+        prim(
+            "bspl",
+            "        uniform token type = \"cubic\"\n        uniform token basis = \"bspline\"\n",
+            "5",
+            "(3, 0, 0), (3, 1, 0), (3, 2, 0), (3, 3, 0), (3, 4, 0)",
+            0.75,
+            "1, 2, 3"
+        ),
+    );
+    std::fs::write(&source, text).unwrap();
+    let want = pxr_dump(&source, None);
+    for ext in ["usda", "usdc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let got = pxr_dump(&out, None);
+        for w in want["curves"].as_array().unwrap() {
+            let path = w["path"].as_str().unwrap();
+            let g = got["curves"].as_array().unwrap().iter().find(|c| c["path"] == path).unwrap();
+            for name in ["stiffness", "tint", "clump"] {
+                let (a, b) = (&w["primvars"][name], &g["primvars"][name]);
+                let spread = path.ends_with("bspl") && name == "clump";
+                assert_eq!(a["type"], b["type"], ".{ext} {path} {name}");
+                if spread {
+                    assert_eq!(b["interpolation"], "vertex", ".{ext} {path} {name}");
+                    assert_eq!(f32s(&b["values"]), [1.0, 1.5, 2.0, 2.5, 3.0], ".{ext} {path} {name}");
+                } else {
+                    assert_eq!(a["interpolation"], b["interpolation"], ".{ext} {path} {name}");
+                    assert_eq!(f32s(&a["values"]), f32s(&b["values"]), ".{ext} {path} {name}");
+                }
+            }
+        }
+    }
+}
