@@ -584,6 +584,13 @@ fn assert_same_in_blender(
     (worst_position, worst_radius)
 }
 
+/// Runs coif with `args` (and `--unreal` for Unreal's layout); it must succeed.
+fn run_coif(args: &[&str], unreal: bool) {
+    let args = [args, if unreal { &["--unreal"] } else { &[] }].concat();
+    let run = common::coif(&args);
+    assert!(run.status.success(), "{args:?}: {}", common::stderr(&run));
+}
+
 #[test]
 fn converted_files_re_import_in_blender_as_blenders_own_files() {
     // Blender's files converted by coif to every format it writes, and imported by Blender's own
@@ -598,12 +605,7 @@ fn converted_files_re_import_in_blender_as_blenders_own_files() {
             .map(|ext| {
                 let out = dir.path().join(format!("{}.{ext}", source.replace('.', "_")));
                 let unreal = ext.starts_with("unreal");
-                let mut args = vec!["convert", &input, common::path_str(&out)];
-                if unreal {
-                    args.push("--unreal");
-                }
-                let run = common::coif(&args);
-                assert!(run.status.success(), "{args:?}: {}", common::stderr(&run));
+                run_coif(&["convert", &input, common::path_str(&out)], unreal);
                 (out, unreal)
             })
             .collect();
@@ -654,7 +656,7 @@ fn styled_frames_re_import_in_blender_as_pxr_reads_them() {
         .map(|ext| {
             let out = dir.path().join(format!("styled.{ext}"));
             let unreal = ext.starts_with("unreal");
-            let mut args = vec![
+            let args = [
                 "style",
                 common::path_str(&recipe),
                 "--groom",
@@ -665,11 +667,7 @@ fn styled_frames_re_import_in_blender_as_pxr_reads_them() {
                 "24",
                 "--quiet",
             ];
-            if unreal {
-                args.push("--unreal");
-            }
-            let run = common::coif(&args);
-            assert!(run.status.success(), "{args:?}: {}", common::stderr(&run));
+            run_coif(&args, unreal);
             (out, unreal)
         })
         .collect();
