@@ -222,6 +222,40 @@ fn the_basis_byte_decides_the_curve_kind() {
     }
 }
 
+/// Maya's AbcExport writes every nurbsCurve with the B-spline basis and its degree in the type
+/// byte (`MayaNurbsCurveWriter`: cubic for degree 3, linear for degree 1, variable order with
+/// `.orders` otherwise); Maya's AbcImport and Blender's reader take the order from the type, so a
+/// "linear" B-spline is a polyline through its points. An order coif cannot simulate exits 2
+/// naming the object and the order.
+#[test]
+fn maya_nurbs_curves_take_their_order_from_the_type_byte() {
+    let read = |bytes: [u8; 4], orders: Option<&[u8]>| {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        let geom = curves(&mut w, top, "nurbsCurve1", &[4, 4], &[line(0.0, 4), line(1.0, 4)].concat(), bytes);
+        if let Some(orders) = orders {
+            let property = w.add_array(geom, ".orders", MetaData::new(), Pod::U8, 1, 0);
+            w.set_sample(property, orders, orders.len() as u64).unwrap();
+        }
+        let file = w.finish().unwrap().into_inner();
+        alembic::read(&file, std::path::Path::new("maya.abc"), None, false)
+    };
+    for (bytes, orders, expected) in [
+        ([1u8, 0, 2, 2], None, CurveBasis::Linear),
+        ([0, 0, 2, 2], None, CurveBasis::BSpline),
+        ([2, 0, 2, 2], Some(&[2u8, 2][..]), CurveBasis::Linear),
+        ([2, 0, 2, 2], Some(&[4, 4][..]), CurveBasis::BSpline),
+    ] {
+        assert_eq!(read(bytes, orders).unwrap().basis, expected, "{bytes:?} orders {orders:?}");
+    }
+    for (orders, named) in
+        [(Some(&[4u8, 3][..]), "order 3"), (Some(&[2, 4][..]), "one degree per object"), (None, ".orders")]
+    {
+        let message = read([2, 0, 2, 2], orders).unwrap_err().to_string();
+        assert!(message.contains("nurbsCurve1") && message.contains(named), "{orders:?}: {message}");
+    }
+}
+
 #[test]
 fn animated_foreign_file_reads_frames_on_the_union_of_its_samplings() {
     // Positions on 24 fps from frame 1; an Xform sampled at 7 fps moving +1 in x per sample.

@@ -319,7 +319,13 @@ impl<'a> CurvesArchive<'a> {
         let basis_property = required(object, "curveBasisAndType")?;
         basis_property.expect(&[Pod::U8], 4)?;
         let basis_bytes = basis_property.sample_bytes(ogawa, self.index_at(basis_property, time))?;
-        let basis = curve_basis(basis_bytes, path)?;
+        let orders = || -> OgawaResult<Vec<f64>> {
+            let orders = object.geom.sampled(".orders").ok_or_else(|| {
+                OgawaError(format!("{path}: variable-order curves without the '.orders' property"))
+            })?;
+            orders.read_f64(ogawa, self.index_at(orders, time))
+        };
+        let basis = curve_basis(basis_bytes, path, orders)?;
 
         let mut points = self.points_at(required(object, "P")?, time)?;
         let counts_property = required(object, "nVertices")?;
@@ -713,7 +719,6 @@ fn required<'o, 'a>(object: &CurvesObject<'o, 'a>, name: &str) -> OgawaResult<&'
         .ok_or_else(|| OgawaError(format!("{}: curves without the required '{name}' property", object.path)))
 }
 
-/// The curve kind from `curveBasisAndType`: the basis byte decides, as in Blender and Houdini.
 /// The wrap of open curves of `basis`, which Alembic does not record: Catmull-Rom passes
 /// through its end points (`pinned`), as Blender evaluates it and as its USD exporter writes the
 /// same curves; the other bases are read as their files' open curves (`nonperiodic`).
@@ -724,20 +729,53 @@ pub fn wrap_of(basis: CurveBasis) -> CurveWrap {
     }
 }
 
-fn curve_basis(bytes: &[u8], path: &str) -> OgawaResult<CurveBasis> {
-    let [_, wrap, basis, _] =
+/// The curve kind from `curveBasisAndType`. The basis byte decides, as in Blender and Houdini
+/// (Blender's own hair says "linear" with a Catmull-Rom basis), except that a B-spline is a NURBS
+/// curve whose order the type byte gives: Maya's AbcExport writes every nurbsCurve with the
+/// B-spline basis and its degree in the type (variable order: `.orders`), and Maya and Blender
+/// both read order 2 as a polyline.
+fn curve_basis(
+    bytes: &[u8],
+    path: &str,
+    orders: impl FnOnce() -> OgawaResult<Vec<f64>>,
+) -> OgawaResult<CurveBasis> {
+    let [curve_type, wrap, basis, _] =
         bytes.try_into().map_err(|_| OgawaError(format!("{path}: curveBasisAndType is empty")))?;
     if wrap != 0 {
         return fail(format!("{path}: periodic (closed) curves are not hair"));
     }
-    Ok(match basis {
-        0 => CurveBasis::Linear,
-        1 => CurveBasis::Bezier,
-        2 => CurveBasis::BSpline,
-        3 => CurveBasis::CatmullRom,
-        other => return fail(format!("{path}: curve basis {other} (hermite or power) is not supported")),
+    Ok(match (basis, curve_type) {
+        (0, _) => CurveBasis::Linear,
+        (1, _) => CurveBasis::Bezier,
+        (2, LINEAR_TYPE) => CurveBasis::Linear,
+        (2, VARIABLE_ORDER_TYPE) => {
+            let orders = orders()?;
+            if orders.iter().all(|&order| order == 2.0) {
+                CurveBasis::Linear
+            } else if orders.iter().all(|&order| order == 4.0) {
+                CurveBasis::BSpline
+            } else if let Some(odd) = orders.iter().find(|&&order| order != 2.0 && order != 4.0) {
+                return fail(format!(
+                    "{path}: NURBS curves of order {odd} (degree {}): coif reads degree 1 and 3",
+                    odd - 1.0
+                ));
+            } else {
+                return fail(format!(
+                    "{path}: NURBS curves of degree 1 and 3 mixed: coif needs one degree per object"
+                ));
+            }
+        }
+        (2, _) => CurveBasis::BSpline,
+        (3, _) => CurveBasis::CatmullRom,
+        (other, _) => {
+            return fail(format!("{path}: curve basis {other} (hermite or power) is not supported"))
+        }
     })
 }
+
+/// `curveBasisAndType`'s type byte: 0 cubic, 1 linear, 2 variable order.
+const LINEAR_TYPE: u8 = 1;
+const VARIABLE_ORDER_TYPE: u8 = 2;
 
 fn has_schema(object: &Object<'_>, schema: &str, title: &str) -> bool {
     object.metadata.get("schema") == Some(schema)
