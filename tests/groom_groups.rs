@@ -202,6 +202,30 @@ fn a_periodic_prim_exits_2_naming_it() {
     assert!(message.contains("</Ring>") && message.contains("periodic"), "{message}");
 }
 
+/// Maya's USD export writes nurbsCurves as `NurbsCurves` prims: beside BasisCurves hair they
+/// used to be left out without a word. In `.usda` and in pxr's `.usdc` of the same stage, exit 2
+/// names the prim and its type, and nothing is written.
+#[test]
+fn nurbs_curves_prims_exit_2_naming_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let usda = dir.path().join("maya.usda");
+    std::fs::write(
+        &usda,
+        "#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef Xform \"groom\"\n{\n    def BasisCurves \"hair\"\n    {\n        uniform token type = \"linear\"\n        int[] curveVertexCounts = [2]\n        point3f[] points = [(0, 0, 0), (0, 1, 0)]\n    }\n    def NurbsCurves \"guides\"\n    {\n        int[] curveVertexCounts = [4]\n        point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)]\n        int[] order = [4]\n        double[] knots = [0, 0, 0, 0, 1, 1, 1, 1]\n    }\n}\n",
+    )
+    .unwrap();
+    let usdc = dir.path().join("maya.usdc");
+    common::usd::probe(&["export", path_str(&usda), path_str(&usdc)]);
+    for source in [&usda, &usdc] {
+        let out = dir.path().join("out.usda");
+        let result = coif(&["convert", path_str(source), path_str(&out)]);
+        assert_eq!(result.status.code(), Some(2), "{}", stderr(&result));
+        let message = stderr(&result);
+        assert!(message.contains("</groom/guides>") && message.contains("NurbsCurves"), "{message}");
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn directions_rotate_with_the_points_from_z_up() {
     // Blender-style Z-up stage: a normal3f primvar and a plain float3 `surface_normal`.

@@ -181,6 +181,20 @@ impl Walker<'_> {
             if let Some(curves) = self.curves(&mut prim, &prim_path, world)? {
                 self.found.push(curves);
             }
+        } else if matches!(prim.type_name.as_str(), "NurbsCurves" | "HermiteCurves")
+            && prim.attribute("points").is_some()
+        {
+            // Curves coif would otherwise leave out without a word (Maya's USD export writes
+            // nurbsCurves so).
+            return Err(self.error(
+                &prim_path,
+                prim.line,
+                format!(
+                    "a {} prim: coif reads hair from BasisCurves (linear, Bézier, B-spline, Catmull-Rom); \
+                     export these curves as BasisCurves",
+                    prim.type_name
+                ),
+            ));
         } else if prim.type_name == "Mesh" {
             first_here = placed(&prim);
             if let Some(mesh) = self.mesh(&mut prim, &prim_path, world)? {
