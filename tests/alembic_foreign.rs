@@ -245,13 +245,13 @@ fn maya_nurbs_curves_take_their_order_from_the_type_byte() {
         ([0, 0, 2, 2], None, CurveBasis::BSpline),
         ([2, 0, 2, 2], Some(&[2u8, 2][..]), CurveBasis::Linear),
         ([2, 0, 2, 2], Some(&[4, 4][..]), CurveBasis::BSpline),
+        // No `.orders`: order 2 in Maya's AbcImport and Blender's reader.
+        ([2, 0, 2, 2], None, CurveBasis::Linear),
     ] {
         assert_eq!(read(bytes, orders).unwrap().basis, expected, "{bytes:?} orders {orders:?}");
     }
-    for (orders, named) in
-        [(Some(&[4u8, 3][..]), "order 3"), (Some(&[2, 4][..]), "one degree per object"), (None, ".orders")]
-    {
-        let message = read([2, 0, 2, 2], orders).unwrap_err().to_string();
+    for (orders, named) in [(&[4u8, 3][..], "order 3"), (&[2, 4][..], "one degree per object")] {
+        let message = read([2, 0, 2, 2], Some(orders)).unwrap_err().to_string();
         assert!(message.contains("nurbsCurve1") && message.contains(named), "{orders:?}: {message}");
     }
 }

@@ -319,11 +319,12 @@ impl<'a> CurvesArchive<'a> {
         let basis_property = required(object, "curveBasisAndType")?;
         basis_property.expect(&[Pod::U8], 4)?;
         let basis_bytes = basis_property.sample_bytes(ogawa, self.index_at(basis_property, time))?;
+        // Without `.orders`, Maya and Blender read variable-order curves as order 2.
         let orders = || -> OgawaResult<Vec<f64>> {
-            let orders = object.geom.sampled(".orders").ok_or_else(|| {
-                OgawaError(format!("{path}: variable-order curves without the '.orders' property"))
-            })?;
-            orders.read_f64(ogawa, self.index_at(orders, time))
+            match object.geom.sampled(".orders") {
+                Some(orders) => orders.read_f64(ogawa, self.index_at(orders, time)),
+                None => Ok(Vec::new()),
+            }
         };
         let basis = curve_basis(basis_bytes, path, orders)?;
 
