@@ -10,7 +10,7 @@ use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
-use crate::surface_mesh::SurfaceMesh;
+use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 
 /// Alembic's polygon-mesh schema (a scalp or head beside the curves).
 pub const POLYMESH_SCHEMA: &str = "AbcGeom_PolyMesh_v1";
@@ -219,18 +219,87 @@ impl<'a> CurvesArchive<'a> {
             return Ok(None);
         }
         let matrix = self.world_matrix(object, time)?;
-        let mut mesh = SurfaceMesh {
-            path: path.clone(),
-            points: points.iter().map(|p| matrix.transform_point3(p.as_dvec3()).as_vec3()).collect(),
-            face_counts,
-            face_indices,
-        };
+        let mut mesh =
+            SurfaceMesh { path: path.clone(), points, face_counts, face_indices, primvars: Vec::new() };
+        let arb = object.geom.compound(".arbGeomParams");
+        let named = [("N", MeshPrimvar::NORMALS), ("uv", MeshPrimvar::UV)];
+        let params = named
+            .iter()
+            .filter_map(|&(param, name)| object.geom.get(param).map(|p| (p, name.to_string())))
+            .chain(
+                arb.map(|c| c.members.as_slice()).unwrap_or(&[]).iter().map(|m| (m, m.name().to_string())),
+            );
+        for (property, name) in params {
+            if let Some(primvar) = self.mesh_primvar(property, name, &mesh, time)? {
+                mesh.primvars.push(primvar);
+            }
+        }
+        mesh.check().map_err(|problem| OgawaError(format!("{path}: {problem}")))?;
+        mesh.transform(matrix);
         // Clockwise in the file; a mirroring transform turns the winding once more.
         if matrix.determinant() >= 0.0 {
             mesh.flip_winding();
         }
-        mesh.check().map_err(|problem| OgawaError(format!("{path}: {problem}")))?;
         Ok(Some(mesh))
+    }
+
+    /// A PolyMesh geometry parameter (plain array or `.vals`/`.indices` compound) at `time`, kept
+    /// indexed, its interpolation from `geoScope` or else from its count on `mesh`; `None` for
+    /// data no mesh primvar holds (strings, more than 4 components).
+    fn mesh_primvar(
+        &self,
+        property: &Property<'a>,
+        name: String,
+        mesh: &SurfaceMesh,
+        time: f64,
+    ) -> OgawaResult<Option<MeshPrimvar>> {
+        let ogawa = &self.archive.ogawa;
+        let Some(extent) = param_extent(property).filter(|e| (1..=4).contains(e)) else { return Ok(None) };
+        let (vals, indices, scope) = match property {
+            Property::Sampled(s) => (s, None, s.metadata.get("geoScope")),
+            Property::Compound(c) => {
+                let Some(vals) = c.sampled(".vals") else { return Ok(None) };
+                let scope = c.metadata.get("geoScope").or_else(|| vals.metadata.get("geoScope"));
+                (vals, c.sampled(".indices"), scope)
+            }
+        };
+        let fail_here =
+            |message: String| OgawaError(format!("{}: geometry parameter '{name}': {message}", mesh.path));
+        vals.expect(NUMERIC, extent)?;
+        let values = vals.read_f32(ogawa, self.index_at(vals, time))?;
+        let indices = match indices {
+            None => None,
+            Some(indices) => {
+                let raw = indices.read_f64(ogawa, self.index_at(indices, time))?;
+                let converted = raw.iter().map(|&i| (0.0..=u32::MAX as f64).contains(&i).then_some(i as u32));
+                Some(
+                    converted
+                        .collect::<Option<Vec<u32>>>()
+                        .ok_or_else(|| fail_here("a negative index".into()))?,
+                )
+            }
+        };
+        let count = indices.as_ref().map_or(values.len() / extent as usize, Vec::len);
+        let interpolation = match scope {
+            Some(scope) => MeshInterpolation::from_alembic_scope(scope)
+                .ok_or_else(|| fail_here(format!("unknown geoScope \"{scope}\"")))?,
+            // No scope: the first interpolation the count fits (`check` names a count that fits none).
+            None => [
+                MeshInterpolation::Vertex,
+                MeshInterpolation::FaceVarying,
+                MeshInterpolation::Uniform,
+                MeshInterpolation::Constant,
+            ]
+            .into_iter()
+            .find(|i| i.count(mesh) == count)
+            .unwrap_or(MeshInterpolation::Vertex),
+        };
+        let kind = match name.as_str() {
+            MeshPrimvar::NORMALS => AttributeKind::Normal,
+            MeshPrimvar::UV => AttributeKind::TexCoord,
+            _ => param_kind(property, extent),
+        };
+        Ok(Some(MeshPrimvar { name, kind, components: extent as usize, interpolation, values, indices }))
     }
 
     /// Every frame, in order; refuses files that would expand far beyond their size.

@@ -1072,6 +1072,7 @@ pub fn wanted(name: &str) -> bool {
             | "faceVertexCounts"
             | "faceVertexIndices"
             | "orientation"
+            | "normals"
             // Cameras (the render's shot).
             | "projection"
             | "focalLength"

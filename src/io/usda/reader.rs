@@ -13,7 +13,7 @@ use crate::groom::{
 };
 use crate::groups::Interpolation;
 use crate::io::{ImportOptions, UpAxis};
-use crate::surface_mesh::SurfaceMesh;
+use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
 const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
@@ -256,19 +256,22 @@ impl Walker<'_> {
         let to_coif = self.stage * world;
         let mut mesh = SurfaceMesh {
             path: prim_path.to_string(),
-            points: points.iter().map(|p| to_coif.transform_point3(p.as_dvec3()).as_vec3()).collect(),
+            points,
             face_counts,
             face_indices,
+            primvars: Vec::new(),
         };
+        mesh.primvars = mesh_primvars(prim, time).map_err(|(line, m)| at_prim(line, m))?;
         let left_handed = match prim.attribute("orientation").and_then(|a| value_at(a, time)) {
             Some(Value::Text(t)) if t.len() == 1 => t[0] == "leftHanded",
             _ => false,
         };
+        mesh.check().map_err(|problem| at_prim(prim.line, format!("mesh: {problem}")))?;
+        mesh.transform(to_coif);
         // A mirroring transform turns the winding too.
         if left_handed != (to_coif.determinant() < 0.0) {
             mesh.flip_winding();
         }
-        mesh.check().map_err(|problem| at_prim(prim.line, format!("mesh: {problem}")))?;
         Ok(Some(mesh))
     }
 
@@ -479,6 +482,57 @@ impl Walker<'_> {
         }
         Ok(Some(curves))
     }
+}
+
+/// A `Mesh` prim's primvars (and its `normals`, as the primvar `normals`; `primvars:normals`
+/// wins over them, as in USD), in file space. Strings and tokens are not mesh data and are left
+/// out. Errors carry the line.
+fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<MeshPrimvar>, (u32, String)> {
+    let mut primvars: Vec<MeshPrimvar> = Vec::new();
+    let has_primvar_normals = prim.attribute("primvars:normals").is_some();
+    for attribute in &prim.attributes {
+        let name = match attribute.name.strip_prefix("primvars:") {
+            Some(name) if !name.ends_with(":indices") => name,
+            None if attribute.name == MeshPrimvar::NORMALS && !has_primvar_normals => MeshPrimvar::NORMALS,
+            _ => continue,
+        };
+        let line = attribute.line;
+        let fail = |message: String| (line, format!("primvar '{name}': {message}"));
+        // USD's fallbacks: `constant` for primvars, `vertex` for a point-based prim's normals.
+        let fallback = if attribute.name == MeshPrimvar::NORMALS { "vertex" } else { "constant" };
+        let token = attribute.interpolation.as_deref().unwrap_or(fallback);
+        let interpolation = MeshInterpolation::from_usd(token)
+            .ok_or_else(|| fail(format!("unknown interpolation \"{token}\"")))?;
+        let Some(value) = value_at(attribute, time) else { continue };
+        let type_name = attribute.type_name.trim_end_matches("[]");
+        let components = super::parser::type_info(&attribute.type_name).1
+            * attribute.element_size.unwrap_or(1).max(1) as usize;
+        let Some(values) = value.into_f32() else { continue };
+        if !(1..=4).contains(&components) {
+            continue; // more components than coif's data model holds (as for curve primvars)
+        }
+        let indices =
+            match prim.attribute(&format!("primvars:{name}:indices")).and_then(|a| value_at(a, time)) {
+                None => None,
+                Some(Value::Int(indices)) => Some(
+                    indices
+                        .iter()
+                        .map(|&i| u32::try_from(i).ok())
+                        .collect::<Option<Vec<u32>>>()
+                        .ok_or_else(|| fail("an index is negative".into()))?,
+                ),
+                Some(_) => return Err(fail("its indices must be int[]".into())),
+            };
+        primvars.push(MeshPrimvar {
+            name: name.to_string(),
+            kind: attribute_kind(type_name, name, components),
+            components,
+            interpolation,
+            values,
+            indices,
+        });
+    }
+    Ok(primvars)
 }
 
 /// The kind a primvar's USD type gives an attribute; plain floats when the type is the one
