@@ -11,6 +11,7 @@ use std::borrow::Cow;
 use serde::{Deserialize, Serialize};
 
 use crate::groom::{Attribute, AttributeRate, CurveBasis, Groom, GroomError};
+use crate::surface_mesh::SurfaceMesh;
 
 /// How a curve's ends behave (USD `wrap`; Alembic's periodicity byte).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -134,16 +135,36 @@ impl Groom {
         (0..self.strand_count()).filter(|&s| self.group_of(s) == group).collect()
     }
 
-    /// Appends `other`'s strands and groups (a reader adding the next prim). Attributes one
-    /// side lacks are padded with zeros and recorded as missing from that side's groups.
-    pub fn append(&mut self, other: &Groom) -> Result<(), GroomError> {
-        let ours: Vec<usize> = (0..self.strand_count()).collect();
-        let theirs: Vec<usize> = (0..other.strand_count()).collect();
-        let mut meshes = std::mem::take(&mut self.meshes);
-        *self = assemble(&[(&*self, &ours), (other, &theirs)])?;
-        meshes.extend(other.meshes.iter().cloned());
-        self.meshes = meshes;
-        Ok(())
+    /// One groom of every part's strands and groups, in order (a reader joining its prims or
+    /// objects); meshes are moved along. The data is copied once however many parts there are.
+    /// Attributes a part lacks are padded with zeros and recorded as missing from its groups.
+    /// An error names the index of the first part that does not fit the ones before it.
+    pub fn concat(mut parts: Vec<Groom>) -> Result<Groom, (usize, GroomError)> {
+        if parts.len() == 1 {
+            return Ok(parts.pop().expect("one part"));
+        }
+        // The one conflict `assemble` refuses: an attribute name with two component counts.
+        let mut components: Vec<(&str, usize)> = Vec::new();
+        for (index, part) in parts.iter().enumerate() {
+            for attribute in &part.attributes {
+                match components.iter().find(|(name, _)| *name == attribute.name) {
+                    Some(&(_, first)) if first != attribute.components => {
+                        let name = attribute.name.clone();
+                        let components = attribute.components;
+                        return Err((index, GroomError::AttributeComponents { name, components }));
+                    }
+                    Some(_) => {}
+                    None => components.push((&attribute.name, attribute.components)),
+                }
+            }
+        }
+        let meshes: Vec<SurfaceMesh> = parts.iter_mut().flat_map(|p| std::mem::take(&mut p.meshes)).collect();
+        let strands: Vec<Vec<usize>> = parts.iter().map(|p| (0..p.strand_count()).collect()).collect();
+        let sources: Vec<(&Groom, &[usize])> =
+            parts.iter().zip(&strands).map(|(p, s)| (p, s.as_slice())).collect();
+        let mut whole = assemble(&sources).map_err(|e| (parts.len().saturating_sub(1), e))?;
+        whole.meshes = meshes;
+        Ok(whole)
     }
 
     /// One groom per group, each with a one-entry group table and only the attributes its group
@@ -268,6 +289,14 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         }
         group_maps.push(map);
     }
+    let strand_total: usize = parts.iter().map(|(_, strands)| strands.len()).sum();
+    let vertex_total: usize =
+        parts.iter().flat_map(|(g, strands)| strands.iter().map(|&s| g.strand_range(s).len())).sum();
+    out.points.reserve_exact(vertex_total);
+    out.widths.reserve_exact(vertex_total);
+    out.strand_offsets.reserve_exact(strand_total);
+    out.strand_ids.reserve_exact(strand_total);
+    out.group_ids.reserve_exact(strand_total);
     let any_uvs = parts.iter().any(|(g, _)| g.root_uvs.is_some());
     let any_guides = parts.iter().any(|(g, _)| g.guides.is_some());
     let (mut uvs, mut guides) = (Vec::new(), Vec::new());
@@ -308,7 +337,11 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         } else {
             AttributeRate::Vertex
         };
-        let mut data = Vec::new();
+        let per_element = match rate {
+            AttributeRate::Strand => strand_total,
+            AttributeRate::Vertex => vertex_total,
+        };
+        let mut data = Vec::with_capacity(per_element * components);
         let mut carried = vec![false; out.groups.len()];
         for ((groom, strands), map) in parts.iter().zip(&group_maps) {
             let attribute = groom.attribute(name);
@@ -402,8 +435,7 @@ mod tests {
     fn append_split_round_trip_keeps_groups_and_missing_attributes() {
         let guides = prim("/Groom/Guides", CurveBasis::CatmullRom, 2, true);
         let children = prim("/Groom/Hair", CurveBasis::Linear, 3, false);
-        let mut groom = guides.clone();
-        groom.append(&children).unwrap();
+        let groom = Groom::concat(vec![guides.clone(), children.clone()]).unwrap();
         groom.validate().unwrap();
         assert_eq!(groom.strand_count(), 5);
         assert_eq!(groom.group_ids, vec![0, 0, 1, 1, 1]);
@@ -415,9 +447,36 @@ mod tests {
     }
 
     #[test]
+    fn concat_names_the_first_part_that_does_not_fit() {
+        let mut third = prim("/C", CurveBasis::Linear, 2, false);
+        let rest_as_scalars = vec![0.0; third.vertex_count()];
+        third.set_attribute(Attribute::new("rest", AttributeRate::Vertex, 1, rest_as_scalars));
+        let parts = vec![
+            prim("/A", CurveBasis::CatmullRom, 2, true),
+            prim("/B", CurveBasis::Linear, 3, false),
+            third,
+        ];
+        match Groom::concat(parts) {
+            Err((2, GroomError::AttributeComponents { name, components: 1 })) => assert_eq!(name, "rest"),
+            other => panic!("expected part 2's 'rest' to be refused, got {other:?}"),
+        }
+        let whole = Groom::concat(vec![
+            prim("/A", CurveBasis::CatmullRom, 2, true),
+            prim("/B", CurveBasis::Linear, 3, false),
+            prim("/A", CurveBasis::CatmullRom, 1, true),
+        ])
+        .unwrap();
+        whole.validate().unwrap();
+        assert_eq!(whole.group_ids, vec![0, 0, 1, 1, 1, 0], "equal groups are one group");
+    }
+
+    #[test]
     fn selection_merges_back_in_place() {
-        let mut groom = prim("/A", CurveBasis::Linear, 2, false);
-        groom.append(&prim("/B", CurveBasis::BSpline, 2, false)).unwrap();
+        let groom = Groom::concat(vec![
+            prim("/A", CurveBasis::Linear, 2, false),
+            prim("/B", CurveBasis::BSpline, 2, false),
+        ])
+        .unwrap();
         let (mut selected, selection) = groom.select_groups(&["B".into()]).unwrap();
         assert_eq!(selection.strands, vec![2, 3]);
         selected.points.iter_mut().for_each(|p| p.z += 1.0);

@@ -171,16 +171,24 @@ impl<'a> CurvesArchive<'a> {
     /// sample at or before it; before a property's first sample its first holds, after its
     /// last its last.
     pub fn read_at_time(&self, time: f64) -> OgawaResult<Groom> {
-        let mut merged: Option<Groom> = None;
+        let mut parts = Vec::with_capacity(self.curves.len());
+        let mut paths = Vec::with_capacity(self.curves.len());
+        // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
+        let mut largest_id: Option<u32> = None;
         for index in 0..self.curves.len() {
             let object = self.resolve(index)?;
-            let groom = self.read_object(&object, time)?;
-            merged = Some(match merged {
-                None => groom,
-                Some(acc) => merge(acc, groom, &object.path)?,
-            });
+            let mut groom = self.read_object(&object, time)?;
+            if index > 0 {
+                let next_id = largest_id.map_or(0, |m| m.wrapping_add(1));
+                groom.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
+            }
+            largest_id = largest_id.max(groom.strand_ids.iter().max().copied());
+            parts.push(groom);
+            paths.push(object.path.clone());
         }
-        let mut groom = merged.expect("at least one curves object");
+        let mut groom = Groom::concat(parts).map_err(|(index, e)| {
+            OgawaError(format!("{}: does not fit the curves objects before it: {e}", paths[index]))
+        })?;
         groom.drop_default_group_named(super::curves_write::DEFAULT_OBJECT_NAME);
         for (path, xform_paths) in &self.meshes {
             let object = self.resolve_path(path, xform_paths)?;
@@ -893,14 +901,4 @@ fn find<'o, 'a>(top: &'o Object<'a>, path: &str) -> Option<&'o Object<'a>> {
         object = object.children.iter().find(|c| c.name == part)?;
     }
     Some(object)
-}
-
-/// Appends `b`'s strands (one more curves object, its own group) to `a`.
-fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
-    // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
-    let next_id = a.strand_ids.iter().max().map_or(0, |m| m.wrapping_add(1));
-    b.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
-    a.append(&b)
-        .map_err(|e| OgawaError(format!("{path}: does not fit the curves objects before it: {e}")))?;
-    Ok(a)
 }

@@ -851,18 +851,12 @@ fn merge(found: Vec<Curves>, files: SiteFiles, path: &Path, lines: u32) -> Resul
         ));
     }
     let all_ids = found.iter().all(|c| c.strand_ids.is_some());
-    let mut merged: Option<Groom> = None;
-    for curves in found {
-        let (prim_path, site) = (curves.path.clone(), curves.site);
-        let groom = curves.into_groom();
-        match &mut merged {
-            None => merged = Some(groom),
-            Some(acc) => acc.append(&groom).map_err(|e| {
-                files.error(site, format!("prim <{prim_path}> does not fit the prims before it: {e}"))
-            })?,
-        }
-    }
-    let mut groom = merged.expect("at least one prim");
+    let sites: Vec<(String, Site)> = found.iter().map(|c| (c.path.clone(), c.site)).collect();
+    let mut groom =
+        Groom::concat(found.into_iter().map(Curves::into_groom).collect()).map_err(|(index, e)| {
+            let (prim_path, site) = &sites[index];
+            files.error(*site, format!("prim <{prim_path}> does not fit the prims before it: {e}"))
+        })?;
     if !all_ids {
         groom.strand_ids = (0..groom.strand_count() as u32).collect();
     }
@@ -907,6 +901,31 @@ mod tests {
             ReadOutcome::Groom(groom) => groom,
             ReadOutcome::NeedsComposition(_) => panic!("no composition here"),
         }
+    }
+
+    #[test]
+    fn a_prim_that_does_not_fit_the_ones_before_it_is_named_with_its_line() {
+        let prim = |name: &str, rest: &str| {
+            format!(
+                "def BasisCurves \"{name}\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    \
+                 point3f[] points = [(0, 0, 0), (0, 1, 0)]\n    {rest}\n}}\n"
+            )
+        };
+        let text = format!(
+            "#usda 1.0\n{}{}{}",
+            prim("A", "float3[] primvars:rest = [(0, 0, 0), (0, 1, 0)] (interpolation = \"vertex\")"),
+            prim("B", ""),
+            prim("C", "float[] primvars:rest = [0, 1] (interpolation = \"vertex\")")
+        );
+        let line = text.lines().position(|l| l.contains("def BasisCurves \"C\"")).unwrap() + 1;
+        let error = read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None)
+            .err()
+            .expect("prim C's rest has 1 component, A's 3")
+            .to_string();
+        assert!(
+            error.contains(&format!("line {line}: prim </C> does not fit the prims before it")),
+            "{error}"
+        );
     }
 
     #[test]
