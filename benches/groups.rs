@@ -155,7 +155,7 @@ fn main() {
             let (w, r) =
                 base.map_or(("".into(), "".into()), |(bw, br)| (ratio(write_cpu, bw), ratio(read_cpu, br)));
             println!(
-                "{ext:<6} {name:<7} {:>10.3} {:>10.2} {:>10.3} {:>10.2} {w:>9} {r:>9}",
+                "{ext:<6} {name:<7} {:>10.3} {:>10.3} {:>10.3} {:>10.3} {w:>9} {r:>9}",
                 median(f.write_wall),
                 write_cpu,
                 median(f.read_wall),

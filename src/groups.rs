@@ -301,13 +301,23 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
     let any_guides = parts.iter().any(|(g, _)| g.guides.is_some());
     let (mut uvs, mut guides) = (Vec::new(), Vec::new());
     for ((groom, strands), map) in parts.iter().zip(&group_maps) {
+        for run in runs(groom, strands) {
+            let (first, last) = (run.start, run.end - 1);
+            let vertices = groom.strand_range(first).start..groom.strand_range(last).end;
+            let (from, to) = (vertices.start as u32, out.points.len() as u32);
+            out.points.extend_from_slice(&groom.points[vertices.clone()]);
+            out.widths.extend_from_slice(&groom.widths[vertices]);
+            out.strand_offsets
+                .extend(groom.strand_offsets[first + 1..=run.end].iter().map(|&o| o - from + to));
+            match groom.strand_ids.get(run.clone()) {
+                Some(ids) => out.strand_ids.extend_from_slice(ids),
+                None => out
+                    .strand_ids
+                    .extend(run.clone().map(|s| groom.strand_ids.get(s).copied().unwrap_or(s as u32))),
+            }
+            out.group_ids.extend(std::iter::repeat_n(map[groom.group_of(first)], run.len()));
+        }
         for &s in strands.iter() {
-            let range = groom.strand_range(s);
-            out.points.extend_from_slice(&groom.points[range.clone()]);
-            out.widths.extend_from_slice(&groom.widths[range]);
-            out.strand_offsets.push(out.points.len() as u32);
-            out.strand_ids.push(groom.strand_ids.get(s).copied().unwrap_or(s as u32));
-            out.group_ids.push(map[groom.group_of(s)]);
             if any_uvs {
                 uvs.push(groom.root_uvs.as_ref().map_or([0.0; 2], |u| u[s]));
             }
@@ -345,24 +355,30 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         let mut carried = vec![false; out.groups.len()];
         for ((groom, strands), map) in parts.iter().zip(&group_maps) {
             let attribute = groom.attribute(name);
-            for &s in strands.iter() {
-                let group = groom.group(groom.group_of(s));
+            for run in runs(groom, strands) {
+                let group_index = groom.group_of(run.start);
+                let vertices = groom.strand_range(run.start).start..groom.strand_range(run.end - 1).end;
                 let count = match rate {
-                    AttributeRate::Strand => 1,
-                    AttributeRate::Vertex => groom.strand_range(s).len(),
+                    AttributeRate::Strand => run.len(),
+                    AttributeRate::Vertex => vertices.len(),
                 };
                 match attribute {
-                    Some(a) if group.carries(name) => {
-                        carried[map[groom.group_of(s)] as usize] = true;
-                        match a.rate {
-                            AttributeRate::Strand => {
-                                let value = &a.data[s * components..(s + 1) * components];
-                                (0..count).for_each(|_| data.extend_from_slice(value));
+                    Some(a) if groom.group(group_index).carries(name) => {
+                        carried[map[group_index] as usize] = true;
+                        match (a.rate, rate) {
+                            (AttributeRate::Strand, AttributeRate::Strand) => {
+                                data.extend_from_slice(&a.data[run.start * components..run.end * components])
                             }
-                            AttributeRate::Vertex => {
-                                let r = groom.strand_range(s);
-                                data.extend_from_slice(&a.data[r.start * components..r.end * components]);
+                            (AttributeRate::Strand, AttributeRate::Vertex) => {
+                                for s in run {
+                                    let value = &a.data[s * components..(s + 1) * components];
+                                    (0..groom.strand_range(s).len())
+                                        .for_each(|_| data.extend_from_slice(value));
+                                }
                             }
+                            (AttributeRate::Vertex, _) => data.extend_from_slice(
+                                &a.data[vertices.start * components..vertices.end * components],
+                            ),
                         }
                     }
                     _ => data.extend(std::iter::repeat_n(0.0, count * components)),
@@ -382,6 +398,22 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
     out.drop_default_group("");
     // Groups no strand uses (a selection) stay, so group ids keep their meaning.
     Ok(out)
+}
+
+/// `strands` as runs of consecutive strands of one group, so that each run's data is copied as
+/// one slice.
+fn runs<'a>(groom: &'a Groom, strands: &'a [usize]) -> impl Iterator<Item = std::ops::Range<usize>> + 'a {
+    let mut rest = strands;
+    std::iter::from_fn(move || {
+        let (&first, _) = rest.split_first()?;
+        let group = groom.group_of(first);
+        let length = 1 + rest
+            .windows(2)
+            .take_while(|pair| pair[1] == pair[0] + 1 && groom.group_of(pair[1]) == group)
+            .count();
+        rest = &rest[length..];
+        Some(first..first + length)
+    })
 }
 
 /// Checks the group table against the strands.
