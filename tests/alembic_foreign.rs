@@ -308,6 +308,36 @@ fn animated_foreign_file_reads_frames_on_the_union_of_its_samplings() {
     assert!(archive.read_at_frame(0.5).is_err(), "before the first sample");
 }
 
+/// A width whose count fits neither its `geoScope` nor, without one, any rate exits 2 naming the
+/// object and the property, with the count and what the scope needs.
+#[test]
+fn a_width_count_that_fits_no_scope_names_object_and_property() {
+    let cases: [(&str, &[f32], &str); 4] = [
+        ("uni", &[0.1, 0.2, 0.3], "3 values, its scope needs 2"),
+        ("con", &[0.1, 0.2], "2 values, its scope needs 1"),
+        ("vtx", &[0.1; 6], "6 values, its scope needs 7"),
+        ("", &[0.1; 5], "5 values, its scope needs 1"),
+    ];
+    for (scope, widths, needs) in cases {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        let rig = xform(&mut w, top, "rig", &[0x10], &[0.0, 0.0, 0.0], None);
+        let points = [line(1.0, 3), line(2.0, 4)].concat();
+        let hair = curves(&mut w, rig, "hair", &[3, 4], &points, [1, 0, 0, 0]);
+        let metadata = if scope.is_empty() { MetaData::new() } else { param_md(scope, Pod::F32, 1) };
+        let width = w.add_array(hair, "width", metadata, Pod::F32, 1, 0);
+        w.set_sample(width, &f32s(widths), widths.len() as u64).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("widths.abc");
+        std::fs::write(&path, w.finish().unwrap().into_inner()).unwrap();
+        let out = coif(&["info", path_str(&path)]);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "scope {scope:?}: {message}");
+        assert!(message.contains("widths.abc"), "scope {scope:?}: {message}");
+        assert!(message.contains(&format!("/rig/hair/.geom/width: {needs}")), "scope {scope:?}: {message}");
+    }
+}
+
 #[test]
 fn curves_missing_mandatory_properties_are_rejected() {
     for missing in [".selfBnds", "curveBasisAndType"] {
