@@ -216,32 +216,28 @@ fn push_f32(buf: &mut Vec<u8>, value: f32) {
 }
 
 /// `text` (2 to 24 bytes, as every spelling of [`spell_f32`]) at the start of 24 bytes, copied
-/// in two overlapping fixed-size pieces: a copy of the exact length is a call to `memcpy`, and
-/// those calls were about a seventh of a write's instructions.
+/// as its first and last `N` bytes (overlapping) with `N` the largest of 16, 8, 4, 2 it holds: a
+/// copy of the exact length is a call to `memcpy`, and those calls were about a seventh of a
+/// write's instructions.
 #[inline]
 fn padded(text: &[u8]) -> [u8; 24] {
     let mut padded = [0u8; 24];
-    let len = text.len();
-    match len {
-        16..=24 => {
-            padded[..16].copy_from_slice(&text[..16]);
-            padded[len - 8..len].copy_from_slice(&text[len - 8..]);
-        }
-        8..=15 => {
-            padded[..8].copy_from_slice(&text[..8]);
-            padded[len - 8..len].copy_from_slice(&text[len - 8..]);
-        }
-        4..=7 => {
-            padded[..4].copy_from_slice(&text[..4]);
-            padded[len - 4..len].copy_from_slice(&text[len - 4..]);
-        }
-        2..=3 => {
-            padded[..2].copy_from_slice(&text[..2]);
-            padded[len - 2..len].copy_from_slice(&text[len - 2..]);
-        }
-        _ => padded[..len].copy_from_slice(text),
+    match text.len() {
+        16..=24 => copy_ends::<16>(&mut padded, text),
+        8..=15 => copy_ends::<8>(&mut padded, text),
+        4..=7 => copy_ends::<4>(&mut padded, text),
+        2..=3 => copy_ends::<2>(&mut padded, text),
+        len => padded[..len].copy_from_slice(text),
     }
     padded
+}
+
+/// Copies `text`'s first and last `N` bytes (a fixed-size copy each) to the same places of `to`.
+#[inline]
+fn copy_ends<const N: usize>(to: &mut [u8; 24], text: &[u8]) {
+    let len = text.len();
+    to[..N].copy_from_slice(&text[..N]);
+    to[len - N..len].copy_from_slice(&text[len - N..]);
 }
 
 /// Appends the first `len` bytes of `text`: a fixed-size copy and a cut.
