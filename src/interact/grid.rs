@@ -184,42 +184,61 @@ impl NeighbourGrid {
     }
 }
 
-/// A coarse, conservative record of where points are: cells are marked in a wrapping table, so
-/// a query may report a box as occupied when it is not (never the reverse).
+/// A coarse, conservative record of where points are: the cells holding chosen points and every
+/// cell next to them are marked in a wrapping table, so [`near`](Self::near) answers for a whole
+/// neighbourhood with one lookup. It may answer yes when no point is near (wrapped cells), never
+/// the reverse.
 #[derive(Clone, Debug, Default)]
 pub struct Occupancy {
     inv_cell_size: f32,
-    bits: u32,
-    marks: Vec<bool>,
+    /// Per bucket: whether a cell of it holds a chosen point, and whether such a cell or a
+    /// neighbour of one does.
+    holds: Vec<bool>,
+    near: Vec<bool>,
+    /// Scratch: the cells holding a chosen point, each once (one per bucket).
+    held: Vec<[i32; 3]>,
 }
 
 impl Occupancy {
-    /// Marks the cells (`cell_size` wide) holding the points `include` selects.
+    /// Wraps every 64 cells per axis: 2^18 cells.
+    const BITS: u32 = 6;
+
+    /// Marks the neighbourhoods (`cell_size` wide cells) of the points `include` selects.
     pub fn mark(&mut self, cell_size: f32, points: &[Vec3], include: impl Fn(usize) -> bool) {
-        // 2^18 cells, wrapping every 64 cells per axis.
-        self.bits = 6;
         self.inv_cell_size = 1.0 / cell_size;
-        self.marks.clear();
-        self.marks.resize(1 << (3 * self.bits), false);
+        let table = 1 << (3 * Self::BITS);
+        for marks in [&mut self.holds, &mut self.near] {
+            marks.clear();
+            marks.resize(table, false);
+        }
+        self.held.clear();
         for (i, &p) in points.iter().enumerate() {
             if include(i) {
-                self.marks[bucket_of_cell(cell_of(p, self.inv_cell_size), self.bits) as usize] = true;
+                let cell = cell_of(p, self.inv_cell_size);
+                let b = bucket_of_cell(cell, Self::BITS) as usize;
+                if !self.holds[b] {
+                    self.holds[b] = true;
+                    self.held.push(cell);
+                }
+            }
+        }
+        // A cell aliasing a held one (a multiple of 64 cells away on each axis) has aliasing
+        // neighbours too, so one cell per bucket marks them all.
+        for &[x, y, z] in &self.held {
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        self.near[bucket_of_cell([x + dx, y + dy, z + dz], Self::BITS) as usize] = true;
+                    }
+                }
             }
         }
     }
 
-    /// Whether any marked cell meets the box `lo`–`hi`.
-    pub fn any_in_box(&self, lo: Vec3, hi: Vec3) -> bool {
-        let (a, b) = (cell_of(lo, self.inv_cell_size), cell_of(hi, self.inv_cell_size));
-        // Boxes wider than the table's period cover all of it.
-        let period = 1 << self.bits;
-        if (0..3).any(|k| b[k] - a[k] >= period) {
-            return self.marks.contains(&true);
-        }
-        (a[2]..=b[2]).any(|z| {
-            (a[1]..=b[1])
-                .any(|y| (a[0]..=b[0]).any(|x| self.marks[bucket_of_cell([x, y, z], self.bits) as usize]))
-        })
+    /// Whether a marked point may lie within `cell_size` of `p` along every axis: true whenever
+    /// one does (cells whose indices differ by at most one hold them).
+    pub fn near(&self, p: Vec3) -> bool {
+        self.near[bucket_of_cell(cell_of(p, self.inv_cell_size), Self::BITS) as usize]
     }
 }
 
@@ -362,18 +381,31 @@ mod tests {
     }
 
     #[test]
-    fn occupancy_never_misses_a_marked_point() {
-        let points: Vec<Vec3> =
-            (0..200).map(|i| Vec3::new(0.013 * i as f32, -0.4, 0.02 * (i % 7) as f32)).collect();
+    fn occupancy_finds_every_point_within_a_cell_on_each_axis() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        let cell = 0.02;
+        // Chosen points spread over 3 m, so the 64-cell table wraps.
+        let chosen: Vec<Vec3> =
+            (0..40).map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 3.0 - Vec3::ONE).collect();
         let mut occupancy = Occupancy::default();
-        occupancy.mark(0.02, &points, |i| i % 3 == 0);
-        for (i, &p) in points.iter().enumerate() {
-            let tiny = Vec3::splat(1e-4);
-            if i % 3 == 0 {
-                assert!(occupancy.any_in_box(p - tiny, p + tiny));
+        occupancy.mark(cell, &chosen, |_| true);
+        let (mut far, mut said_far) = (0, 0);
+        for _ in 0..20_000 {
+            let q = chosen[rng.random_range(0..chosen.len())];
+            let p = q + (Vec3::new(rng.random(), rng.random(), rng.random()) - Vec3::splat(0.5)) * 6.0 * cell;
+            let nearest = chosen.iter().map(|&c| (c - p).abs().max_element()).fold(f32::MAX, f32::min);
+            if nearest <= cell {
+                assert!(occupancy.near(p), "{p} is within a cell of a chosen point");
+            } else if nearest > 2.0 * cell {
+                far += 1;
+                said_far += !occupancy.near(p) as usize;
             }
         }
-        assert!(!occupancy.any_in_box(Vec3::new(0.1, 0.5, 0.1), Vec3::new(0.2, 0.6, 0.2)));
+        // Not vacuous: far points are mostly told apart (wrapping aliases a few).
+        assert!(far > 1000 && said_far * 10 > far * 9, "{said_far} of {far} far points said far");
+        // Points not chosen leave no mark.
+        occupancy.mark(cell, &chosen, |_| false);
+        assert!(chosen.iter().all(|&c| !occupancy.near(c)));
     }
 
     #[test]
