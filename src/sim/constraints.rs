@@ -147,12 +147,6 @@ impl Sym3 {
         }
     }
 
-    /// `n·nᵀ`.
-    #[inline(always)]
-    pub fn outer(n: Vec3) -> Sym3 {
-        Sym3::identity_minus_outer(0.0, -1.0, n)
-    }
-
     /// `self − s·o`.
     #[inline(always)]
     pub fn minus_scaled(self, o: Sym3, s: f32) -> Sym3 {
@@ -179,25 +173,6 @@ impl Sym3 {
             yy: (a * f - c * c) * inv_det,
             yz: (b * c - a * e) * inv_det,
             zz: (a * d - b * b) * inv_det,
-        }
-    }
-
-    /// `W·self·W` for `W = w·(I − n·nᵀ)` (`n` a unit vector or zero):
-    /// `w²·(G − n·gᵀ − g·nᵀ + (n·g)·n·nᵀ)` with `g = G·n`.
-    #[inline(always)]
-    pub fn sandwich(self, w: f32, n: Vec3) -> Sym3 {
-        let g = self.times(n);
-        let s = n.dot(g);
-        let w2 = w * w;
-        let entry =
-            |gij: f32, ni: f32, nj: f32, gi: f32, gj: f32| w2 * (gij - ni * gj - gi * nj + s * ni * nj);
-        Sym3 {
-            xx: entry(self.xx, n.x, n.x, g.x, g.x),
-            xy: entry(self.xy, n.x, n.y, g.x, g.y),
-            xz: entry(self.xz, n.x, n.z, g.x, g.z),
-            yy: entry(self.yy, n.y, n.y, g.y, g.y),
-            yz: entry(self.yz, n.y, n.z, g.y, g.z),
-            zz: entry(self.zz, n.z, n.z, g.z, g.z),
         }
     }
 

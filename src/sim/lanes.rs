@@ -237,25 +237,6 @@ impl S3 {
         }
     }
     #[inline(always)]
-    fn outer(n: V3) -> S3 {
-        S3::identity_minus_outer(F::splat(0.0), F::splat(-1.0), n)
-    }
-    #[inline(always)]
-    fn sandwich(self, w: F, n: V3) -> S3 {
-        let g = self.times(n);
-        let s = n.dot(g);
-        let w2 = w * w;
-        let entry = |gij: F, ni: F, nj: F, gi: F, gj: F| w2 * (gij - ni * gj - gi * nj + s * ni * nj);
-        S3 {
-            xx: entry(self.xx, n.x, n.x, g.x, g.x),
-            xy: entry(self.xy, n.x, n.y, g.x, g.y),
-            xz: entry(self.xz, n.x, n.z, g.x, g.z),
-            yy: entry(self.yy, n.y, n.y, g.y, g.y),
-            yz: entry(self.yz, n.y, n.z, g.y, g.z),
-            zz: entry(self.zz, n.z, n.z, g.z, g.z),
-        }
-    }
-    #[inline(always)]
     fn times(self, v: V3) -> V3 {
         V3 {
             x: self.xx * v.x + self.xy * v.y + self.xz * v.z,
@@ -312,8 +293,8 @@ pub struct Scratch {
     values: Vec<V3>,
     /// Per lane, the first edge of the free tail.
     free_tail: [usize; LANES],
-    /// Per vertex, the direction an obstacle pushed it this step (`solver::project_obstacles`).
-    contact: Vec<V3>,
+    /// Per vertex, its inverse mass in the direct solve (`solver::project_obstacles`).
+    solve_w: Vec<F>,
     edge_k: Vec<EdgeK>,
     pair_k: Vec<PairK>,
     /// One lane's positions, handed to the obstacle hook.
@@ -393,20 +374,11 @@ fn finish_step_impl(
     let n = strands[0].x.len();
     let edges = n - 1;
     let s = scratch;
-    for v in [
-        &mut s.x,
-        &mut s.x_prev,
-        &mut s.v,
-        &mut s.target,
-        &mut s.rest,
-        &mut s.lambda,
-        &mut s.values,
-        &mut s.contact,
-    ] {
+    for v in [&mut s.x, &mut s.x_prev, &mut s.v, &mut s.target, &mut s.rest, &mut s.lambda, &mut s.values] {
         resize(v, n);
     }
     resize(&mut s.inverse, n);
-    for v in [&mut s.kinematic, &mut s.w, &mut s.wq] {
+    for v in [&mut s.kinematic, &mut s.w, &mut s.wq, &mut s.solve_w] {
         resize(v, n);
     }
     resize(&mut s.q, n);
@@ -451,7 +423,7 @@ fn finish_step_impl(
         s.x_prev[i] = s.x[i];
         s.x[i] = V3::select(s.kinematic[i], s.target[i], s.x[i] + s.v[i].scale(dt_f));
         s.lambda[i] = V3::default();
-        s.contact[i] = V3::default();
+        s.solve_w[i] = s.w[i];
     }
     for iteration in 0..iterations {
         solve_stretch_shear(s, edges);
@@ -503,18 +475,12 @@ fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn
         }
         hooks.project(st.strand, st.first_vertex, &mut s.lane_x, st.w);
         for i in 0..n {
-            if let Some(direction) = (s.lane_x[i] - s.x[i].get(l)).try_normalize() {
-                s.contact[i].set(l, direction);
+            if s.lane_x[i] != s.x[i].get(l) {
+                s.solve_w[i].0[l] = st.w[i] * super::solver::CONTACT_SLIP;
             }
             s.x[i].set(l, s.lane_x[i]);
         }
     }
-}
-
-/// `w·(v − n·(n·v))`: a vertex's inverse mass as a matrix applied to `v` (`solver::weigh`).
-#[inline(always)]
-fn weigh(w: F, n: V3, v: V3) -> V3 {
-    (v - n.scale(n.dot(v))).scale(w)
 }
 
 /// The scalar `solve_stretch_shear`, lane by lane.
@@ -522,21 +488,20 @@ fn weigh(w: F, n: V3, v: V3) -> V3 {
 fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
     let zero = F::splat(0.0);
     let one = F::splat(1.0);
+    let w = &s.solve_w;
     for e in 0..edges {
         // Edges before the lane's free tail (`solver::free_tail`) are left out: μ = 0.
         let in_tail = F(from_fn(|l| if e >= s.free_tail[l] { 1.0 } else { 0.0 }));
         let d = s.q[e].director3();
         let l = s.edge_k[e].length;
-        let vertices = s.w[e] + s.w[e + 1];
+        let vertices = w[e] + w[e + 1];
         let frame = F::splat(4.0) * s.wq[e] * l * l;
-        let mut block = S3::identity_minus_outer((vertices + frame) * F::splat(1.0 + 1e-6), frame, d)
-            .minus_scaled(S3::outer(s.contact[e]), s.w[e])
-            .minus_scaled(S3::outer(s.contact[e + 1]), s.w[e + 1]);
+        let mut block = S3::identity_minus_outer((vertices + frame) * F::splat(1.0 + 1e-6), frame, d);
         let mut rhs = d.scale(l) - (s.x[e + 1] - s.x[e]);
         if e > 0 {
             // Zero where the lane's tail starts at `e`: its vertex `e` is kinematic (w = 0).
-            block = block.minus_scaled(s.inverse[e - 1].sandwich(s.w[e], s.contact[e]), one);
-            rhs = rhs + weigh(s.w[e], s.contact[e], s.values[e - 1]);
+            block = block.minus_scaled(s.inverse[e - 1], w[e] * w[e]);
+            rhs = rhs + s.values[e - 1].scale(w[e]);
         }
         let inv_frame = frame.positive_select(frame, one).recip();
         let frame_only = S3::select(frame, S3::identity_minus_outer(inv_frame, inv_frame, d), S3::default());
@@ -546,9 +511,9 @@ fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
         s.values[e] = s.inverse[e].times(rhs);
     }
     for e in (0..edges.saturating_sub(1)).rev() {
-        s.values[e] = s.values[e] + s.inverse[e].times(weigh(s.w[e + 1], s.contact[e + 1], s.values[e + 1]));
+        s.values[e] = s.values[e] + s.inverse[e].times(s.values[e + 1].scale(w[e + 1]));
     }
-    for j in 0..=edges {
+    for (j, &wj) in w.iter().enumerate().take(edges + 1) {
         let mut dp = V3::default();
         if j > 0 {
             dp = dp + s.values[j - 1];
@@ -556,7 +521,7 @@ fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
         if j < edges {
             dp = dp - s.values[j];
         }
-        s.x[j] = s.x[j] + weigh(s.w[j], s.contact[j], dp);
+        s.x[j] = s.x[j] + dp.scale(wj);
     }
     for e in 0..edges {
         let q = s.q[e];

@@ -65,9 +65,9 @@
 //!   [`Hooks::accelerate`] (per strand, may read the strand's positions and edit velocities).
 //! * **Position projection**: [`Hooks::project`], called once per iteration per strand after the
 //!   constraints (head, floor, curler rods). It may only move vertices with non-zero inverse mass.
-//!   For the rest of the step the direct stretch–shear solve keeps each vertex the projection
-//!   moved where it was put along the direction it was moved (a contact the exact solve does not
-//!   undo; it may still slide across it). Hooks run concurrently on different strands; anything
+//!   For the rest of the step the direct stretch–shear solve holds each vertex the projection
+//!   moved (its inverse mass there drops to 1 %): where touching hair goes is the projection's
+//!   decision, depth and friction. Hooks run concurrently on different strands; anything
 //!   they read from other strands must be a snapshot taken before the step, so results stay
 //!   independent of thread count.
 //! * **Mass scale**: [`Simulation::set_mass_scale`] (wet hair is heavier).

@@ -78,8 +78,9 @@ pub struct Rods {
     /// stretch–shear solve.
     solve_inverse: Vec<Sym3>,
     solve_values: Vec<Vec3>,
-    /// Per vertex, the direction an obstacle pushed it this step (zero: none).
-    contact_directions: Vec<Vec3>,
+    /// Per vertex, its inverse mass in the direct stretch–shear solve (held once an obstacle
+    /// moved it this step).
+    solve_inv_mass: Vec<f32>,
     edge_coefficients: Vec<StretchShearCoefficients>,
     pair_coefficients: Vec<BendTwistCoefficients>,
     /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
@@ -99,7 +100,7 @@ pub(super) struct StepArrays<'a> {
     pub lambdas: &'a mut [Vec3],
     pub solve_inverse: &'a mut [Sym3],
     pub solve_values: &'a mut [Vec3],
-    pub contact_directions: &'a mut [Vec3],
+    pub solve_inv_mass: &'a mut [f32],
     pub edge_coefficients: &'a [StretchShearCoefficients],
     pub pair_coefficients: &'a [BendTwistCoefficients],
     pub inv_mass: &'a [f32],
@@ -166,7 +167,7 @@ impl Rods {
             lambdas: vec![Vec3::ZERO; n],
             solve_inverse: vec![Sym3::default(); n],
             solve_values: vec![Vec3::ZERO; n],
-            contact_directions: vec![Vec3::ZERO; n],
+            solve_inv_mass: vec![0.0; n],
             edge_coefficients: vec![StretchShearCoefficients::default(); n],
             pair_coefficients: vec![BendTwistCoefficients::default(); n],
             work_units: Vec::new(),
@@ -254,7 +255,7 @@ impl Rods {
             self.lambdas.len(),
             self.solve_inverse.len(),
             self.solve_values.len(),
-            self.contact_directions.len(),
+            self.solve_inv_mass.len(),
             self.edge_coefficients.len(),
             self.pair_coefficients.len(),
         ];
@@ -281,7 +282,7 @@ impl Rods {
             lambdas: &mut self.lambdas,
             solve_inverse: &mut self.solve_inverse,
             solve_values: &mut self.solve_values,
-            contact_directions: &mut self.contact_directions,
+            solve_inv_mass: &mut self.solve_inv_mass,
             edge_coefficients: &self.edge_coefficients,
             pair_coefficients: &self.pair_coefficients,
             inv_mass: &self.inv_mass,

@@ -67,7 +67,7 @@ struct Strand<'a> {
     lambda: &'a mut [Vec3],
     inverse: &'a mut [Sym3],
     values: &'a mut [Vec3],
-    contact: &'a mut [Vec3],
+    solve_w: &'a mut [f32],
     edge_k: &'a [StretchShearCoefficients],
     pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
@@ -92,7 +92,7 @@ struct Parts<'a> {
     lambda: SharedMut<Vec3>,
     inverse: SharedMut<Sym3>,
     values: SharedMut<Vec3>,
-    contact: SharedMut<Vec3>,
+    solve_w: SharedMut<f32>,
     edge_k: &'a [StretchShearCoefficients],
     pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
@@ -123,7 +123,7 @@ impl<'a> Parts<'a> {
             rest: self.rest.slice(r.clone()),
             lambda: self.lambda.slice(r.clone()),
             inverse: self.inverse.slice(r.clone()),
-            contact: self.contact.slice(r.clone()),
+            solve_w: self.solve_w.slice(r.clone()),
             values: self.values.slice(r.clone()),
             edge_k: &self.edge_k[r.clone()],
             pair_k: &self.pair_k[r.clone()],
@@ -163,7 +163,7 @@ pub(crate) fn step_all(
         rest: SharedMut::new(a.rest_darboux),
         lambda: SharedMut::new(a.lambdas),
         inverse: SharedMut::new(a.solve_inverse),
-        contact: SharedMut::new(a.contact_directions),
+        solve_w: SharedMut::new(a.solve_inv_mass),
         values: SharedMut::new(a.solve_values),
         edge_k: a.edge_coefficients,
         pair_k: a.pair_coefficients,
@@ -240,21 +240,21 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
     let edges = s.x.len() - 1;
     let start = free_tail(s.kinematic);
     s.values[..start].fill(Vec3::ZERO);
-    // Forward elimination: P_e = B_e − W_e·P_{e−1}⁻¹·W_e, z_e = P_e⁻¹·(−C_e + W_e·z_{e−1}).
+    // The vertices' inverse masses for this solve: touching vertices are held (`project_obstacles`).
+    let w: &[f32] = s.solve_w;
+    // Forward elimination: P_e = B_e − w_e²·P_{e−1}⁻¹, z_e = P_e⁻¹·(−C_e + w_e·z_{e−1}).
     for e in start..edges {
         let d = director3(s.q[e]);
         let l = s.length[e];
-        let vertices = s.w[e] + s.w[e + 1];
+        let vertices = w[e] + w[e + 1];
         let frame = 4.0 * s.wq[e] * l * l;
         // A span held at both ends has no stretch mode of its own: a relative 1e-6 on the
         // diagonal keeps its pivot invertible without changing any solvable system measurably.
-        let mut block = Sym3::identity_minus_outer((vertices + frame) * (1.0 + 1e-6), frame, d)
-            .minus_scaled(Sym3::outer(s.contact[e]), s.w[e])
-            .minus_scaled(Sym3::outer(s.contact[e + 1]), s.w[e + 1]);
+        let mut block = Sym3::identity_minus_outer((vertices + frame) * (1.0 + 1e-6), frame, d);
         let mut rhs = (l * d) - (s.x[e + 1] - s.x[e]);
         if e > start {
-            block = block.minus_scaled(s.inverse[e - 1].sandwich(s.w[e], s.contact[e]), 1.0);
-            rhs += weigh(s.w[e], s.contact[e], s.values[e - 1]);
+            block = block.minus_scaled(s.inverse[e - 1], w[e] * w[e]);
+            rhs += w[e] * s.values[e - 1];
         }
         s.inverse[e] = if vertices > 0.0 {
             block.inverse()
@@ -267,15 +267,15 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
         };
         s.values[e] = s.inverse[e].times(rhs);
     }
-    // Back substitution: μ_e = z_e + P_e⁻¹·W_{e+1}·μ_{e+1}.
+    // Back substitution: μ_e = z_e + w_{e+1}·P_e⁻¹·μ_{e+1}.
     for e in (start..edges.saturating_sub(1)).rev() {
-        s.values[e] += s.inverse[e].times(weigh(s.w[e + 1], s.contact[e + 1], s.values[e + 1]));
+        s.values[e] += s.inverse[e].times(w[e + 1] * s.values[e + 1]);
     }
-    // Δx_j = W_j·(μ_{j−1} − μ_j); each frame turns its d3 along the shear part of its μ.
-    for j in start..=edges {
+    // Δx_j = w_j·(μ_{j−1} − μ_j); each frame turns its d3 along the shear part of its μ.
+    for (j, &wj) in w.iter().enumerate().take(edges + 1).skip(start) {
         let before = if j > 0 { s.values[j - 1] } else { Vec3::ZERO };
         let after = if j < edges { s.values[j] } else { Vec3::ZERO };
-        s.x[j] += weigh(s.w[j], s.contact[j], before - after);
+        s.x[j] += wj * (before - after);
     }
     for e in start..edges {
         let wq = s.wq[e];
@@ -289,24 +289,28 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
     }
 }
 
-/// A vertex's inverse mass as a matrix, `W = w·(I − n·nᵀ)` with `n` its contact direction (or
-/// zero), applied to `v`.
-#[inline(always)]
-fn weigh(w: f32, n: Vec3, v: Vec3) -> Vec3 {
-    w * (v - n * n.dot(v))
-}
+/// The share of its inverse mass a vertex keeps in the direct solves left in a step once an
+/// obstacle has moved it (see [`project_obstacles`]).
+pub(super) const CONTACT_SLIP: f32 = 1e-2;
 
-/// Projects onto the obstacles and remembers, for the direct solves left in this step, the
-/// direction in which the projection moved each vertex: the solve then keeps the vertex where the
-/// projection put it along that direction (a contact it does not undo) and lets it slide across
-/// it. Without this the exact solve pulled resting hair back into the head every iteration and
-/// the projection pushed it out again.
+/// Projects onto the obstacles and, for the direct solves left in this step, holds every vertex
+/// the projection moved: its inverse mass there drops to `CONTACT_SLIP` of its own. Where a
+/// touching vertex goes is the projection's decision (depth and friction); without the hold the
+/// exact solve pulled resting hair back into the head every iteration and slid it along the
+/// surface, where friction acts only on vertices found inside, and the projection pushed it out
+/// again — a settle at Δt 1/240 never came to rest. The hold is isotropic and never total:
+/// holding only the normal (`w·(I − n·nᵀ)`) left the root edge's pivot singular whenever vertex 1
+/// touched the scalp (root vertex and frame pinned), and f32 resolves a near-null direction of a
+/// 3×3 block only to ~10 %, so its huge inverse leaked through the elimination and threw wet
+/// strands at 40 m/s (Blender's bed-head under the pillow); a span nothing can satisfy is still
+/// met by moving its touching vertices, which the projection then puts back, as Gauss–Seidel
+/// does.
 fn project_obstacles(s: &mut Strand<'_>, hooks: &dyn Hooks, strand: usize, first: usize) {
     s.values.copy_from_slice(s.x);
     hooks.project(strand, first, s.x, s.w);
     for j in 0..s.x.len() {
-        if let Some(direction) = (s.x[j] - s.values[j]).try_normalize() {
-            s.contact[j] = direction;
+        if s.x[j] != s.values[j] {
+            s.solve_w[j] = s.w[j] * CONTACT_SLIP;
         }
     }
 }
@@ -354,7 +358,7 @@ fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
         n >= 2
             && [s.v.len(), s.x_prev.len(), s.q.len(), s.rest.len()]
                 .iter()
-                .chain(&[s.lambda.len(), s.inverse.len(), s.values.len(), s.contact.len(), s.edge_k.len()])
+                .chain(&[s.lambda.len(), s.inverse.len(), s.values.len(), s.solve_w.len(), s.edge_k.len()])
                 .chain(&[s.pair_k.len(), s.w.len(), s.kinematic.len(), s.targets.len(), s.external.len()])
                 .chain(&[s.wq.len(), s.length.len(), s.compliance.len(), s.bonded.len(), s.broken.len()])
                 .all(|&len| len == n)
@@ -386,7 +390,7 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
         s.x_prev[i] = s.x[i];
         s.x[i] = if s.kinematic[i] { s.targets[i] } else { s.x[i] + s.v[i] * dt };
     }
-    s.contact.fill(Vec3::ZERO);
+    s.solve_w.copy_from_slice(s.w);
     // Frames are quasi-static: they carry no angular momentum and start each step where the
     // last ended. (Hair's rotational inertia is negligible, the frame inertia here is only a
     // conditioning choice, and integrating frame angular velocities fed energy into resting curls.)
