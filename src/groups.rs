@@ -26,6 +26,17 @@ pub enum CurveWrap {
     Periodic,
 }
 
+/// A primvar interpolation a file gave an attribute that its rate alone would not give back, so
+/// writers can return the file's choice where the values still fit it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    /// USD `constant`: one value for the whole prim (read as the same value on every strand).
+    Constant,
+    /// USD `varying`: one value per segment end, which is one per vertex on linear and pinned
+    /// curves (the only case recorded: elsewhere the reader spreads the values).
+    Varying,
+}
+
 /// One named set of curves sharing a basis.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct CurveGroup {
@@ -38,11 +49,18 @@ pub struct CurveGroup {
     /// Groom attributes this group does not carry (the groom pads them with zeros for its
     /// strands; writers leave them out of this group's prim).
     pub missing: Vec<String>,
+    /// Attributes this group's file gave an [`Interpolation`] their rate does not say.
+    pub interpolations: Vec<(String, Interpolation)>,
 }
 
 impl CurveGroup {
     pub fn new(name: impl Into<String>, basis: CurveBasis, wrap: CurveWrap) -> Self {
         CurveGroup { name: name.into(), basis, wrap, ..Default::default() }
+    }
+
+    /// The interpolation the file gave attribute `name` in this group, when not its rate's.
+    pub fn interpolation(&self, name: &str) -> Option<Interpolation> {
+        self.interpolations.iter().find(|(n, _)| n == name).map(|&(_, i)| i)
     }
 
     /// Whether the group carries attribute `name`.

@@ -351,6 +351,29 @@ fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
         coif(&["convert", "tests/data/blender_groom.usda", path_str(&dir.path().join("u.hair")), "--unreal"]);
     assert_eq!(run.status.code(), Some(2));
     assert!(stderr(&run).contains("--unreal"), "{}", stderr(&run));
+    // `coif style --unreal` writes the same layout (the sibling named in --json), and refuses the
+    // same formats before styling, writing nothing.
+    let recipe = dir.path().join("brief.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    let style = |out: &Path| {
+        let args =
+            ["style", path_str(&recipe), "--groom", "tests/data/blender_groom.usda", "-o", path_str(out)];
+        coif(&[&args[..], &["--unreal", "--json", "--quiet"]].concat())
+    };
+    let styled = dir.path().join("styled.abc");
+    let run = style(&styled);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(stdout_json(&run)["meshes_output"], path_str(&dir.path().join("styled_meshes.abc")));
+    let bytes = std::fs::read(&styled).unwrap();
+    assert!(!bytes.windows(18).any(|w| w == b"AbcGeom_PolyMesh_v"), "a PolyMesh in the styled Unreal .abc");
+    assert!(bytes.windows(13).any(|w| w == b"groom_root_uv"));
+    for ext in ["hair", "usdz"] {
+        let out = dir.path().join(format!("styled.{ext}"));
+        let run = style(&out);
+        assert_eq!(run.status.code(), Some(2), "{ext}: {}", stderr(&run));
+        assert!(stderr(&run).contains("--unreal"), "{}", stderr(&run));
+        assert!(!out.exists());
+    }
 }
 
 #[test]
@@ -465,5 +488,102 @@ fn unreal_meshes_file_is_written_with_the_groom_or_not_at_all() {
         assert_eq!(error.exit_code(), 2, "{error}");
         assert!(error.to_string().contains("/skin"), ".{ext}: {error}");
         assert!(dir_listing(dir.path()).is_empty(), ".{ext}: {:?}", dir_listing(dir.path()));
+    }
+}
+
+#[test]
+fn nonperiodic_catmull_rom_to_alembic_warns_naming_the_file_and_object() {
+    // Alembic records no wrap, and its readers (Blender, coif) take Catmull-Rom as pinned: a
+    // nonperiodic Catmull-Rom group cannot survive a write to `.abc`. The run says so, naming
+    // the output file and the curve object; linear groups and pinned sources need no warning.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("tests/data/blender_groom.usda").unwrap();
+    assert_eq!(text.matches("wrap = \"pinned\"").count(), 1, "Blender's guides are pinned");
+    let source = dir.path().join("nonperiodic.usda");
+    std::fs::write(&source, text.replace("wrap = \"pinned\"", "wrap = \"nonperiodic\"")).unwrap();
+    let guides = "/root/Head/Guides/GuidesData";
+    assert_eq!(group_summary(&read(&source))[0].2, CurveWrap::Nonperiodic, "{guides} in the source");
+    let out = dir.path().join("out.abc");
+    let run = coif(&["convert", path_str(&source), path_str(&out)]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = stderr(&run);
+    let warnings: Vec<&str> = text.lines().filter(|l| l.starts_with("coif: warning:")).collect();
+    assert_eq!(warnings.len(), 1, "one group changes: {text}");
+    for needed in [path_str(&out), &format!("'{guides}'"), "Nonperiodic", "Pinned"] {
+        assert!(warnings[0].contains(needed), "the warning names {needed}: {}", warnings[0]);
+    }
+    // What it warns of is what a reader gets.
+    let back = group_summary(&read(&out));
+    let guides_back = back.iter().find(|g| g.0.ends_with("Guides/GuidesData")).unwrap();
+    assert_eq!(guides_back.2, CurveWrap::Pinned);
+    // Control: Blender's own pinned guides convert without a warning.
+    let run = coif(&["convert", "tests/data/blender_groom.usda", path_str(&dir.path().join("pinned.abc"))]);
+    assert!(run.status.success());
+    assert!(!stderr(&run).contains("warning"), "{}", stderr(&run));
+}
+
+#[test]
+fn constant_and_varying_primvars_keep_their_interpolation_through_convert() {
+    // Constant and varying primvars on a linear and a pinned Catmull-Rom prim (where varying is
+    // one value per vertex), and varying on a nonperiodic B-spline (fewer segment ends than
+    // points: read spread over the points, so written back per vertex). pxr must see the source's
+    // interpolation, type and values again in coif's .usda and .usdc.
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("interpolations.usda");
+    let prim = |name: &str, head: &str, counts: &str, points: &str, stiffness: f32, clump: &str| {
+        format!(
+            "    def BasisCurves \"{name}\"\n    {{\n{head}        int[] curveVertexCounts = [{counts}]\n        point3f[] points = [{points}]\n        float[] primvars:stiffness = [{stiffness}] (\n            interpolation = \"constant\"\n        )\n        color3f[] primvars:tint = [(0.1, 0.2, 0.3)] (\n            interpolation = \"constant\"\n        )\n        float[] primvars:clump = [{clump}] (\n            interpolation = \"varying\"\n        )\n    }}\n"
+        )
+    };
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef Xform \"G\"\n{{\n{}{}{}}}\n",
+        prim(
+            "lin",
+            "        uniform token type = \"linear\"\n",
+            "3, 4",
+            "(0, 0, 0), (0, 1, 0), (0, 2, 0), (1, 0, 0), (1, 1, 0), (1, 2, 0), (1, 3, 0)",
+            0.5,
+            "0, 1, 2, 3, 4, 5, 6"
+        ),
+        prim(
+            "crom",
+            "        uniform token type = \"cubic\"\n        uniform token basis = \"catmullRom\"\n        uniform token wrap = \"pinned\"\n",
+            "4",
+            "(2, 0, 0), (2, 1, 0), (2, 2, 0), (2, 3, 0)",
+            0.25,
+            "7, 8, 9, 10"
+        ),
+        prim(
+            "bspl",
+            "        uniform token type = \"cubic\"\n        uniform token basis = \"bspline\"\n",
+            "5",
+            "(3, 0, 0), (3, 1, 0), (3, 2, 0), (3, 3, 0), (3, 4, 0)",
+            0.75,
+            "1, 2, 3"
+        ),
+    );
+    std::fs::write(&source, text).unwrap();
+    let want = pxr_dump(&source, None);
+    for ext in ["usda", "usdc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let got = pxr_dump(&out, None);
+        for w in want["curves"].as_array().unwrap() {
+            let path = w["path"].as_str().unwrap();
+            let g = got["curves"].as_array().unwrap().iter().find(|c| c["path"] == path).unwrap();
+            for name in ["stiffness", "tint", "clump"] {
+                let (a, b) = (&w["primvars"][name], &g["primvars"][name]);
+                let spread = path.ends_with("bspl") && name == "clump";
+                assert_eq!(a["type"], b["type"], ".{ext} {path} {name}");
+                if spread {
+                    assert_eq!(b["interpolation"], "vertex", ".{ext} {path} {name}");
+                    assert_eq!(f32s(&b["values"]), [1.0, 1.5, 2.0, 2.5, 3.0], ".{ext} {path} {name}");
+                } else {
+                    assert_eq!(a["interpolation"], b["interpolation"], ".{ext} {path} {name}");
+                    assert_eq!(f32s(&a["values"]), f32s(&b["values"]), ".{ext} {path} {name}");
+                }
+            }
+        }
     }
 }

@@ -188,6 +188,37 @@ fn animation_writer_rejects_changed_topology_no_frames_and_bad_times() {
     write(&[groom.points.clone(), groom.points.clone()], times).unwrap();
 }
 
+/// `groom_id` is USD's `int`: the largest id it holds reaches pxr and coif's reader exactly in
+/// `.usda` and `.usdc`; one past it (written negative before) is refused naming the strand, and
+/// no file is left.
+#[test]
+fn groom_ids_past_usd_int_are_refused_and_the_largest_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut groom = rich_groom(CurveBasis::Linear);
+    let last = groom.strand_ids.len() - 1;
+    groom.strand_ids[last] = i32::MAX as u32;
+    for name in ["max.usda", "max.usdc"] {
+        let path = dir.path().join(name);
+        coif::io::write_groom(&path, &groom).unwrap();
+        let dump = pxr_dump(&path, None);
+        let values = primvar(&dump["curves"][0], "groom_id")["values"].as_array().unwrap();
+        // The dump's numbers are JSON floats; an f64 holds every int exactly.
+        let ids: Vec<f64> = values.iter().map(|v| v.as_f64().unwrap()).collect();
+        assert_eq!(ids, groom.strand_ids.iter().map(|&i| f64::from(i)).collect::<Vec<_>>(), "{name}");
+        let read = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
+        assert_eq!(read.strand_ids, groom.strand_ids, "{name}");
+    }
+    groom.strand_ids[last] = 1 << 31;
+    for name in ["over.usda", "over.usdc"] {
+        let path = dir.path().join(name);
+        let error = coif::io::write_groom(&path, &groom).unwrap_err();
+        let message = error.to_string();
+        assert!(matches!(error, coif::Error::Usage(_)), "{message}");
+        assert!(message.contains(&format!("strand {last} has groom_id 2147483648")), "{message}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "only the two earlier files");
+    }
+}
+
 #[test]
 fn usda_to_usdc_to_usda_keeps_every_value() {
     let dir = tempfile::tempdir().unwrap();

@@ -319,6 +319,10 @@ pub(crate) struct StyleArgs {
     /// Without it, a mesh in the groom file (USD `Mesh`, Alembic `PolyMesh`) under the roots is used.
     #[arg(long, value_name = "OBJ")]
     pub(crate) scalp: Option<PathBuf>,
+    /// Output for Unreal, as `convert --unreal` writes it: centimetres, groom_* attribute
+    /// names, the groom spec version, the meshes in a sibling file.
+    #[arg(long)]
+    pub(crate) unreal: bool,
 }
 
 #[derive(Args)]

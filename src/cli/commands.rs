@@ -58,7 +58,8 @@ fn run_style(args: StyleArgs) -> Result<()> {
     if let Some(count) = args.guides {
         recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
     }
-    io::Format::from_extension(&args.output)?;
+    let export = io::ExportOptions { unreal: args.unreal };
+    io::check_output(&args.output, &export)?;
     let loaded = io::read_groom(&args.groom, &args.import.options(&args.groom)?)?;
     let progress = args.progress.mode(args.quiet, args.json);
     let frames_per_second = args.frames.unwrap_or(0.0);
@@ -88,16 +89,23 @@ fn run_style(args: StyleArgs) -> Result<()> {
         &styled.frames,
         &styled.frame_attributes,
         frames_per_second,
-        &io::ExportOptions::default(),
+        &export,
     )?;
+    let meshes_output = io::meshes_output(&args.output, groom, &export);
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
+    report_meshes_output(meshes_output.as_deref());
     if let Some(settle) = report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
         eprintln!("coif: warning: {}", settle_failure(&settle));
     }
     if args.json {
-        print_json(json!({ "output": args.output, "report": report, "warnings": warnings }));
+        print_json(json!({
+            "output": args.output,
+            "meshes_output": meshes_output,
+            "report": report,
+            "warnings": warnings
+        }));
     } else {
         for stage in &report.stages {
             let curl = stage.curl_radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
@@ -494,7 +502,7 @@ fn run_convert(
     use io::timeline::{parse_range, read_timeline, Timeline};
     let options = import.options(input)?;
     let range = frame_range.map(|text| parse_range(text, "--frame-range")).transpose()?;
-    let output_format = io::Format::from_extension(output)?;
+    let output_format = io::check_output(output, export)?;
     let timeline = match range {
         Some((first, last)) => {
             io::check_animated_output(output)?;

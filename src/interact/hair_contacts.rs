@@ -23,7 +23,7 @@
 //! vertex–edge pair is listed once, through the piece that holds the closest point. Queries run
 //! in the grid's spatial order, and while most vertices are held only edges near movable ones
 //! are cut into pieces.
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::grid::{NeighbourGrid, NeighbourSpread, Occupancy};
@@ -34,21 +34,23 @@ const BUILD_CHUNK: usize = 2048;
 
 /// A piece of an edge, carrying what a query needs so candidates are read contiguously: the
 /// whole edge (every piece of an edge computes the same closest point, so exactly one claims
-/// it), its vertex index and strand, its mean radius, which piece of how many it is, and its own
-/// middle and reach (mean radius plus half its length): a vertex farther than its reach plus
-/// its own radius and the skin from the middle cannot be listed through this piece.
+/// it), its vertex index and strand, its mean radius, and which piece of how many it is. Its
+/// [`PieceSphere`] is kept apart.
 #[derive(Clone, Copy, Debug, Default)]
 struct Piece {
     a: Vec3,
     b: Vec3,
-    mid: Vec3,
-    reach: f32,
     edge: u32,
     strand: u32,
     radius: f32,
     index: u32,
     count: u32,
 }
+
+/// A piece's middle (xyz) and reach (w: mean radius plus half its length): a vertex farther than
+/// the reach plus its own radius and the skin from the middle cannot be listed through this
+/// piece. Most pieces a query visits fail this test, so it reads these 16 bytes alone.
+type PieceSphere = Vec4;
 
 pub struct HairContacts {
     /// α, m/s²: the push at full overlap.
@@ -62,13 +64,14 @@ pub struct HairContacts {
     edge_continues: Vec<bool>,
     /// First vertex of every edge.
     edges: Vec<u32>,
-    // Build scratch: each edge's first piece, the pieces in edge order and their middles, their
-    // grid, and the pieces in the grid's order.
+    // Build scratch: each edge's first piece, the middles and edges of the pieces in edge order,
+    // their grid, and the pieces and their spheres in the grid's order.
     first_piece: Vec<u32>,
-    pieces: Vec<Piece>,
     piece_mids: Vec<Vec3>,
+    piece_edges: Vec<u32>,
     grid: NeighbourGrid,
     sorted_pieces: Vec<Piece>,
+    sorted_spheres: Vec<PieceSphere>,
     /// Movable vertices to query, as (bucket << 32 | vertex), sorted.
     queries: Vec<u64>,
     // Verlet lists: `list_edges[list_starts[i]..list_starts[i + 1]]` are vertex i's candidates.
@@ -132,9 +135,10 @@ impl HairContacts {
             grid: NeighbourGrid::new(Self::cell_size(max_radius, skin, spacing)),
             edges,
             first_piece: Vec::new(),
-            pieces: Vec::new(),
             piece_mids: Vec::new(),
+            piece_edges: Vec::new(),
             sorted_pieces: Vec::new(),
+            sorted_spheres: Vec::new(),
             queries: Vec::new(),
             list_starts: Vec::new(),
             list_edges: Vec::new(),
@@ -290,23 +294,20 @@ impl HairContacts {
         ((points[j].distance(points[j + 1]) / self.spacing).ceil() as u32).max(1)
     }
 
-    fn piece(&self, points: &[Vec3], radii: &[f32], e: usize, index: u32) -> Piece {
+    /// Piece `index` of edge `e`, and its sphere.
+    fn piece(&self, points: &[Vec3], radii: &[f32], e: usize, index: u32) -> (Piece, PieceSphere) {
         let j = self.edges[e] as usize;
         let (a, b) = (points[j], points[j + 1]);
         let count = self.first_piece[e + 1] - self.first_piece[e];
         let radius = 0.5 * (radii[j] + radii[j + 1]);
-        Piece {
-            a,
-            b,
-            mid: a.lerp(b, (index as f32 + 0.5) / count as f32),
-            // A closest point rounded just past the piece's end still counts as in it.
-            reach: radius + a.distance(b) / count as f32 * 0.505 + 1e-6,
-            edge: j as u32,
-            strand: self.strand_of[j],
-            radius,
-            index,
-            count,
-        }
+        // A closest point rounded just past the piece's end still counts as in it.
+        let reach = radius + a.distance(b) / count as f32 * 0.505 + 1e-6;
+        let piece = Piece { a, b, edge: j as u32, strand: self.strand_of[j], radius, index, count };
+        (piece, Self::piece_mid(a, b, index, count).extend(reach))
+    }
+
+    fn piece_mid(a: Vec3, b: Vec3, index: u32, count: u32) -> Vec3 {
+        a.lerp(b, (index as f32 + 0.5) / count as f32)
     }
 
     /// Cuts the edges into pieces and sorts them into the grid. While most vertices are not
@@ -338,31 +339,41 @@ impl HairContacts {
             self.first_piece.push(self.first_piece.last().unwrap() + c);
         }
         let total = *self.first_piece.last().unwrap() as usize;
-        let mut pieces = std::mem::take(&mut self.pieces);
+        // The grid sorts the pieces' middles; the pieces themselves are made in its order.
         let mut mids = std::mem::take(&mut self.piece_mids);
-        pieces.resize(total, Piece::default());
+        let mut piece_edges = std::mem::take(&mut self.piece_edges);
         mids.resize(total, Vec3::ZERO);
+        piece_edges.resize(total, 0);
         let this = &*self;
-        pieces.par_chunks_mut(BUILD_CHUNK).zip(mids.par_chunks_mut(BUILD_CHUNK)).enumerate().for_each(
-            |(c, (pieces, mids))| {
+        mids.par_chunks_mut(BUILD_CHUNK).zip(piece_edges.par_chunks_mut(BUILD_CHUNK)).enumerate().for_each(
+            |(c, (mids, piece_edges))| {
                 let first = c * BUILD_CHUNK;
                 let mut e = this.first_piece.partition_point(|&f| f as usize <= first) - 1;
-                for ((k, piece), mid) in (first..).zip(pieces).zip(mids) {
+                for ((k, mid), piece_edge) in (first..).zip(mids).zip(piece_edges) {
                     while this.first_piece[e + 1] as usize <= k {
                         e += 1;
                     }
-                    *piece = this.piece(points, radii, e, k as u32 - this.first_piece[e]);
-                    *mid = piece.mid;
+                    let j = this.edges[e] as usize;
+                    let count = this.first_piece[e + 1] - this.first_piece[e];
+                    *mid = Self::piece_mid(points[j], points[j + 1], k as u32 - this.first_piece[e], count);
+                    *piece_edge = e as u32;
                 }
             },
         );
         self.grid.rebuild(&mids);
+        (self.piece_mids, self.piece_edges) = (mids, piece_edges);
         let mut sorted = std::mem::take(&mut self.sorted_pieces);
+        let mut spheres = std::mem::take(&mut self.sorted_spheres);
         sorted.resize(total, Piece::default());
-        sorted.par_iter_mut().zip(self.grid.sorted_items().par_iter()).for_each(|(piece, &k)| {
-            *piece = pieces[k as usize];
-        });
-        (self.pieces, self.piece_mids, self.sorted_pieces) = (pieces, mids, sorted);
+        spheres.resize(total, PieceSphere::ZERO);
+        let this = &*self;
+        sorted.par_iter_mut().zip(spheres.par_iter_mut()).zip(this.grid.sorted_items().par_iter()).for_each(
+            |((piece, sphere), &k)| {
+                let e = this.piece_edges[k as usize] as usize;
+                (*piece, *sphere) = this.piece(points, radii, e, k - this.first_piece[e]);
+            },
+        );
+        (self.sorted_pieces, self.sorted_spheres) = (sorted, spheres);
     }
 
     /// Builds the lists of every movable vertex, or (`partial`) only of those whose pairs may
@@ -468,11 +479,11 @@ impl HairContacts {
         let strand = self.strand_of[i];
         let own = radii[i] + self.skin;
         self.grid.for_each_near_run(p, |run| {
-            for piece in &self.sorted_pieces[run] {
+            for (sphere, piece) in self.sorted_spheres[run.clone()].iter().zip(&self.sorted_pieces[run]) {
                 // Most pieces in the cells around are beyond reach of their middle: a cheap test
                 // before the closest point.
-                let near = own + piece.reach;
-                if piece.strand == strand || p.distance_squared(piece.mid) >= near * near {
+                let near = own + sphere.w;
+                if p.distance_squared(sphere.truncate()) >= near * near || piece.strand == strand {
                     continue;
                 }
                 let ab = piece.b - piece.a;

@@ -303,14 +303,7 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
 /// written together with the groom (both or neither).
 pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
     groom.validate()?;
-    let format = Format::from_extension(path)?;
-    if options.unreal && matches!(format, Format::Hair | Format::Usdz) {
-        return Err(Error::Usage(format!(
-            "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
-            path.display(),
-            path.extension().and_then(|e| e.to_str()).unwrap_or("")
-        )));
-    }
+    let format = check_output(path, options)?;
     match format {
         Format::Hair => {
             hair::check_writable(groom, path)?;
@@ -329,6 +322,20 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
             Ok(alembic_warnings(path, groom))
         }
     }
+}
+
+/// The format `path` is written in with `options`, or the usage error: `--unreal` writes only
+/// the formats Unreal's groom importers read. Commands check it before any work.
+pub fn check_output(path: &Path, options: &ExportOptions) -> Result<Format> {
+    let format = Format::from_extension(path)?;
+    if options.unreal && matches!(format, Format::Hair | Format::Usdz) {
+        return Err(Error::Usage(format!(
+            "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
+            path.display(),
+            path.extension().and_then(|e| e.to_str()).unwrap_or("")
+        )));
+    }
+    Ok(format)
 }
 
 /// The file a write of `groom` to `path` puts the meshes in when that is not `path` itself: the
@@ -394,6 +401,7 @@ pub fn write_animated(
     };
     let times =
         usda::TimeCodes { start: 1.0, end: frames.len() as f64, per_second: frames_per_second as f64 };
+    check_output(path, options)?;
     let format = check_animated_output(path)?;
     if format == Format::Alembic {
         let abc_options = alembic_options(options, times.per_second, times.start);
@@ -430,6 +438,7 @@ pub fn write_frames(
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
     first.validate()?;
+    check_output(path, options)?;
     let format = check_animated_output(path)?;
     let count = timeline.frame_count();
     let same_topology = |k: u64, groom: &Groom| -> Result<()> {

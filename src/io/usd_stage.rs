@@ -26,6 +26,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groups::Interpolation;
 use crate::io::usda::names;
 use crate::surface_mesh::SurfaceMesh;
 
@@ -160,8 +161,20 @@ pub fn add_unreal_groom_properties(stage: &mut Stage) {
     }
 }
 
-/// Checks what USD cannot store: cubic strands with too few control points for their basis.
+/// Checks what USD cannot store: strand ids past `int` (`groom_id`), cubic strands with too few
+/// control points for their basis.
 pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
+    // `groom_id` is USD's `int` (what Unreal's importer reads): a larger id would be written
+    // negative, and coif's own reader refuses negative ids.
+    if let Some((strand, id)) =
+        groom.strand_ids.iter().enumerate().find(|(_, &id)| i32::try_from(id).is_err())
+    {
+        return Err(Error::Usage(format!(
+            "{}: strand {strand} has groom_id {id}; USD's int primvar holds ids up to {}",
+            path.display(),
+            i32::MAX
+        )));
+    }
     if groom.groups.is_empty() && groom.basis == CurveBasis::Linear {
         return Ok(());
     }
@@ -557,6 +570,7 @@ fn primvars<'g>(
         Property::new(format!("primvars:{name}"), "int[]", Value::Default(data)).interpolated("uniform")
     };
     let ids = strands.per_strand(&groom.strand_ids, 1);
+    // `check_writable` refused ids past `i32::MAX`.
     primvars.push(uniform_ints(names::GROOM_ID, ids.iter().map(|&i| i as i32).collect()));
     if let Some(guides) = &groom.guides {
         let guides = strands.per_strand(guides, 1);
@@ -588,12 +602,30 @@ fn primvars<'g>(
             ));
         }
         let type_name = usd_type(attribute.kind, &attribute.name, attribute.components);
-        let interpolation = match attribute.rate {
-            AttributeRate::Vertex => "vertex",
-            AttributeRate::Strand => "uniform",
-        };
-        let data = |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name);
         let sampled = animation.filter(|a| a.attribute(0, &attribute.name).is_some());
+        // The file's own interpolation where the values still fit it (one value for the prim;
+        // varying = vertex on linear and pinned curves); else the rate's.
+        let fits = |interpolation| match (interpolation, attribute.rate) {
+            (Interpolation::Constant, AttributeRate::Strand) => {
+                let values = strands.per_strand(&attribute.data, attribute.components);
+                sampled.is_none()
+                    && values.chunks_exact(attribute.components).all(|v| v == &values[..v.len()])
+            }
+            (Interpolation::Varying, AttributeRate::Vertex) => {
+                group.basis == CurveBasis::Linear
+                    || (group.wrap == CurveWrap::Pinned && group.basis != CurveBasis::Bezier)
+            }
+            _ => false,
+        };
+        let interpolation = match (group.interpolation(&attribute.name).filter(|&i| fits(i)), attribute.rate)
+        {
+            (Some(Interpolation::Constant), _) => "constant",
+            (Some(Interpolation::Varying), _) => "varying",
+            (None, AttributeRate::Vertex) => "vertex",
+            (None, AttributeRate::Strand) => "uniform",
+        };
+        let one_value = interpolation == "constant";
+        let data = |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name, one_value);
         let value = match sampled {
             Some(a) => Value::TimeSamples(
                 (0..a.points.len())
@@ -610,12 +642,22 @@ fn primvars<'g>(
 }
 
 /// A group's values of an attribute, as `type_name` holds them.
-fn primvar_data<'g>(groom: &Groom, strands: &Strands, attribute: &'g Attribute, type_name: &str) -> Data<'g> {
+/// `one_value`: only the first strand's (a `constant` primvar).
+fn primvar_data<'g>(
+    groom: &Groom,
+    strands: &Strands,
+    attribute: &'g Attribute,
+    type_name: &str,
+    one_value: bool,
+) -> Data<'g> {
     let components = attribute.components;
-    let values = match attribute.rate {
+    let mut values = match attribute.rate {
         AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, components),
         AttributeRate::Strand => strands.per_strand(&attribute.data, components),
     };
+    if one_value {
+        values.to_mut().truncate(components);
+    }
     match attribute.kind {
         // Int and bool tuples have no USD type of their own here: they go as floats.
         AttributeKind::Int if type_name == "int[]" => {

@@ -1,13 +1,18 @@
-"""Test helper: what Blender's own importer (bpy) makes of a groom coif wrote, as JSON.
+"""Test helper: what Blender's own importer (bpy) makes of a groom file, as JSON.
 
   bpy_reimport.py FILE [--frames FIRST:LAST]
-      FILE is .abc (wm.alembic_import) or .usd/.usda/.usdc (wm.usd_import)
+      FILE is .abc (wm.alembic_import) or .usd/.usda/.usdc/.usdz (wm.usd_import)
 
-For every curves object: its name, curve and point counts, and each attribute whose name starts
-with "groom_" (domain, data type, values flattened) -- the guide flag and Unreal's interpolation
-attributes a DCC needs to re-interpolate children from guides. With --frames, also the world
-positions of every curves object's points at each scene frame FIRST..LAST (evaluated: object
-animation, cache modifiers), in Blender's space (Z up, metres).
+For every curves object ("objects"): its name, curve and point counts, the set of its curve types
+(Blender's `curve_type` codes: 0 Catmull-Rom, the default when the attribute is absent, 1 poly,
+2 Bézier, 3 NURBS), whether any curve is cyclic, the radius of every point, the world positions
+of its points (evaluated: object transforms, cache modifiers) and each attribute whose name
+starts with "groom_" (domain, data type, values flattened) -- the guide flag and Unreal's
+interpolation attributes a DCC needs to re-interpolate children from guides. For every mesh
+object ("meshes"): its name, vertex and face counts, world vertex positions, UV map names and
+whether it has custom normals. With --frames, also the world positions of every curves and mesh
+object at each scene frame FIRST..LAST. All in Blender's space (Z up, metres, or the file's
+units for Alembic, which has none).
 """
 import json
 import sys
@@ -26,13 +31,49 @@ def flatten(attribute):
     return out
 
 
+def evaluated(obj):
+    return obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+
+
 def world_points(obj):
-    evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
-    matrix = evaluated.matrix_world
-    out = []
-    for p in evaluated.data.attributes["position"].data:
-        out.extend(matrix @ p.vector)
-    return out
+    data = evaluated(obj)
+    matrix = data.matrix_world
+    if obj.type == "MESH":
+        return [x for v in data.data.vertices for x in matrix @ v.co]
+    return [x for p in data.data.attributes["position"].data for x in matrix @ p.vector]
+
+
+def curves_object(obj):
+    curves = evaluated(obj).data
+    attributes = curves.attributes
+    types = sorted({a.value for a in attributes["curve_type"].data}) if "curve_type" in attributes else [0]
+    cyclic = "cyclic" in attributes and any(a.value for a in attributes["cyclic"].data)
+    return {
+        "name": obj.name,
+        "curves": len(curves.curves),
+        "points": len(curves.points),
+        "curve_types": types,
+        "cyclic": cyclic,
+        "radii": [a.value for a in attributes["radius"].data] if "radius" in attributes else [],
+        "positions": world_points(obj),
+        "attributes": {
+            a.name: {"domain": a.domain, "type": a.data_type, "values": flatten(a)}
+            for a in attributes
+            if a.name.startswith("groom_")
+        },
+    }
+
+
+def mesh_object(obj):
+    mesh = evaluated(obj).data
+    return {
+        "name": obj.name,
+        "vertices": len(mesh.vertices),
+        "faces": len(mesh.polygons),
+        "positions": world_points(obj),
+        "uv_maps": [uv.name for uv in mesh.uv_layers],
+        "custom_normals": mesh.has_custom_normals,
+    }
 
 
 def main():
@@ -41,36 +82,28 @@ def main():
     frames = None
     if "--frames" in args:
         first, last = args[args.index("--frames") + 1].split(":")
-        frames = range(int(first), int(last) + 1)
+        frames = range(int(float(first)), int(float(last)) + 1)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     if path.endswith(".abc"):
         bpy.ops.wm.alembic_import(filepath=path, as_background_job=False)
     else:
         bpy.ops.wm.usd_import(filepath=path)
-    objects = []
-    for obj in sorted(bpy.context.scene.objects, key=lambda o: o.name):
-        if obj.type != "CURVES":
-            continue
-        curves = obj.data
-        objects.append(
-            {
-                "name": obj.name,
-                "curves": len(curves.curves),
-                "points": len(curves.points),
-                "attributes": {
-                    a.name: {"domain": a.domain, "type": a.data_type, "values": flatten(a)}
-                    for a in curves.attributes
-                    if a.name.startswith("groom_")
-                },
-            }
-        )
-    result = {"objects": objects}
+    scene = bpy.context.scene
+    by_name = sorted(scene.objects, key=lambda o: o.name)
+    curves = [o for o in by_name if o.type == "CURVES"]
+    meshes = [o for o in by_name if o.type == "MESH"]
     if frames is not None:
-        curves_objects = sorted((o for o in bpy.context.scene.objects if o.type == "CURVES"), key=lambda o: o.name)
+        scene.frame_set(frames[0])
+    result = {
+        "objects": [curves_object(o) for o in curves],
+        "meshes": [mesh_object(o) for o in meshes],
+        "other_types": sorted({o.type for o in by_name} - {"CURVES", "MESH", "EMPTY"}),
+    }
+    if frames is not None:
         result["frames"] = []
         for frame in frames:
-            bpy.context.scene.frame_set(frame)
-            result["frames"].append({o.name: world_points(o) for o in curves_objects})
+            scene.frame_set(frame)
+            result["frames"].append({o.name: world_points(o) for o in curves + meshes})
     print("BPY-JSON " + json.dumps(result))
 
 

@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::groom::{
     Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
 };
+use crate::groups::Interpolation;
 use crate::io::{ImportOptions, UpAxis};
 use crate::surface_mesh::SurfaceMesh;
 
@@ -31,6 +32,8 @@ struct Curves {
     root_uvs: Option<Vec<[f32; 2]>>,
     guides: Option<Vec<bool>>,
     attributes: Vec<GroomAttribute>,
+    /// Attributes read from `constant` or exactly-per-vertex `varying` primvars.
+    interpolations: Vec<(String, Interpolation)>,
 }
 
 /// The transform from a layer's space to coif's (metres, Y up), applied after each prim's world
@@ -362,6 +365,7 @@ impl Walker<'_> {
             root_uvs: None,
             guides: None,
             attributes: Vec::new(),
+            interpolations: Vec::new(),
         };
         let primvar_names: Vec<String> = prim
             .attributes
@@ -427,6 +431,14 @@ impl Walker<'_> {
                 _ => {
                     let groom_name = names::attribute_for_primvar(&name);
                     let kind = attribute_kind(&type_name, &groom_name, components);
+                    let interpolation = match interpolation.as_str() {
+                        "constant" => Some(Interpolation::Constant),
+                        "varying" if layout.varying_is_vertex() => Some(Interpolation::Varying),
+                        _ => None,
+                    };
+                    if let Some(interpolation) = interpolation {
+                        curves.interpolations.push((groom_name.clone(), interpolation));
+                    }
                     curves
                         .attributes
                         .push(GroomAttribute::new(groom_name, rate, components, data).with_kind(kind));
@@ -493,6 +505,11 @@ impl Layout<'_> {
             (_, true) => vertices,
             (_, false) => vertices.saturating_sub(2).max(1),
         }
+    }
+
+    /// Whether `varying` values are one per vertex (linear or pinned non-Bézier curves).
+    fn varying_is_vertex(&self) -> bool {
+        self.counts.iter().all(|&c| self.varying_count(c) == c)
     }
 
     /// Checks the value count against the interpolation and returns per-strand or per-vertex data.
@@ -803,6 +820,7 @@ impl Curves {
         }
         let mut group = CurveGroup::new(self.path, self.basis, self.wrap);
         group.purpose = self.purpose;
+        group.interpolations = self.interpolations;
         groom.set_single_group(group);
         groom
     }
