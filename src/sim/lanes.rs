@@ -293,8 +293,6 @@ pub struct Scratch {
     values: Vec<V3>,
     /// Per lane, the first edge of the free tail.
     free_tail: [usize; LANES],
-    /// Per vertex, its inverse mass in the direct solve (`solver::project_obstacles`).
-    solve_w: Vec<F>,
     edge_k: Vec<EdgeK>,
     pair_k: Vec<PairK>,
     /// One lane's positions, handed to the obstacle hook.
@@ -378,7 +376,7 @@ fn finish_step_impl(
         resize(v, n);
     }
     resize(&mut s.inverse, n);
-    for v in [&mut s.kinematic, &mut s.w, &mut s.wq, &mut s.solve_w] {
+    for v in [&mut s.kinematic, &mut s.w, &mut s.wq] {
         resize(v, n);
     }
     resize(&mut s.q, n);
@@ -423,7 +421,6 @@ fn finish_step_impl(
         s.x_prev[i] = s.x[i];
         s.x[i] = V3::select(s.kinematic[i], s.target[i], s.x[i] + s.v[i].scale(dt_f));
         s.lambda[i] = V3::default();
-        s.solve_w[i] = s.w[i];
     }
     for iteration in 0..iterations {
         solve_stretch_shear(s, edges);
@@ -475,9 +472,6 @@ fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn
         }
         hooks.project(st.strand, st.first_vertex, &mut s.lane_x, st.w);
         for i in 0..n {
-            if s.lane_x[i] != s.x[i].get(l) {
-                s.solve_w[i].0[l] = st.w[i] * super::solver::CONTACT_SLIP;
-            }
             s.x[i].set(l, s.lane_x[i]);
         }
     }
@@ -488,7 +482,7 @@ fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn
 fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
     let zero = F::splat(0.0);
     let one = F::splat(1.0);
-    let w = &s.solve_w;
+    let w = &s.w;
     for e in 0..edges {
         // Edges before the lane's free tail (`solver::free_tail`) are left out: μ = 0.
         let in_tail = F(from_fn(|l| if e >= s.free_tail[l] { 1.0 } else { 0.0 }));

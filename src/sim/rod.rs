@@ -78,9 +78,6 @@ pub struct Rods {
     /// stretch–shear solve.
     solve_inverse: Vec<Sym3>,
     solve_values: Vec<Vec3>,
-    /// Per vertex, its inverse mass in the direct stretch–shear solve (held once an obstacle
-    /// moved it this step).
-    solve_inv_mass: Vec<f32>,
     edge_coefficients: Vec<StretchShearCoefficients>,
     pair_coefficients: Vec<BendTwistCoefficients>,
     /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
@@ -100,7 +97,6 @@ pub(super) struct StepArrays<'a> {
     pub lambdas: &'a mut [Vec3],
     pub solve_inverse: &'a mut [Sym3],
     pub solve_values: &'a mut [Vec3],
-    pub solve_inv_mass: &'a mut [f32],
     pub edge_coefficients: &'a [StretchShearCoefficients],
     pub pair_coefficients: &'a [BendTwistCoefficients],
     pub inv_mass: &'a [f32],
@@ -167,7 +163,6 @@ impl Rods {
             lambdas: vec![Vec3::ZERO; n],
             solve_inverse: vec![Sym3::default(); n],
             solve_values: vec![Vec3::ZERO; n],
-            solve_inv_mass: vec![0.0; n],
             edge_coefficients: vec![StretchShearCoefficients::default(); n],
             pair_coefficients: vec![BendTwistCoefficients::default(); n],
             work_units: Vec::new(),
@@ -255,7 +250,6 @@ impl Rods {
             self.lambdas.len(),
             self.solve_inverse.len(),
             self.solve_values.len(),
-            self.solve_inv_mass.len(),
             self.edge_coefficients.len(),
             self.pair_coefficients.len(),
         ];
@@ -282,7 +276,6 @@ impl Rods {
             lambdas: &mut self.lambdas,
             solve_inverse: &mut self.solve_inverse,
             solve_values: &mut self.solve_values,
-            solve_inv_mass: &mut self.solve_inv_mass,
             edge_coefficients: &self.edge_coefficients,
             pair_coefficients: &self.pair_coefficients,
             inv_mass: &self.inv_mass,

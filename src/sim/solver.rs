@@ -67,7 +67,6 @@ struct Strand<'a> {
     lambda: &'a mut [Vec3],
     inverse: &'a mut [Sym3],
     values: &'a mut [Vec3],
-    solve_w: &'a mut [f32],
     edge_k: &'a [StretchShearCoefficients],
     pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
@@ -92,7 +91,6 @@ struct Parts<'a> {
     lambda: SharedMut<Vec3>,
     inverse: SharedMut<Sym3>,
     values: SharedMut<Vec3>,
-    solve_w: SharedMut<f32>,
     edge_k: &'a [StretchShearCoefficients],
     pair_k: &'a [BendTwistCoefficients],
     w: &'a [f32],
@@ -123,7 +121,6 @@ impl<'a> Parts<'a> {
             rest: self.rest.slice(r.clone()),
             lambda: self.lambda.slice(r.clone()),
             inverse: self.inverse.slice(r.clone()),
-            solve_w: self.solve_w.slice(r.clone()),
             values: self.values.slice(r.clone()),
             edge_k: &self.edge_k[r.clone()],
             pair_k: &self.pair_k[r.clone()],
@@ -163,7 +160,6 @@ pub(crate) fn step_all(
         rest: SharedMut::new(a.rest_darboux),
         lambda: SharedMut::new(a.lambdas),
         inverse: SharedMut::new(a.solve_inverse),
-        solve_w: SharedMut::new(a.solve_inv_mass),
         values: SharedMut::new(a.solve_values),
         edge_k: a.edge_coefficients,
         pair_k: a.pair_coefficients,
@@ -240,8 +236,7 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
     let edges = s.x.len() - 1;
     let start = free_tail(s.kinematic);
     s.values[..start].fill(Vec3::ZERO);
-    // The vertices' inverse masses for this solve: touching vertices are held (`project_obstacles`).
-    let w: &[f32] = s.solve_w;
+    let w: &[f32] = s.w;
     // Forward elimination: P_e = B_e − w_e²·P_{e−1}⁻¹, z_e = P_e⁻¹·(−C_e + w_e·z_{e−1}).
     for e in start..edges {
         let d = director3(s.q[e]);
@@ -289,32 +284,6 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
     }
 }
 
-/// The share of its inverse mass a vertex keeps in the direct solves left in a step once an
-/// obstacle has moved it (see [`project_obstacles`]).
-pub(super) const CONTACT_SLIP: f32 = 1e-2;
-
-/// Projects onto the obstacles and, for the direct solves left in this step, holds every vertex
-/// the projection moved: its inverse mass there drops to `CONTACT_SLIP` of its own. Where a
-/// touching vertex goes is the projection's decision (depth and friction); without the hold the
-/// exact solve pulled resting hair back into the head every iteration and slid it along the
-/// surface, where friction acts only on vertices found inside, and the projection pushed it out
-/// again — a settle at Δt 1/240 never came to rest. The hold is isotropic and never total:
-/// holding only the normal (`w·(I − n·nᵀ)`) left the root edge's pivot singular whenever vertex 1
-/// touched the scalp (root vertex and frame pinned), and f32 resolves a near-null direction of a
-/// 3×3 block only to ~10 %, so its huge inverse leaked through the elimination and threw wet
-/// strands at 40 m/s (Blender's bed-head under the pillow); a span nothing can satisfy is still
-/// met by moving its touching vertices, which the projection then puts back, as Gauss–Seidel
-/// does.
-fn project_obstacles(s: &mut Strand<'_>, hooks: &dyn Hooks, strand: usize, first: usize) {
-    s.values.copy_from_slice(s.x);
-    hooks.project(strand, first, s.x, s.w);
-    for j in 0..s.x.len() {
-        if s.x[j] != s.values[j] {
-            s.solve_w[j] = s.w[j] * CONTACT_SLIP;
-        }
-    }
-}
-
 /// The first edge of the strand's free tail: edges from the last kinematic vertex on. A span
 /// between two kinematic vertices (a root and a held winding) can be over-constrained — its rest
 /// length shorter than the gap — and a direct solve of hard constraints would then pull it
@@ -358,7 +327,7 @@ fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
         n >= 2
             && [s.v.len(), s.x_prev.len(), s.q.len(), s.rest.len()]
                 .iter()
-                .chain(&[s.lambda.len(), s.inverse.len(), s.values.len(), s.solve_w.len(), s.edge_k.len()])
+                .chain(&[s.lambda.len(), s.inverse.len(), s.values.len(), s.edge_k.len()])
                 .chain(&[s.pair_k.len(), s.w.len(), s.kinematic.len(), s.targets.len(), s.external.len()])
                 .chain(&[s.wq.len(), s.length.len(), s.compliance.len(), s.bonded.len(), s.broken.len()])
                 .all(|&len| len == n)
@@ -390,7 +359,6 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
         s.x_prev[i] = s.x[i];
         s.x[i] = if s.kinematic[i] { s.targets[i] } else { s.x[i] + s.v[i] * dt };
     }
-    s.solve_w.copy_from_slice(s.w);
     // Frames are quasi-static: they carry no angular momentum and start each step where the
     // last ended. (Hair's rotational inertia is negligible, the frame inertia here is only a
     // conditioning choice, and integrating frame angular velocities fed energy into resting curls.)
@@ -414,9 +382,7 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
                 }
             }
         }
-        if hooks.projects() {
-            project_obstacles(&mut s, hooks, strand, first);
-        }
+        hooks.project(strand, first, s.x, s.w);
     }
 
     // Velocities from the positions actually reached.
