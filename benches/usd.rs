@@ -6,7 +6,7 @@
 //!     cargo bench --bench usd            (or `make bench-usd`)
 
 mod common;
-use common::median;
+use common::{cpu_seconds, load, median};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -72,22 +72,6 @@ fn status_kb(field: &str) -> u64 {
         .find_map(|l| l.strip_prefix(field).and_then(|r| r.trim_start_matches(':').split_whitespace().next()))
         .and_then(|v| v.parse().ok())
         .unwrap_or(0)
-}
-
-/// CPU seconds (user + system, all threads) this process and its finished children have used.
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // Fields after the command name (which is in parentheses): utime, stime, cutime, cstime are
-    // the 12th to 15th.
-    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-    let ticks: f64 = fields.get(11..15).map_or(0.0, |f| f.iter().filter_map(|v| v.parse::<f64>().ok()).sum());
-    ticks / 100.0
-}
-
-/// The 1-, 5- and 15-minute load averages: CPU figures are comparable only at similar load.
-fn load() -> String {
-    let text = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
-    text.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
 }
 
 /// One measurement in this (child) process; prints the same JSON as the pxr script.

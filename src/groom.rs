@@ -219,7 +219,8 @@ impl Groom {
     pub fn scale(&mut self, factor: f32) {
         self.points.iter_mut().for_each(|p| *p *= factor);
         self.widths.iter_mut().for_each(|w| *w *= factor);
-        self.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(|p| *p *= factor);
+        let scale = glam::DMat4::from_scale(glam::DVec3::splat(factor as f64));
+        self.meshes.iter_mut().for_each(|m| m.transform(scale));
     }
 
     /// Checks every invariant of the model; the first violation is returned.

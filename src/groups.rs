@@ -11,6 +11,7 @@ use std::borrow::Cow;
 use serde::{Deserialize, Serialize};
 
 use crate::groom::{Attribute, AttributeRate, CurveBasis, Groom, GroomError};
+use crate::surface_mesh::SurfaceMesh;
 
 /// How a curve's ends behave (USD `wrap`; Alembic's periodicity byte).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -134,16 +135,36 @@ impl Groom {
         (0..self.strand_count()).filter(|&s| self.group_of(s) == group).collect()
     }
 
-    /// Appends `other`'s strands and groups (a reader adding the next prim). Attributes one
-    /// side lacks are padded with zeros and recorded as missing from that side's groups.
-    pub fn append(&mut self, other: &Groom) -> Result<(), GroomError> {
-        let ours: Vec<usize> = (0..self.strand_count()).collect();
-        let theirs: Vec<usize> = (0..other.strand_count()).collect();
-        let mut meshes = std::mem::take(&mut self.meshes);
-        *self = assemble(&[(&*self, &ours), (other, &theirs)])?;
-        meshes.extend(other.meshes.iter().cloned());
-        self.meshes = meshes;
-        Ok(())
+    /// One groom of every part's strands and groups, in order (a reader joining its prims or
+    /// objects); meshes are moved along. The data is copied once however many parts there are.
+    /// Attributes a part lacks are padded with zeros and recorded as missing from its groups.
+    /// An error names the index of the first part that does not fit the ones before it.
+    pub fn concat(mut parts: Vec<Groom>) -> Result<Groom, (usize, GroomError)> {
+        if parts.len() == 1 {
+            return Ok(parts.pop().expect("one part"));
+        }
+        // The one conflict `assemble` refuses: an attribute name with two component counts.
+        let mut components: Vec<(&str, usize)> = Vec::new();
+        for (index, part) in parts.iter().enumerate() {
+            for attribute in &part.attributes {
+                match components.iter().find(|(name, _)| *name == attribute.name) {
+                    Some(&(_, first)) if first != attribute.components => {
+                        let name = attribute.name.clone();
+                        let components = attribute.components;
+                        return Err((index, GroomError::AttributeComponents { name, components }));
+                    }
+                    Some(_) => {}
+                    None => components.push((&attribute.name, attribute.components)),
+                }
+            }
+        }
+        let meshes: Vec<SurfaceMesh> = parts.iter_mut().flat_map(|p| std::mem::take(&mut p.meshes)).collect();
+        let strands: Vec<Vec<usize>> = parts.iter().map(|p| (0..p.strand_count()).collect()).collect();
+        let sources: Vec<(&Groom, &[usize])> =
+            parts.iter().zip(&strands).map(|(p, s)| (p, s.as_slice())).collect();
+        let mut whole = assemble(&sources).map_err(|e| (parts.len().saturating_sub(1), e))?;
+        whole.meshes = meshes;
+        Ok(whole)
     }
 
     /// One groom per group, each with a one-entry group table and only the attributes its group
@@ -268,17 +289,35 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         }
         group_maps.push(map);
     }
+    let strand_total: usize = parts.iter().map(|(_, strands)| strands.len()).sum();
+    let vertex_total: usize =
+        parts.iter().flat_map(|(g, strands)| strands.iter().map(|&s| g.strand_range(s).len())).sum();
+    out.points.reserve_exact(vertex_total);
+    out.widths.reserve_exact(vertex_total);
+    out.strand_offsets.reserve_exact(strand_total);
+    out.strand_ids.reserve_exact(strand_total);
+    out.group_ids.reserve_exact(strand_total);
     let any_uvs = parts.iter().any(|(g, _)| g.root_uvs.is_some());
     let any_guides = parts.iter().any(|(g, _)| g.guides.is_some());
     let (mut uvs, mut guides) = (Vec::new(), Vec::new());
     for ((groom, strands), map) in parts.iter().zip(&group_maps) {
+        for run in runs(groom, strands) {
+            let (first, last) = (run.start, run.end - 1);
+            let vertices = groom.strand_range(first).start..groom.strand_range(last).end;
+            let (from, to) = (vertices.start as u32, out.points.len() as u32);
+            out.points.extend_from_slice(&groom.points[vertices.clone()]);
+            out.widths.extend_from_slice(&groom.widths[vertices]);
+            out.strand_offsets
+                .extend(groom.strand_offsets[first + 1..=run.end].iter().map(|&o| o - from + to));
+            match groom.strand_ids.get(run.clone()) {
+                Some(ids) => out.strand_ids.extend_from_slice(ids),
+                None => out
+                    .strand_ids
+                    .extend(run.clone().map(|s| groom.strand_ids.get(s).copied().unwrap_or(s as u32))),
+            }
+            out.group_ids.extend(std::iter::repeat_n(map[groom.group_of(first)], run.len()));
+        }
         for &s in strands.iter() {
-            let range = groom.strand_range(s);
-            out.points.extend_from_slice(&groom.points[range.clone()]);
-            out.widths.extend_from_slice(&groom.widths[range]);
-            out.strand_offsets.push(out.points.len() as u32);
-            out.strand_ids.push(groom.strand_ids.get(s).copied().unwrap_or(s as u32));
-            out.group_ids.push(map[groom.group_of(s)]);
             if any_uvs {
                 uvs.push(groom.root_uvs.as_ref().map_or([0.0; 2], |u| u[s]));
             }
@@ -308,28 +347,38 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         } else {
             AttributeRate::Vertex
         };
-        let mut data = Vec::new();
+        let per_element = match rate {
+            AttributeRate::Strand => strand_total,
+            AttributeRate::Vertex => vertex_total,
+        };
+        let mut data = Vec::with_capacity(per_element * components);
         let mut carried = vec![false; out.groups.len()];
         for ((groom, strands), map) in parts.iter().zip(&group_maps) {
             let attribute = groom.attribute(name);
-            for &s in strands.iter() {
-                let group = groom.group(groom.group_of(s));
+            for run in runs(groom, strands) {
+                let group_index = groom.group_of(run.start);
+                let vertices = groom.strand_range(run.start).start..groom.strand_range(run.end - 1).end;
                 let count = match rate {
-                    AttributeRate::Strand => 1,
-                    AttributeRate::Vertex => groom.strand_range(s).len(),
+                    AttributeRate::Strand => run.len(),
+                    AttributeRate::Vertex => vertices.len(),
                 };
                 match attribute {
-                    Some(a) if group.carries(name) => {
-                        carried[map[groom.group_of(s)] as usize] = true;
-                        match a.rate {
-                            AttributeRate::Strand => {
-                                let value = &a.data[s * components..(s + 1) * components];
-                                (0..count).for_each(|_| data.extend_from_slice(value));
+                    Some(a) if groom.group(group_index).carries(name) => {
+                        carried[map[group_index] as usize] = true;
+                        match (a.rate, rate) {
+                            (AttributeRate::Strand, AttributeRate::Strand) => {
+                                data.extend_from_slice(&a.data[run.start * components..run.end * components])
                             }
-                            AttributeRate::Vertex => {
-                                let r = groom.strand_range(s);
-                                data.extend_from_slice(&a.data[r.start * components..r.end * components]);
+                            (AttributeRate::Strand, AttributeRate::Vertex) => {
+                                for s in run {
+                                    let value = &a.data[s * components..(s + 1) * components];
+                                    (0..groom.strand_range(s).len())
+                                        .for_each(|_| data.extend_from_slice(value));
+                                }
                             }
+                            (AttributeRate::Vertex, _) => data.extend_from_slice(
+                                &a.data[vertices.start * components..vertices.end * components],
+                            ),
                         }
                     }
                     _ => data.extend(std::iter::repeat_n(0.0, count * components)),
@@ -349,6 +398,22 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
     out.drop_default_group("");
     // Groups no strand uses (a selection) stay, so group ids keep their meaning.
     Ok(out)
+}
+
+/// `strands` as runs of consecutive strands of one group, so that each run's data is copied as
+/// one slice.
+fn runs<'a>(groom: &'a Groom, strands: &'a [usize]) -> impl Iterator<Item = std::ops::Range<usize>> + 'a {
+    let mut rest = strands;
+    std::iter::from_fn(move || {
+        let (&first, _) = rest.split_first()?;
+        let group = groom.group_of(first);
+        let length = 1 + rest
+            .windows(2)
+            .take_while(|pair| pair[1] == pair[0] + 1 && groom.group_of(pair[1]) == group)
+            .count();
+        rest = &rest[length..];
+        Some(first..first + length)
+    })
 }
 
 /// Checks the group table against the strands.
@@ -402,8 +467,7 @@ mod tests {
     fn append_split_round_trip_keeps_groups_and_missing_attributes() {
         let guides = prim("/Groom/Guides", CurveBasis::CatmullRom, 2, true);
         let children = prim("/Groom/Hair", CurveBasis::Linear, 3, false);
-        let mut groom = guides.clone();
-        groom.append(&children).unwrap();
+        let groom = Groom::concat(vec![guides.clone(), children.clone()]).unwrap();
         groom.validate().unwrap();
         assert_eq!(groom.strand_count(), 5);
         assert_eq!(groom.group_ids, vec![0, 0, 1, 1, 1]);
@@ -415,9 +479,36 @@ mod tests {
     }
 
     #[test]
+    fn concat_names_the_first_part_that_does_not_fit() {
+        let mut third = prim("/C", CurveBasis::Linear, 2, false);
+        let rest_as_scalars = vec![0.0; third.vertex_count()];
+        third.set_attribute(Attribute::new("rest", AttributeRate::Vertex, 1, rest_as_scalars));
+        let parts = vec![
+            prim("/A", CurveBasis::CatmullRom, 2, true),
+            prim("/B", CurveBasis::Linear, 3, false),
+            third,
+        ];
+        match Groom::concat(parts) {
+            Err((2, GroomError::AttributeComponents { name, components: 1 })) => assert_eq!(name, "rest"),
+            other => panic!("expected part 2's 'rest' to be refused, got {other:?}"),
+        }
+        let whole = Groom::concat(vec![
+            prim("/A", CurveBasis::CatmullRom, 2, true),
+            prim("/B", CurveBasis::Linear, 3, false),
+            prim("/A", CurveBasis::CatmullRom, 1, true),
+        ])
+        .unwrap();
+        whole.validate().unwrap();
+        assert_eq!(whole.group_ids, vec![0, 0, 1, 1, 1, 0], "equal groups are one group");
+    }
+
+    #[test]
     fn selection_merges_back_in_place() {
-        let mut groom = prim("/A", CurveBasis::Linear, 2, false);
-        groom.append(&prim("/B", CurveBasis::BSpline, 2, false)).unwrap();
+        let groom = Groom::concat(vec![
+            prim("/A", CurveBasis::Linear, 2, false),
+            prim("/B", CurveBasis::BSpline, 2, false),
+        ])
+        .unwrap();
         let (mut selected, selection) = groom.select_groups(&["B".into()]).unwrap();
         assert_eq!(selection.strands, vec![2, 3]);
         selected.points.iter_mut().for_each(|p| p.z += 1.0);

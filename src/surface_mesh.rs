@@ -2,9 +2,9 @@
 //! curves (USD `Mesh` prims, Alembic `PolyMesh` objects). Readers bring them into coif's space
 //! (metres, Y up) with the curves; styling uses the one the roots sit on as the groom's own
 //! scalp ([`scalp_of`]), and writers that can carry meshes give them back at their paths.
-use glam::Vec3;
+use glam::{DMat4, Vec3};
 
-use crate::groom::Groom;
+use crate::groom::{AttributeKind, Groom};
 use crate::interact::mesh_sdf::TriangleMesh;
 
 /// A polygon mesh as the file holds it: faces of any vertex count, wound counter-clockwise seen
@@ -18,6 +18,151 @@ pub struct SurfaceMesh {
     pub face_counts: Vec<u32>,
     /// Every face's vertex indices, concatenated.
     pub face_indices: Vec<u32>,
+    /// The mesh's own data (UVs, normals, rest positions, masks), passed through conversions.
+    pub primvars: Vec<MeshPrimvar>,
+}
+
+/// Where a mesh primvar's values sit (USD interpolation; Alembic `geoScope`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshInterpolation {
+    /// One value for the mesh.
+    Constant,
+    /// One per face.
+    Uniform,
+    /// One per point, interpolated linearly (USD `varying`; Alembic `var`).
+    Varying,
+    /// One per point.
+    Vertex,
+    /// One per face corner, in face order (UVs, split normals).
+    FaceVarying,
+}
+
+impl MeshInterpolation {
+    pub const ALL: [MeshInterpolation; 5] = [
+        MeshInterpolation::Constant,
+        MeshInterpolation::Uniform,
+        MeshInterpolation::Varying,
+        MeshInterpolation::Vertex,
+        MeshInterpolation::FaceVarying,
+    ];
+
+    /// USD's token.
+    pub fn usd_name(self) -> &'static str {
+        match self {
+            MeshInterpolation::Constant => "constant",
+            MeshInterpolation::Uniform => "uniform",
+            MeshInterpolation::Varying => "varying",
+            MeshInterpolation::Vertex => "vertex",
+            MeshInterpolation::FaceVarying => "faceVarying",
+        }
+    }
+
+    /// Alembic's `geoScope`.
+    pub fn alembic_scope(self) -> &'static str {
+        match self {
+            MeshInterpolation::Constant => "con",
+            MeshInterpolation::Uniform => "uni",
+            MeshInterpolation::Varying => "var",
+            MeshInterpolation::Vertex => "vtx",
+            MeshInterpolation::FaceVarying => "fvr",
+        }
+    }
+
+    pub fn from_usd(token: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|i| i.usd_name() == token)
+    }
+
+    pub fn from_alembic_scope(scope: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|i| i.alembic_scope() == scope)
+    }
+
+    /// How many values this interpolation needs on `mesh`.
+    pub fn count(self, mesh: &SurfaceMesh) -> usize {
+        match self {
+            MeshInterpolation::Constant => 1,
+            MeshInterpolation::Uniform => mesh.face_counts.len(),
+            MeshInterpolation::Varying | MeshInterpolation::Vertex => mesh.points.len(),
+            MeshInterpolation::FaceVarying => mesh.face_indices.len(),
+        }
+    }
+}
+
+/// One named piece of mesh data: `components` floats per element (ints and bools held as
+/// floats, as groom attributes are), optionally indexed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshPrimvar {
+    /// The primvar's name (`st`, `rest_position`); `normals` for the mesh's normals.
+    pub name: String,
+    /// Its role: whether it moves with the points and which file type it takes.
+    pub kind: AttributeKind,
+    pub components: usize,
+    pub interpolation: MeshInterpolation,
+    pub values: Vec<f32>,
+    /// Element `i` is `values[indices[i]]` when present.
+    pub indices: Option<Vec<u32>>,
+}
+
+impl MeshPrimvar {
+    /// The name the mesh's normals go by.
+    pub const NORMALS: &'static str = "normals";
+    /// The name of the mesh's main UV set (USD's convention; Alembic's `uv`).
+    pub const UV: &'static str = "st";
+
+    /// Number of elements (indices when indexed, else values).
+    pub fn len(&self) -> usize {
+        self.indices.as_ref().map_or(self.values.len() / self.components.max(1), Vec::len)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The values expanded through the indices.
+    pub fn expanded(&self) -> std::borrow::Cow<'_, [f32]> {
+        match &self.indices {
+            None => std::borrow::Cow::Borrowed(&self.values),
+            Some(indices) => std::borrow::Cow::Owned(
+                indices
+                    .iter()
+                    .flat_map(|&i| {
+                        let at = i as usize * self.components;
+                        self.values[at..at + self.components].iter().copied()
+                    })
+                    .collect(),
+            ),
+        }
+    }
+
+    /// Checks the counts against `mesh`: the first problem, in words naming the primvar.
+    fn check(&self, mesh: &SurfaceMesh) -> Result<(), String> {
+        let name = &self.name;
+        if !(1..=4).contains(&self.components) || self.values.len() % self.components != 0 {
+            return Err(format!(
+                "primvar '{name}' has {} values of {} components",
+                self.values.len(),
+                self.components
+            ));
+        }
+        let needed = self.interpolation.count(mesh);
+        if self.len() != needed {
+            return Err(format!(
+                "primvar '{name}': {} interpolation needs {needed} values, found {}",
+                self.interpolation.usd_name(),
+                self.len()
+            ));
+        }
+        let available = self.values.len() / self.components;
+        if let Some(i) = self.indices.iter().flatten().position(|&i| i as usize >= available) {
+            return Err(format!(
+                "primvar '{name}': index {i} is {}, but there are {available} values",
+                self.indices.as_ref().unwrap()[i]
+            ));
+        }
+        if let Some(i) = self.values.iter().position(|v| !v.is_finite()) {
+            return Err(format!("primvar '{name}': value {i} is not finite ({})", self.values[i]));
+        }
+        Ok(())
+    }
 }
 
 impl SurfaceMesh {
@@ -47,7 +192,26 @@ impl SurfaceMesh {
                 self.points.len()
             ));
         }
-        Ok(())
+        self.primvars.iter().try_for_each(|primvar| primvar.check(self))
+    }
+
+    /// Moves the mesh by `to` (a file's space to coif's, or a unit change): the points, and the
+    /// primvars that are positions or directions as groom attributes move
+    /// ([`crate::io::transform_values`]).
+    pub fn transform(&mut self, to: DMat4) {
+        if to == DMat4::IDENTITY {
+            return;
+        }
+        self.points.iter_mut().for_each(|p| *p = to.transform_point3(p.as_dvec3()).as_vec3());
+        for primvar in &mut self.primvars {
+            crate::io::transform_values(
+                primvar.kind,
+                &primvar.name,
+                primvar.components,
+                &mut primvar.values,
+                to,
+            );
+        }
     }
 
     /// The faces as triangle fans, in face order.
@@ -64,12 +228,20 @@ impl SurfaceMesh {
         triangles
     }
 
-    /// Reverses every face's winding (for files wound clockwise, as Alembic is).
+    /// Reverses every face's winding (for files wound clockwise, as Alembic is), and with it the
+    /// order of every face-varying primvar's corners.
     pub fn flip_winding(&mut self) {
-        let mut at = 0usize;
-        for &count in &self.face_counts {
-            self.face_indices[at..at + count as usize].reverse();
-            at += count as usize;
+        reverse_corners(&self.face_counts, &mut self.face_indices, 1);
+        for primvar in &mut self.primvars {
+            if primvar.interpolation != MeshInterpolation::FaceVarying
+                || primvar.len() != self.face_indices.len()
+            {
+                continue; // `check` reports the mismatch
+            }
+            match &mut primvar.indices {
+                Some(indices) => reverse_corners(&self.face_counts, indices, 1),
+                None => reverse_corners(&self.face_counts, &mut primvar.values, primvar.components),
+            }
         }
     }
 
@@ -90,6 +262,19 @@ impl SurfaceMesh {
             triangles.iter_mut().for_each(|t| t.swap(1, 2));
         }
         TriangleMesh { points: self.points.clone(), triangles }
+    }
+}
+
+/// Reverses the order of each face's corners in `values` (`components` per corner, faces of
+/// `face_counts` corners in order), keeping each corner's components in order.
+fn reverse_corners<T>(face_counts: &[u32], values: &mut [T], components: usize) {
+    let mut at = 0usize;
+    for &count in face_counts {
+        let corners = count as usize;
+        let face = &mut values[at * components..(at + corners) * components];
+        face.reverse();
+        face.chunks_exact_mut(components).for_each(<[T]>::reverse);
+        at += corners;
     }
 }
 
@@ -143,6 +328,7 @@ mod tests {
             points,
             face_counts: vec![4; 6],
             face_indices: faces.iter().flatten().copied().collect(),
+            primvars: Vec::new(),
         }
     }
 

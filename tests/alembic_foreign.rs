@@ -222,6 +222,40 @@ fn the_basis_byte_decides_the_curve_kind() {
     }
 }
 
+/// Maya's AbcExport writes every nurbsCurve with the B-spline basis and its degree in the type
+/// byte (`MayaNurbsCurveWriter`: cubic for degree 3, linear for degree 1, variable order with
+/// `.orders` otherwise); Maya's AbcImport and Blender's reader take the order from the type, so a
+/// "linear" B-spline is a polyline through its points. An order coif cannot simulate exits 2
+/// naming the object and the order.
+#[test]
+fn maya_nurbs_curves_take_their_order_from_the_type_byte() {
+    let read = |bytes: [u8; 4], orders: Option<&[u8]>| {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        let geom = curves(&mut w, top, "nurbsCurve1", &[4, 4], &[line(0.0, 4), line(1.0, 4)].concat(), bytes);
+        if let Some(orders) = orders {
+            let property = w.add_array(geom, ".orders", MetaData::new(), Pod::U8, 1, 0);
+            w.set_sample(property, orders, orders.len() as u64).unwrap();
+        }
+        let file = w.finish().unwrap().into_inner();
+        alembic::read(&file, std::path::Path::new("maya.abc"), None, false)
+    };
+    for (bytes, orders, expected) in [
+        ([1u8, 0, 2, 2], None, CurveBasis::Linear),
+        ([0, 0, 2, 2], None, CurveBasis::BSpline),
+        ([2, 0, 2, 2], Some(&[2u8, 2][..]), CurveBasis::Linear),
+        ([2, 0, 2, 2], Some(&[4, 4][..]), CurveBasis::BSpline),
+        // No `.orders`: order 2 in Maya's AbcImport and Blender's reader.
+        ([2, 0, 2, 2], None, CurveBasis::Linear),
+    ] {
+        assert_eq!(read(bytes, orders).unwrap().basis, expected, "{bytes:?} orders {orders:?}");
+    }
+    for (orders, named) in [(&[4u8, 3][..], "order 3"), (&[2, 4][..], "one degree per object")] {
+        let message = read([2, 0, 2, 2], Some(orders)).unwrap_err().to_string();
+        assert!(message.contains("nurbsCurve1") && message.contains(named), "{orders:?}: {message}");
+    }
+}
+
 #[test]
 fn animated_foreign_file_reads_frames_on_the_union_of_its_samplings() {
     // Positions on 24 fps from frame 1; an Xform sampled at 7 fps moving +1 in x per sample.
@@ -272,6 +306,36 @@ fn animated_foreign_file_reads_frames_on_the_union_of_its_samplings() {
         assert!((groom.points[0] - expected).length() < 1e-6, "frame {f}: {} vs {expected}", groom.points[0]);
     }
     assert!(archive.read_at_frame(0.5).is_err(), "before the first sample");
+}
+
+/// A width whose count fits neither its `geoScope` nor, without one, any rate exits 2 naming the
+/// object and the property, with the count and what the scope needs.
+#[test]
+fn a_width_count_that_fits_no_scope_names_object_and_property() {
+    let cases: [(&str, &[f32], &str); 4] = [
+        ("uni", &[0.1, 0.2, 0.3], "3 values, its scope needs 2"),
+        ("con", &[0.1, 0.2], "2 values, its scope needs 1"),
+        ("vtx", &[0.1; 6], "6 values, its scope needs 7"),
+        ("", &[0.1; 5], "5 values, its scope needs 1"),
+    ];
+    for (scope, widths, needs) in cases {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        let rig = xform(&mut w, top, "rig", &[0x10], &[0.0, 0.0, 0.0], None);
+        let points = [line(1.0, 3), line(2.0, 4)].concat();
+        let hair = curves(&mut w, rig, "hair", &[3, 4], &points, [1, 0, 0, 0]);
+        let metadata = if scope.is_empty() { MetaData::new() } else { param_md(scope, Pod::F32, 1) };
+        let width = w.add_array(hair, "width", metadata, Pod::F32, 1, 0);
+        w.set_sample(width, &f32s(widths), widths.len() as u64).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("widths.abc");
+        std::fs::write(&path, w.finish().unwrap().into_inner()).unwrap();
+        let out = coif(&["info", path_str(&path)]);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "scope {scope:?}: {message}");
+        assert!(message.contains("widths.abc"), "scope {scope:?}: {message}");
+        assert!(message.contains(&format!("/rig/hair/.geom/width: {needs}")), "scope {scope:?}: {message}");
+    }
 }
 
 #[test]

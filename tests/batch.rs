@@ -290,6 +290,11 @@ impl Schedule {
         self.0 ^= self.0 >> 27;
         self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) % n
     }
+
+    /// A number in [0, 1).
+    fn fraction(&mut self) -> f64 {
+        self.below(1 << 20) as f64 / (1u64 << 20) as f64
+    }
 }
 
 /// 200 tasks, interrupted again and again: tasks killed at random (SIGKILL, which leaves
@@ -300,7 +305,12 @@ impl Schedule {
 #[test]
 fn a_batch_killed_at_random_resumes_to_the_bytes_of_an_uninterrupted_run() {
     let clean = small_job(WEDGE_200);
+    let started = Instant::now();
     let report = batch(clean.path(), "2");
+    // Rounds and kills are timed as fractions of an uninterrupted run on this machine now: on a
+    // fast, quiet machine fixed durations let the rounds finish every task, leaving nothing to
+    // resume; on a slow one they would kill before anything starts.
+    let uninterrupted = started.elapsed();
     assert_eq!(report["done"], 200, "{}", report["failed"]);
 
     let killed = small_job(WEDGE_200);
@@ -314,9 +324,10 @@ fn a_batch_killed_at_random_resumes_to_the_bytes_of_an_uninterrupted_run() {
             .stderr(std::process::Stdio::null())
             .spawn()
             .unwrap();
-        let round_ends = Instant::now() + Duration::from_millis(400 + schedule.below(800));
+        // Five rounds of 4-10 % each: at most half of the work gets done before the resume.
+        let round_ends = Instant::now() + uninterrupted.mul_f64(0.04 + 0.06 * schedule.fraction());
         while Instant::now() < round_ends {
-            std::thread::sleep(Duration::from_millis(20 + schedule.below(150)));
+            std::thread::sleep(uninterrupted.mul_f64(0.01 * (1.0 + schedule.fraction())));
             let tasks = task_processes(killed.path());
             if tasks.is_empty() {
                 continue;

@@ -411,8 +411,15 @@ fn a_coarse_groom_winds_without_tunnelling_into_its_head_mesh() {
 
 #[test]
 fn presets_resample_coarse_grooms_by_their_head_and_leave_fine_ones_as_they_come() {
-    use coif::style::placement::default_max_segment;
+    use coif::style::placement::head_frame;
     let parse = |name: &str| recipe::parse(&preset(name), Path::new("preset.toml")).unwrap();
+    fn default_max_segment(
+        recipe: &recipe::Recipe,
+        groom: &Groom,
+        scalp: Option<&coif::interact::mesh_sdf::TriangleMesh>,
+    ) -> coif::Result<Option<f32>> {
+        coif::style::placement::default_max_segment(recipe, groom, head_frame(recipe, groom, scalp)?)
+    }
     // Blender's guides (8 cm segments, 0.8 head units) on a 10 cm and a 20 cm head.
     for file in ["blender_groom.usda", "blender_groom_x2.usda"] {
         let groom = load(file);
@@ -1176,5 +1183,38 @@ fn animated_convert_matches_the_original_frame_by_frame_in_pxr_and_in_blender() 
             }
         }
         eprintln!("Blender: {out:?} within {worst_seen:.2e} m of Blender's own file on frames {range}");
+    }
+}
+
+/// One head frame whatever is simulated: a recipe styled through the groom's guides is placed in
+/// the frame fitted to the whole groom (its head mesh, else all its roots), the frame styling
+/// every strand uses. Fitted to the guides' roots instead, the 20 cm head's frame was 24° off.
+#[test]
+fn styling_through_guides_places_the_recipe_in_the_whole_grooms_head_frame() {
+    let text =
+        "frame = \"head\"\n[settings]\ndt = 0.005\n[[stages]]\nkind = \"settle\"\nmax_seconds = 0.005\n";
+    let recipe = recipe::parse(text, Path::new("frame.toml")).unwrap();
+    let frame_of = |groom: &Groom| {
+        let styled = style(groom, &recipe, &StyleOptions::default()).unwrap();
+        let f = styled.report.head_frame.unwrap();
+        (Vec3::from(f.center), Vec3::from(f.up), Vec3::from(f.front), f.size, styled.report.guides)
+    };
+    for file in ["blender_groom.usda", "blender_groom_x2.usda"] {
+        let mut every = load(file);
+        every.guides = None;
+        for with_mesh in [true, false] {
+            if !with_mesh {
+                every.meshes.clear();
+            }
+            let (center, up, front, size, none) = frame_of(&every);
+            let (g_center, g_up, g_front, g_size, guides) = frame_of(&with_blender_guides(every.clone()));
+            assert!(none.is_none() && guides.is_some_and(|g| g < every.strand_count()), "{file}: {guides:?}");
+            let angle = |a: Vec3, b: Vec3| a.dot(b).clamp(-1.0, 1.0).acos().to_degrees();
+            let what = format!("{file} (mesh {with_mesh}): guides' frame");
+            assert!(angle(up, g_up) < 1.0, "{what}: up {g_up} vs {up}");
+            assert!(angle(front, g_front) < 1.0, "{what}: front {g_front} vs {front}");
+            assert!(center.distance(g_center) < 0.01 * size, "{what}: centre {g_center} vs {center}");
+            assert!((g_size / size - 1.0).abs() < 0.01, "{what}: size {g_size} vs {size}");
+        }
     }
 }

@@ -202,6 +202,30 @@ fn a_periodic_prim_exits_2_naming_it() {
     assert!(message.contains("</Ring>") && message.contains("periodic"), "{message}");
 }
 
+/// Maya's USD export writes nurbsCurves as `NurbsCurves` prims: beside BasisCurves hair they
+/// used to be left out without a word. In `.usda` and in pxr's `.usdc` of the same stage, exit 2
+/// names the prim and its type, and nothing is written.
+#[test]
+fn nurbs_curves_prims_exit_2_naming_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let usda = dir.path().join("maya.usda");
+    std::fs::write(
+        &usda,
+        "#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef Xform \"groom\"\n{\n    def BasisCurves \"hair\"\n    {\n        uniform token type = \"linear\"\n        int[] curveVertexCounts = [2]\n        point3f[] points = [(0, 0, 0), (0, 1, 0)]\n    }\n    def NurbsCurves \"guides\"\n    {\n        int[] curveVertexCounts = [4]\n        point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)]\n        int[] order = [4]\n        double[] knots = [0, 0, 0, 0, 1, 1, 1, 1]\n    }\n}\n",
+    )
+    .unwrap();
+    let usdc = dir.path().join("maya.usdc");
+    common::usd::probe(&["export", path_str(&usda), path_str(&usdc)]);
+    for source in [&usda, &usdc] {
+        let out = dir.path().join("out.usda");
+        let result = coif(&["convert", path_str(source), path_str(&out)]);
+        assert_eq!(result.status.code(), Some(2), "{}", stderr(&result));
+        let message = stderr(&result);
+        assert!(message.contains("</groom/guides>") && message.contains("NurbsCurves"), "{message}");
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn directions_rotate_with_the_points_from_z_up() {
     // Blender-style Z-up stage: a normal3f primvar and a plain float3 `surface_normal`.
@@ -586,4 +610,122 @@ fn constant_and_varying_primvars_keep_their_interpolation_through_convert() {
             }
         }
     }
+}
+
+/// The source's mesh primvars (and normals) as pxr sees them after coif's conversion: names,
+/// types, roles, interpolations; values exact, or moved Z up → Y up as the points are
+/// (`rest_position` like the points, normals rotated: mean dot with the rotated source).
+fn assert_same_mesh_primvars(source: &Value, written: &Value, label: &str) {
+    assert_eq!((&source["upAxis"], &written["upAxis"]), (&Value::from("Z"), &Value::from("Y")));
+    let (a, b) = (&source["meshes"][0], &written["meshes"][0]);
+    let (sp, wp) = (a["primvars"].as_object().unwrap(), b["primvars"].as_object().unwrap());
+    for name in ["st", "scalp", "rest_position"] {
+        assert!(sp.contains_key(name), "the source has {name}");
+    }
+    for (name, s) in sp {
+        let w = wp.get(name).unwrap_or_else(|| panic!("{label}: primvar {name} is missing"));
+        for key in ["type", "role", "interpolation"] {
+            assert_eq!(s[key], w[key], "{label}: primvar {name}: {key}");
+        }
+        let (sv, wv) = (f32s(&s["values"]), f32s(&w["values"]));
+        assert_eq!(sv.len(), wv.len(), "{label}: primvar {name}: values");
+        // Blender's rest positions are the mesh's points: they must move as the points do.
+        let expected: Vec<f32> = if name == "rest_position" {
+            assert_eq!(sv, f32s(&a["points"]), "the source's rest positions are its points");
+            f32s(&b["points"])
+        } else {
+            sv
+        };
+        for (i, (x, y)) in expected.iter().zip(&wv).enumerate() {
+            assert!((x - y).abs() <= 2e-6, "{label}: primvar {name} value {i}: {x} vs {y}");
+        }
+    }
+    let (sn, wn) = (&a["normals"], &b["normals"]);
+    assert!(sn.is_object(), "the source has normals");
+    assert_eq!((&sn["type"], &sn["interpolation"]), (&wn["type"], &wn["interpolation"]), "{label}: normals");
+    let (sv, wv) = (f32s(&sn["values"]), f32s(&wn["values"]));
+    assert_eq!(sv.len(), wv.len(), "{label}: normals");
+    let dots: Vec<f32> = sv
+        .chunks_exact(3)
+        .zip(wv.chunks_exact(3))
+        .map(|(n, w)| n[0] * w[0] + n[2] * w[1] - n[1] * w[2])
+        .collect();
+    let mean_dot = dots.iter().sum::<f32>() / dots.len() as f32;
+    assert!(mean_dot >= 0.999, "{label}: normals' mean dot with the rotated source {mean_dot}");
+}
+
+#[test]
+fn scalp_mesh_primvars_survive_usd_and_alembic_conversion_to_y_up() {
+    // Blender's Z-up centimetre... stage: the head carries `st` (faceVarying texCoord2f),
+    // `scalp` (vertex float), `rest_position` (vertex float3) and faceVarying normals.
+    let source_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_groom.usda");
+    let source = pxr_dump(&source_path, None);
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["usda", "usdc"] {
+        let out = dir.path().join(format!("converted.{ext}"));
+        let result = coif(&["convert", path_str(&source_path), path_str(&out)]);
+        assert!(result.status.success(), "{}", stderr(&result));
+        assert_same_mesh_primvars(&source, &pxr_dump(&out, None), ext);
+    }
+    // Through Alembic (PolyMesh `N`, `uv`, `.arbGeomParams`, clockwise faces) and back to USD.
+    let abc = dir.path().join("converted.abc");
+    let back = dir.path().join("back.usda");
+    for (from, to) in [(&source_path, &abc), (&abc, &back)] {
+        let result = coif(&["convert", path_str(from), path_str(to)]);
+        assert!(result.status.success(), "{}", stderr(&result));
+    }
+    assert_same_mesh_primvars(&source, &pxr_dump(&back, None), "via .abc");
+}
+
+#[test]
+fn blender_alembic_head_keeps_its_uvs_and_normals() {
+    // Blender's own .abc head: `uv` (sourceName UVMap) and `N`, both face-varying; its USD
+    // export of the same scene holds the same UVs and normals, corner for corner.
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("from_abc.usda");
+    let result = coif(&["convert", path_str(&data.join("blender_groom.abc")), path_str(&out)]);
+    assert!(result.status.success(), "{}", stderr(&result));
+    let (usd, written) = (pxr_dump(&data.join("blender_groom.usda"), None), pxr_dump(&out, None));
+    let (a, b) = (&usd["meshes"][0], &written["meshes"][0]);
+    assert_eq!(a["indices"], b["indices"], "the same faces in the same winding");
+    let st = &b["primvars"]["st"];
+    assert_eq!(
+        (&st["type"], &st["interpolation"]),
+        (&Value::from("texCoord2f[]"), &Value::from("faceVarying"))
+    );
+    let (su, wu) = (f32s(&a["primvars"]["st"]["values"]), f32s(&st["values"]));
+    assert_eq!(su.len(), wu.len());
+    assert!(su.iter().zip(&wu).all(|(x, y)| (x - y).abs() <= 1e-6), "UVs corner for corner");
+    assert_eq!(b["normals"]["interpolation"], "faceVarying");
+    let (sn, wn) = (f32s(&a["normals"]["values"]), f32s(&b["normals"]["values"]));
+    // Both exports are Z up; coif's output is Y up: rotate the USD export's normals.
+    let mean_dot = sn
+        .chunks_exact(3)
+        .zip(wn.chunks_exact(3))
+        .map(|(n, w)| n[0] * w[0] + n[2] * w[1] - n[1] * w[2])
+        .sum::<f32>()
+        / (sn.len() / 3) as f32;
+    assert!(mean_dot >= 0.999, "normals: mean dot {mean_dot}");
+}
+
+#[test]
+fn a_mesh_primvar_whose_count_fits_no_interpolation_exits_2_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad_uv.usda");
+    std::fs::write(
+        &path,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"Hair\"\n{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0)]\n}\ndef Mesh \"Scalp\"\n{\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 2]\n    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 0, 1)]\n    texCoord2f[] primvars:st = [(0, 0), (1, 0)] (\n        interpolation = \"faceVarying\"\n    )\n}\n",
+    )
+    .unwrap();
+    let out = coif(&["info", path_str(&path)]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(
+        message.contains("bad_uv.usda")
+            && message.contains("</Scalp>")
+            && message.contains("'st'")
+            && message.contains("needs 3 values, found 2"),
+        "{message}"
+    );
 }

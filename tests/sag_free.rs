@@ -52,7 +52,8 @@ fn styled_presets_hold_still_when_simulated_again() {
         let settle = styled.report.stages.last().unwrap().settle.unwrap();
         // The recipe as the run placed it on the input groom: its head frame turns the preset's
         // gravity and colliders into world coordinates (as in `tests/style_settle.rs`).
-        let placed = placement::place(&recipe, &input, None).unwrap();
+        let frame = placement::head_frame(&recipe, &input, None).unwrap();
+        let placed = placement::place(&recipe, &input, None, frame).unwrap();
         let mut params = sim_params(&placed.recipe);
         // Simulated again under the gravity it was settled with (the perm settles without, to
         // show its free curl).

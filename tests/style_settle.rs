@@ -46,7 +46,8 @@ fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
     // The recipe as the run placed it on the input groom: its head frame turns the preset's
     // gravity and colliders into world coordinates.
     let input = coif::io::read_groom(&groom, &Default::default()).unwrap().groom;
-    let placed = coif::style::placement::place(&parsed, &input, None).unwrap();
+    let frame = coif::style::placement::head_frame(&parsed, &input, None).unwrap();
+    let placed = coif::style::placement::place(&parsed, &input, None, frame).unwrap();
     let options = coif::sim::driver::SimulateOptions {
         params: coif::style::run::sim_params(&placed.recipe),
         seconds: 2.0,

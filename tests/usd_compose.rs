@@ -420,6 +420,79 @@ fn bad_composition_exits_2_naming_file_prim_and_arc() {
     }
 }
 
+/// A bad value on a composed stage is named where it was authored: the sublayer or referenced
+/// file and its line (a crate file has no lines), not the root layer the user opened.
+#[test]
+fn bad_values_name_the_layer_and_line_that_author_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    // 1-based line of the first line of `text` containing `needle`.
+    let line_of = |text: &str, needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+    let curves = |extra: &str| {
+        format!(
+            "#usda 1.0\n(\n    defaultPrim = \"C\"\n)\n\ndef BasisCurves \"C\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0)]\n{extra}}}\n"
+        )
+    };
+    let bad_widths =
+        curves("    float[] widths = [0.1, 0.1, 0.1] (\n        interpolation = \"vertex\"\n    )\n");
+    write("widths.usda", &bad_widths);
+    let bad_xform = curves(
+        "    token xformOp:translate = \"left\"\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n",
+    );
+    write("xform.usda", &bad_xform);
+    let good = write("good.usda", &curves(""));
+    let crate_file = dir.path().join("good.usdc");
+    let converted = coif_without_python(&["convert", path_str(&good), path_str(&crate_file)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+
+    let sublayer = |name: &str| format!("#usda 1.0\n(\n    subLayers = [@./{name}@]\n)\n");
+    let reference =
+        |name: &str| format!("#usda 1.0\n\ndef \"Groom\" (\n    references = @{name}@\n)\n{{\n}}\n");
+    // Counts overridden in the root layer against points in the crate file: the points' site.
+    let over_counts = "#usda 1.0\n(\n    subLayers = [@good.usdc@]\n)\n\nover \"C\"\n{\n    int[] curveVertexCounts = [3]\n}\n";
+    let root_widths = "#usda 1.0\n(\n    subLayers = [@good.usda@]\n)\n\nover \"C\"\n{\n    float[] widths = [1, 2, 3]\n}\n";
+    let cases: Vec<(PathBuf, String, Option<usize>)> = vec![
+        (
+            write("sub_widths.usda", &sublayer("widths.usda")),
+            "widths.usda".into(),
+            Some(line_of(&bad_widths, "widths")),
+        ),
+        (
+            write("ref_widths.usda", &reference("widths.usda")),
+            "widths.usda".into(),
+            Some(line_of(&bad_widths, "widths")),
+        ),
+        (
+            write("sub_xform.usda", &sublayer("xform.usda")),
+            "xform.usda".into(),
+            Some(line_of(&bad_xform, "xformOp:translate =")),
+        ),
+        (write("over_counts.usda", over_counts), "good.usdc".into(), None),
+        (
+            write("root_widths.usda", root_widths),
+            "root_widths.usda".into(),
+            Some(line_of(root_widths, "widths")),
+        ),
+    ];
+    let out = dir.path().join("out.usda");
+    for (input, file, line) in &cases {
+        let result = coif_without_python(&["convert", path_str(input), path_str(&out)]);
+        let message = stderr(&result);
+        assert_eq!(result.status.code(), Some(2), "{}: {message}", input.display());
+        let expected = match line {
+            Some(line) => format!("{file}: line {line}: prim </"),
+            None => format!("{file}: prim </"),
+        };
+        assert!(message.contains(&expected), "{}: {expected:?} not in {message}", input.display());
+        assert!(!out.exists());
+    }
+}
+
 /// A curve whose one strand moves between time codes 0 and 24 of its layer, in a layer of the
 /// given timeline metadata.
 fn timed_curves_layer(metadata: &str) -> String {

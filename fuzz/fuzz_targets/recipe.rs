@@ -21,8 +21,11 @@ fuzz_target!(|data: &[u8]| {
     let Ok(recipe) = coif::style::recipe::parse(text, std::path::Path::new("/nonexistent/fuzz.toml")) else {
         return;
     };
-    // In the order `style::style` takes them: the limits first, then the placement.
+    // In the order `style::style` takes them: the limits first, then the head frame fitted to
+    // the whole groom, then the placement in it.
     if coif::limits::check_style(groom(), &recipe, 24.0).is_ok() {
-        let _ = coif::style::placement::place(&recipe, groom(), None);
+        if let Ok(frame) = coif::style::placement::head_frame(&recipe, groom(), None) {
+            let _ = coif::style::placement::place(&recipe, groom(), None, frame);
+        }
     }
 });

@@ -20,6 +20,7 @@ use crate::analysis::resample_groom;
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::style::head_frame::HeadFrame;
 use crate::style::recipe::Recipe;
 use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled, WaterSnapshots};
 use binding::{Binding, GUIDES_PER_CHILD};
@@ -82,7 +83,14 @@ pub fn wanted(groom: &Groom, recipe: &Recipe) -> bool {
 }
 
 /// Styles the guides of a groom with a recipe and interpolates the children from them.
-pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+/// `frame` is the head frame fitted to the whole groom ([`crate::style::placement::head_frame`]):
+/// the guides are placed in it, not in one fitted to their own roots.
+pub fn style(
+    input: &Groom,
+    recipe: &Recipe,
+    options: &StyleOptions,
+    frame: Option<HeadFrame>,
+) -> Result<Styled> {
     let groom = match recipe.settings.max_segment {
         Some(max) => resample_groom(input, max),
         None => input.clone(),
@@ -131,7 +139,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     let mut guide_recipe = recipe.clone();
     guide_recipe.settings.max_segment = None; // resampled above, with the children
     guide_recipe.guides = None;
-    let styled = style_strands(&guides, &guide_recipe, options, WaterSnapshots::Keep)?;
+    let styled = style_strands(&guides, &guide_recipe, options, frame, WaterSnapshots::Keep)?;
 
     let before = Curves::new(guides.points.clone(), guides.strand_offsets.clone(), None);
     let posed = |points: Vec<Vec3>| {
@@ -163,7 +171,7 @@ pub fn style(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     };
     let bound = bind(&children.points);
     let after = posed(styled.groom.points.clone());
-    let shapes = obstacle_shapes(recipe, &guides, options.scalp.as_deref())?;
+    let shapes = obstacle_shapes(recipe, &guides, options.scalp.as_deref(), frame)?;
     let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
     let (last, last_pose) = start(usize::MAX);
     let mut child_points = deform::deform(&last, last_pose, &after);

@@ -1,10 +1,10 @@
 //! Uniform-grid neighbour search (S2 §2.4), shared by hair–hair contacts and water particles.
 //!
-//! Items are bucketed by the cell their point falls in. A cell's bucket interleaves the low bits
-//! of its coordinates (a Morton code that wraps around), in a table sized to the item count: the
-//! grid needs no bounds, its memory is linear in the items, and — unlike a scrambling hash —
-//! neighbouring cells land in nearby buckets, so queries made in spatial order (see
-//! [`NeighbourGrid::bucket_of`]) stay in cache. A query visits those of the 27 cells around a point
+//! Items are bucketed by the cell their point falls in. A cell's bucket is the low bits of the
+//! Morton code interleaving its coordinates (a code that wraps around), in a table of one to two
+//! buckets per item: the grid needs no bounds, its memory is linear in the items, and — unlike a
+//! scrambling hash — neighbouring cells land in nearby buckets, so queries made in spatial order
+//! (see [`NeighbourGrid::bucket_of`]) stay in cache. A query visits those of the 27 cells around a point
 //! that come within a cell width of it.
 //! Building is a counting sort: linear, allocation-free once the buffers have grown, and its order
 //! depends only on the input, never on thread timing.
@@ -15,15 +15,15 @@ use rayon::prelude::*;
 pub struct NeighbourGrid {
     cell_size: f32,
     inv_cell_size: f32,
-    /// Bits per axis of the bucket index (the table has 2^(3·bits) buckets).
+    /// Bits of the bucket index (the table has 2^bits buckets).
     bits: u32,
     /// `starts[b]..starts[b + 1]` index `items` for bucket `b`.
     starts: Vec<u32>,
     /// Item indices sorted by bucket (and by index within a bucket).
     items: Vec<u32>,
-    /// One bit per bucket: whether it holds any item. The table has several buckets per item,
-    /// so most a query visits are empty, and these bits (a 32nd of `starts`) stay in cache
-    /// where `starts` does not.
+    /// One bit per bucket: whether it holds any item. Items cluster (hair is a shell) and the
+    /// table has one to two buckets per item, so many a query visits are empty, and these bits
+    /// (a 32nd of `starts`) stay in cache where `starts` does not.
     occupied: Vec<u64>,
     /// Scratch: each item's bucket, and each bucket's next free slot while scattering.
     buckets: Vec<u32>,
@@ -56,10 +56,16 @@ fn spread_bits(v: u32) -> u32 {
 /// The Morton code of a cell's coordinates modulo 2^bits per axis (two's complement wraps, so
 /// negative cells need no offset).
 fn bucket_of_cell(cell: [i32; 3], bits: u32) -> u32 {
-    let low = (1u32 << bits) - 1;
-    spread_bits(cell[0] as u32 & low)
-        | spread_bits(cell[1] as u32 & low) << 1
-        | spread_bits(cell[2] as u32 & low) << 2
+    morton_low_bits(cell, 3 * bits)
+}
+
+/// The low `bits` (at most 30) of the Morton code of a cell's coordinates: x keeps its low
+/// ⌈bits/3⌉ bits, y and z one fewer where `bits` is not a multiple of 3, so each axis wraps
+/// every 2^⌊bits/3⌋ cells or more.
+fn morton_low_bits(cell: [i32; 3], bits: u32) -> u32 {
+    let code =
+        spread_bits(cell[0] as u32) | spread_bits(cell[1] as u32) << 1 | spread_bits(cell[2] as u32) << 2;
+    code & ((1u32 << bits) - 1)
 }
 
 impl NeighbourGrid {
@@ -79,7 +85,7 @@ impl NeighbourGrid {
     }
 
     fn bucket(&self, cell: [i32; 3]) -> u32 {
-        bucket_of_cell(cell, self.bits)
+        morton_low_bits(cell, self.bits)
     }
 
     /// The bucket holding point `p`: sorting queries by it makes neighbouring queries consecutive.
@@ -89,16 +95,18 @@ impl NeighbourGrid {
 
     /// Rebuilds the grid over `points` (item `i` sits at `points[i]`).
     pub fn rebuild(&mut self, points: &[Vec3]) {
-        // At least as many buckets as items (and 2 bits, so a query's 27 cells never wrap onto
-        // one bucket), at most 2^30.
-        self.bits = ((points.len().max(64) as f64).log2() / 3.0).ceil().min(10.0) as u32;
-        let table = 1usize << (3 * self.bits);
+        // One to two buckets per item (2^k ≥ items), at most 2^30; at least 2^6, so every axis
+        // wraps every 4 cells or more and a query's 27 cells never share a bucket. (A table of
+        // 8^k buckets, up to 8 times the items, made this serial rebuild half the cost of
+        // cutting contact pieces at 20k × 32.)
+        self.bits = ((points.len().max(64) as f64).log2().ceil() as u32).min(30);
+        let table = 1usize << self.bits;
         let (inv, bits) = (self.inv_cell_size, self.bits);
         self.buckets.resize(points.len(), 0);
         self.buckets
             .par_iter_mut()
             .zip(points.par_iter())
-            .for_each(|(b, &p)| *b = bucket_of_cell(cell_of(p, inv), bits));
+            .for_each(|(b, &p)| *b = morton_low_bits(cell_of(p, inv), bits));
 
         self.starts.clear();
         self.starts.resize(table + 1, 0);
@@ -333,18 +341,23 @@ mod tests {
     #[test]
     fn cells_of_a_block_get_distinct_buckets_and_the_code_wraps() {
         assert_eq!(spread_bits(0b1011), 0b1_000_001_001);
-        let mut grid = NeighbourGrid::new(1.0);
-        grid.rebuild(&vec![Vec3::ZERO; 4096]);
-        assert_eq!(grid.bits, 4);
-        // Every cell of a 16³ block has its own bucket; the block wraps onto itself.
-        let mut seen = std::collections::HashSet::new();
-        for x in -8..8 {
-            for y in -8..8 {
-                for z in -8..8 {
-                    assert!(seen.insert(grid.bucket([x, y, z])));
-                    assert_eq!(grid.bucket([x, y, z]), grid.bucket([x + 16, y - 16, z + 32]));
+        // 4096 items: 2^12 buckets, 16 cells per axis; 4097: 2^13, x wraps every 32.
+        for (items, bits, period) in [(4096, 12, [16, 16, 16]), (4097, 13, [32, 16, 16])] {
+            let mut grid = NeighbourGrid::new(1.0);
+            grid.rebuild(&vec![Vec3::ZERO; items]);
+            assert_eq!(grid.bits, bits);
+            // Every cell of one period's block has its own bucket; the block wraps onto itself.
+            let mut seen = std::collections::HashSet::new();
+            let [px, py, pz] = period;
+            for x in -px / 2..px / 2 {
+                for y in -py / 2..py / 2 {
+                    for z in -pz / 2..pz / 2 {
+                        assert!(seen.insert(grid.bucket([x, y, z])));
+                        assert_eq!(grid.bucket([x, y, z]), grid.bucket([x + px, y - py, z + 2 * pz]));
+                    }
                 }
             }
+            assert_eq!(seen.len(), 1 << bits);
         }
     }
 

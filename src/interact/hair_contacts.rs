@@ -409,6 +409,9 @@ impl HairContacts {
                 for &query in queries {
                     let before = edges.len();
                     this.candidates_of(query as u32 as usize, points, radii, &mut edges);
+                    // By edge, not grid order: contact forces are summed in list order, and
+                    // the result must not depend on how the grid lays out its buckets.
+                    edges[before..].sort_unstable();
                     counts.push((edges.len() - before) as u32);
                 }
                 (counts, edges)
@@ -472,8 +475,8 @@ impl HairContacts {
         self.lifetime = 0;
     }
 
-    /// Appends the edges of other strands within contact distance plus skin of vertex `i`, in
-    /// the grid's (deterministic) order.
+    /// Appends the edges of other strands within contact distance plus skin of vertex `i`, each
+    /// once, in the grid's order.
     fn candidates_of(&self, i: usize, points: &[Vec3], radii: &[f32], out: &mut Vec<u32>) {
         let p = points[i];
         let strand = self.strand_of[i];
@@ -641,6 +644,55 @@ mod tests {
         assert!(touching > 100, "too few contacts to test: {touching}");
         eprintln!("{touching} contacts, lists built {builds} times in 20 steps");
         assert!(builds > 1 && builds < 20, "lists built {builds} times in 20 steps");
+    }
+
+    #[test]
+    fn pushes_equal_an_all_pairs_search_bit_for_bit_at_any_thread_count() {
+        // 300 thick random-walk strands in a 20 × 1.5 × 1.5 cm box: the grid's table wraps along
+        // x every few centimetres, so buckets mix far cells. Lists are summed by edge, as the
+        // all-pairs search sums, so each vertex's push must equal it exactly: a pair missed or
+        // listed twice shows; and every thread count must give the same bits.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(16);
+        let (start, offsets) = random_walks(&mut rng, 300, 10, Vec3::new(0.2, 0.015, 0.015), 0.005);
+        let radii: Vec<f32> = (0..start.len()).map(|_| rng.random_range(2e-4..6e-4)).collect();
+        let fixed: Vec<bool> = (0..start.len()).map(|i| i % 10 == 0).collect();
+        let drift: Vec<Vec<Vec3>> = (0..3)
+            .map(|_| (0..start.len()).map(|_| jitter(&mut rng) * HairContacts::DEFAULT_SKIN).collect())
+            .collect();
+        let dt = 1.0 / 360.0;
+        // Each step's points, and the pushes at them.
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut contacts = HairContacts::new(&offsets, &radii, 0.001, 50.0);
+                let mut points = start.clone();
+                let mut steps = Vec::new();
+                for moves in &drift {
+                    let mut v = vec![Vec3::ZERO; points.len()];
+                    contacts.apply(&points, &radii, &fixed, &mut v, dt);
+                    steps.push((points.clone(), v));
+                    points.iter_mut().zip(moves).for_each(|(p, m)| *p += *m);
+                }
+                steps
+            })
+        };
+        let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        let one = run(1);
+        let mut touching = 0;
+        for (step, (points, pushes)) in one.iter().enumerate() {
+            let mut expected = brute_force(&offsets, points, &radii, 50.0, dt);
+            expected.iter_mut().zip(&fixed).filter(|(_, &f)| f).for_each(|(e, _)| *e = Vec3::ZERO);
+            assert_eq!(bits(pushes), bits(&expected), "step {step}");
+            touching += expected.iter().filter(|&&e| e != Vec3::ZERO).count();
+        }
+        assert!(touching > 300, "too few contacts to test: {touching}");
+        for threads in [2, 3] {
+            let other = run(threads);
+            assert!(
+                one.iter().zip(&other).all(|(a, b)| bits(&a.1) == bits(&b.1)),
+                "{threads} threads differ"
+            );
+        }
     }
 
     #[test]

@@ -95,6 +95,8 @@ impl Droplets {
                     touches.push((i, offset / d * adhesion(d, params.r_min, params.r_max)));
                 }
             });
+            // Pulls are summed in this order: by vertex, whatever the grid's bucket layout.
+            touches.sort_unstable_by_key(|&(i, _)| i);
         });
         let mut wetness = wetness;
         if wetness.is_some() {

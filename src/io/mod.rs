@@ -233,9 +233,9 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
         // Z up to Y up: (x, y, z) -> (x, z, -y), a rotation, so handedness is kept.
         let to_y_up = |p: &mut Vec3| *p = Vec3::new(p.x, p.z, -p.y);
         groom.points.iter_mut().for_each(to_y_up);
-        groom.meshes.iter_mut().flat_map(|m| m.points.iter_mut()).for_each(to_y_up);
         let rotation =
             glam::DMat4::from_cols(glam::DVec4::X, glam::DVec4::NEG_Z, glam::DVec4::Y, glam::DVec4::W);
+        groom.meshes.iter_mut().for_each(|m| m.transform(rotation));
         transform_attributes(&mut groom.attributes, rotation);
     }
     if let Some(scale) = options.meters_per_unit {
@@ -244,41 +244,55 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
 }
 
 /// Moves the attributes that are positions or directions with the points, from a file's space to
-/// coif's by `to_coif`: points (`rest`) like the points, normals by the inverse transpose (kept
-/// unit length), vectors (velocities) by the linear part — by kind, or for plain float3 data by
-/// name (Blender's `surface_normal`, `N`, `v`, `velocit*`, `rest`). Every reader uses it.
+/// coif's by `to_coif` (see [`transform_values`]). Every reader uses it.
 pub(crate) fn transform_attributes(attributes: &mut [crate::groom::Attribute], to_coif: glam::DMat4) {
-    use crate::groom::AttributeKind;
-    if to_coif == glam::DMat4::IDENTITY {
-        return;
-    }
-    let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
-    let linear = glam::DMat3::from_mat4(to_coif);
-    for attribute in attributes.iter_mut().filter(|a| a.components == 3) {
-        let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(attribute) {
-            Some(AttributeKind::Point) => Box::new(transform),
-            Some(AttributeKind::Normal) => {
-                let normal_matrix = linear.inverse().transpose();
-                Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
-            }
-            Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
-            None => continue,
-        };
-        for c in attribute.data.chunks_exact_mut(3) {
-            c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
-        }
+    for attribute in attributes.iter_mut() {
+        transform_values(attribute.kind, &attribute.name, attribute.components, &mut attribute.data, to_coif);
     }
 }
 
-/// How a 3-vector attribute follows the points from file space to coif's: by its kind, or for
-/// plain float3 data by its name (Blender's `surface_normal`, velocities…); `None`: not at all.
-fn direction_kind(attribute: &crate::groom::Attribute) -> Option<crate::groom::AttributeKind> {
+/// Moves 3-vector data that is a position or direction with the points by `to_coif`: points
+/// (`rest`) like the points, normals by the inverse transpose (kept unit length), vectors
+/// (velocities) by the linear part — by kind, or for plain float3 data by name (Blender's
+/// `surface_normal`, `rest_position`, `N`, `v`, `velocit*`, `rest`). Groom attributes and mesh
+/// primvars both move by it.
+pub(crate) fn transform_values(
+    kind: crate::groom::AttributeKind,
+    name: &str,
+    components: usize,
+    data: &mut [f32],
+    to_coif: glam::DMat4,
+) {
     use crate::groom::AttributeKind;
-    match attribute.kind {
-        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(attribute.kind),
+    if to_coif == glam::DMat4::IDENTITY || components != 3 {
+        return;
+    }
+    let linear = glam::DMat3::from_mat4(to_coif);
+    let map: Box<dyn Fn(Vec3) -> Vec3> = match direction_kind(kind, name) {
+        Some(AttributeKind::Point) => {
+            Box::new(move |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3())
+        }
+        Some(AttributeKind::Normal) => {
+            let normal_matrix = linear.inverse().transpose();
+            Box::new(move |n: Vec3| (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3())
+        }
+        Some(_) => Box::new(move |v: Vec3| (linear * v.as_dvec3()).as_vec3()),
+        None => return,
+    };
+    for c in data.chunks_exact_mut(3) {
+        c.copy_from_slice(&map(Vec3::from_slice(c)).to_array());
+    }
+}
+
+/// How 3-vector data follows the points from file space to coif's: by its kind, or for plain
+/// float3 data by its name; `None`: not at all.
+fn direction_kind(kind: crate::groom::AttributeKind, name: &str) -> Option<crate::groom::AttributeKind> {
+    use crate::groom::AttributeKind;
+    match kind {
+        AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(kind),
         AttributeKind::Float => {
-            let name = attribute.name.to_ascii_lowercase();
-            if name == usda::names::REST {
+            let name = name.to_ascii_lowercase();
+            if name == usda::names::REST || name == "rest_position" {
                 Some(AttributeKind::Point)
             } else if name == "n" || name.contains("normal") {
                 Some(AttributeKind::Normal)

@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::Interpolation;
 use crate::io::usda::names;
-use crate::surface_mesh::SurfaceMesh;
+use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 
 /// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
 pub const DEFAULT_PRIM_PATH: &str = "/Groom/Strands";
@@ -539,9 +539,41 @@ fn mesh_prim<'g>(mesh: &'g SurfaceMesh, index: usize, animation: Option<&Animati
         None => Positions::Still(Cow::Borrowed(&mesh.points)),
     };
     properties.extend(points_and_extent(positions, 0.0));
+    properties.extend(mesh.primvars.iter().flat_map(mesh_primvar));
     properties.push(Property::uniform_token("orientation", "rightHanded"));
     properties.push(Property::uniform_token("subdivisionScheme", "none"));
     Prim { name: String::new(), type_name: "Mesh", properties, children: Vec::new() }
+}
+
+/// A mesh primvar as USD properties: `primvars:NAME` (the mesh's plain `normals` attribute for
+/// unindexed normals), typed by its role, and its `:indices`.
+fn mesh_primvar(primvar: &MeshPrimvar) -> Vec<Property<'_>> {
+    let type_name = usd_type(primvar.kind, &primvar.name, primvar.components);
+    let data = match primvar.kind {
+        AttributeKind::Int if type_name == "int[]" => Data::Ints {
+            values: Cow::Owned(primvar.values.iter().map(|&v| v as i32).collect()),
+            components: 1,
+        },
+        AttributeKind::Bool if type_name == "bool[]" => {
+            Data::Bools(primvar.values.iter().map(|&v| v != 0.0).collect())
+        }
+        _ => floats(Cow::Borrowed(&primvar.values), primvar.components),
+    };
+    let name = match (primvar.name.as_str(), &primvar.indices) {
+        (MeshPrimvar::NORMALS, None) => MeshPrimvar::NORMALS.to_string(),
+        (name, _) => format!("primvars:{}", valid_name(name)),
+    };
+    let mut properties = vec![Property::new(name.clone(), type_name, Value::Default(data))
+        .interpolated(primvar.interpolation.usd_name())];
+    if let Some(indices) = &primvar.indices {
+        let values = Cow::Owned(indices.iter().map(|&i| i as i32).collect());
+        properties.push(Property::new(
+            format!("{name}:indices"),
+            "int[]",
+            Value::Default(Data::Ints { values, components: 1 }),
+        ));
+    }
+    properties
 }
 
 /// USD's `type` and `basis` tokens for a curve basis.

@@ -64,7 +64,7 @@ use super::camera::CameraSpec;
 use super::light::{Environment, KeyLight, Light, RectLight, SphereLight};
 use super::RenderSettings;
 use crate::error::{Error, Result};
-use crate::io::usda::{self, Layer, Prim, Value};
+use crate::io::usda::{self, Layer, Prim, SiteFiles, Value};
 use crate::io::ImportOptions;
 use crate::validate::{self, Range, COORDINATE};
 
@@ -372,7 +372,7 @@ fn collect<'a>(
     prim: &'a Prim,
     parent_path: &str,
     parent: DMat4,
-    file: &Path,
+    files: SiteFiles,
     found: &mut Vec<Found<'a>>,
 ) -> Result<()> {
     if !prim.is_defined_and_active() {
@@ -380,7 +380,7 @@ fn collect<'a>(
     }
     let path = format!("{parent_path}/{}", prim.name);
     let (local, reset) = usda::local_transform(prim, None)
-        .map_err(|m| Error::format(file, format!("prim {path} (line {}): {m}", prim.line)))?;
+        .map_err(|(site, m)| files.error(site, format!("prim {path}: {m}")))?;
     let world = if reset { local } else { parent * local };
     if prim.type_name == "Camera"
         || SUPPORTED_LIGHTS.contains(&prim.type_name.as_str())
@@ -389,7 +389,7 @@ fn collect<'a>(
         found.push(Found { prim, path: path.clone(), world });
     }
     for child in &prim.children {
-        collect(child, &path, world, file, found)?;
+        collect(child, &path, world, files, found)?;
     }
     Ok(())
 }
@@ -397,18 +397,13 @@ fn collect<'a>(
 /// One attribute's numbers, or its fallback; errors name the prim and the attribute.
 struct PrimValues<'a> {
     found: &'a Found<'a>,
-    file: &'a Path,
+    files: SiteFiles<'a>,
 }
 
 impl PrimValues<'_> {
     fn error(&self, message: impl std::fmt::Display) -> Error {
-        Error::format(
-            self.file,
-            format!(
-                "{} {} (line {}): {message}",
-                self.found.prim.type_name, self.found.path, self.found.prim.line
-            ),
-        )
+        let prim = self.found.prim;
+        self.files.error(prim.site, format!("{} {}: {message}", prim.type_name, self.found.path))
     }
 
     fn numbers(&self, name: &str) -> Result<Option<Vec<f64>>> {
@@ -480,9 +475,10 @@ impl PrimValues<'_> {
 
 fn from_layer(layer: &Layer, file: &Path, camera_prim: Option<&str>, aspect: f32) -> Result<Shot> {
     let stage = usda::stage_transform(layer, file, &ImportOptions::default())?;
+    let files = SiteFiles::new(file, &layer.sources);
     let mut found = Vec::new();
     for prim in &layer.prims {
-        collect(prim, "", DMat4::IDENTITY, file, &mut found)?;
+        collect(prim, "", DMat4::IDENTITY, files, &mut found)?;
     }
     let mut shot = Shot::default();
 
@@ -508,14 +504,14 @@ fn from_layer(layer: &Layer, file: &Path, camera_prim: Option<&str>, aspect: f32
         None => cameras.first().copied(),
     };
     if let Some(found) = camera {
-        shot.camera = Some(usd_camera(&PrimValues { found, file }, stage, aspect)?);
+        shot.camera = Some(usd_camera(&PrimValues { found, files }, stage, aspect)?);
     }
 
     let mut lights = Vec::new();
     let mut environment = None;
     let mut any_light = false;
     for found in found.iter().filter(|f| f.prim.type_name != "Camera") {
-        let values = PrimValues { found, file };
+        let values = PrimValues { found, files };
         any_light = true;
         let world = stage * found.world;
         match found.prim.type_name.as_str() {

@@ -51,11 +51,25 @@ pub fn needs_frame(recipe: &Recipe) -> bool {
         })
 }
 
-/// Places `recipe` on `groom` (already resampled), whose scalp or head mesh is `scalp` if it
-/// has one.
-pub fn place(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<Placed> {
+/// The head frame `recipe` is placed in on `groom` (the whole groom, whose scalp or head mesh
+/// is `scalp` if it has one), or `None` when the recipe needs none. Fitted once per styling run,
+/// so the guides of a guide run are placed in the same frame as every strand would be.
+pub fn head_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<Option<HeadFrame>> {
+    needs_frame(recipe).then(|| fit_frame(recipe, groom, scalp)).transpose()
+}
+
+/// Places `recipe` on `groom` (already resampled; the guides alone in a guide run), whose scalp
+/// or head mesh is `scalp` if it has one, in `frame` (from [`head_frame`] on the whole groom).
+pub fn place(
+    recipe: &Recipe,
+    groom: &Groom,
+    scalp: Option<&TriangleMesh>,
+    frame: Option<HeadFrame>,
+) -> Result<Placed> {
     let roots: Vec<Vec3> = (0..groom.strand_count()).map(|s| groom.strand_points(s)[0]).collect();
-    let frame = if needs_frame(recipe) { Some(fit_frame(recipe, groom, scalp)?) } else { None };
+    if needs_frame(recipe) && frame.is_none() {
+        return Err(Error::Usage("the recipe is written in the head frame, but none was fitted".into()));
+    }
     let mut out = recipe.clone();
     let world = |f: &mut Option<Frame>| f.replace(Frame::World).unwrap_or(recipe.frame);
     // Converters for items in the head frame (identity for world items).
@@ -256,15 +270,11 @@ pub const COARSEST_SEGMENT_ROD_DIAMETERS: f32 = 0.75;
 /// [`COARSEST_SEGMENT_ROD_DIAMETERS`] of the thinnest rod), so it is simulated as it comes;
 /// else the finer of [`DEFAULT_SEGMENT_HEAD_UNITS`] and that limit, so a preset styles a coarse
 /// groom of any head size unchanged, at the same resolution relative to the head.
-pub fn default_max_segment(
-    recipe: &Recipe,
-    groom: &Groom,
-    scalp: Option<&TriangleMesh>,
-) -> Result<Option<f32>> {
+pub fn default_max_segment(recipe: &Recipe, groom: &Groom, frame: Option<HeadFrame>) -> Result<Option<f32>> {
     if recipe.settings.max_segment.is_some() {
         return Ok(recipe.settings.max_segment);
     }
-    let size = if needs_frame(recipe) { Some(fit_frame(recipe, groom, scalp)?.size()) } else { None };
+    let size = frame.map(|f| f.size());
     let metres = |f: Option<Frame>, l: f32| match (f.unwrap_or(recipe.frame), size) {
         (Frame::Head, Some(size)) => l * size,
         _ => l,

@@ -136,9 +136,12 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
         }
         None => options,
     };
+    // One head frame for the run, fitted to the whole groom as it comes (its scalp mesh, else
+    // all its roots), whether every strand or only the guides are simulated.
+    let frame = super::placement::head_frame(recipe, groom, options.scalp.as_deref())?;
     // A recipe without `max_segment` still gets the resolution its head and rods need.
     let resolved;
-    let recipe = match super::placement::default_max_segment(recipe, groom, options.scalp.as_deref())? {
+    let recipe = match super::placement::default_max_segment(recipe, groom, frame)? {
         Some(max) if recipe.settings.max_segment.is_none() => {
             resolved = {
                 let mut r = recipe.clone();
@@ -151,9 +154,9 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     };
     crate::limits::check_style(groom, recipe, options.frames_per_second)?;
     let mut styled = if crate::guides::wanted(groom, recipe) {
-        crate::guides::style(groom, recipe, options)?
+        crate::guides::style(groom, recipe, options, frame)?
     } else {
-        style_strands(groom, recipe, options, WaterSnapshots::Drop)?
+        style_strands(groom, recipe, options, frame, WaterSnapshots::Drop)?
     };
     styled.groom.meshes.clone_from(&groom.meshes);
     Ok(styled)
@@ -172,9 +175,10 @@ pub(crate) fn style_strands(
     groom: &Groom,
     recipe: &Recipe,
     options: &StyleOptions,
+    frame: Option<HeadFrame>,
     snapshots: WaterSnapshots,
 ) -> Result<Styled> {
-    let mut session = Session::new(groom, recipe, options)?;
+    let mut session = Session::new(groom, recipe, options, frame)?;
     session.keep_snapshots = snapshots == WaterSnapshots::Keep;
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
@@ -334,13 +338,18 @@ struct Session {
 }
 
 impl Session {
-    fn new(input: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Session> {
+    fn new(
+        input: &Groom,
+        recipe: &Recipe,
+        options: &StyleOptions,
+        frame: Option<HeadFrame>,
+    ) -> Result<Session> {
         let groom = match recipe.settings.max_segment {
             Some(max) => resample_groom(input, max),
             None => input.clone(),
         };
         groom.validate()?;
-        let placed = place(recipe, &groom, options.scalp.as_deref())?;
+        let placed = place(recipe, &groom, options.scalp.as_deref(), frame)?;
         let recipe = placed.recipe;
         let settings = &recipe.settings;
         let mut sim = Simulation::new(&groom, sim_params(&recipe))?;
@@ -986,9 +995,14 @@ pub fn sim_params(recipe: &Recipe) -> SimParams {
 }
 
 /// The recipe's obstacles as collider shapes at rest (no pressing offsets, no rods), placed on
-/// `groom` exactly as a styling run places them (head frame, the groom's scalp).
-pub fn obstacle_shapes(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Result<Vec<Shape>> {
-    Ok(place(recipe, groom, scalp)?.shapes)
+/// `groom` in `frame` exactly as a styling run places them (the groom's scalp).
+pub fn obstacle_shapes(
+    recipe: &Recipe,
+    groom: &Groom,
+    scalp: Option<&TriangleMesh>,
+    frame: Option<HeadFrame>,
+) -> Result<Vec<Shape>> {
+    Ok(place(recipe, groom, scalp, frame)?.shapes)
 }
 
 fn smoothstep(t: f32) -> f32 {

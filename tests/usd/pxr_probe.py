@@ -102,6 +102,22 @@ def dump(path, time=None):
             "pointsTimeSamples": mesh.GetPointsAttr().GetTimeSamples(),
             "extent": floats(mesh.GetExtentAttr().Get(code) or []),
             "computedExtent": floats(UsdGeom.Boundable.ComputeExtentFromPlugins(mesh, code) or []),
+            "normals": {
+                "interpolation": mesh.GetNormalsInterpolation(),
+                "type": str(mesh.GetNormalsAttr().GetTypeName()),
+                "values": floats(mesh.GetNormalsAttr().Get(code) or []),
+            } if mesh.GetNormalsAttr().HasAuthoredValue() else None,
+            # Authored primvars, flattened through their indices.
+            "primvars": {
+                pv.GetPrimvarName(): {
+                    "type": str(pv.GetTypeName()),
+                    "role": str(pv.GetTypeName().role),
+                    "interpolation": pv.GetInterpolation(),
+                    "indexed": pv.IsIndexed(),
+                    "values": floats(pv.ComputeFlattened(code)),
+                }
+                for pv in UsdGeom.PrimvarsAPI(prim).GetPrimvarsWithAuthoredValues()
+            },
         })
     validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
     findings = UsdValidation.ValidationContext(validators).Validate(stage)

@@ -10,7 +10,7 @@ use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
-use crate::surface_mesh::SurfaceMesh;
+use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 
 /// Alembic's polygon-mesh schema (a scalp or head beside the curves).
 pub const POLYMESH_SCHEMA: &str = "AbcGeom_PolyMesh_v1";
@@ -171,16 +171,24 @@ impl<'a> CurvesArchive<'a> {
     /// sample at or before it; before a property's first sample its first holds, after its
     /// last its last.
     pub fn read_at_time(&self, time: f64) -> OgawaResult<Groom> {
-        let mut merged: Option<Groom> = None;
+        let mut parts = Vec::with_capacity(self.curves.len());
+        let mut paths = Vec::with_capacity(self.curves.len());
+        // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
+        let mut largest_id: Option<u32> = None;
         for index in 0..self.curves.len() {
             let object = self.resolve(index)?;
-            let groom = self.read_object(&object, time)?;
-            merged = Some(match merged {
-                None => groom,
-                Some(acc) => merge(acc, groom, &object.path)?,
-            });
+            let mut groom = self.read_object(&object, time)?;
+            if index > 0 {
+                let next_id = largest_id.map_or(0, |m| m.wrapping_add(1));
+                groom.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
+            }
+            largest_id = largest_id.max(groom.strand_ids.iter().max().copied());
+            parts.push(groom);
+            paths.push(object.path.clone());
         }
-        let mut groom = merged.expect("at least one curves object");
+        let mut groom = Groom::concat(parts).map_err(|(index, e)| {
+            OgawaError(format!("{}: does not fit the curves objects before it: {e}", paths[index]))
+        })?;
         groom.drop_default_group_named(super::curves_write::DEFAULT_OBJECT_NAME);
         for (path, xform_paths) in &self.meshes {
             let object = self.resolve_path(path, xform_paths)?;
@@ -219,18 +227,87 @@ impl<'a> CurvesArchive<'a> {
             return Ok(None);
         }
         let matrix = self.world_matrix(object, time)?;
-        let mut mesh = SurfaceMesh {
-            path: path.clone(),
-            points: points.iter().map(|p| matrix.transform_point3(p.as_dvec3()).as_vec3()).collect(),
-            face_counts,
-            face_indices,
-        };
+        let mut mesh =
+            SurfaceMesh { path: path.clone(), points, face_counts, face_indices, primvars: Vec::new() };
+        let arb = object.geom.compound(".arbGeomParams");
+        let named = [("N", MeshPrimvar::NORMALS), ("uv", MeshPrimvar::UV)];
+        let params = named
+            .iter()
+            .filter_map(|&(param, name)| object.geom.get(param).map(|p| (p, name.to_string())))
+            .chain(
+                arb.map(|c| c.members.as_slice()).unwrap_or(&[]).iter().map(|m| (m, m.name().to_string())),
+            );
+        for (property, name) in params {
+            if let Some(primvar) = self.mesh_primvar(property, name, &mesh, time)? {
+                mesh.primvars.push(primvar);
+            }
+        }
+        mesh.check().map_err(|problem| OgawaError(format!("{path}: {problem}")))?;
+        mesh.transform(matrix);
         // Clockwise in the file; a mirroring transform turns the winding once more.
         if matrix.determinant() >= 0.0 {
             mesh.flip_winding();
         }
-        mesh.check().map_err(|problem| OgawaError(format!("{path}: {problem}")))?;
         Ok(Some(mesh))
+    }
+
+    /// A PolyMesh geometry parameter (plain array or `.vals`/`.indices` compound) at `time`, kept
+    /// indexed, its interpolation from `geoScope` or else from its count on `mesh`; `None` for
+    /// data no mesh primvar holds (strings, more than 4 components).
+    fn mesh_primvar(
+        &self,
+        property: &Property<'a>,
+        name: String,
+        mesh: &SurfaceMesh,
+        time: f64,
+    ) -> OgawaResult<Option<MeshPrimvar>> {
+        let ogawa = &self.archive.ogawa;
+        let Some(extent) = param_extent(property).filter(|e| (1..=4).contains(e)) else { return Ok(None) };
+        let (vals, indices, scope) = match property {
+            Property::Sampled(s) => (s, None, s.metadata.get("geoScope")),
+            Property::Compound(c) => {
+                let Some(vals) = c.sampled(".vals") else { return Ok(None) };
+                let scope = c.metadata.get("geoScope").or_else(|| vals.metadata.get("geoScope"));
+                (vals, c.sampled(".indices"), scope)
+            }
+        };
+        let fail_here =
+            |message: String| OgawaError(format!("{}: geometry parameter '{name}': {message}", mesh.path));
+        vals.expect(NUMERIC, extent)?;
+        let values = vals.read_f32(ogawa, self.index_at(vals, time))?;
+        let indices = match indices {
+            None => None,
+            Some(indices) => {
+                let raw = indices.read_f64(ogawa, self.index_at(indices, time))?;
+                let converted = raw.iter().map(|&i| (0.0..=u32::MAX as f64).contains(&i).then_some(i as u32));
+                Some(
+                    converted
+                        .collect::<Option<Vec<u32>>>()
+                        .ok_or_else(|| fail_here("a negative index".into()))?,
+                )
+            }
+        };
+        let count = indices.as_ref().map_or(values.len() / extent as usize, Vec::len);
+        let interpolation = match scope {
+            Some(scope) => MeshInterpolation::from_alembic_scope(scope)
+                .ok_or_else(|| fail_here(format!("unknown geoScope \"{scope}\"")))?,
+            // No scope: the first interpolation the count fits (`check` names a count that fits none).
+            None => [
+                MeshInterpolation::Vertex,
+                MeshInterpolation::FaceVarying,
+                MeshInterpolation::Uniform,
+                MeshInterpolation::Constant,
+            ]
+            .into_iter()
+            .find(|i| i.count(mesh) == count)
+            .unwrap_or(MeshInterpolation::Vertex),
+        };
+        let kind = match name.as_str() {
+            MeshPrimvar::NORMALS => AttributeKind::Normal,
+            MeshPrimvar::UV => AttributeKind::TexCoord,
+            _ => param_kind(property, extent),
+        };
+        Ok(Some(MeshPrimvar { name, kind, components: extent as usize, interpolation, values, indices }))
     }
 
     /// Every frame, in order; refuses files that would expand far beyond their size.
@@ -319,7 +396,14 @@ impl<'a> CurvesArchive<'a> {
         let basis_property = required(object, "curveBasisAndType")?;
         basis_property.expect(&[Pod::U8], 4)?;
         let basis_bytes = basis_property.sample_bytes(ogawa, self.index_at(basis_property, time))?;
-        let basis = curve_basis(basis_bytes, path)?;
+        // Without `.orders`, Maya and Blender read variable-order curves as order 2.
+        let orders = || -> OgawaResult<Vec<f64>> {
+            match object.geom.sampled(".orders") {
+                Some(orders) => orders.read_f64(ogawa, self.index_at(orders, time)),
+                None => Ok(Vec::new()),
+            }
+        };
+        let basis = curve_basis(basis_bytes, path, orders)?;
 
         let mut points = self.points_at(required(object, "P")?, time)?;
         let counts_property = required(object, "nVertices")?;
@@ -713,7 +797,6 @@ fn required<'o, 'a>(object: &CurvesObject<'o, 'a>, name: &str) -> OgawaResult<&'
         .ok_or_else(|| OgawaError(format!("{}: curves without the required '{name}' property", object.path)))
 }
 
-/// The curve kind from `curveBasisAndType`: the basis byte decides, as in Blender and Houdini.
 /// The wrap of open curves of `basis`, which Alembic does not record: Catmull-Rom passes
 /// through its end points (`pinned`), as Blender evaluates it and as its USD exporter writes the
 /// same curves; the other bases are read as their files' open curves (`nonperiodic`).
@@ -724,20 +807,53 @@ pub fn wrap_of(basis: CurveBasis) -> CurveWrap {
     }
 }
 
-fn curve_basis(bytes: &[u8], path: &str) -> OgawaResult<CurveBasis> {
-    let [_, wrap, basis, _] =
+/// The curve kind from `curveBasisAndType`. The basis byte decides, as in Blender and Houdini
+/// (Blender's own hair says "linear" with a Catmull-Rom basis), except that a B-spline is a NURBS
+/// curve whose order the type byte gives: Maya's AbcExport writes every nurbsCurve with the
+/// B-spline basis and its degree in the type (variable order: `.orders`), and Maya and Blender
+/// both read order 2 as a polyline.
+fn curve_basis(
+    bytes: &[u8],
+    path: &str,
+    orders: impl FnOnce() -> OgawaResult<Vec<f64>>,
+) -> OgawaResult<CurveBasis> {
+    let [curve_type, wrap, basis, _] =
         bytes.try_into().map_err(|_| OgawaError(format!("{path}: curveBasisAndType is empty")))?;
     if wrap != 0 {
         return fail(format!("{path}: periodic (closed) curves are not hair"));
     }
-    Ok(match basis {
-        0 => CurveBasis::Linear,
-        1 => CurveBasis::Bezier,
-        2 => CurveBasis::BSpline,
-        3 => CurveBasis::CatmullRom,
-        other => return fail(format!("{path}: curve basis {other} (hermite or power) is not supported")),
+    Ok(match (basis, curve_type) {
+        (0, _) => CurveBasis::Linear,
+        (1, _) => CurveBasis::Bezier,
+        (2, LINEAR_TYPE) => CurveBasis::Linear,
+        (2, VARIABLE_ORDER_TYPE) => {
+            let orders = orders()?;
+            if orders.iter().all(|&order| order == 2.0) {
+                CurveBasis::Linear
+            } else if orders.iter().all(|&order| order == 4.0) {
+                CurveBasis::BSpline
+            } else if let Some(odd) = orders.iter().find(|&&order| order != 2.0 && order != 4.0) {
+                return fail(format!(
+                    "{path}: NURBS curves of order {odd} (degree {}): coif reads degree 1 and 3",
+                    odd - 1.0
+                ));
+            } else {
+                return fail(format!(
+                    "{path}: NURBS curves of degree 1 and 3 mixed: coif needs one degree per object"
+                ));
+            }
+        }
+        (2, _) => CurveBasis::BSpline,
+        (3, _) => CurveBasis::CatmullRom,
+        (other, _) => {
+            return fail(format!("{path}: curve basis {other} (hermite or power) is not supported"))
+        }
     })
 }
+
+/// `curveBasisAndType`'s type byte: 0 cubic, 1 linear, 2 variable order.
+const LINEAR_TYPE: u8 = 1;
+const VARIABLE_ORDER_TYPE: u8 = 2;
 
 fn has_schema(object: &Object<'_>, schema: &str, title: &str) -> bool {
     object.metadata.get("schema") == Some(schema)
@@ -785,14 +901,4 @@ fn find<'o, 'a>(top: &'o Object<'a>, path: &str) -> Option<&'o Object<'a>> {
         object = object.children.iter().find(|c| c.name == part)?;
     }
     Some(object)
-}
-
-/// Appends `b`'s strands (one more curves object, its own group) to `a`.
-fn merge(mut a: Groom, mut b: Groom, path: &str) -> OgawaResult<Groom> {
-    // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
-    let next_id = a.strand_ids.iter().max().map_or(0, |m| m.wrapping_add(1));
-    b.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
-    a.append(&b)
-        .map_err(|e| OgawaError(format!("{path}: does not fit the curves objects before it: {e}")))?;
-    Ok(a)
 }

@@ -15,7 +15,7 @@ use super::curves_read::POLYMESH_SCHEMA;
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
 use crate::groom::{attr, AttributeKind, AttributeRate, CurveBasis, CurveWrap, Groom};
-use crate::surface_mesh::SurfaceMesh;
+use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 
 pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
 pub const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
@@ -204,9 +204,10 @@ impl<W: Write + Seek> CurvesWriter<W> {
         let mut meshes = Vec::new();
         if options.objects != Objects::Curves {
             for (index, mesh) in first.meshes.iter().enumerate() {
+                let scale = if options.unreal { epic::UNITS_PER_METRE } else { 1.0 };
                 meshes.push(tree.place(&mut archive, &mesh.path, "mesh", |a, at, name| {
-                    add_polymesh(a, at, name, index, mesh, time_sampling)
-                })?);
+                    add_polymesh(a, at, name, (index, mesh, scale), time_sampling)
+                })??);
             }
         }
         Ok(CurvesWriter {
@@ -587,23 +588,91 @@ impl Tree {
     }
 }
 
-/// A PolyMesh object for groom mesh `index`, its properties in the C++ writer's order.
+/// A PolyMesh object for groom mesh `index` (points scaled by `scale` when written), its
+/// properties in the C++ writer's order, its primvars written once (they do not move).
 fn add_polymesh<W: Write + Seek>(
     archive: &mut ArchiveWriter<W>,
     parent: ObjectId,
     name: &str,
-    index: usize,
-    mesh: &SurfaceMesh,
+    (index, mesh, scale): (usize, &SurfaceMesh, f32),
     ts: u32,
-) -> (ObjectId, MeshObject) {
+) -> (ObjectId, io::Result<MeshObject>) {
     let (object, geom, bounds, positions) = add_geom_object(archive, parent, name, POLYMESH_SCHEMA, ts);
     let face_indices = archive.add_array(geom, ".faceIndices", MetaData::new(), Pod::I32, 1, ts);
     let face_counts = archive.add_array(geom, ".faceCounts", MetaData::new(), Pod::I32, 1, ts);
     // coif's meshes are wound counter-clockwise; Alembic's clockwise.
     let mut clockwise = mesh.clone();
     clockwise.flip_winding();
+    clockwise.transform(DMat4::from_scale(glam::DVec3::splat(scale as f64)));
     let clockwise_indices = clockwise.face_indices.iter().map(|&i| i as i32).collect();
-    (object, MeshObject { mesh: index, bounds, positions, face_indices, face_counts, clockwise_indices })
+    let mut arb = None;
+    let written = clockwise.primvars.iter().try_for_each(|primvar| {
+        let (parent, name) = match primvar.name.as_str() {
+            MeshPrimvar::NORMALS => (geom, "N"),
+            MeshPrimvar::UV => (geom, "uv"),
+            other => (
+                *arb.get_or_insert_with(|| archive.add_compound(geom, ".arbGeomParams", MetaData::new())),
+                other,
+            ),
+        };
+        add_mesh_param(archive, parent, name, primvar)
+    });
+    let made = written.map(|()| MeshObject {
+        mesh: index,
+        bounds,
+        positions,
+        face_indices,
+        face_counts,
+        clockwise_indices,
+    });
+    (object, made)
+}
+
+/// One mesh primvar as a geometry parameter with one sample: a plain array, or a `.vals` /
+/// `.indices` compound when indexed; its interpolation as `geoScope`.
+fn add_mesh_param<W: Write + Seek>(
+    archive: &mut ArchiveWriter<W>,
+    parent: CompoundId,
+    name: &str,
+    primvar: &MeshPrimvar,
+) -> io::Result<()> {
+    let pod = pod(primvar.kind, &primvar.name);
+    let extent = primvar.components as u8;
+    let metadata = geom_param_metadata(
+        primvar.interpolation.alembic_scope(),
+        pod,
+        extent,
+        interpretation(primvar.kind, &primvar.name, primvar.components),
+    );
+    let bytes: Vec<u8> = match pod {
+        Pod::I32 => primvar.values.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect(),
+        Pod::Bool => primvar.values.iter().map(|&v| (v != 0.0) as u8).collect(),
+        _ => bytemuck::cast_slice(&primvar.values).to_vec(),
+    };
+    let elements = (primvar.values.len() / primvar.components) as u64;
+    // The C++ library and ogawa-rs read a PolyMesh's `uv` as an indexed compound (Blender
+    // writes it so), so it always gets indices.
+    let identity: Vec<u32>;
+    let indices = match &primvar.indices {
+        None if name == "uv" => {
+            identity = (0..elements as u32).collect();
+            Some(&identity)
+        }
+        indices => indices.as_ref(),
+    };
+    match indices {
+        None => {
+            let id = archive.add_array(parent, name, metadata, pod, extent, 0);
+            archive.set_sample(id, &bytes, elements)
+        }
+        Some(indices) => {
+            let compound = archive.add_compound(parent, name, metadata.clone());
+            let vals = archive.add_array(compound, ".vals", metadata, pod, extent, 0);
+            archive.set_sample(vals, &bytes, elements)?;
+            let ids = archive.add_array(compound, ".indices", MetaData::new(), Pod::U32, 1, 0);
+            archive.set_sample(ids, bytemuck::cast_slice(indices), indices.len() as u64)
+        }
+    }
 }
 
 /// An Xform object; `matrix` `None` is the identity (an empty `.xform`).

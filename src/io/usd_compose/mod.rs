@@ -35,11 +35,12 @@ use arcs::{Arcs, AssetArc, LayerOffset, ListOp};
 
 use crate::error::{Error, Result};
 use crate::groom::Groom;
-use crate::io::usda::{self, Attribute, Layer, Prim, Selection, Specifier};
+use crate::io::usda::{self, Attribute, Layer, Prim, Selection, Site, Specifier};
 use crate::io::{usdc, ImportOptions};
 
 /// Layers loaded for one stage (a layer read at two different times counts twice).
 pub const MAX_LAYERS: usize = 256;
+const _: () = assert!(MAX_LAYERS <= u16::MAX as usize, "a Site names its layer in a u16");
 /// Arcs nested one inside another (a reference in a referenced layer…).
 pub const MAX_ARC_DEPTH: usize = 64;
 /// Nodes in one prim's index.
@@ -89,7 +90,6 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
         stacks: Vec::new(),
         stack_ids: HashMap::new(),
         overrides,
-        root_layer: 0,
         prims: 0,
         work: 0,
         next_node: 0,
@@ -101,7 +101,8 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
     let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     let meta = (root.meters_per_unit, root.up_axis.clone(), root.default_prim.clone(), root.lines);
     let root_id = composer.add_layer(canonical.clone(), path.to_path_buf(), selection.time, root)?;
-    composer.root_layer = root_id;
+    // Sites index the loaded layers, so the root must be the first: the file being read.
+    debug_assert_eq!(root_id, 0);
     let stack = composer.stack_with_root(root_id, &canonical, selection.time, &mut Vec::new())?;
     let mut out = Layer {
         lines: meta.3,
@@ -136,6 +137,7 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
             return Err(Error::format(path, format!("--variant {}: {problem}", o.spec)));
         }
     }
+    out.sources = composer.layers.iter().map(|l| l.display.clone()).collect();
     Ok(out)
 }
 
@@ -240,6 +242,14 @@ struct Opinion<'l> {
     arc: Arc,
 }
 
+impl Opinion<'_> {
+    /// Where a spec of this opinion's layer was authored, on the composed stage.
+    fn site(&self, in_layer: Site) -> Site {
+        // MAX_LAYERS bounds the index.
+        Site { layer: self.layer as u16, line: in_layer.line }
+    }
+}
+
 struct Composer {
     time: Option<f64>,
     layers: Vec<LoadedLayer>,
@@ -247,8 +257,6 @@ struct Composer {
     stacks: Vec<Stack>,
     stack_ids: HashMap<(PathBuf, Option<u64>), usize>,
     overrides: Vec<VariantOverride>,
-    /// The stage's root layer: lines of its specs mean something in errors.
-    root_layer: usize,
     prims: usize,
     work: usize,
     next_node: usize,
@@ -758,7 +766,7 @@ impl Composer {
         if opinions.is_empty() {
             return Ok(None);
         }
-        let mut prim = compose_fields(name, &opinions, self.time, self.root_layer);
+        let mut prim = compose_fields(name, &opinions, self.time);
         let mut child_names: Vec<String> = Vec::new();
         let mut seen = HashSet::new();
         for opinion in opinions.iter().rev() {
@@ -871,7 +879,7 @@ fn in_arc(error: Error, authored_in: &Path, arc: &str) -> Error {
 }
 
 /// The composed prim's own fields: type, specifier, active, attributes (children come later).
-fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>, root_layer: usize) -> Prim {
+fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>) -> Prim {
     let strongest = &opinions[0];
     let specifier = opinions
         .iter()
@@ -890,7 +898,7 @@ fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>, root_laye
             .find(|t| !t.is_empty())
             .cloned()
             .unwrap_or_default(),
-        line: if strongest.layer == root_layer { strongest.prim.line } else { 0 },
+        site: strongest.site(strongest.prim.site),
         specifier,
         active: opinions.iter().find_map(|o| o.prim.active),
         ..Default::default()
@@ -928,15 +936,15 @@ fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>, root_laye
             ..Default::default()
         };
         if let Some((spec, opinion)) = source {
-            attribute.line = if opinion.layer == root_layer { spec.line } else { 0 };
+            attribute.site = opinion.site(spec.site);
             attribute.default = spec.default.clone();
             attribute.samples =
                 spec.samples.iter().map(|(t, v)| (opinion.offset.apply(*t), v.clone())).collect();
             if time.is_none() && attribute.default.is_some() {
                 attribute.samples.clear();
             }
-        } else if let Some((spec, _)) = specs.first() {
-            attribute.line = spec.line;
+        } else if let Some((spec, opinion)) = specs.first() {
+            attribute.site = opinion.site(spec.site);
         }
         prim.attributes.push(attribute);
     }

@@ -15,7 +15,7 @@ mod reader;
 mod writer;
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::groom::Groom;
@@ -25,10 +25,33 @@ pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_P
 pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
 pub(crate) use parser::{offer_sample, wanted};
-pub use parser::{Attribute, Layer, LayerTimeline, Prim, Specifier, Value};
+pub use parser::{Attribute, Layer, LayerTimeline, Prim, Site, Specifier, Value};
 pub(crate) use reader::{
     groom_from_layer, local_transform, places_with_time_samples, stage_transform, value_at,
 };
+
+/// Errors about a spec name the file and line where it was authored: on a composed stage, the
+/// sublayer or referenced file a value came from, not the root layer.
+#[derive(Clone, Copy)]
+pub struct SiteFiles<'a> {
+    read: &'a Path,
+    sources: &'a [PathBuf],
+}
+
+impl<'a> SiteFiles<'a> {
+    /// `read`: the file the stage was read from; `sources`: its [`Layer::sources`].
+    pub fn new(read: &'a Path, sources: &'a [PathBuf]) -> Self {
+        SiteFiles { read, sources }
+    }
+
+    pub fn error(&self, site: Site, message: impl std::fmt::Display) -> Error {
+        let file = self.sources.get(usize::from(site.layer)).map_or(self.read, PathBuf::as_path);
+        match site.line {
+            0 => Error::format(file, message.to_string()),
+            line => Error::format(file, format!("line {line}: {message}")),
+        }
+    }
+}
 
 /// First bytes of every `.usda` file.
 pub const MAGIC: &[u8] = b"#usda";

@@ -103,12 +103,28 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
     }
 }
 
+/// Where a spec was authored, for error messages: a line of a layer. On a composed stage the
+/// specs come from several layers: `layer` indexes [`Layer::sources`] (0: the file read).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Site {
+    pub layer: u16,
+    /// 0 where lines mean nothing (a crate file).
+    pub line: u32,
+}
+
+impl Site {
+    /// A line of the file being read.
+    pub fn line(line: u32) -> Site {
+        Site { layer: 0, line }
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Attribute {
     pub name: String,
     pub type_name: String,
-    /// Line of the declaration, for error messages.
-    pub line: u32,
+    /// The declaration.
+    pub site: Site,
     pub default: Option<Value>,
     /// The time samples kept (see [`Parser::offer_sample`]): at most the two around the
     /// requested time, or the earliest one when no time was requested.
@@ -132,7 +148,7 @@ pub enum Specifier {
 pub struct Prim {
     pub type_name: String,
     pub name: String,
-    pub line: u32,
+    pub site: Site,
     pub specifier: Specifier,
     /// The `active` opinion, if authored.
     pub active: Option<bool>,
@@ -162,6 +178,9 @@ impl Prim {
 pub struct Layer {
     /// Lines in the file (the last line), for errors about the stage as a whole.
     pub lines: u32,
+    /// The files a composed stage's specs come from ([`Site::layer`]); the first is the root
+    /// layer. Empty for a layer as read: its sites are all in its own file.
+    pub sources: Vec<std::path::PathBuf>,
     pub meters_per_unit: Option<f64>,
     pub up_axis: Option<String>,
     pub default_prim: Option<String>,
@@ -615,7 +634,7 @@ impl Parser<'_> {
             "class" => Specifier::Class,
             _ => Specifier::Over,
         };
-        let mut prim = Prim { line, specifier, ..Default::default() };
+        let mut prim = Prim { site: Site::line(line), specifier, ..Default::default() };
         if self.lexer.at_identifier() {
             prim.type_name = self.lexer.identifier()?;
         }
@@ -722,7 +741,8 @@ impl Parser<'_> {
                 }
                 Some(_) => {
                     let line = self.lexer.line;
-                    let mut variant = Prim { line, name: self.lexer.string()?, ..Default::default() };
+                    let mut variant =
+                        Prim { site: Site::line(line), name: self.lexer.string()?, ..Default::default() };
                     self.spec_body(&mut variant)?;
                     variants.push(variant);
                 }
@@ -765,7 +785,7 @@ impl Parser<'_> {
                 prim.attributes.push(Attribute {
                     name: name.clone(),
                     type_name: type_name.clone(),
-                    line,
+                    site: Site::line(line),
                     ..Default::default()
                 });
                 prim.attributes.len() - 1
@@ -777,7 +797,7 @@ impl Parser<'_> {
                     let reserve = if keep { vertex_hint(prim) } else { 0 };
                     let value = self.typed_value(kind, components, array, keep, reserve)?;
                     prim.attributes[index].default = Some(value);
-                    prim.attributes[index].line = line;
+                    prim.attributes[index].site = Site::line(line);
                 }
                 Some("timeSamples") => {
                     let reserve = if keep { vertex_hint(prim) } else { 0 };
@@ -1072,6 +1092,7 @@ pub fn wanted(name: &str) -> bool {
             | "faceVertexCounts"
             | "faceVertexIndices"
             | "orientation"
+            | "normals"
             // Cameras (the render's shot).
             | "projection"
             | "focalLength"

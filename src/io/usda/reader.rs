@@ -5,15 +5,15 @@ use std::path::Path;
 
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
-use super::parser::{Attribute, Layer, Prim, Value};
-use super::{names, DEFAULT_WIDTH};
+use super::parser::{Attribute, Layer, Prim, Site, Value};
+use super::{names, SiteFiles, DEFAULT_WIDTH};
 use crate::error::{Error, Result};
 use crate::groom::{
     Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
 };
 use crate::groups::Interpolation;
 use crate::io::{ImportOptions, UpAxis};
-use crate::surface_mesh::SurfaceMesh;
+use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
 const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
@@ -21,7 +21,7 @@ const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
 /// One `BasisCurves` prim's curves, transformed to coif's space (metres, Y up).
 struct Curves {
     path: String,
-    line: u32,
+    site: Site,
     basis: CurveBasis,
     wrap: CurveWrap,
     purpose: Option<String>,
@@ -83,14 +83,16 @@ pub fn places_with_time_samples(layer: &Layer) -> bool {
 
 /// Builds the groom a layer describes, at `time` (see [`value_at`]).
 pub fn groom_from_layer(
-    layer: Layer,
+    mut layer: Layer,
     path: &Path,
     options: &ImportOptions,
     time: Option<f64>,
 ) -> Result<Groom> {
     let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
-    let mut walker = Walker { path, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
+    let sources = std::mem::take(&mut layer.sources);
+    let files = SiteFiles::new(path, &sources);
+    let mut walker = Walker { files, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
     for prim in layer.prims {
         walker.visit(prim, "", DMat4::IDENTITY, None)?;
     }
@@ -101,23 +103,23 @@ pub fn groom_from_layer(
     // final sample.
     if let (Some(at), Some(first)) = (time, &walker.first_sample) {
         if at < first.time {
-            return Err(Error::format(
-                path,
+            return Err(files.error(
+                first.site,
                 format!(
-                    "line {}: frame {at} is before the first time sample ({}) of '{}' and of everything \
-                     else that places the groom",
-                    first.line, first.time, first.attribute
+                    "frame {at} is before the first time sample ({}) of '{}' and of everything else that \
+                     places the groom",
+                    first.time, first.attribute
                 ),
             ));
         }
     }
-    let mut groom = merge(walker.found, path, layer_lines)?;
+    let mut groom = merge(walker.found, files, path, layer_lines)?;
     groom.meshes = walker.meshes;
     Ok(groom)
 }
 
 struct Walker<'a> {
-    path: &'a Path,
+    files: SiteFiles<'a>,
     time: Option<f64>,
     stage: DMat4,
     found: Vec<Curves>,
@@ -131,7 +133,7 @@ struct Walker<'a> {
 struct FirstSample {
     time: f64,
     attribute: String,
-    line: u32,
+    site: Site,
 }
 
 impl FirstSample {
@@ -143,7 +145,7 @@ impl FirstSample {
             _ => Some(FirstSample {
                 time,
                 attribute: format!("{prim_path}.{}", attribute.name),
-                line: attribute.line,
+                site: attribute.site,
             }),
         }
     }
@@ -163,7 +165,7 @@ impl Walker<'_> {
         }
         let prim_path = format!("{parent_path}/{}", prim.name);
         let (local, reset) =
-            local_transform(&prim, self.time).map_err(|m| self.error(&prim_path, prim.line, m))?;
+            local_transform(&prim, self.time).map_err(|(site, m)| self.error(&prim_path, site, m))?;
         // `!resetXformStack!`: the ancestors' transforms do not apply to this prim.
         let world = if reset { local } else { parent * local };
         let transforms = prim.attributes.iter().filter(|a| a.name.starts_with("xformOp"));
@@ -181,6 +183,20 @@ impl Walker<'_> {
             if let Some(curves) = self.curves(&mut prim, &prim_path, world)? {
                 self.found.push(curves);
             }
+        } else if matches!(prim.type_name.as_str(), "NurbsCurves" | "HermiteCurves")
+            && prim.attribute("points").is_some()
+        {
+            // Curves coif would otherwise leave out without a word (Maya's USD export writes
+            // nurbsCurves so).
+            return Err(self.error(
+                &prim_path,
+                prim.site,
+                format!(
+                    "a {} prim: coif reads hair from BasisCurves (linear, Bézier, B-spline, Catmull-Rom); \
+                     export these curves as BasisCurves",
+                    prim.type_name
+                ),
+            ));
         } else if prim.type_name == "Mesh" {
             first_here = placed(&prim);
             if let Some(mesh) = self.mesh(&mut prim, &prim_path, world)? {
@@ -198,25 +214,25 @@ impl Walker<'_> {
         Ok(())
     }
 
-    fn error(&self, prim_path: &str, line: u32, message: impl std::fmt::Display) -> Error {
-        Error::format(self.path, format!("line {line}: prim <{prim_path}>: {message}"))
+    fn error(&self, prim_path: &str, site: Site, message: impl std::fmt::Display) -> Error {
+        self.files.error(site, format!("prim <{prim_path}>: {message}"))
     }
 
     /// Reads one `Mesh` prim (a scalp, head or body) in coif's space, wound counter-clockwise;
     /// `None` when it has no points or faces (an empty placeholder).
     fn mesh(&self, prim: &mut Prim, prim_path: &str, world: DMat4) -> Result<Option<SurfaceMesh>> {
         let time = self.time;
-        let at_prim = |line: u32, message: String| self.error(prim_path, line, message);
+        let at_prim = |site: Site, message: String| self.error(prim_path, site, message);
         let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
             return Ok(None);
         };
-        let points_line = points_attr.line;
+        let points_site = points_attr.site;
         let points: Vec<Vec3> = match take_value(points_attr, time) {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,
             Some(other) => match other.to_f32() {
                 Some(flat) if flat.len() % 3 == 0 => flat.chunks_exact(3).map(Vec3::from_slice).collect(),
-                _ => return Err(at_prim(points_line, "'points' must be a point3f[] array".into())),
+                _ => return Err(at_prim(points_site, "'points' must be a point3f[] array".into())),
             },
         };
         let ints = |name: &str| -> Result<Option<Vec<u32>>> {
@@ -228,8 +244,8 @@ impl Walker<'_> {
                     .map(|&v| u32::try_from(v).ok())
                     .collect::<Option<Vec<u32>>>()
                     .map(Some)
-                    .ok_or_else(|| at_prim(attribute.line, format!("'{name}' holds a negative value"))),
-                Some(_) => Err(at_prim(attribute.line, format!("'{name}' must be an int[] array"))),
+                    .ok_or_else(|| at_prim(attribute.site, format!("'{name}' holds a negative value"))),
+                Some(_) => Err(at_prim(attribute.site, format!("'{name}' must be an int[] array"))),
             }
         };
         let (Some(face_counts), Some(face_indices)) = (ints("faceVertexCounts")?, ints("faceVertexIndices")?)
@@ -242,31 +258,34 @@ impl Walker<'_> {
         let to_coif = self.stage * world;
         let mut mesh = SurfaceMesh {
             path: prim_path.to_string(),
-            points: points.iter().map(|p| to_coif.transform_point3(p.as_dvec3()).as_vec3()).collect(),
+            points,
             face_counts,
             face_indices,
+            primvars: Vec::new(),
         };
+        mesh.primvars = mesh_primvars(prim, time).map_err(|(site, m)| at_prim(site, m))?;
         let left_handed = match prim.attribute("orientation").and_then(|a| value_at(a, time)) {
             Some(Value::Text(t)) if t.len() == 1 => t[0] == "leftHanded",
             _ => false,
         };
+        mesh.check().map_err(|problem| at_prim(prim.site, format!("mesh: {problem}")))?;
+        mesh.transform(to_coif);
         // A mirroring transform turns the winding too.
         if left_handed != (to_coif.determinant() < 0.0) {
             mesh.flip_winding();
         }
-        mesh.check().map_err(|problem| at_prim(prim.line, format!("mesh: {problem}")))?;
         Ok(Some(mesh))
     }
 
     /// Reads one `BasisCurves` prim; `None` when it has no points (an empty placeholder).
     fn curves(&self, prim: &mut Prim, prim_path: &str, world: DMat4) -> Result<Option<Curves>> {
         let time = self.time;
-        let at_prim = |line: u32, message: String| self.error(prim_path, line, message);
+        let at_prim = |site: Site, message: String| self.error(prim_path, site, message);
         let token = |prim: &Prim, name: &str, fallback: &str| -> Result<String> {
-            match prim.attribute(name).and_then(|a| value_at(a, time).map(|v| (a.line, v))) {
+            match prim.attribute(name).and_then(|a| value_at(a, time).map(|v| (a.site, v))) {
                 None => Ok(fallback.to_string()),
                 Some((_, Value::Text(t))) if t.len() == 1 => Ok(t[0].clone()),
-                Some((line, _)) => Err(at_prim(line, format!("'{name}' must be a token"))),
+                Some((site, _)) => Err(at_prim(site, format!("'{name}' must be a token"))),
             }
         };
         let curve_type = token(prim, "type", "cubic")?;
@@ -278,20 +297,20 @@ impl Walker<'_> {
             ("cubic", "bspline") => CurveBasis::BSpline,
             ("cubic", "catmullRom") => CurveBasis::CatmullRom,
             ("cubic", other) => {
-                return Err(at_prim(prim.line, format!("unsupported cubic basis \"{other}\"")))
+                return Err(at_prim(prim.site, format!("unsupported cubic basis \"{other}\"")))
             }
-            (other, _) => return Err(at_prim(prim.line, format!("unknown curve type \"{other}\""))),
+            (other, _) => return Err(at_prim(prim.site, format!("unknown curve type \"{other}\""))),
         };
         let wrap =
             match wrap.as_str() {
                 "nonperiodic" => CurveWrap::Nonperiodic,
                 "pinned" => CurveWrap::Pinned,
                 "periodic" => return Err(at_prim(
-                    prim.line,
+                    prim.site,
                     "wrap \"periodic\" (closed curves) is not supported: coif cannot simulate closed strands"
                         .into(),
                 )),
-                other => return Err(at_prim(prim.line, format!("unknown wrap \"{other}\""))),
+                other => return Err(at_prim(prim.site, format!("unknown wrap \"{other}\""))),
             };
         let pinned = wrap == CurveWrap::Pinned;
         let purpose = token(prim, "purpose", "default")?;
@@ -300,33 +319,33 @@ impl Walker<'_> {
         let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
             return Ok(None);
         };
-        let points_line = points_attr.line;
+        let points_site = points_attr.site;
         let points = match take_value(points_attr, time) {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,
             // point3d[] and other numeric spellings of 3-vectors.
             Some(other) => match other.to_f32() {
                 Some(flat) if flat.len() % 3 == 0 => flat.chunks_exact(3).map(Vec3::from_slice).collect(),
-                _ => return Err(at_prim(points_line, "'points' must be a point3f[] array".into())),
+                _ => return Err(at_prim(points_site, "'points' must be a point3f[] array".into())),
             },
         };
         let counts_attr = prim.attribute("curveVertexCounts");
-        let counts_line = counts_attr.map_or(prim.line, |a| a.line);
+        let counts_site = counts_attr.map_or(prim.site, |a| a.site);
         let counts: Vec<u32> = match counts_attr.and_then(|a| value_at(a, time)) {
             Some(Value::Int(counts)) => counts
                 .iter()
                 .map(|&c| u32::try_from(c).ok().filter(|&c| c > 0))
                 .collect::<Option<_>>()
                 .ok_or_else(|| {
-                    at_prim(counts_line, "curveVertexCounts holds a count that is not positive".into())
+                    at_prim(counts_site, "curveVertexCounts holds a count that is not positive".into())
                 })?,
-            Some(_) => return Err(at_prim(counts_line, "'curveVertexCounts' must be an int[] array".into())),
-            None => return Err(at_prim(points_line, "points without curveVertexCounts".into())),
+            Some(_) => return Err(at_prim(counts_site, "'curveVertexCounts' must be an int[] array".into())),
+            None => return Err(at_prim(points_site, "points without curveVertexCounts".into())),
         };
         let total: u64 = counts.iter().map(|&c| c as u64).sum();
         if total != points.len() as u64 {
             return Err(at_prim(
-                points_line,
+                points_site,
                 format!("curveVertexCounts add up to {total} points but 'points' has {}", points.len()),
             ));
         }
@@ -335,17 +354,17 @@ impl Walker<'_> {
         let widths = match prim.attributes.iter_mut().find(|a| a.name == "widths") {
             None => None,
             Some(attr) => {
-                let line = attr.line;
+                let site = attr.site;
                 let interpolation = attr.interpolation.clone().unwrap_or_else(|| "vertex".into());
                 match take_value(attr, time) {
                     None => None,
                     Some(value) => {
                         let values = value
                             .into_f32()
-                            .ok_or_else(|| at_prim(line, "'widths' must be a float[] array".into()))?;
+                            .ok_or_else(|| at_prim(site, "'widths' must be a float[] array".into()))?;
                         let (rate, data) = layout
                             .resolve(values, 1, &interpolation)
-                            .map_err(|m| at_prim(line, format!("widths: {m}")))?;
+                            .map_err(|m| at_prim(site, format!("widths: {m}")))?;
                         Some(layout.to_vertex(rate, 1, data))
                     }
                 }
@@ -354,7 +373,7 @@ impl Walker<'_> {
 
         let mut curves = Curves {
             path: prim_path.to_string(),
-            line: prim.line,
+            site: prim.site,
             basis,
             wrap,
             purpose,
@@ -380,7 +399,7 @@ impl Walker<'_> {
                 .and_then(|a| value_at(a, time))
                 .map(|v| v.to_f64());
             let attr = prim.attributes.iter_mut().find(|a| a.name == format!("primvars:{name}")).unwrap();
-            let line = attr.line;
+            let site = attr.site;
             let type_name = attr.type_name.trim_end_matches("[]").to_string();
             let interpolation = attr.interpolation.clone().unwrap_or_else(|| "constant".into());
             let (kind_components, element_size) =
@@ -393,7 +412,7 @@ impl Walker<'_> {
                 if ids.len() == counts.len() {
                     let ids = ids.iter().map(|&v| u32::try_from(v).ok()).collect::<Option<_>>();
                     curves.strand_ids = Some(ids.ok_or_else(|| {
-                        at_prim(line, "groom_id values must be non-negative integers".into())
+                        at_prim(site, "groom_id values must be non-negative integers".into())
                     })?);
                     continue;
                 }
@@ -405,13 +424,13 @@ impl Walker<'_> {
             }
             if let Some(indices) = indices {
                 let indices =
-                    indices.ok_or_else(|| at_prim(line, format!("primvars:{name}:indices must be int[]")))?;
+                    indices.ok_or_else(|| at_prim(site, format!("primvars:{name}:indices must be int[]")))?;
                 values = expand_indices(&values, &indices, components)
-                    .map_err(|m| at_prim(line, format!("primvars:{name}:indices: {m}")))?;
+                    .map_err(|m| at_prim(site, format!("primvars:{name}:indices: {m}")))?;
             }
             let (rate, data) = layout
                 .resolve(values, components, &interpolation)
-                .map_err(|m| at_prim(line, format!("primvars:{name}: {m}")))?;
+                .map_err(|m| at_prim(site, format!("primvars:{name}: {m}")))?;
             match (name.as_str(), rate, components) {
                 (names::ST, AttributeRate::Strand, 2) => {
                     curves.root_uvs = Some(data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
@@ -422,7 +441,7 @@ impl Walker<'_> {
                         .map(|&v| (v >= 0.0 && v.fract() == 0.0).then_some(v as u32))
                         .collect::<Option<_>>();
                     curves.strand_ids = Some(ids.ok_or_else(|| {
-                        at_prim(line, "groom_id values must be non-negative integers".into())
+                        at_prim(site, "groom_id values must be non-negative integers".into())
                     })?);
                 }
                 (names::GROOM_GUIDE, AttributeRate::Strand, 1) => {
@@ -465,6 +484,57 @@ impl Walker<'_> {
         }
         Ok(Some(curves))
     }
+}
+
+/// A `Mesh` prim's primvars (and its `normals`, as the primvar `normals`; `primvars:normals`
+/// wins over them, as in USD), in file space. Strings and tokens are not mesh data and are left
+/// out. Errors carry the line.
+fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<MeshPrimvar>, (Site, String)> {
+    let mut primvars: Vec<MeshPrimvar> = Vec::new();
+    let has_primvar_normals = prim.attribute("primvars:normals").is_some();
+    for attribute in &prim.attributes {
+        let name = match attribute.name.strip_prefix("primvars:") {
+            Some(name) if !name.ends_with(":indices") => name,
+            None if attribute.name == MeshPrimvar::NORMALS && !has_primvar_normals => MeshPrimvar::NORMALS,
+            _ => continue,
+        };
+        let site = attribute.site;
+        let fail = |message: String| (site, format!("primvar '{name}': {message}"));
+        // USD's fallbacks: `constant` for primvars, `vertex` for a point-based prim's normals.
+        let fallback = if attribute.name == MeshPrimvar::NORMALS { "vertex" } else { "constant" };
+        let token = attribute.interpolation.as_deref().unwrap_or(fallback);
+        let interpolation = MeshInterpolation::from_usd(token)
+            .ok_or_else(|| fail(format!("unknown interpolation \"{token}\"")))?;
+        let Some(value) = value_at(attribute, time) else { continue };
+        let type_name = attribute.type_name.trim_end_matches("[]");
+        let components = super::parser::type_info(&attribute.type_name).1
+            * attribute.element_size.unwrap_or(1).max(1) as usize;
+        let Some(values) = value.into_f32() else { continue };
+        if !(1..=4).contains(&components) {
+            continue; // more components than coif's data model holds (as for curve primvars)
+        }
+        let indices =
+            match prim.attribute(&format!("primvars:{name}:indices")).and_then(|a| value_at(a, time)) {
+                None => None,
+                Some(Value::Int(indices)) => Some(
+                    indices
+                        .iter()
+                        .map(|&i| u32::try_from(i).ok())
+                        .collect::<Option<Vec<u32>>>()
+                        .ok_or_else(|| fail("an index is negative".into()))?,
+                ),
+                Some(_) => return Err(fail("its indices must be int[]".into())),
+            };
+        primvars.push(MeshPrimvar {
+            name: name.to_string(),
+            kind: attribute_kind(type_name, name, components),
+            components,
+            interpolation,
+            values,
+            indices,
+        });
+    }
+    Ok(primvars)
 }
 
 /// The kind a primvar's USD type gives an attribute; plain floats when the type is the one
@@ -669,11 +739,15 @@ fn lerp(a: &Value, b: &Value, t: f64) -> Value {
 }
 
 /// A prim's local transform from its `xformOpOrder`, and whether it resets the parent stack.
-pub(crate) fn local_transform(prim: &Prim, time: Option<f64>) -> std::result::Result<(DMat4, bool), String> {
-    let Some(order) = prim.attribute("xformOpOrder").and_then(|a| value_at(a, time)) else {
-        return Ok((DMat4::IDENTITY, false));
+pub(crate) fn local_transform(
+    prim: &Prim,
+    time: Option<f64>,
+) -> std::result::Result<(DMat4, bool), (Site, String)> {
+    let Some(order_attribute) = prim.attribute("xformOpOrder") else { return Ok((DMat4::IDENTITY, false)) };
+    let Some(order) = value_at(order_attribute, time) else { return Ok((DMat4::IDENTITY, false)) };
+    let Value::Text(order) = order else {
+        return Err((order_attribute.site, "xformOpOrder must be a token[] array".into()));
     };
-    let Value::Text(order) = order else { return Err("xformOpOrder must be a token[] array".into()) };
     let mut matrix = DMat4::IDENTITY;
     let mut reset = false;
     for op in &order {
@@ -686,14 +760,14 @@ pub(crate) fn local_transform(prim: &Prim, time: Option<f64>) -> std::result::Re
             Some(name) => (name, true),
             None => (op.as_str(), false),
         };
-        let attribute = prim
-            .attribute(name)
-            .ok_or_else(|| format!("xformOpOrder names '{name}' but the prim has no such attribute"))?;
+        let attribute = prim.attribute(name).ok_or_else(|| {
+            (order_attribute.site, format!("xformOpOrder names '{name}' but the prim has no such attribute"))
+        })?;
         let values = value_at(attribute, time)
             .and_then(|v| v.to_f64())
-            .ok_or_else(|| format!("'{name}' (line {}) has no numeric value", attribute.line))?;
+            .ok_or_else(|| (attribute.site, format!("'{name}' has no numeric value")))?;
         let mut op_matrix =
-            xform_op(name, &values).map_err(|m| format!("'{name}' (line {}): {m}", attribute.line))?;
+            xform_op(name, &values).map_err(|m| (attribute.site, format!("'{name}': {m}")))?;
         if invert {
             op_matrix = op_matrix.inverse();
         }
@@ -701,7 +775,7 @@ pub(crate) fn local_transform(prim: &Prim, time: Option<f64>) -> std::result::Re
         matrix *= op_matrix;
     }
     if !matrix.is_finite() {
-        return Err("the transform is not finite".into());
+        return Err((prim.site, "the transform is not finite".into()));
     }
     Ok((matrix, reset))
 }
@@ -769,7 +843,7 @@ fn xform_op(name: &str, v: &[f64]) -> std::result::Result<DMat4, String> {
 
 /// One groom from all curve prims, one group per prim. Strand ids are renumbered unless every
 /// prim has them; a lone prim named as coif writes it gets no group table.
-fn merge(found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
+fn merge(found: Vec<Curves>, files: SiteFiles, path: &Path, lines: u32) -> Result<Groom> {
     if found.is_empty() {
         return Err(Error::format(
             path,
@@ -777,21 +851,12 @@ fn merge(found: Vec<Curves>, path: &Path, lines: u32) -> Result<Groom> {
         ));
     }
     let all_ids = found.iter().all(|c| c.strand_ids.is_some());
-    let mut merged: Option<Groom> = None;
-    for curves in found {
-        let (prim_path, line) = (curves.path.clone(), curves.line);
-        let groom = curves.into_groom();
-        match &mut merged {
-            None => merged = Some(groom),
-            Some(acc) => acc.append(&groom).map_err(|e| {
-                Error::format(
-                    path,
-                    format!("line {line}: prim <{prim_path}> does not fit the prims before it: {e}"),
-                )
-            })?,
-        }
-    }
-    let mut groom = merged.expect("at least one prim");
+    let sites: Vec<(String, Site)> = found.iter().map(|c| (c.path.clone(), c.site)).collect();
+    let mut groom =
+        Groom::concat(found.into_iter().map(Curves::into_groom).collect()).map_err(|(index, e)| {
+            let (prim_path, site) = &sites[index];
+            files.error(*site, format!("prim <{prim_path}> does not fit the prims before it: {e}"))
+        })?;
     if !all_ids {
         groom.strand_ids = (0..groom.strand_count() as u32).collect();
     }
@@ -836,6 +901,31 @@ mod tests {
             ReadOutcome::Groom(groom) => groom,
             ReadOutcome::NeedsComposition(_) => panic!("no composition here"),
         }
+    }
+
+    #[test]
+    fn a_prim_that_does_not_fit_the_ones_before_it_is_named_with_its_line() {
+        let prim = |name: &str, rest: &str| {
+            format!(
+                "def BasisCurves \"{name}\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    \
+                 point3f[] points = [(0, 0, 0), (0, 1, 0)]\n    {rest}\n}}\n"
+            )
+        };
+        let text = format!(
+            "#usda 1.0\n{}{}{}",
+            prim("A", "float3[] primvars:rest = [(0, 0, 0), (0, 1, 0)] (interpolation = \"vertex\")"),
+            prim("B", ""),
+            prim("C", "float[] primvars:rest = [0, 1] (interpolation = \"vertex\")")
+        );
+        let line = text.lines().position(|l| l.contains("def BasisCurves \"C\"")).unwrap() + 1;
+        let error = read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None)
+            .err()
+            .expect("prim C's rest has 1 component, A's 3")
+            .to_string();
+        assert!(
+            error.contains(&format!("line {line}: prim </C> does not fit the prims before it")),
+            "{error}"
+        );
     }
 
     #[test]

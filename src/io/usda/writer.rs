@@ -120,34 +120,43 @@ fn write_property(property: &Property, out: &mut (impl Write + ?Sized), indent: 
 }
 
 fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<()> {
+    let stateless = || ();
     match data {
         Data::Token(token) => out.write_all(format!("\"{token}\"").as_bytes()),
-        Data::Ints { values, components: 1 } => write_array(out, values, |buf, &v| push_int(buf, v)),
+        Data::Ints { values, components: 1 } => {
+            write_array(out, values, stateless, |(), buf, &v| push_int(buf, v))
+        }
         Data::Ints { values, components } => {
             let tuples: Vec<&[i32]> = values.chunks_exact(*components).collect();
-            write_array(out, &tuples, |buf, t| push_tuple(buf, t, |buf, &v| push_int(buf, v)))
+            write_array(out, &tuples, stateless, |(), buf, t| push_tuple(buf, t, |buf, &v| push_int(buf, v)))
         }
-        Data::Bools(values) => write_array(out, values, |buf, &v| buf.push(if v { b'1' } else { b'0' })),
+        Data::Bools(values) => {
+            write_array(out, values, stateless, |(), buf, &v| buf.push(if v { b'1' } else { b'0' }))
+        }
         Data::Int(value) => out.write_all(value.to_string().as_bytes()),
-        Data::Floats { values, components: 1 } => write_array(out, values, |buf, &v| push_f32(buf, v)),
+        Data::Floats { values, components: 1 } => {
+            write_array(out, values, RecentSpellings::new, |recent, buf, &v| recent.push(buf, v))
+        }
         Data::Floats { values, components: 3 } => {
             let tuples: &[[f32; 3]] = bytemuck::cast_slice(values);
-            write_array(out, tuples, |buf, t| push_tuple(buf, t, |buf, &v| push_f32(buf, v)))
+            write_array(out, tuples, stateless, |(), buf, t| push_tuple(buf, t, |buf, &v| push_f32(buf, v)))
         }
         Data::Floats { values, components } => {
             let tuples: Vec<&[f32]> = values.chunks_exact(*components).collect();
-            write_array(out, &tuples, |buf, t| push_tuple(buf, t, |buf, &v| push_f32(buf, v)))
+            write_array(out, &tuples, stateless, |(), buf, t| push_tuple(buf, t, |buf, &v| push_f32(buf, v)))
         }
     }
 }
 
 /// `[a, b, …]`, formatting chunks of elements in parallel and writing them in order. The next
 /// batch is formatted on the pool while this thread writes the last one, so disk and formatting
-/// overlap.
-fn write_array<T: Sync>(
+/// overlap. Each chunk's formatting starts from a fresh `state()`, so the text does not depend on
+/// how the array is split.
+fn write_array<T: Sync, S>(
     out: &mut (impl Write + ?Sized),
     items: &[T],
-    format: impl Fn(&mut Vec<u8>, &T) + Sync,
+    state: impl Fn() -> S + Sync,
+    format: impl Fn(&mut S, &mut Vec<u8>, &T) + Sync,
 ) -> std::io::Result<()> {
     out.write_all(b"[")?;
     // A number's text takes about three bytes per byte of its value (`-0.08234567, ` for an f32).
@@ -160,11 +169,12 @@ fn write_array<T: Sync>(
             .enumerate()
             .map(|(c, chunk)| {
                 let mut buf = Vec::with_capacity(chunk.len() * (text_per_item + 8));
+                let mut state = state();
                 for (i, item) in chunk.iter().enumerate() {
                     if b + c + i > 0 {
                         buf.extend_from_slice(b", ");
                     }
-                    format(&mut buf, item);
+                    format(&mut state, &mut buf, item);
                 }
                 buf
             })
@@ -199,16 +209,106 @@ fn push_int(buf: &mut Vec<u8>, value: i32) {
     buf.extend_from_slice(itoa::Buffer::new().format(value).as_bytes());
 }
 
-/// The shortest decimal that reads back as the same `f32`; USD's spelling of the non-finite.
 fn push_f32(buf: &mut Vec<u8>, value: f32) {
+    let mut buffer = zmij::Buffer::new();
+    let spelled = spell_f32(&mut buffer, value);
+    push_padded(buf, &padded(spelled), spelled.len());
+}
+
+/// `text` (2 to 24 bytes, as every spelling of [`spell_f32`]) at the start of 24 bytes, copied
+/// as its first and last `N` bytes (overlapping) with `N` the largest of 16, 8, 4, 2 it holds: a
+/// copy of the exact length is a call to `memcpy`, and those calls were about a seventh of a
+/// write's instructions.
+#[inline]
+fn padded(text: &[u8]) -> [u8; 24] {
+    let mut padded = [0u8; 24];
+    match text.len() {
+        16..=24 => copy_ends::<16>(&mut padded, text),
+        8..=15 => copy_ends::<8>(&mut padded, text),
+        4..=7 => copy_ends::<4>(&mut padded, text),
+        2..=3 => copy_ends::<2>(&mut padded, text),
+        len => padded[..len].copy_from_slice(text),
+    }
+    padded
+}
+
+/// Copies `text`'s first and last `N` bytes (a fixed-size copy each) to the same places of `to`.
+#[inline]
+fn copy_ends<const N: usize>(to: &mut [u8; 24], text: &[u8]) {
+    let len = text.len();
+    to[..N].copy_from_slice(&text[..N]);
+    to[len - N..len].copy_from_slice(&text[len - N..]);
+}
+
+/// Appends the first `len` bytes of `text`: a fixed-size copy and a cut.
+#[inline]
+fn push_padded(buf: &mut Vec<u8>, text: &[u8; 24], len: usize) {
+    let end = buf.len() + len;
+    buf.extend_from_slice(text);
+    buf.truncate(end);
+}
+
+/// The shortest decimal that reads back as the same `f32`; USD's spelling of the non-finite.
+fn spell_f32(buffer: &mut zmij::Buffer, value: f32) -> &[u8] {
     if value.is_finite() {
-        buf.extend_from_slice(zmij::Buffer::new().format_finite(value).as_bytes());
+        buffer.format_finite(value).as_bytes()
     } else if value.is_nan() {
-        buf.extend_from_slice(b"nan");
+        b"nan"
     } else if value > 0.0 {
-        buf.extend_from_slice(b"inf");
+        b"inf"
     } else {
-        buf.extend_from_slice(b"-inf");
+        b"-inf"
+    }
+}
+
+/// The spellings of the scalars a chunk formatted last, by their bits. Scalar arrays such as
+/// widths repeat a few values (a taper every strand shares: 30 distinct widths among the 1,120 of
+/// Blender's test groom), and copying a spelling takes a fraction of the instructions of making
+/// one. A chunk where few values repeat stops looking.
+struct RecentSpellings {
+    bits: [u32; RECENT_SLOTS],
+    /// [`spell_f32`]'s text (at most 17 bytes) and its length in the last byte.
+    text: [[u8; 24]; RECENT_SLOTS],
+    looked_up: u32,
+    found: u32,
+}
+
+const RECENT_SLOTS: usize = 256;
+/// Values looked up before a chunk decides whether repeats are common enough to keep looking.
+const RECENT_TRIAL: u32 = 1024;
+
+impl RecentSpellings {
+    fn new() -> Self {
+        // Every slot starts as the spelling of 0.0, whose bits are 0.
+        let mut zero = [0u8; 24];
+        zero[..3].copy_from_slice(b"0.0");
+        zero[23] = 3;
+        Self { bits: [0; RECENT_SLOTS], text: [zero; RECENT_SLOTS], looked_up: 0, found: 0 }
+    }
+
+    /// Appends `value` as [`spell_f32`] spells it.
+    #[inline]
+    fn push(&mut self, buf: &mut Vec<u8>, value: f32) {
+        if self.looked_up >= RECENT_TRIAL && self.found < RECENT_TRIAL / 8 {
+            // Below about one repeat in eight, looking up costs more than it saves.
+            return push_f32(buf, value);
+        }
+        self.looked_up += 1;
+        let bits = value.to_bits();
+        // Fibonacci hashing: the top byte of the product mixes every bit of the value.
+        let slot = (bits.wrapping_mul(0x9e37_79b9) >> 24) as usize;
+        if self.bits[slot] == bits {
+            self.found += 1;
+        } else {
+            let mut buffer = zmij::Buffer::new();
+            let spelled = spell_f32(&mut buffer, value);
+            let mut text = padded(spelled);
+            text[23] = spelled.len() as u8;
+            self.bits[slot] = bits;
+            self.text[slot] = text;
+        }
+        let text = &self.text[slot];
+        push_padded(buf, text, usize::from(text[23]));
     }
 }
 
@@ -222,5 +322,72 @@ fn push_number(text: &mut String, value: f64) {
         text.push_str(itoa::Buffer::new().format(value as i64));
     } else {
         push_f64(text, value);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The array as the writer spelled it before spellings were reused and copied in pieces:
+    /// every value formatted by `zmij` and appended whole.
+    fn spelled_one_by_one(values: &[f32]) -> Vec<u8> {
+        let mut text = b"[".to_vec();
+        for (i, &v) in values.iter().enumerate() {
+            if i > 0 {
+                text.extend_from_slice(b", ");
+            }
+            let spelled = match v {
+                v if v.is_nan() => "nan".to_string(),
+                f32::INFINITY => "inf".to_string(),
+                f32::NEG_INFINITY => "-inf".to_string(),
+                v => zmij::Buffer::new().format_finite(v).to_string(),
+            };
+            text.extend_from_slice(spelled.as_bytes());
+        }
+        text.push(b']');
+        text
+    }
+
+    #[test]
+    fn padded_copies_keep_every_length() {
+        let source: Vec<u8> = (b'a'..=b'z').collect();
+        for len in 0..=24 {
+            let mut buf = b"x".to_vec();
+            push_padded(&mut buf, &padded(&source[..len]), len);
+            assert_eq!(buf[1..], source[..len], "length {len}");
+        }
+    }
+
+    fn written(values: &[f32]) -> Vec<u8> {
+        let mut text = Vec::new();
+        write_data(&Data::Floats { values: values.into(), components: 1 }, &mut text).unwrap();
+        text
+    }
+
+    #[test]
+    fn reused_spellings_are_the_spellings() {
+        // A taper every strand repeats, with the values that spell longest or oddly, and values
+        // sharing a slot of the recent spellings (same top byte of the hashed bits).
+        let mut profile: Vec<f32> = (0..32).map(|k| 80e-6 * (1.0 - 0.5 * k as f32 / 31.0)).collect();
+        profile.extend([0.0, -0.0, -1.234_567_9e-6, 1e-45, f32::MAX, -f32::MIN_POSITIVE, 1e13, 16_777_216.0]);
+        profile.extend([f32::NAN, f32::INFINITY, f32::NEG_INFINITY, f32::from_bits(0x7fc0_0001)]);
+        let slot = |v: f32| v.to_bits().wrapping_mul(0x9e37_79b9) >> 24;
+        let colliding: Vec<f32> = (1..200_000u32)
+            .map(|i| f32::from_bits(0x3c00_0000 + i))
+            .filter(|&v| slot(v) == slot(0.5))
+            .take(8)
+            .collect();
+        assert_eq!(colliding.len(), 8);
+        profile.extend(&colliding);
+        profile.push(0.5);
+        let repeating: Vec<f32> = profile.iter().copied().cycle().take(300_000).collect();
+        assert_eq!(written(&repeating), spelled_one_by_one(&repeating));
+
+        // Few repeats, so chunks stop looking them up, then repeats again; more than one chunk.
+        let mut mixed: Vec<f32> = (0..200_000u32).map(|i| f32::from_bits(0x3e80_0000 + 37 * i)).collect();
+        mixed.extend(repeating.iter().take(100_000));
+        assert_eq!(written(&mixed), spelled_one_by_one(&mixed));
+        assert_eq!(written(&[]), b"[]");
     }
 }
