@@ -6,7 +6,7 @@
 //! Catmull-Rom guides (`purpose = "guide"`), the rest linear children in three groups, plus a
 //! scalp mesh of 20,000 triangles with normals. Runs alternate between the two grooms; figures
 //! are medians of `COIF_BENCH_RUNS` (default 5). `COIF_BENCH_STRANDS` sets the size (default
-//! 100,000 × 32).
+//! 100,000 × 32); `COIF_BENCH_KEEP=DIR` leaves the files in `DIR` (to profile `coif info` on them).
 
 mod common;
 use common::{cpu_seconds, load, median};
@@ -136,7 +136,9 @@ fn main() {
     let single = groom_of(&all, 0);
     let split = grouped(&all);
     drop(all);
-    let dir = tempfile::tempdir().expect("temporary directory");
+    let temporary = tempfile::tempdir().expect("temporary directory");
+    let keep = std::env::var_os("COIF_BENCH_KEEP").map(std::path::PathBuf::from);
+    let dir = keep.as_deref().unwrap_or(temporary.path());
     println!("groups + scalp against one group: {count} x {VERTICES}, medians of {runs}, load {}", load());
     println!(
         "{:<6} {:<7} {:>10} {:>10} {:>10} {:>10} {:>9} {:>9}",
@@ -146,8 +148,8 @@ fn main() {
         let new = || Figures { write_wall: vec![], write_cpu: vec![], read_wall: vec![], read_cpu: vec![] };
         let (mut one, mut many) = (new(), new());
         for _ in 0..runs {
-            measure(&single, &dir.path().join(format!("single.{ext}")), &mut one);
-            measure(&split, &dir.path().join(format!("groups.{ext}")), &mut many);
+            measure(&single, &dir.join(format!("single.{ext}")), &mut one);
+            measure(&split, &dir.join(format!("groups.{ext}")), &mut many);
         }
         let row = |name: &str, f: Figures, base: Option<(f64, f64)>| {
             let (write_cpu, read_cpu) = (median(f.write_cpu), median(f.read_cpu));

@@ -30,19 +30,33 @@ fn resimulate(groom: &Groom, params: SimParams, colliders: Vec<Shape>, sag_free:
     out
 }
 
+/// The bed-head and the water set: settled with gravity on the seed head, their outputs hold
+/// still (0.75 and 0.63 mm in 2 s; 1.57 and 1.98 mm before the rest state was exported in the
+/// frames a reader rebuilds).
 #[test]
-#[ignore = "fails: placed on the input groom, the styled outputs move 2.5 (bedhead), 2.4 (water set), \
-            6.4 (blow-dry; settle stops at torque residual 1.4e-3) and 4.0 mm (perm) when simulated \
-            again"]
-fn styled_presets_hold_still_when_simulated_again() {
-    let mut failures = Vec::new();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for (preset, groom, step) in [
+fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
+    presets_hold_still(&[
         ("bedhead_scene1", "seed_200x24cm.hair", 10),
         ("water_set", "seed_200x24cm.hair", 10),
+    ]);
+}
+
+#[test]
+#[ignore = "fails: the blow-dry's output moves 2.6 mm in 2 s (its settle stops unconverged at torque \
+            residual 1.6e-3) and the perm's 5.1 mm (48 cm tight curls settled without gravity)"]
+fn styled_blow_dry_and_perm_hold_still_when_simulated_again() {
+    presets_hold_still(&[
         ("blowdry_scene2", "seed_200x24cm.hair", 10),
         ("perm_scene3", "seed_100x48cm.hair", 10),
-    ] {
+    ]);
+}
+
+/// Each preset styles every `step`-th strand of its groom; the output, simulated again for 2 s
+/// with the recipe's colliders and gravity, moves less than 1 mm.
+fn presets_hold_still(presets: &[(&str, &str, usize)]) {
+    let mut failures = Vec::new();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for &(preset, groom, step) in presets {
         let path = root.join(format!("grooms/recipes/{preset}.toml"));
         let recipe = recipe::load(&path).unwrap();
         let input =
@@ -76,7 +90,7 @@ fn straight_dcc_groom_holds_still_with_the_sag_free_option() {
 }
 
 #[test]
-#[ignore = "fails: moves 33 mm (54.5 mm without the option); not explained yet"]
+#[ignore = "fails (33 mm) until the strand solve converges: Gauss–Seidel bending is too soft on 1 cm curls"]
 fn curly_dcc_groom_holds_still_with_the_sag_free_option() {
     dcc_groom_holds_still(Style::Curly { radius: 0.01, pitch: 0.03 });
 }

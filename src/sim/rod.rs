@@ -113,6 +113,25 @@ pub fn frame_along(t: Vec3) -> Quat {
     Quat::from_rotation_arc(E3, t.normalize())
 }
 
+/// The edge frames of one strand's `points` (one per vertex; the tip repeats the last edge's):
+/// the root frame along the first edge, then parallel transport, so the shape has no twist.
+/// These are the frames a groom read from a file gets, and what exported rest Darboux vectors
+/// are measured in.
+pub fn transport_frames(points: &[Vec3], frames: &mut [Quat]) {
+    let last = points.len() - 1;
+    let mut frame = frame_along(points[1] - points[0]);
+    frames[0] = frame;
+    for i in 1..last {
+        let t0 = (points[i] - points[i - 1]).normalize();
+        let t1 = (points[i + 1] - points[i]).normalize();
+        frame = (Quat::from_rotation_arc(t0, t1) * frame).normalize();
+        // Re-align exactly with the edge so round-off does not accumulate as shear.
+        frame = (Quat::from_rotation_arc(director3(frame), t1) * frame).normalize();
+        frames[i] = frame;
+    }
+    frames[last] = frames[last - 1];
+}
+
 /// Groups of `LANES` consecutive strands with equal vertex counts run in SIMD lanes, every other
 /// strand alone. Depends only on the groom, so results do not depend on threads.
 fn work_units(offsets: &[u32]) -> Vec<(usize, usize, bool)> {
@@ -178,19 +197,10 @@ impl Rods {
             for i in first..last {
                 rods.rest_lengths[i] = p[i].distance(p[i + 1]);
             }
-            // Frames: root frame along the first edge, then parallel transport.
-            let mut frame = frame_along(p[first + 1] - p[first]);
-            rods.frames[first] = frame;
+            transport_frames(&p[range.clone()], &mut rods.frames[range.clone()]);
             for i in first + 1..last {
-                let t0 = (p[i] - p[i - 1]).normalize();
-                let t1 = (p[i + 1] - p[i]).normalize();
-                frame = (Quat::from_rotation_arc(t0, t1) * frame).normalize();
-                // Re-align exactly with the edge so round-off does not accumulate as shear.
-                frame = (Quat::from_rotation_arc(director3(frame), t1) * frame).normalize();
-                rods.frames[i] = frame;
-                rods.rest_darboux[i] = darboux_canonical(rods.frames[i - 1], frame);
+                rods.rest_darboux[i] = darboux_canonical(rods.frames[i - 1], rods.frames[i]);
             }
-            rods.frames[last] = rods.frames[last - 1];
             // Masses: each vertex carries half of each adjacent edge.
             let mut distance = 0.0;
             for i in first..=last {

@@ -336,7 +336,7 @@ impl Simulation {
         let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
         let mut attributes = vec![
             Attribute::new("rest", AttributeRate::Vertex, 3, flat(&self.rest_curves())),
-            Attribute::new("rest_darboux", AttributeRate::Vertex, 3, flat(&self.zero_stress_darboux())),
+            Attribute::new("rest_darboux", AttributeRate::Vertex, 3, flat(&self.exported_rest_darboux())),
         ];
         for kind in BondKind::ALL {
             attributes.push(Attribute::new(
