@@ -1,8 +1,8 @@
-//! Solver speed: ns per vertex-iteration (one stretch–shear, one bend–twist and one length-solve
-//! row per vertex and iteration, plus the per-step prediction and velocity update amortised) for
-//! the configurations, on 1 thread and on 2 threads. Prints the median of 3 runs, by wall
-//! clock and by CPU time of the workers (robust when other processes share the cores).
-//! `cargo bench --bench sim [-- FILTER]`, FILTER matching a configuration name.
+//! Solver speed: ns per vertex-iteration (one stretch–shear, one bend–twist and one direct
+//! stretch–shear row per vertex and iteration, plus the per-step prediction and velocity update
+//! amortised) for the configurations, on 1 thread and on 2 threads. Prints the median of 3
+//! runs, by wall clock and by CPU time of the workers (robust when other processes share the
+//! cores). `cargo bench --bench sim [-- FILTER]`, FILTER matching a configuration name.
 
 mod common;
 use common::median;

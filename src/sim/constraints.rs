@@ -36,7 +36,7 @@ pub fn director3(q: Quat) -> Vec3 {
 
 /// `q ⊗ ē` with `ē = (0,0,0,−1)` written out: the quaternion product with a fixed axis.
 #[inline(always)]
-fn times_e_bar(q: Quat) -> Quat {
+pub(crate) fn times_e_bar(q: Quat) -> Quat {
     // q ⊗ (0,0,−1,0 as xyz) : Hamilton product with (x,y,z,w) = (0,0,−1,0).
     Quat::from_xyzw(-q.y, q.x, -q.w, q.z)
 }
@@ -118,6 +118,71 @@ pub fn project_stretch_shear_with(p1: &mut Vec3, p2: &mut Vec3, q: &mut Quat, k:
     if k.frame > 0.0 {
         let dq = pure(shear) * times_e_bar(*q);
         *q = (*q + dq * k.frame).normalize();
+    }
+}
+
+/// A symmetric 3×3 matrix (the pivot blocks of the direct stretch–shear solve), as its six
+/// distinct entries. The SIMD lanes use the same formulas, so both paths round alike.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sym3 {
+    pub xx: f32,
+    pub xy: f32,
+    pub xz: f32,
+    pub yy: f32,
+    pub yz: f32,
+    pub zz: f32,
+}
+
+impl Sym3 {
+    /// `diagonal·I − s·d·dᵀ`.
+    #[inline(always)]
+    pub fn identity_minus_outer(diagonal: f32, s: f32, d: Vec3) -> Sym3 {
+        Sym3 {
+            xx: diagonal - s * d.x * d.x,
+            xy: -(s * d.x * d.y),
+            xz: -(s * d.x * d.z),
+            yy: diagonal - s * d.y * d.y,
+            yz: -(s * d.y * d.z),
+            zz: diagonal - s * d.z * d.z,
+        }
+    }
+
+    /// `self − s·o`.
+    #[inline(always)]
+    pub fn minus_scaled(self, o: Sym3, s: f32) -> Sym3 {
+        Sym3 {
+            xx: self.xx - s * o.xx,
+            xy: self.xy - s * o.xy,
+            xz: self.xz - s * o.xz,
+            yy: self.yy - s * o.yy,
+            yz: self.yz - s * o.yz,
+            zz: self.zz - s * o.zz,
+        }
+    }
+
+    /// The inverse by cofactors (the caller keeps the matrix positive definite).
+    #[inline(always)]
+    pub fn inverse(self) -> Sym3 {
+        let Sym3 { xx: a, xy: b, xz: c, yy: d, yz: e, zz: f } = self;
+        let (ca, cb, cc) = (d * f - e * e, c * e - b * f, b * e - c * d);
+        let inv_det = 1.0 / (a * ca + b * cb + c * cc);
+        Sym3 {
+            xx: ca * inv_det,
+            xy: cb * inv_det,
+            xz: cc * inv_det,
+            yy: (a * f - c * c) * inv_det,
+            yz: (b * c - a * e) * inv_det,
+            zz: (a * d - b * b) * inv_det,
+        }
+    }
+
+    #[inline(always)]
+    pub fn times(self, v: Vec3) -> Vec3 {
+        Vec3::new(
+            self.xx * v.x + self.xy * v.y + self.xz * v.z,
+            self.xy * v.x + self.yy * v.y + self.yz * v.z,
+            self.xz * v.x + self.yz * v.y + self.zz * v.z,
+        )
     }
 }
 

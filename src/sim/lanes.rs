@@ -188,6 +188,75 @@ impl Q {
     }
 }
 
+/// A symmetric 3×3 matrix per lane, with the formulas of the scalar `Sym3`.
+#[derive(Clone, Copy, Debug, Default)]
+struct S3 {
+    xx: F,
+    xy: F,
+    xz: F,
+    yy: F,
+    yz: F,
+    zz: F,
+}
+
+impl S3 {
+    #[inline(always)]
+    fn identity_minus_outer(diagonal: F, s: F, d: V3) -> S3 {
+        S3 {
+            xx: diagonal - s * d.x * d.x,
+            xy: -(s * d.x * d.y),
+            xz: -(s * d.x * d.z),
+            yy: diagonal - s * d.y * d.y,
+            yz: -(s * d.y * d.z),
+            zz: diagonal - s * d.z * d.z,
+        }
+    }
+    #[inline(always)]
+    fn minus_scaled(self, o: S3, s: F) -> S3 {
+        S3 {
+            xx: self.xx - s * o.xx,
+            xy: self.xy - s * o.xy,
+            xz: self.xz - s * o.xz,
+            yy: self.yy - s * o.yy,
+            yz: self.yz - s * o.yz,
+            zz: self.zz - s * o.zz,
+        }
+    }
+    #[inline(always)]
+    fn inverse(self) -> S3 {
+        let S3 { xx: a, xy: b, xz: c, yy: d, yz: e, zz: f } = self;
+        let (ca, cb, cc) = (d * f - e * e, c * e - b * f, b * e - c * d);
+        let inv_det = (a * ca + b * cb + c * cc).recip();
+        S3 {
+            xx: ca * inv_det,
+            xy: cb * inv_det,
+            xz: cc * inv_det,
+            yy: (a * f - c * c) * inv_det,
+            yz: (b * c - a * e) * inv_det,
+            zz: (a * d - b * b) * inv_det,
+        }
+    }
+    #[inline(always)]
+    fn times(self, v: V3) -> V3 {
+        V3 {
+            x: self.xx * v.x + self.xy * v.y + self.xz * v.z,
+            y: self.xy * v.x + self.yy * v.y + self.yz * v.z,
+            z: self.xz * v.x + self.yz * v.y + self.zz * v.z,
+        }
+    }
+    #[inline(always)]
+    fn select(mask: F, a: S3, b: S3) -> S3 {
+        S3 {
+            xx: mask.positive_select(a.xx, b.xx),
+            xy: mask.positive_select(a.xy, b.xy),
+            xz: mask.positive_select(a.xz, b.xz),
+            yy: mask.positive_select(a.yy, b.yy),
+            yz: mask.positive_select(a.yz, b.yz),
+            zz: mask.positive_select(a.zz, b.zz),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 struct EdgeK {
     inv_length: F,
@@ -220,9 +289,10 @@ pub struct Scratch {
     q: Vec<Q>,
     rest: Vec<V3>,
     lambda: Vec<V3>,
-    directions: Vec<V3>,
-    upper: Vec<F>,
-    values: Vec<F>,
+    inverse: Vec<S3>,
+    values: Vec<V3>,
+    /// Per lane, the first edge of the free tail.
+    free_tail: [usize; LANES],
     edge_k: Vec<EdgeK>,
     pair_k: Vec<PairK>,
     /// One lane's positions, handed to the obstacle hook.
@@ -302,11 +372,11 @@ fn finish_step_impl(
     let n = strands[0].x.len();
     let edges = n - 1;
     let s = scratch;
-    for v in [&mut s.x, &mut s.x_prev, &mut s.v, &mut s.target, &mut s.rest, &mut s.lambda] {
+    for v in [&mut s.x, &mut s.x_prev, &mut s.v, &mut s.target, &mut s.rest, &mut s.lambda, &mut s.values] {
         resize(v, n);
     }
-    resize(&mut s.directions, n);
-    for v in [&mut s.kinematic, &mut s.w, &mut s.wq, &mut s.upper, &mut s.values] {
+    resize(&mut s.inverse, n);
+    for v in [&mut s.kinematic, &mut s.w, &mut s.wq] {
         resize(v, n);
     }
     resize(&mut s.q, n);
@@ -341,6 +411,10 @@ fn finish_step_impl(
         }
     }
 
+    for (l, st) in strands.iter().enumerate() {
+        s.free_tail[l] = super::solver::free_tail(st.kinematic);
+    }
+
     // Prediction.
     let dt_f = F::splat(dt);
     for i in 0..n {
@@ -349,7 +423,7 @@ fn finish_step_impl(
         s.lambda[i] = V3::default();
     }
     for iteration in 0..iterations {
-        solve_lengths(s, edges);
+        solve_stretch_shear(s, edges);
         if iteration % 2 == 0 {
             for e in 0..edges {
                 project_edge(s, e);
@@ -403,44 +477,55 @@ fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn
     }
 }
 
+/// The scalar `solve_stretch_shear`, lane by lane.
 #[inline(always)]
-fn solve_lengths(s: &mut Scratch, edges: usize) {
-    for i in 0..edges {
-        let d = s.x[i + 1] - s.x[i];
-        let length = d.dot(d).sqrt();
-        s.directions[i] = d.scale(length.recip());
-        s.values[i] = s.edge_k[i].length - length;
-    }
+fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
     let zero = F::splat(0.0);
-    let mut upper_prev = zero;
-    let mut value_prev = zero;
-    for i in 0..edges {
-        let n = s.directions[i];
-        let a = if i > 0 { -(s.w[i] * n.dot(s.directions[i - 1])) } else { zero };
-        let b = s.w[i] + s.w[i + 1];
-        let c = if i + 1 < edges { -(s.w[i + 1] * n.dot(s.directions[i + 1])) } else { zero };
-        let pivot = b - a * upper_prev;
-        let ok = F(from_fn(|l| if pivot.0[l] > 1e-7 * b.0[l] && b.0[l] > 0.0 { 1.0 } else { 0.0 }));
-        let inv_pivot = pivot.recip();
-        upper_prev = ok.positive_select(c * inv_pivot, zero);
-        value_prev = ok.positive_select((s.values[i] - a * value_prev) * inv_pivot, zero);
-        s.upper[i] = upper_prev;
-        s.values[i] = value_prev;
+    let one = F::splat(1.0);
+    let w = &s.w;
+    for e in 0..edges {
+        // Edges before the lane's free tail (`solver::free_tail`) are left out: μ = 0.
+        let in_tail = F(from_fn(|l| if e >= s.free_tail[l] { 1.0 } else { 0.0 }));
+        let d = s.q[e].director3();
+        let l = s.edge_k[e].length;
+        let vertices = w[e] + w[e + 1];
+        let frame = F::splat(4.0) * s.wq[e] * l * l;
+        let mut block = S3::identity_minus_outer((vertices + frame) * F::splat(1.0 + 1e-6), frame, d);
+        let mut rhs = d.scale(l) - (s.x[e + 1] - s.x[e]);
+        if e > 0 {
+            // Zero where the lane's tail starts at `e`: its vertex `e` is kinematic (w = 0).
+            block = block.minus_scaled(s.inverse[e - 1], w[e] * w[e]);
+            rhs = rhs + s.values[e - 1].scale(w[e]);
+        }
+        let inv_frame = frame.positive_select(frame, one).recip();
+        let frame_only = S3::select(frame, S3::identity_minus_outer(inv_frame, inv_frame, d), S3::default());
+        // Lanes where the block is not invertible compute a discarded inverse.
+        let safe = S3::select(vertices, block, S3::identity_minus_outer(one, zero, d));
+        s.inverse[e] = S3::select(in_tail, S3::select(vertices, safe.inverse(), frame_only), S3::default());
+        s.values[e] = s.inverse[e].times(rhs);
     }
-    let mut next = zero;
-    for i in (0..edges).rev() {
-        next = s.values[i] - s.upper[i] * next;
-        s.values[i] = next;
+    for e in (0..edges.saturating_sub(1)).rev() {
+        s.values[e] = s.values[e] + s.inverse[e].times(s.values[e + 1].scale(w[e + 1]));
     }
-    for j in 0..=edges {
+    for (j, &wj) in w.iter().enumerate().take(edges + 1) {
         let mut dp = V3::default();
         if j > 0 {
-            dp = dp + s.directions[j - 1].scale(s.values[j - 1]);
+            dp = dp + s.values[j - 1];
         }
         if j < edges {
-            dp = dp - s.directions[j].scale(s.values[j]);
+            dp = dp - s.values[j];
         }
-        s.x[j] = s.x[j] + dp.scale(s.w[j]);
+        s.x[j] = s.x[j] + dp.scale(wj);
+    }
+    for e in 0..edges {
+        let q = s.q[e];
+        let d = q.director3();
+        let mu = s.values[e];
+        let across = mu - d.scale(mu.dot(d));
+        let dq = Q::pure(across).mul(q.times_e_bar());
+        let turned = q.add_scaled(dq, -(F::splat(2.0) * s.wq[e] * s.edge_k[e].length)).normalize();
+        let turning = F(from_fn(|l| if e >= s.free_tail[l] { s.wq[e].0[l] } else { 0.0 }));
+        s.q[e] = Q::select(turning, turned, q);
     }
 }
 

@@ -11,9 +11,9 @@
 //! * [`constraints`]: stretch–shear and bend–twist projections.
 //! * [`bonds`]: the four bond kinds, S1-15 rest shape, S1-16 breaking and re-forming.
 //! * [`cuticle`]: S1-13/14 stiffness gradient.
-//! * [`solver`]: the stepper: per iteration a direct (tridiagonal) solve of the edge lengths, then
-//!   Gauss–Seidel sweeps of stretch–shear and bend–twist along each strand, alternating direction;
-//!   strands in parallel.
+//! * [`solver`]: the stepper: per iteration a direct (block-tridiagonal) solve of every edge's
+//!   stretch–shear along the strand's free tail, then Gauss–Seidel sweeps of stretch–shear and
+//!   bend–twist along each strand, alternating direction; strands in parallel.
 //! * [`settle`]: static equilibrium with a convergence report; zero-stress rest curves; export.
 //!
 //! # Stiffness: XPBD with physical moduli
@@ -25,25 +25,38 @@
 //! (one constraint with per-step stiffness `k` under a pull `g·Δt²` per step settles at an error
 //! `g·Δt²·(1 − k)/k`; XPBD's settles at `g·α/w`, independent of Δt).
 //!
-//! Two further choices keep the static shape independent of the iteration count: the edge lengths
-//! are solved directly (tridiagonal, exact to first order) once per iteration, because
-//! Gauss–Seidel alone leaves a hanging strand stretched by ~1.5 % at 5 iterations; and the frame
-//! inertia is a conditioning parameter ([`SimParams::frame_inertia_factor`]), since hair's true
-//! rotational inertia would make frames absorb every shear correction (it is also capped at the
-//! bending compliance `α/Δt²`, which helps stiff, finely cut strands). Frames are quasi-static
-//! (no angular velocity): integrating frame angular velocities made resting curls creep.
+//! Two further choices keep the static shape independent of the iteration count and of how
+//! finely a strand is cut. **Stretch–shear is solved directly** once per iteration: the
+//! constraints `x_{e+1} − x_e = l_e·d3(q_e)` of all edges, in the vertices and the edge frames
+//! together, form a block-tridiagonal system (3×3 blocks, linear time per strand). Gauss–Seidel
+//! alone carries a correction one edge per sweep, so a loaded strand kept a stretch and a shear
+//! that fell only like 1/iterations: a cantilever of 2 mm segments sagged 7× beam theory at 5
+//! iterations, and strands hanging at Δt 1/30 stretched to 3× their length. Now the cantilever
+//! matches Euler–Bernoulli for its discrete clamp (half an edge out, see below) within 2 % for 2 mm
+//! to 3 cm segments at 5, 10 and 20 iterations, and hanging strands stretch 2e-6 at Δt 1/30
+//! (`cargo bench --bench accuracy`, `tests/sim_invariance.rs`). The solve covers the strand's
+//! free tail, from its last kinematic vertex to the tip: a span between two kinematic vertices
+//! (a root and a winding held on a curler rod) can be shorter than its gap, and hard constraints
+//! solved exactly would then pull it apart at metres per second; there the Gauss–Seidel sweep's
+//! bounded local projections leave a compromise, as before. Bend–twist stays Gauss–Seidel: the
+//! frame inertia is a conditioning parameter ([`SimParams::frame_inertia_factor`]), capped at
+//! the bending compliance `α/Δt²`, which keeps the bend–twist system well conditioned (extra
+//! bend–twist sweeps change a cantilever's sag by < 1 %). Frames are quasi-static (no angular
+//! velocity): integrating frame angular velocities made resting curls creep.
 //!
-//! **Limit.** Gauss–Seidel resolves bending well only while a pair is soft per step
-//! (`α/Δt² ≳ wq`): for 80 µm hair at Δt = 1/360 that holds for segments of about 7 mm and longer
-//! (the seed uses 3 cm). Finer or stiffer strands look softer than their modulus at 5 iterations
-//! and their shape then depends on the iteration count; with enough iterations they converge to
-//! beam theory (`tests/sim_invariance.rs`). A direct solve along the strand for bend–twist (as
-//! is done here for the lengths) is the known cure.
+//! **Limits.** The pinned root frame clamps the whole first edge, so the discrete clamp sits half
+//! an edge out (a cantilever of n segments sags `(1 − 1/(2n))⁴` of beam theory for its full
+//! length: 0.77 for 8 segments, 0.94 for 32); a bending hinge of half length between the root's
+//! orientation and a free first frame would remove it. Quasi-static frames with a capped inertia
+//! still act as a drag on bending that depends on Δt, so dynamic stages (press, blow-dry) bake
+//! slightly different shapes at different Δt (`cargo bench --bench accuracy -- invariance`); a
+//! solve of stretch–shear and bend–twist together (Deul et al. 2018) with massless frames is the
+//! known cure.
 //!
 //! # Speed
 //! Groups of 8 consecutive strands with equal vertex counts are solved together, one strand per
-//! SIMD lane (`lanes`, AVX when the CPU has it, same bits as SSE2); other strands, and all strands
-//! when a [`Hooks::project`] callback is active, go through the scalar path. No allocation happens
+//! SIMD lane (`lanes`, AVX when the CPU has it, same bits as SSE2; a [`Hooks::project`] callback
+//! is called one lane at a time); other strands go through the scalar path. No allocation happens
 //! in a step after the first. `cargo bench --bench sim` prints ns per vertex-iteration.
 //!
 //! # Extension points (for interactions and recipes)
@@ -52,8 +65,12 @@
 //!   [`Hooks::accelerate`] (per strand, may read the strand's positions and edit velocities).
 //! * **Position projection**: [`Hooks::project`], called once per iteration per strand after the
 //!   constraints (head, floor, curler rods). It may only move vertices with non-zero inverse mass.
-//!   Hooks run concurrently on different strands; anything they read from other strands must be a
-//!   snapshot taken before the step, so results stay independent of thread count.
+//!   The direct stretch–shear solve sees touching vertices with their own inverse mass: holding
+//!   them in it (inverse mass × 0.01 for the rest of the step) fought the projection every step
+//!   and left settles 10× further from rest (`make demo`: force residual 1.06e-1 against 1.02e-2;
+//!   × 0.1: 3.0e-2). Hooks run concurrently on different strands; anything they read from other
+//!   strands must be a snapshot taken before the step, so results stay independent of thread
+//!   count.
 //! * **Mass scale**: [`Simulation::set_mass_scale`] (wet hair is heavier).
 //! * **Kinematic attachment**: [`Simulation::attach`] / [`Simulation::detach`] pin any vertex to a
 //!   moving target (winding on rods); [`Simulation::set_root`] drives root vertex and frame

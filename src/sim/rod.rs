@@ -6,7 +6,9 @@
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::constraints::{darboux_canonical, director3, BendTwistCoefficients, StretchShearCoefficients, E3};
+use super::constraints::{
+    darboux_canonical, director3, BendTwistCoefficients, StretchShearCoefficients, Sym3, E3,
+};
 use super::cuticle::Cuticle;
 use super::lanes::LANES;
 use crate::groom::{Groom, GroomError};
@@ -72,9 +74,10 @@ pub struct Rods {
     // Scratch, kept here so a step allocates nothing.
     previous_positions: Vec<Vec3>,
     lambdas: Vec<Vec3>,
-    edge_directions: Vec<Vec3>,
-    solve_upper: Vec<f32>,
-    solve_values: Vec<f32>,
+    /// Per edge, the inverse pivot block and the right-hand side / solution of the direct
+    /// stretch–shear solve.
+    solve_inverse: Vec<Sym3>,
+    solve_values: Vec<Vec3>,
     edge_coefficients: Vec<StretchShearCoefficients>,
     pair_coefficients: Vec<BendTwistCoefficients>,
     /// Units of parallel work: `(first strand, strand count, solved in SIMD lanes)`.
@@ -92,9 +95,8 @@ pub(super) struct StepArrays<'a> {
     pub frames: &'a mut [Quat],
     pub rest_darboux: &'a mut [Vec3],
     pub lambdas: &'a mut [Vec3],
-    pub edge_directions: &'a mut [Vec3],
-    pub solve_upper: &'a mut [f32],
-    pub solve_values: &'a mut [f32],
+    pub solve_inverse: &'a mut [Sym3],
+    pub solve_values: &'a mut [Vec3],
     pub edge_coefficients: &'a [StretchShearCoefficients],
     pub pair_coefficients: &'a [BendTwistCoefficients],
     pub inv_mass: &'a [f32],
@@ -178,9 +180,8 @@ impl Rods {
             compliance: vec![Vec3::ZERO; n],
             previous_positions: groom.points.clone(),
             lambdas: vec![Vec3::ZERO; n],
-            edge_directions: vec![Vec3::ZERO; n],
-            solve_upper: vec![0.0; n],
-            solve_values: vec![0.0; n],
+            solve_inverse: vec![Sym3::default(); n],
+            solve_values: vec![Vec3::ZERO; n],
             edge_coefficients: vec![StretchShearCoefficients::default(); n],
             pair_coefficients: vec![BendTwistCoefficients::default(); n],
             work_units: Vec::new(),
@@ -257,8 +258,7 @@ impl Rods {
             self.compliance.len(),
             self.previous_positions.len(),
             self.lambdas.len(),
-            self.edge_directions.len(),
-            self.solve_upper.len(),
+            self.solve_inverse.len(),
             self.solve_values.len(),
             self.edge_coefficients.len(),
             self.pair_coefficients.len(),
@@ -284,8 +284,7 @@ impl Rods {
             frames: &mut self.frames,
             rest_darboux: &mut self.rest_darboux,
             lambdas: &mut self.lambdas,
-            edge_directions: &mut self.edge_directions,
-            solve_upper: &mut self.solve_upper,
+            solve_inverse: &mut self.solve_inverse,
             solve_values: &mut self.solve_values,
             edge_coefficients: &self.edge_coefficients,
             pair_coefficients: &self.pair_coefficients,
