@@ -10,7 +10,7 @@
 //! leaves eight or nine digits in the integer part of a 64-bit product; either the shorter
 //! candidate next to it is inside the rounding interval, or the nearest one-digit-longer decimal
 //! is the answer. The decisions are zmij's, including its choice of rounding, and the test
-//! `spellings_equal_zmij_for_every_f32` (ignored: ~10 minutes) checks all 2³² values.
+//! `spellings_equal_zmij_for_every_f32` (ignored: ~3.5 CPU minutes) checks all 2³² values.
 
 /// Bytes [`spell`] may store into (its spelling takes at most 17 of them).
 pub const WINDOW: usize = 32;
@@ -307,7 +307,7 @@ mod tests {
         }
     }
 
-    /// Every f32 (about 10 minutes in release on one core):
+    /// Every f32 (about 3.5 CPU minutes in release, on all threads):
     /// `cargo test --release --lib spell -- --ignored`.
     #[test]
     #[ignore]
