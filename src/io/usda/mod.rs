@@ -12,6 +12,7 @@ mod bulk;
 mod lexer;
 mod parser;
 mod reader;
+mod spell;
 mod writer;
 
 use std::io::Read;

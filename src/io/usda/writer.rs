@@ -1,13 +1,14 @@
 //! The planned stage (`io::usd_stage`) as USD text. Large arrays are formatted in fixed-size
 //! chunks on all threads and written in order, so the output is the same at any thread count and
 //! memory stays bounded. Floats are written in their shortest form that reads back to the same
-//! `f32` (`zmij`), integers with `itoa`.
+//! `f32` (`io::usda::spell`, zmij's spelling), integers with `itoa`.
 use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::spell::{self, WINDOW};
 use crate::error::{Error, Result};
 use crate::groom::Groom;
 use crate::io::usd_stage::{self, Data, Prim, Property, Stage, TimeCodes, Value};
@@ -124,26 +125,32 @@ fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<(
     match data {
         Data::Token(token) => out.write_all(format!("\"{token}\"").as_bytes()),
         Data::Ints { values, components: 1 } => {
-            write_array(out, values, stateless, |(), buf, &v| push_int(buf, v))
+            write_array(out, values, stateless, |(), text, &v| text.push_int(v))
         }
         Data::Ints { values, components } => {
             let tuples: Vec<&[i32]> = values.chunks_exact(*components).collect();
-            write_array(out, &tuples, stateless, |(), buf, t| push_tuple(buf, t, |buf, &v| push_int(buf, v)))
+            write_array(out, &tuples, stateless, |(), text, t| {
+                push_tuple(text, t, |text, &v| text.push_int(v))
+            })
         }
         Data::Bools(values) => {
-            write_array(out, values, stateless, |(), buf, &v| buf.push(if v { b'1' } else { b'0' }))
+            write_array(out, values, stateless, |(), text, &v| text.push_fixed(if v { b"1" } else { b"0" }))
         }
         Data::Int(value) => out.write_all(value.to_string().as_bytes()),
         Data::Floats { values, components: 1 } => {
-            write_array(out, values, RecentSpellings::new, |recent, buf, &v| recent.push(buf, v))
+            write_array(out, values, RecentSpellings::new, |recent, text, &v| recent.push(text, v))
         }
         Data::Floats { values, components: 3 } => {
             let tuples: &[[f32; 3]] = bytemuck::cast_slice(values);
-            write_array(out, tuples, stateless, |(), buf, t| push_tuple(buf, t, |buf, &v| push_f32(buf, v)))
+            write_array(out, tuples, stateless, |(), text, t| {
+                push_tuple(text, t, |text, &v| text.push_f32(v))
+            })
         }
         Data::Floats { values, components } => {
             let tuples: Vec<&[f32]> = values.chunks_exact(*components).collect();
-            write_array(out, &tuples, stateless, |(), buf, t| push_tuple(buf, t, |buf, &v| push_f32(buf, v)))
+            write_array(out, &tuples, stateless, |(), text, t| {
+                push_tuple(text, t, |text, &v| text.push_f32(v))
+            })
         }
     }
 }
@@ -156,7 +163,7 @@ fn write_array<T: Sync, S>(
     out: &mut (impl Write + ?Sized),
     items: &[T],
     state: impl Fn() -> S + Sync,
-    format: impl Fn(&mut S, &mut Vec<u8>, &T) + Sync,
+    format: impl Fn(&mut S, &mut Text, &T) + Sync,
 ) -> std::io::Result<()> {
     out.write_all(b"[")?;
     // A number's text takes about three bytes per byte of its value (`-0.08234567, ` for an f32).
@@ -168,15 +175,15 @@ fn write_array<T: Sync, S>(
             .par_chunks(chunk)
             .enumerate()
             .map(|(c, chunk)| {
-                let mut buf = Vec::with_capacity(chunk.len() * (text_per_item + 8));
+                let mut text = Text::with_capacity(chunk.len() * (text_per_item + 8));
                 let mut state = state();
                 for (i, item) in chunk.iter().enumerate() {
                     if b + c + i > 0 {
-                        buf.extend_from_slice(b", ");
+                        text.push_fixed(b", ");
                     }
-                    format(&mut state, &mut buf, item);
+                    format(&mut state, &mut text, item);
                 }
-                buf
+                text.into_bytes()
             })
             .collect()
     };
@@ -194,31 +201,75 @@ fn write_array<T: Sync, S>(
     out.write_all(b"]")
 }
 
-fn push_tuple<T>(buf: &mut Vec<u8>, values: &[T], push: impl Fn(&mut Vec<u8>, &T)) {
-    buf.push(b'(');
+/// A chunk's text, written in fixed-size stores: a piece is stored as a whole window of
+/// [`WINDOW`] bytes at the end of the text, of which only its length is kept. Copies of the
+/// exact length are calls to `memcpy`, which cost as much as making a spelling.
+struct Text {
+    /// The text, then at least a window of scratch bytes.
+    bytes: Vec<u8>,
+    len: usize,
+}
+
+impl Text {
+    fn with_capacity(capacity: usize) -> Self {
+        Self { bytes: vec![0; capacity + WINDOW], len: 0 }
+    }
+
+    /// Appends the first `write(window)` bytes of what `write` stores into the window after the
+    /// text.
+    #[inline]
+    fn push_with(&mut self, write: impl FnOnce(&mut [u8; WINDOW]) -> usize) {
+        if self.len + WINDOW > self.bytes.len() {
+            self.bytes.resize(2 * self.bytes.len() + WINDOW, 0);
+        }
+        let window = (&mut self.bytes[self.len..self.len + WINDOW]).try_into().expect("a window");
+        let length = write(window);
+        debug_assert!(length <= WINDOW);
+        self.len += length;
+    }
+
+    #[inline]
+    fn push_fixed<const N: usize>(&mut self, bytes: &[u8; N]) {
+        self.push_with(|window| {
+            window[..N].copy_from_slice(bytes);
+            N
+        });
+    }
+
+    #[inline]
+    fn push_f32(&mut self, value: f32) {
+        self.push_with(|window| spell::spell(value, window));
+    }
+
+    fn push_int(&mut self, value: i32) {
+        let mut buffer = itoa::Buffer::new();
+        let spelled = buffer.format(value).as_bytes();
+        let (spelling, length) = (padded(spelled), spelled.len());
+        self.push_with(|window| {
+            window[..24].copy_from_slice(&spelling);
+            length
+        });
+    }
+
+    fn into_bytes(mut self) -> Vec<u8> {
+        self.bytes.truncate(self.len);
+        self.bytes
+    }
+}
+
+fn push_tuple<T>(text: &mut Text, values: &[T], push: impl Fn(&mut Text, &T)) {
+    text.push_fixed(b"(");
     for (i, v) in values.iter().enumerate() {
         if i > 0 {
-            buf.extend_from_slice(b", ");
+            text.push_fixed(b", ");
         }
-        push(buf, v);
+        push(text, v);
     }
-    buf.push(b')');
+    text.push_fixed(b")");
 }
 
-fn push_int(buf: &mut Vec<u8>, value: i32) {
-    buf.extend_from_slice(itoa::Buffer::new().format(value).as_bytes());
-}
-
-fn push_f32(buf: &mut Vec<u8>, value: f32) {
-    let mut buffer = zmij::Buffer::new();
-    let spelled = spell_f32(&mut buffer, value);
-    push_padded(buf, &padded(spelled), spelled.len());
-}
-
-/// `text` (2 to 24 bytes, as every spelling of [`spell_f32`]) at the start of 24 bytes, copied
-/// as its first and last `N` bytes (overlapping) with `N` the largest of 16, 8, 4, 2 it holds: a
-/// copy of the exact length is a call to `memcpy`, and those calls were about a seventh of a
-/// write's instructions.
+/// `text` (at most 24 bytes) at the start of 24 bytes, copied as its first and last `N` bytes
+/// (overlapping) with `N` the largest of 16, 8, 4, 2 it holds: fixed-size copies, no `memcpy`.
 #[inline]
 fn padded(text: &[u8]) -> [u8; 24] {
     let mut padded = [0u8; 24];
@@ -240,34 +291,13 @@ fn copy_ends<const N: usize>(to: &mut [u8; 24], text: &[u8]) {
     to[len - N..len].copy_from_slice(&text[len - N..]);
 }
 
-/// Appends the first `len` bytes of `text`: a fixed-size copy and a cut.
-#[inline]
-fn push_padded(buf: &mut Vec<u8>, text: &[u8; 24], len: usize) {
-    let end = buf.len() + len;
-    buf.extend_from_slice(text);
-    buf.truncate(end);
-}
-
-/// The shortest decimal that reads back as the same `f32`; USD's spelling of the non-finite.
-fn spell_f32(buffer: &mut zmij::Buffer, value: f32) -> &[u8] {
-    if value.is_finite() {
-        buffer.format_finite(value).as_bytes()
-    } else if value.is_nan() {
-        b"nan"
-    } else if value > 0.0 {
-        b"inf"
-    } else {
-        b"-inf"
-    }
-}
-
 /// The spellings of the scalars a chunk formatted last, by their bits. Scalar arrays such as
 /// widths repeat a few values (a taper every strand shares: 30 distinct widths among the 1,120 of
 /// Blender's test groom), and copying a spelling takes a fraction of the instructions of making
 /// one. A chunk where few values repeat stops looking.
 struct RecentSpellings {
     bits: [u32; RECENT_SLOTS],
-    /// [`spell_f32`]'s text (at most 17 bytes) and its length in the last byte.
+    /// [`spell::spell`]'s text (at most 17 bytes) and its length in the last byte.
     text: [[u8; 24]; RECENT_SLOTS],
     looked_up: u32,
     found: u32,
@@ -286,29 +316,33 @@ impl RecentSpellings {
         Self { bits: [0; RECENT_SLOTS], text: [zero; RECENT_SLOTS], looked_up: 0, found: 0 }
     }
 
-    /// Appends `value` as [`spell_f32`] spells it.
+    /// Appends `value` as [`spell::spell`] spells it.
     #[inline]
-    fn push(&mut self, buf: &mut Vec<u8>, value: f32) {
+    fn push(&mut self, text: &mut Text, value: f32) {
         if self.looked_up >= RECENT_TRIAL && self.found < RECENT_TRIAL / 8 {
             // Below about one repeat in eight, looking up costs more than it saves.
-            return push_f32(buf, value);
+            return text.push_f32(value);
         }
         self.looked_up += 1;
         let bits = value.to_bits();
         // Fibonacci hashing: the top byte of the product mixes every bit of the value.
         let slot = (bits.wrapping_mul(0x9e37_79b9) >> 24) as usize;
+        let cached = &mut self.text[slot];
         if self.bits[slot] == bits {
             self.found += 1;
+            text.push_with(|window| {
+                window[..24].copy_from_slice(cached);
+                usize::from(cached[23])
+            });
         } else {
-            let mut buffer = zmij::Buffer::new();
-            let spelled = spell_f32(&mut buffer, value);
-            let mut text = padded(spelled);
-            text[23] = spelled.len() as u8;
             self.bits[slot] = bits;
-            self.text[slot] = text;
+            text.push_with(|window| {
+                let length = spell::spell(value, window);
+                cached.copy_from_slice(&window[..24]);
+                cached[23] = length as u8;
+                length
+            });
         }
-        let text = &self.text[slot];
-        push_padded(buf, text, usize::from(text[23]));
     }
 }
 
@@ -353,10 +387,21 @@ mod tests {
     fn padded_copies_keep_every_length() {
         let source: Vec<u8> = (b'a'..=b'z').collect();
         for len in 0..=24 {
-            let mut buf = b"x".to_vec();
-            push_padded(&mut buf, &padded(&source[..len]), len);
-            assert_eq!(buf[1..], source[..len], "length {len}");
+            assert_eq!(padded(&source[..len])[..len], source[..len], "length {len}");
         }
+    }
+
+    #[test]
+    fn text_keeps_pieces_past_its_capacity() {
+        let mut text = Text::with_capacity(0);
+        let mut expected = Vec::new();
+        for i in -300..300 {
+            text.push_int(i * 7919);
+            text.push_fixed(b", ");
+            text.push_f32(i as f32 * 0.37);
+            expected.extend(format!("{}, {}", i * 7919, zmij::Buffer::new().format(i as f32 * 0.37)).bytes());
+        }
+        assert_eq!(text.into_bytes(), expected);
     }
 
     fn written(values: &[f32]) -> Vec<u8> {
