@@ -1218,3 +1218,48 @@ fn styling_through_guides_places_the_recipe_in_the_whole_grooms_head_frame() {
         }
     }
 }
+
+/// Without a scalp mesh, a guide run collides with the same head as a run of every strand: the
+/// `shape = "scalp"` and `shape = "head"` ellipsoids are fitted once, with the head frame, to the
+/// whole groom's roots, not to the roots of the strands a run simulates (the guides). Both are
+/// placed as `style` places them (`placement::head_frame` on the whole groom, then the obstacles
+/// on the strands simulated); the expectation is the ellipsoid fitted to every root directly.
+#[test]
+fn guides_without_a_scalp_mesh_collide_with_the_whole_grooms_head() {
+    use coif::interact::obstacles::Shape;
+    use coif::style::placement::head_frame;
+    use coif::style::run::obstacle_shapes;
+    let text = "frame = \"head\"\n[[obstacles]]\nname = \"scalp\"\nshape = \"scalp\"\n\
+                [[obstacles]]\nname = \"head\"\nshape = \"head\"\n\
+                [[stages]]\nkind = \"settle\"\nmax_seconds = 0.005\n";
+    let recipe = recipe::parse(text, Path::new("colliders.toml")).unwrap();
+    for file in ["blender_groom.usda", "blender_groom_x2.usda"] {
+        let mut every = load(file);
+        every.meshes.clear();
+        let guide_strands = group_strands(&every, group(&every, "Guides"));
+        let guides = coif::groups::assemble(&[(&every, &guide_strands)]).unwrap();
+        assert!(guides.strand_count() < every.strand_count() / 2, "{file}");
+        let frame = head_frame(&recipe, &every, None).unwrap();
+        let full = obstacle_shapes(&recipe, &every, None, frame).unwrap();
+        let guided = obstacle_shapes(&recipe, &guides, None, frame).unwrap();
+        // Independent of the frame's stored fit: the ellipsoid fitted to every root.
+        let f = frame.unwrap();
+        let roots: Vec<Vec3> = (0..every.strand_count()).map(|s| every.strand_points(s)[0]).collect();
+        let e = f.fit_ellipsoid(&roots).unwrap();
+        let guide_roots: Vec<Vec3> = guide_strands.iter().map(|&s| every.strand_points(s)[0]).collect();
+        let from_guides = f.fit_ellipsoid(&guide_roots).unwrap();
+        eprintln!(
+            "{file}: head fitted to every root: radii {:?}; to the guides' roots: radii {:?}",
+            e.radii * f.size(),
+            from_guides.radii * f.size()
+        );
+        assert_eq!(full.len(), 2);
+        for (k, (a, b)) in full.iter().zip(&guided).enumerate() {
+            assert_eq!(a, b, "{file}: obstacle {k} of the guide run");
+            let Shape::Ellipsoid { center, radii, rotation } = a else { panic!("{file}: {a:?}") };
+            assert!(center.distance(f.point(e.center)) < 1e-6 * f.size(), "{file}: centre {center}");
+            assert!((*radii - e.radii * f.size()).abs().max_element() < 1e-6 * f.size(), "{file}: {radii}");
+            assert!(rotation.angle_between(f.rotation() * e.rotation) < 1e-4, "{file}: rotation");
+        }
+    }
+}
