@@ -585,6 +585,7 @@ fn assert_same_in_blender(
         let worst =
             worst_distance(&blender_points(&g["positions"], scale), &blender_points(&w["positions"], 1.0));
         assert!(worst < 1e-6, "{label}: head mesh {worst} m from Blender's own file");
+        assert_same_head_uvs_and_normals(label, g, w);
     } else {
         assert_eq!(names(got, "meshes"), Vec::<String>::new(), "{label}: no mesh in this file");
     }
@@ -640,9 +641,45 @@ fn converted_files_re_import_in_blender_as_blenders_own_files() {
                     &blender_points(&w["positions"], 1.0),
                 );
                 assert!(worst < 1e-6, "{label}: head mesh {worst} m from Blender's own file");
+                assert_same_head_uvs_and_normals(&label, g, w);
             }
         }
     }
+}
+
+/// The head mesh `got` of Blender's import of coif's output against `want`, Blender's import of
+/// its own file: the same number of UV maps, each map's UVs at every face corner (maps in
+/// order: Blender names an Alembic map by the `sourceName` its exporter writes, which coif does
+/// not keep), custom normals, and corner normals in world space (Blender turns a Y-up file's
+/// object, not its data) with a mean dot of at least 0.999.
+fn assert_same_head_uvs_and_normals(label: &str, got: &serde_json::Value, want: &serde_json::Value) {
+    use common::usd::f32s;
+    let maps = |m: &serde_json::Value| m["uvs"].as_object().unwrap().values().map(f32s).collect::<Vec<_>>();
+    let (got_uvs, want_uvs) = (maps(got), maps(want));
+    assert!(!want_uvs.is_empty(), "{label}: Blender's head has UVs");
+    assert_eq!(
+        got_uvs.len(),
+        want_uvs.len(),
+        "{label}: head UV maps {} vs {}",
+        got["uv_maps"],
+        want["uv_maps"]
+    );
+    for (g, w) in got_uvs.iter().zip(&want_uvs) {
+        assert_eq!(g.len(), w.len(), "{label}: head UV corners");
+        let worst = g.iter().zip(w).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "{label}: head UVs differ by {worst}");
+    }
+    assert_eq!(got["custom_normals"], want["custom_normals"], "{label}: head custom normals");
+    let (g, w) = (f32s(&got["corner_normals"]), f32s(&want["corner_normals"]));
+    assert!(!w.is_empty() && g.len() == w.len(), "{label}: head corner normals {} vs {}", g.len(), w.len());
+    let dots: Vec<f32> = g
+        .chunks_exact(3)
+        .zip(w.chunks_exact(3))
+        .map(|(a, b)| a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+        .collect();
+    let mean = dots.iter().sum::<f32>() / dots.len() as f32;
+    eprintln!("Blender: {label}: head UVs exact to 1e-6, corner normals mean dot {mean:.7}");
+    assert!(mean >= 0.999, "{label}: head corner normals, mean dot {mean} with Blender's own file");
 }
 
 #[test]
