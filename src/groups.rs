@@ -33,9 +33,33 @@ pub enum CurveWrap {
 pub enum Interpolation {
     /// USD `constant`: one value for the whole prim (read as the same value on every strand).
     Constant,
-    /// USD `varying`: one value per segment end, which is one per vertex on linear and pinned
-    /// curves (the only case recorded: elsewhere the reader spreads the values).
+    /// USD `uniform`, Alembic `uni`: one value per curve (recorded for widths, which the groom
+    /// keeps per vertex).
+    Uniform,
+    /// USD `varying`: one value per segment end (see [`crate::primvar_rates`]). For attributes,
+    /// recorded only where that is one per vertex (linear and pinned curves); for widths on
+    /// any basis.
     Varying,
+}
+
+impl Interpolation {
+    /// The USD `interpolation` token.
+    pub fn usd_name(self) -> &'static str {
+        match self {
+            Interpolation::Constant => "constant",
+            Interpolation::Uniform => "uniform",
+            Interpolation::Varying => "varying",
+        }
+    }
+
+    /// The Alembic `geoScope`.
+    pub fn alembic_scope(self) -> &'static str {
+        match self {
+            Interpolation::Constant => "con",
+            Interpolation::Uniform => "uni",
+            Interpolation::Varying => "var",
+        }
+    }
 }
 
 /// One named set of curves sharing a basis.
@@ -52,6 +76,10 @@ pub struct CurveGroup {
     pub missing: Vec<String>,
     /// Attributes this group's file gave an [`Interpolation`] their rate does not say.
     pub interpolations: Vec<(String, Interpolation)>,
+    /// How the file gave the widths (`None`: per vertex); the groom keeps them per vertex and
+    /// writers give them back at this rate while the values fit it
+    /// ([`crate::primvar_rates::widths_at`]).
+    pub width_interpolation: Option<Interpolation>,
 }
 
 impl CurveGroup {

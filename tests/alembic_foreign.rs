@@ -470,3 +470,70 @@ fn geom_params_keep_types_and_turn_with_the_transform() {
         assert!(text.contains(declaration), "{declaration} missing from the .usda");
     }
 }
+
+/// An archive with one cubic curves object `/hair` (curves of 5 and 4 points, `basis` bytes)
+/// whose `width` has `geoScope = var` and `widths`; written to `dir/name`.
+fn varying_widths_file(
+    dir: &std::path::Path,
+    name: &str,
+    basis: [u8; 4],
+    counts: &[i32],
+    widths: &[f32],
+) -> std::path::PathBuf {
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let top = w.top();
+    let points: Vec<Vec3> =
+        counts.iter().enumerate().flat_map(|(i, &n)| line(i as f32, n as usize)).collect();
+    let hair = curves(&mut w, top, "hair", counts, &points, basis);
+    let width = w.add_array(hair, "width", param_md("var", Pod::F32, 1), Pod::F32, 1, 0);
+    w.set_sample(width, &f32s(widths), widths.len() as u64).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, w.finish().unwrap().into_inner()).unwrap();
+    path
+}
+
+#[test]
+fn varying_widths_on_cubic_curves_are_per_segment_end_or_per_vertex() {
+    // `var` on cubic curves: a RenderMan-style writer gives one value per segment end (a
+    // nonperiodic B-spline of n points: n - 2; a Bézier: (n - 1)/3 + 1), Houdini one per point.
+    // Segment-end widths must reach USD as `varying` with the same values (pxr counts the segment
+    // ends itself) and come back in coif's .abc under `var` (ogawa-rs); per-point ones as vertex
+    // widths; any other count exits 2 naming the file, object, property and both counts.
+    let dir = tempfile::tempdir().unwrap();
+    let bspline = [0, 0, 2, 1];
+    let bezier = [0, 0, 1, 3];
+    // (file, basis bytes, counts, widths, USD interpolation, Alembic scope written back)
+    type Case<'a> = (&'a str, [u8; 4], &'a [i32], Vec<f32>, &'a str, &'a str);
+    let cases: [Case; 3] = [
+        ("ends.abc", bspline, &[5, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "varying", "var"),
+        ("bezier.abc", bezier, &[7, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "varying", "var"),
+        ("points.abc", bspline, &[5, 4], (1..=9).map(|i| i as f32 * 0.01).collect(), "vertex", "vtx"),
+    ];
+    for (name, basis, counts, widths, usd, scope) in cases {
+        let source = varying_widths_file(dir.path(), name, basis, counts, &widths);
+        let usda = dir.path().join(format!("{name}.usda"));
+        let run = coif(&["convert", path_str(&source), path_str(&usda)]);
+        assert!(run.status.success(), "{name}: {}", stderr(&run));
+        let dump = common::usd::pxr_dump(&usda, None);
+        let prim = &dump["curves"][0];
+        assert_eq!(prim["widthsInterpolation"], usd, "{name}");
+        assert_eq!(common::usd::f32s(&prim["widths"]), widths, "{name}");
+        if usd == "varying" {
+            assert_eq!(prim["segmentEnds"].as_u64(), Some(widths.len() as u64), "{name}: pxr's segment ends");
+        }
+        let abc = dir.path().join(format!("back_{name}"));
+        let run = coif(&["convert", path_str(&source), path_str(&abc)]);
+        assert!(run.status.success(), "{name}: {}", stderr(&run));
+        let read = curve_widths_via_ogawa_rs(&abc);
+        assert_eq!(read, vec![("/hair".to_string(), scope.to_string(), widths.clone())], "{name}");
+    }
+    let bad = varying_widths_file(dir.path(), "bad.abc", bspline, &[5, 4], &[0.01; 6]);
+    let out = coif(&["info", path_str(&bad)]);
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{message}");
+    assert!(message.contains("bad.abc"), "{message}");
+    assert!(
+        message.contains("/hair/.geom/width: 6 values, its scope needs 9 (one per vertex) or 5"),
+        "{message}"
+    );
+}

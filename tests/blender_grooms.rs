@@ -585,6 +585,7 @@ fn assert_same_in_blender(
         let worst =
             worst_distance(&blender_points(&g["positions"], scale), &blender_points(&w["positions"], 1.0));
         assert!(worst < 1e-6, "{label}: head mesh {worst} m from Blender's own file");
+        assert_same_head_uvs_and_normals(label, g, w);
     } else {
         assert_eq!(names(got, "meshes"), Vec::<String>::new(), "{label}: no mesh in this file");
     }
@@ -640,9 +641,45 @@ fn converted_files_re_import_in_blender_as_blenders_own_files() {
                     &blender_points(&w["positions"], 1.0),
                 );
                 assert!(worst < 1e-6, "{label}: head mesh {worst} m from Blender's own file");
+                assert_same_head_uvs_and_normals(&label, g, w);
             }
         }
     }
+}
+
+/// The head mesh `got` of Blender's import of coif's output against `want`, Blender's import of
+/// its own file: the same number of UV maps, each map's UVs at every face corner (maps in
+/// order: Blender names an Alembic map by the `sourceName` its exporter writes, which coif does
+/// not keep), custom normals, and corner normals in world space (Blender turns a Y-up file's
+/// object, not its data) with a mean dot of at least 0.999.
+fn assert_same_head_uvs_and_normals(label: &str, got: &serde_json::Value, want: &serde_json::Value) {
+    use common::usd::f32s;
+    let maps = |m: &serde_json::Value| m["uvs"].as_object().unwrap().values().map(f32s).collect::<Vec<_>>();
+    let (got_uvs, want_uvs) = (maps(got), maps(want));
+    assert!(!want_uvs.is_empty(), "{label}: Blender's head has UVs");
+    assert_eq!(
+        got_uvs.len(),
+        want_uvs.len(),
+        "{label}: head UV maps {} vs {}",
+        got["uv_maps"],
+        want["uv_maps"]
+    );
+    for (g, w) in got_uvs.iter().zip(&want_uvs) {
+        assert_eq!(g.len(), w.len(), "{label}: head UV corners");
+        let worst = g.iter().zip(w).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "{label}: head UVs differ by {worst}");
+    }
+    assert_eq!(got["custom_normals"], want["custom_normals"], "{label}: head custom normals");
+    let (g, w) = (f32s(&got["corner_normals"]), f32s(&want["corner_normals"]));
+    assert!(!w.is_empty() && g.len() == w.len(), "{label}: head corner normals {} vs {}", g.len(), w.len());
+    let dots: Vec<f32> = g
+        .chunks_exact(3)
+        .zip(w.chunks_exact(3))
+        .map(|(a, b)| a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+        .collect();
+    let mean = dots.iter().sum::<f32>() / dots.len() as f32;
+    eprintln!("Blender: {label}: head UVs exact to 1e-6, corner normals mean dot {mean:.7}");
+    assert!(mean >= 0.999, "{label}: head corner normals, mean dot {mean} with Blender's own file");
 }
 
 #[test]
@@ -1215,6 +1252,51 @@ fn styling_through_guides_places_the_recipe_in_the_whole_grooms_head_frame() {
             assert!(angle(front, g_front) < 1.0, "{what}: front {g_front} vs {front}");
             assert!(center.distance(g_center) < 0.01 * size, "{what}: centre {g_center} vs {center}");
             assert!((g_size / size - 1.0).abs() < 0.01, "{what}: size {g_size} vs {size}");
+        }
+    }
+}
+
+/// Without a scalp mesh, a guide run collides with the same head as a run of every strand: the
+/// `shape = "scalp"` and `shape = "head"` ellipsoids are fitted once, with the head frame, to the
+/// whole groom's roots, not to the roots of the strands a run simulates (the guides). Both are
+/// placed as `style` places them (`placement::head_frame` on the whole groom, then the obstacles
+/// on the strands simulated); the expectation is the ellipsoid fitted to every root directly.
+#[test]
+fn guides_without_a_scalp_mesh_collide_with_the_whole_grooms_head() {
+    use coif::interact::obstacles::Shape;
+    use coif::style::placement::head_frame;
+    use coif::style::run::obstacle_shapes;
+    let text = "frame = \"head\"\n[[obstacles]]\nname = \"scalp\"\nshape = \"scalp\"\n\
+                [[obstacles]]\nname = \"head\"\nshape = \"head\"\n\
+                [[stages]]\nkind = \"settle\"\nmax_seconds = 0.005\n";
+    let recipe = recipe::parse(text, Path::new("colliders.toml")).unwrap();
+    for file in ["blender_groom.usda", "blender_groom_x2.usda"] {
+        let mut every = load(file);
+        every.meshes.clear();
+        let guide_strands = group_strands(&every, group(&every, "Guides"));
+        let guides = coif::groups::assemble(&[(&every, &guide_strands)]).unwrap();
+        assert!(guides.strand_count() < every.strand_count() / 2, "{file}");
+        let frame = head_frame(&recipe, &every, None).unwrap();
+        let full = obstacle_shapes(&recipe, &every, None, frame).unwrap();
+        let guided = obstacle_shapes(&recipe, &guides, None, frame).unwrap();
+        // Independent of the frame's stored fit: the ellipsoid fitted to every root.
+        let f = frame.unwrap();
+        let roots: Vec<Vec3> = (0..every.strand_count()).map(|s| every.strand_points(s)[0]).collect();
+        let e = f.fit_ellipsoid(&roots).unwrap();
+        let guide_roots: Vec<Vec3> = guide_strands.iter().map(|&s| every.strand_points(s)[0]).collect();
+        let from_guides = f.fit_ellipsoid(&guide_roots).unwrap();
+        eprintln!(
+            "{file}: head fitted to every root: radii {:?}; to the guides' roots: radii {:?}",
+            e.radii * f.size(),
+            from_guides.radii * f.size()
+        );
+        assert_eq!(full.len(), 2);
+        for (k, (a, b)) in full.iter().zip(&guided).enumerate() {
+            assert_eq!(a, b, "{file}: obstacle {k} of the guide run");
+            let Shape::Ellipsoid { center, radii, rotation } = a else { panic!("{file}: {a:?}") };
+            assert!(center.distance(f.point(e.center)) < 1e-6 * f.size(), "{file}: centre {center}");
+            assert!((*radii - e.radii * f.size()).abs().max_element() < 1e-6 * f.size(), "{file}: {radii}");
+            assert!(rotation.angle_between(f.rotation() * e.rotation) < 1e-4, "{file}: rotation");
         }
     }
 }

@@ -550,7 +550,8 @@ fn nonperiodic_catmull_rom_to_alembic_warns_naming_the_file_and_object() {
 fn constant_and_varying_primvars_keep_their_interpolation_through_convert() {
     // Constant and varying primvars on a linear and a pinned Catmull-Rom prim (where varying is
     // one value per vertex), and varying on a nonperiodic B-spline (fewer segment ends than
-    // points: read spread over the points, so written back per vertex). pxr must see the source's
+    // points: each end's value goes to the point it lies next to, points 1..=3, and the unreached
+    // end points repeat their neighbours; written back per vertex). pxr must see the source's
     // interpolation, type and values again in coif's .usda and .usdc.
     let dir = tempfile::tempdir().unwrap();
     let source = dir.path().join("interpolations.usda");
@@ -602,7 +603,7 @@ fn constant_and_varying_primvars_keep_their_interpolation_through_convert() {
                 assert_eq!(a["type"], b["type"], ".{ext} {path} {name}");
                 if spread {
                     assert_eq!(b["interpolation"], "vertex", ".{ext} {path} {name}");
-                    assert_eq!(f32s(&b["values"]), [1.0, 1.5, 2.0, 2.5, 3.0], ".{ext} {path} {name}");
+                    assert_eq!(f32s(&b["values"]), [1.0, 1.0, 2.0, 3.0, 3.0], ".{ext} {path} {name}");
                 } else {
                     assert_eq!(a["interpolation"], b["interpolation"], ".{ext} {path} {name}");
                     assert_eq!(f32s(&a["values"]), f32s(&b["values"]), ".{ext} {path} {name}");
@@ -728,4 +729,86 @@ fn a_mesh_primvar_whose_count_fits_no_interpolation_exits_2_naming_it() {
             && message.contains("needs 3 values, found 2"),
         "{message}"
     );
+}
+
+#[test]
+fn widths_keep_their_interpolation_through_convert() {
+    // Widths at every rate USD has: constant, uniform (one per curve, on pinned Catmull-Rom),
+    // varying (one per segment end, fewer than the points on nonperiodic B-spline and Bézier
+    // curves) and vertex. The groom keeps widths per vertex; coif's .usda, .usdc and .abc must give
+    // each prim's widths back at the source's rate with the source's values, as pxr (USD) and
+    // ogawa-rs (the Alembic `width` and its geoScope) read them, and the .abc read back by coif
+    // must give the same USD again.
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("widths.usda");
+    let prim = |name: &str, head: &str, counts: &str, points: usize, widths: &str, interpolation: &str| {
+        let points: Vec<String> = (0..points).map(|i| format!("({}, {i}, {})", name.len(), i % 2)).collect();
+        format!(
+            "    def BasisCurves \"{name}\"\n    {{\n{head}        int[] curveVertexCounts = [{counts}]\n        point3f[] points = [{}]\n        float[] widths = [{widths}] (\n            interpolation = \"{interpolation}\"\n        )\n    }}\n",
+            points.join(", ")
+        )
+    };
+    let cubic = |basis: &str, wrap: &str| {
+        format!("        uniform token type = \"cubic\"\n        uniform token basis = \"{basis}\"\n        uniform token wrap = \"{wrap}\"\n")
+    };
+    let linear = "        uniform token type = \"linear\"\n";
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef Xform \"G\"\n{{\n{}{}{}{}{}}}\n",
+        prim("con", linear, "3, 4", 7, "0.01", "constant"),
+        prim("uni", &cubic("catmullRom", "pinned"), "4, 5", 9, "0.02, 0.03", "uniform"),
+        prim("var", &cubic("bspline", "nonperiodic"), "5, 4", 9, "0.01, 0.02, 0.03, 0.04, 0.05", "varying"),
+        prim("bez", &cubic("bezier", "nonperiodic"), "7", 7, "0.01, 0.02, 0.03", "varying"),
+        prim("vtx", linear, "2", 2, "0.01, 0.02", "vertex"),
+    );
+    std::fs::write(&source, text).unwrap();
+    let want = pxr_dump(&source, None);
+    let want = want["curves"].as_array().unwrap();
+    assert_eq!(want.len(), 5);
+    for w in want {
+        if w["widthsInterpolation"] == "varying" {
+            // pxr's own count of segment ends is what the source gives.
+            assert_eq!(
+                w["segmentEnds"].as_u64().unwrap() as usize,
+                f32s(&w["widths"]).len(),
+                "{}",
+                w["path"]
+            );
+        }
+    }
+    let same_widths = |got: &Value, label: &str| {
+        for w in want {
+            let path = w["path"].as_str().unwrap();
+            let g = got["curves"].as_array().unwrap().iter().find(|c| c["path"] == path).unwrap();
+            assert_eq!(g["widthsInterpolation"], w["widthsInterpolation"], "{label} {path}");
+            assert_eq!(f32s(&g["widths"]), f32s(&w["widths"]), "{label} {path}");
+            assert!(
+                got["validationErrors"].as_array().unwrap().is_empty(),
+                "{label}: {}",
+                got["validationErrors"]
+            );
+        }
+    };
+    for ext in ["usda", "usdc", "abc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        if ext == "abc" {
+            let scopes = [("constant", "con"), ("uniform", "uni"), ("varying", "var"), ("vertex", "vtx")];
+            let read = curve_widths_via_ogawa_rs(&out);
+            assert_eq!(read.len(), want.len());
+            for w in want {
+                let path = w["path"].as_str().unwrap();
+                let (_, scope, values) = read.iter().find(|(name, _, _)| name == path).unwrap();
+                let usd = w["widthsInterpolation"].as_str().unwrap();
+                assert_eq!(scope, scopes.iter().find(|s| s.0 == usd).unwrap().1, ".abc {path}");
+                assert_eq!(values, &f32s(&w["widths"]), ".abc {path}");
+            }
+            let back = dir.path().join("back.usda");
+            let run = coif(&["convert", path_str(&out), path_str(&back)]);
+            assert!(run.status.success(), "{}", stderr(&run));
+            same_widths(&pxr_dump(&back, None), ".abc then .usda");
+        } else {
+            same_widths(&pxr_dump(&out, None), &format!(".{ext}"));
+        }
+    }
 }

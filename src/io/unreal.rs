@@ -53,9 +53,11 @@ pub fn meshes_path(groom_path: &Path) -> PathBuf {
 /// The groom as Unreal's USD importer wants its primvars: `groom_group_id` (int per strand),
 /// `groom_root_uv` (float2 per strand), `color` as `groom_color`, every other attribute
 /// prefixed `groom_` (the importer ignores other names). `groom_id` and `groom_guide` are the
-/// names coif writes anyway; widths stay USD `widths`, which the importer reads itself.
+/// names coif writes anyway; widths stay USD `widths`, which the importer reads itself, per
+/// vertex (the rate its documentation and coif's tests know it reads).
 pub fn for_usd(groom: &Groom) -> Groom {
     let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
+    out.groups.iter_mut().for_each(|g| g.width_interpolation = None);
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
     let group_ids = out.group_ids.iter().map(|&g| g as f32).collect();
     out.set_attribute(

@@ -7,8 +7,8 @@
 //! when animated), then one `BasisCurves` prim per curve group at the group's path
 //! (`/Groom/Strands` for a groom without groups) with `Xform`s above. Each curve prim holds
 //! `basis` (cubic only), `purpose` (when the group has one), `type`, `wrap`,
-//! `curveVertexCounts`, `widths` (vertex), the primvars, `points` and `extent` — default values,
-//! or time samples of `points`, `extent` and of every primvar that changes when animated. Then
+//! `curveVertexCounts`, `widths` (per vertex, or at the rate the file gave them while they fit
+//! it), the primvars, `points` and `extent` — default values, or time samples of `points`, `extent` and of every primvar that changes when animated. Then
 //! one `Mesh` prim per groom mesh (a scalp, head or body) at the path it was read from: its faces,
 //! `points` (time-sampled when they move) and `extent`, wound counter-clockwise as
 //! `rightHanded` says, `subdivisionScheme = "none"` (coif collides with the polygons as they
@@ -28,6 +28,7 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::Interpolation;
 use crate::io::usda::names;
+use crate::primvar_rates;
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 
 /// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
@@ -469,12 +470,25 @@ fn curves_prim<'g>(
     };
     properties.push(Property::uniform_token("type", curve_type));
     properties.push(Property::uniform_token("wrap", wrap));
-    let counts = Data::Ints { values: Cow::Owned(strands.counts(groom)), components: 1 };
-    properties.push(Property::new("curveVertexCounts", "int[]", Value::Default(counts)));
+    let vertex_counts = strands.counts(groom);
+    let counts: Vec<usize> = vertex_counts.iter().map(|&c| c as usize).collect();
+    let vertex_counts = Data::Ints { values: Cow::Owned(vertex_counts), components: 1 };
+    properties.push(Property::new("curveVertexCounts", "int[]", Value::Default(vertex_counts)));
     let widths = strands.per_vertex(groom, &groom.widths, 1);
     let half_width = widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5;
-    properties
-        .push(Property::new("widths", "float[]", Value::Default(floats(widths, 1))).interpolated("vertex"));
+    let (interpolation, widths) = match primvar_rates::widths_at(
+        group.width_interpolation,
+        group.basis,
+        group.wrap,
+        &counts,
+        &widths,
+    ) {
+        Some((interpolation, values)) => (interpolation.usd_name(), Cow::Owned(values)),
+        None => ("vertex", widths),
+    };
+    properties.push(
+        Property::new("widths", "float[]", Value::Default(floats(widths, 1))).interpolated(interpolation),
+    );
     properties.extend(primvars(groom, group, strands, animation).0);
 
     let positions = match animation {
@@ -651,8 +665,7 @@ fn primvars<'g>(
         };
         let interpolation = match (group.interpolation(&attribute.name).filter(|&i| fits(i)), attribute.rate)
         {
-            (Some(Interpolation::Constant), _) => "constant",
-            (Some(Interpolation::Varying), _) => "varying",
+            (Some(interpolation), _) => interpolation.usd_name(),
             (None, AttributeRate::Vertex) => "vertex",
             (None, AttributeRate::Strand) => "uniform",
         };

@@ -28,6 +28,10 @@ pub struct HeadFrame {
     up: Vec3,
     front: Vec3,
     size: f32,
+    /// The ellipsoid fitted to the roots of the groom the frame was fitted to (head
+    /// coordinates), so that a run styling some of the strands (the guides) collides with the
+    /// head the whole groom grows on.
+    roots_head: Option<Ellipsoid>,
 }
 
 /// Values a recipe sets instead of fitting them (world coordinates, metres).
@@ -50,7 +54,7 @@ impl HeadFrame {
         if !(center.is_finite() && size.is_finite() && size > 0.0) {
             return Err(format!("a head frame needs a finite centre and a positive size, not {size}"));
         }
-        Ok(HeadFrame { center, up, front, size })
+        Ok(HeadFrame { center, up, front, size, roots_head: None })
     }
 
     pub fn center(&self) -> Vec3 {
@@ -156,7 +160,15 @@ impl HeadFrame {
                 Vec3::Z
             }
         });
-        HeadFrame::new(center, up, front, size)
+        let mut frame = HeadFrame::new(center, up, front, size)?;
+        frame.roots_head = frame.fit_ellipsoid(&roots);
+        Ok(frame)
+    }
+
+    /// The head as an ellipsoid in head coordinates: the one fitted to the whole groom's roots
+    /// with the frame, else (a frame made with [`HeadFrame::new`]) the one fitted to `roots`.
+    pub fn head_ellipsoid(&self, roots: &[Vec3]) -> Option<Ellipsoid> {
+        self.roots_head.or_else(|| self.fit_ellipsoid(roots))
     }
 
     /// The ellipsoid that best fits `points` (the roots), in head coordinates, shrunk (by at most

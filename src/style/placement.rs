@@ -107,7 +107,7 @@ pub fn place(
                     }
                     (Frame::Head, Some(fr)) => {
                         // Along the head's axes; what is left out comes from the fitted head.
-                        let fitted = fr.fit_ellipsoid(&roots);
+                        let fitted = fr.head_ellipsoid(&roots);
                         let c = center.map(Vec3::from).or(fitted.map(|e| e.center)).unwrap_or(Vec3::ZERO);
                         let r = radii.map(Vec3::from).or(fitted.map(|e| e.radii)).unwrap_or(Vec3::ONE);
                         Shape::Ellipsoid {
@@ -321,10 +321,10 @@ fn fit_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
     })
 }
 
-/// The head as the ellipsoid fitted to the roots (a sphere of the frame's size when the roots do
-/// not determine one).
+/// The head as the ellipsoid fitted to the roots of the whole groom the frame was fitted to (a
+/// sphere of the frame's size when the roots do not determine one).
 fn fitted_head(frame: &HeadFrame, roots: &[Vec3]) -> Result<Shape> {
-    let e = frame.fit_ellipsoid(roots).unwrap_or(Ellipsoid {
+    let e = frame.head_ellipsoid(roots).unwrap_or(Ellipsoid {
         center: Vec3::ZERO,
         radii: Vec3::ONE,
         rotation: Quat::IDENTITY,

@@ -9,8 +9,8 @@ For every curves object ("objects"): its name, curve and point counts, the set o
 of its points (evaluated: object transforms, cache modifiers) and each attribute whose name
 starts with "groom_" (domain, data type, values flattened) -- the guide flag and Unreal's
 interpolation attributes a DCC needs to re-interpolate children from guides. For every mesh
-object ("meshes"): its name, vertex and face counts, world vertex positions, UV map names and
-whether it has custom normals. With --frames, also the world positions of every curves and mesh
+object ("meshes"): its name, vertex and face counts, world vertex positions, UV map names, the
+UVs of each map and the world-space normal of every face corner, and whether it has custom normals. With --frames, also the world positions of every curves and mesh
 object at each scene frame FIRST..LAST. All in Blender's space (Z up, metres, or the file's
 units for Alembic, which has none).
 """
@@ -65,7 +65,11 @@ def curves_object(obj):
 
 
 def mesh_object(obj):
-    mesh = evaluated(obj).data
+    data = evaluated(obj)
+    mesh = data.data
+    # Directions turn with the inverse transpose of the object's matrix (an up-axis change on
+    # import rotates the object, not its data).
+    normal_matrix = data.matrix_world.to_3x3().inverted().transposed()
     return {
         "name": obj.name,
         "vertices": len(mesh.vertices),
@@ -73,6 +77,9 @@ def mesh_object(obj):
         "positions": world_points(obj),
         "uv_maps": [uv.name for uv in mesh.uv_layers],
         "custom_normals": mesh.has_custom_normals,
+        # Per face corner, in Blender's corner order.
+        "uvs": {uv.name: [x for c in uv.uv for x in c.vector] for uv in mesh.uv_layers},
+        "corner_normals": [x for n in mesh.corner_normals for x in (normal_matrix @ n.vector).normalized()],
     }
 
 

@@ -188,4 +188,43 @@ pub fn polymesh_via_ogawa_rs(path: &Path) -> (Vec<[f32; 3]>, Vec<i32>, Vec<i32>)
     panic!("{}: ogawa-rs finds no PolyMesh", path.display());
 }
 
+/// Every curves object's `width` as ogawa-rs (an independent Alembic reader) reads it: the
+/// object's full name, the `geoScope` metadata and the values of the first sample.
+#[allow(dead_code)]
+pub fn curve_widths_via_ogawa_rs(path: &Path) -> Vec<(String, String, Vec<f32>)> {
+    use ogawa_rs::{Archive, FileReader, PodArray, PropertyReader, Schema};
+    let mut reader = FileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let mut found = Vec::new();
+    let mut stack = vec![archive.load_root_object(&mut reader).unwrap()];
+    while let Some(object) = stack.pop() {
+        if let Ok(Schema::Curves(_)) = Schema::parse(&object, &mut reader, &archive) {
+            let top = object.properties().unwrap();
+            let Ok(PropertyReader::Compound(geom)) = top.load_sub_property(0, &mut reader, &archive) else {
+                panic!("{}: .geom is not a compound", object.header.full_name)
+            };
+            let index = geom.find_sub_property_index("width").expect("a width property");
+            let scope =
+                geom.property_headers[index].meta_data.tokens.get("geoScope").cloned().unwrap_or_default();
+            let Ok(PropertyReader::Array(array)) = geom.load_sub_property(index, &mut reader, &archive)
+            else {
+                panic!("width is not an array")
+            };
+            let Ok(PodArray::F32(values)) = array.load_sample(0, &mut reader) else {
+                panic!("width is not float32")
+            };
+            found.push((object.header.full_name.clone(), scope, values));
+        }
+        for i in 0..object.child_count() {
+            stack.push(
+                object
+                    .load_child(i, &mut reader, &archive.indexed_meta_data, &archive.time_samplings)
+                    .unwrap(),
+            );
+        }
+    }
+    found.sort_by(|a, b| a.0.cmp(&b.0));
+    found
+}
+
 pub mod usd;

@@ -1,7 +1,7 @@
 //! Reading grooms from Alembic: every Curves object in the archive (under any Xform
 //! hierarchy, transforms applied) merged into one groom, at one sample time or at all of them.
 //! Accepts what coif writes and what other tools write: cubic bases, widths per file / curve /
-//! vertex, plain or indexed geometry parameters, Epic's `groom_*` attributes.
+//! segment end / vertex, plain or indexed geometry parameters, Epic's `groom_*` attributes.
 use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 
@@ -10,6 +10,8 @@ use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groups::Interpolation;
+use crate::primvar_rates;
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 
 /// Alembic's polygon-mesh schema (a scalp or head beside the curves).
@@ -441,6 +443,7 @@ impl<'a> CurvesArchive<'a> {
             Some(p) => Some(self.expand(p, time, &groom, 1, path)?),
             None => None,
         };
+        let width_interpolation = width.as_ref().and_then(|w| w.interpolation);
         groom.widths = match width {
             Some(param) => param.into_vertices(&groom),
             None => vec![
@@ -487,7 +490,9 @@ impl<'a> CurvesArchive<'a> {
                 }
             }
         }
-        groom.set_single_group(CurveGroup::new(path.clone(), basis, wrap_of(basis)));
+        let mut group = CurveGroup::new(path.clone(), basis, wrap_of(basis));
+        group.width_interpolation = width_interpolation;
+        groom.set_single_group(group);
         Ok(groom)
     }
 
@@ -573,23 +578,48 @@ impl<'a> CurvesArchive<'a> {
         };
         let count = values.len() / extent as usize;
         let (strands, vertices) = (groom.strand_count(), groom.vertex_count());
-        let rate = match metadata_scope.as_deref() {
-            Some("vtx") | Some("var") | Some("fvr") => Rate::Vertex,
-            Some("uni") => Rate::Strand,
-            Some("con") => Rate::Constant,
-            _ if count == vertices => Rate::Vertex,
-            _ if count == strands => Rate::Strand,
-            _ => Rate::Constant,
+        // `var` is one value per segment end (RenderMan's rule: Alembic has no pinned curves);
+        // Houdini writes point attributes under `var` too, so a per-vertex count is per vertex.
+        let varying_count = |n: usize| primvar_rates::varying_count(groom.basis, CurveWrap::Nonperiodic, n);
+        let varying: usize = groom.vertex_counts().map(varying_count).sum();
+        let (rate, interpolation) = match metadata_scope.as_deref() {
+            Some("var") if count == varying => (Rate::Vertex, Some(Interpolation::Varying)),
+            Some("var") if count != vertices => {
+                return fail(format!(
+                    "{name}: {count} values, its scope needs {vertices} (one per vertex) or {varying} \
+                     (one per segment end of the {:?} curves)",
+                    groom.basis
+                ));
+            }
+            Some("vtx") | Some("var") | Some("fvr") => (Rate::Vertex, None),
+            Some("uni") => (Rate::Strand, Some(Interpolation::Uniform)),
+            Some("con") => (Rate::Constant, Some(Interpolation::Constant)),
+            _ if count == vertices => (Rate::Vertex, None),
+            _ if count == strands => (Rate::Strand, Some(Interpolation::Uniform)),
+            _ => (Rate::Constant, Some(Interpolation::Constant)),
         };
-        let expected = match rate {
-            Rate::Vertex => vertices,
-            Rate::Strand => strands,
-            Rate::Constant => 1,
+        let expected = match (rate, interpolation) {
+            (Rate::Vertex, Some(Interpolation::Varying)) => varying,
+            (Rate::Vertex, _) => vertices,
+            (Rate::Strand, _) => strands,
+            (Rate::Constant, _) => 1,
         };
         if count != expected {
             return fail(format!("{name}: {count} values, its scope needs {expected}"));
         }
-        Ok(Param { values, extent: extent as usize, rate })
+        let values = if interpolation == Some(Interpolation::Varying) && varying != vertices {
+            let counts = groom.vertex_counts();
+            primvar_rates::varying_to_vertex(
+                groom.basis,
+                CurveWrap::Nonperiodic,
+                counts,
+                &values,
+                extent as usize,
+            )
+        } else {
+            values
+        };
+        Ok(Param { values, extent: extent as usize, rate, interpolation })
     }
 }
 
@@ -691,9 +721,12 @@ enum Rate {
 }
 
 struct Param {
+    /// Per-vertex values when `rate` is `Vertex` (`var` values spread onto the vertices).
     values: Vec<f32>,
     extent: usize,
     rate: Rate,
+    /// The rate the file gave, when not per vertex (what a writer gives back).
+    interpolation: Option<Interpolation>,
 }
 
 impl Param {

@@ -15,6 +15,8 @@ use super::curves_read::POLYMESH_SCHEMA;
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
 use crate::groom::{attr, AttributeKind, AttributeRate, CurveBasis, CurveWrap, Groom};
+use crate::groups::Interpolation;
+use crate::primvar_rates;
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 
 pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
@@ -99,6 +101,9 @@ struct CurveProperties {
     velocities: Option<PropertyId>,
     uv: Option<PropertyId>,
     width: PropertyId,
+    /// The rate of `width` (and Unreal's `groom_width`) when not per vertex: the file's, which
+    /// the first frame's widths fit (see [`primvar_rates::widths_at`]).
+    width_rate: Option<Interpolation>,
     /// `.arbGeomParams` members and what fills them.
     params: Vec<(PropertyId, ParamSource)>,
 }
@@ -339,18 +344,35 @@ impl<W: Write + Seek> CurvesWriter<W> {
             (p.vertex_counts, Cow::Borrowed(bytemuck::cast_slice(&counts)), counts.len() as u64),
             (p.basis, Cow::Owned(basis.to_vec()), 1),
         ];
+        let widths: Cow<[f32]> = match p.width_rate {
+            None => Cow::Borrowed(&groom.widths),
+            Some(rate) => match group_widths(groom, Some(rate)) {
+                Some((_, values)) => Cow::Owned(values),
+                None => {
+                    return Err(io::Error::new(
+                        io::ErrorKind::InvalidInput,
+                        format!(
+                            "frame {}: the widths of {} no longer fit the rate of the first frame ({})",
+                            self.frames,
+                            groom.group(0).name,
+                            rate.alembic_scope()
+                        ),
+                    ))
+                }
+            },
+        };
         for (id, source) in &p.params {
-            let (bytes, elements) = param_bytes(groom, source, scale);
+            let (bytes, elements) = param_bytes(groom, source, &widths, scale);
             samples.push((*id, bytes, elements));
         }
         if let Some(id) = p.velocities {
             samples.push((id, Cow::Borrowed(bytemuck::cast_slice(&velocities)), velocities.len() as u64));
         }
         if let Some(id) = p.uv {
-            let (bytes, elements) = param_bytes(groom, &ParamSource::RootUvs, scale);
+            let (bytes, elements) = param_bytes(groom, &ParamSource::RootUvs, &widths, scale);
             samples.push((id, bytes, elements));
         }
-        let (bytes, elements) = param_bytes(groom, &ParamSource::Widths, scale);
+        let (bytes, elements) = param_bytes(groom, &ParamSource::Widths, &widths, scale);
         samples.push((p.width, bytes, elements));
         // Keys are pure functions of the bytes: hash on every core, then write in order.
         let keys: Vec<[u8; 16]> = samples.par_iter().map(|(_, bytes, _)| sample_key(bytes)).collect();
@@ -395,6 +417,16 @@ fn velocities(
         (Some(prev), None) => prev.iter().zip(current).map(|(a, b)| (*b - *a) * fps).collect(),
         (None, None) => vec![Vec3::ZERO; current.len()],
     })
+}
+
+/// The widths of a one-group groom at the rate its file gave them, while they fit it
+/// (`rate`: the one the first frame chose, which a later frame must fit too); `None`: per vertex.
+/// Alembic has no pinned curves: `var` counts segment ends as on nonperiodic ones.
+fn group_widths(groom: &Groom, rate: Option<Interpolation>) -> Option<(Interpolation, Vec<f32>)> {
+    let group = groom.group(0);
+    let counts: Vec<usize> = groom.vertex_counts().collect();
+    let rate = rate.or(group.width_interpolation);
+    primvar_rates::widths_at(rate, group.basis, CurveWrap::Nonperiodic, &counts, &groom.widths)
 }
 
 fn geom_param_metadata(scope: &str, pod: Pod, extent: u8, interpretation: &str) -> MetaData {
@@ -476,6 +508,11 @@ fn add_curves<W: Write + Seek>(
     let vertex_counts = archive.add_array(geom, "nVertices", MetaData::new(), Pod::I32, 1, ts);
     let basis = archive.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, ts);
 
+    // Unreal reads widths per file, strand or vertex, but not per segment end.
+    let width_rate = group_widths(groom, None)
+        .map(|(rate, _)| rate)
+        .filter(|&rate| !(unreal && rate == Interpolation::Varying));
+    let width_scope = width_rate.map_or("vtx", Interpolation::alembic_scope);
     let mut sources = Vec::new();
     if unreal {
         sources.push((epic::WIDTH.to_string(), ParamSource::Widths));
@@ -517,7 +554,11 @@ fn add_curves<W: Write + Seek>(
                     (pod, a.components as u8, a.rate, interpretation(a.kind, &a.name, a.components))
                 }
             };
-            let metadata = geom_param_metadata(scope(rate), pod, extent, interp);
+            let scope = match source {
+                ParamSource::Widths => width_scope,
+                _ => scope(rate),
+            };
+            let metadata = geom_param_metadata(scope, pod, extent, interp);
             params.push((archive.add_array(arb, &name, metadata, pod, extent, ts), source));
         }
     }
@@ -536,8 +577,19 @@ fn add_curves<W: Write + Seek>(
         archive.add_array(geom, "uv", metadata, Pod::F32, 2, ts)
     });
     let width =
-        archive.add_array(geom, "width", geom_param_metadata("vtx", Pod::F32, 1, ""), Pod::F32, 1, ts);
-    (object, CurveProperties { bounds, positions, vertex_counts, basis, velocities, uv, width, params })
+        archive.add_array(geom, "width", geom_param_metadata(width_scope, Pod::F32, 1, ""), Pod::F32, 1, ts);
+    let properties = CurveProperties {
+        bounds,
+        positions,
+        vertex_counts,
+        basis,
+        velocities,
+        uv,
+        width,
+        width_rate,
+        params,
+    };
+    (object, properties)
 }
 
 /// The objects placed so far under the writer's parent: a path becomes Xforms above a leaf
@@ -747,7 +799,13 @@ fn written_as_int32(name: &str) -> bool {
     name == crate::guides::CLOSEST_GUIDES
 }
 
-fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'g, [u8]>, u64) {
+/// The bytes and element count of a parameter; `widths` are the groom's at the rate written.
+fn param_bytes<'g>(
+    groom: &'g Groom,
+    source: &ParamSource,
+    widths: &'g [f32],
+    scale: f32,
+) -> (Cow<'g, [u8]>, u64) {
     fn floats<'g>(values: &'g [f32], factor: f32) -> Cow<'g, [u8]> {
         if factor == 1.0 {
             Cow::Borrowed(bytemuck::cast_slice(values))
@@ -756,7 +814,7 @@ fn param_bytes<'g>(groom: &'g Groom, source: &ParamSource, scale: f32) -> (Cow<'
         }
     }
     match source {
-        ParamSource::Widths => (floats(&groom.widths, scale), groom.widths.len() as u64),
+        ParamSource::Widths => (floats(widths, scale), widths.len() as u64),
         ParamSource::StrandIds => (
             Cow::Owned(groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect()),
             groom.strand_ids.len() as u64,

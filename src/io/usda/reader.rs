@@ -13,6 +13,7 @@ use crate::groom::{
 };
 use crate::groups::Interpolation;
 use crate::io::{ImportOptions, UpAxis};
+use crate::primvar_rates;
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
@@ -34,6 +35,7 @@ struct Curves {
     attributes: Vec<GroomAttribute>,
     /// Attributes read from `constant` or exactly-per-vertex `varying` primvars.
     interpolations: Vec<(String, Interpolation)>,
+    width_interpolation: Option<Interpolation>,
 }
 
 /// The transform from a layer's space to coif's (metres, Y up), applied after each prim's world
@@ -312,7 +314,6 @@ impl Walker<'_> {
                 )),
                 other => return Err(at_prim(prim.site, format!("unknown wrap \"{other}\""))),
             };
-        let pinned = wrap == CurveWrap::Pinned;
         let purpose = token(prim, "purpose", "default")?;
         let purpose = (purpose != "default").then_some(purpose);
 
@@ -349,8 +350,9 @@ impl Walker<'_> {
                 format!("curveVertexCounts add up to {total} points but 'points' has {}", points.len()),
             ));
         }
-        let layout = Layout { counts: &counts, points: points.len(), basis, pinned };
+        let layout = Layout { counts: &counts, points: points.len(), basis, wrap };
 
+        let mut width_interpolation = None;
         let widths = match prim.attributes.iter_mut().find(|a| a.name == "widths") {
             None => None,
             Some(attr) => {
@@ -365,6 +367,13 @@ impl Walker<'_> {
                         let (rate, data) = layout
                             .resolve(values, 1, &interpolation)
                             .map_err(|m| at_prim(site, format!("widths: {m}")))?;
+                        // Kept per vertex; the file's rate goes back out with them.
+                        width_interpolation = match interpolation.as_str() {
+                            "constant" => Some(Interpolation::Constant),
+                            "uniform" => Some(Interpolation::Uniform),
+                            "varying" => Some(Interpolation::Varying),
+                            _ => None,
+                        };
                         Some(layout.to_vertex(rate, 1, data))
                     }
                 }
@@ -385,6 +394,7 @@ impl Walker<'_> {
             guides: None,
             attributes: Vec::new(),
             interpolations: Vec::new(),
+            width_interpolation,
         };
         let primvar_names: Vec<String> = prim
             .attributes
@@ -563,23 +573,18 @@ struct Layout<'a> {
     counts: &'a [u32],
     points: usize,
     basis: CurveBasis,
-    pinned: bool,
+    wrap: CurveWrap,
 }
 
 impl Layout<'_> {
     /// Values per curve for `varying` interpolation (one per segment end).
-    fn varying_count(&self, vertices: u32) -> u32 {
-        match (self.basis, self.pinned) {
-            (CurveBasis::Linear, _) => vertices,
-            (CurveBasis::Bezier, _) => (vertices.saturating_sub(1)) / 3 + 1,
-            (_, true) => vertices,
-            (_, false) => vertices.saturating_sub(2).max(1),
-        }
+    fn varying_count(&self, vertices: u32) -> usize {
+        primvar_rates::varying_count(self.basis, self.wrap, vertices as usize)
     }
 
     /// Whether `varying` values are one per vertex (linear or pinned non-Bézier curves).
     fn varying_is_vertex(&self) -> bool {
-        self.counts.iter().all(|&c| self.varying_count(c) == c)
+        self.counts.iter().all(|&c| self.varying_count(c) == c as usize)
     }
 
     /// Checks the value count against the interpolation and returns per-strand or per-vertex data.
@@ -612,29 +617,15 @@ impl Layout<'_> {
                 Ok((AttributeRate::Vertex, values))
             }
             "varying" | "faceVarying" => {
-                let needed: usize = self.counts.iter().map(|&c| self.varying_count(c) as usize).sum();
+                let needed: usize = self.counts.iter().map(|&c| self.varying_count(c)).sum();
                 expect(needed)?;
                 if needed == self.points {
                     return Ok((AttributeRate::Vertex, values));
                 }
-                let mut out = Vec::with_capacity(self.points * components);
-                let mut start = 0;
-                for &count in self.counts {
-                    let m = self.varying_count(count) as usize;
-                    let curve = &values[start * components..(start + m) * components];
-                    for i in 0..count as usize {
-                        // Spread the segment-end values evenly over the control points.
-                        let u = if count > 1 { i as f32 * (m - 1) as f32 / (count - 1) as f32 } else { 0.0 };
-                        let (k, t) = ((u.floor() as usize).min(m - 1), u - u.floor());
-                        let next = (k + 1).min(m - 1);
-                        for c in 0..components {
-                            let (a, b) = (curve[k * components + c], curve[next * components + c]);
-                            out.push(if t == 0.0 { a } else { a + (b - a) * t });
-                        }
-                    }
-                    start += m;
-                }
-                Ok((AttributeRate::Vertex, out))
+                let counts = self.counts.iter().map(|&c| c as usize);
+                let spread =
+                    primvar_rates::varying_to_vertex(self.basis, self.wrap, counts, &values, components);
+                Ok((AttributeRate::Vertex, spread))
             }
             other => Err(format!("unknown interpolation \"{other}\"")),
         }
@@ -886,6 +877,7 @@ impl Curves {
         let mut group = CurveGroup::new(self.path, self.basis, self.wrap);
         group.purpose = self.purpose;
         group.interpolations = self.interpolations;
+        group.width_interpolation = self.width_interpolation;
         groom.set_single_group(group);
         groom
     }
@@ -929,13 +921,14 @@ mod tests {
     }
 
     #[test]
-    fn varying_values_on_cubic_curves_spread_over_the_control_points() {
-        // A 4-point B-spline has 2 segment ends: 0.1 at the start, 0.4 at the end.
+    fn varying_values_on_cubic_curves_go_to_the_control_points_at_their_segment_ends() {
+        // A 4-point B-spline has 2 segment ends, next to points 1 and 2: 0.1 there and on the
+        // point before (which no segment reaches), 0.4 there and on the point after.
         let groom = read_text(
             "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"C\"\n{\n    uniform token type = \"cubic\"\n    uniform token basis = \"bspline\"\n    int[] curveVertexCounts = [4]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)]\n    float[] widths = [0.1, 0.4] (\n        interpolation = \"varying\"\n    )\n}\n",
         );
         assert_eq!(groom.basis, CurveBasis::BSpline);
-        let expected = [0.1f32, 0.2, 0.3, 0.4];
+        let expected = [0.1f32, 0.1, 0.4, 0.4];
         for (w, e) in groom.widths.iter().zip(expected) {
             assert!((w - e).abs() < 1e-6, "{:?}", groom.widths);
         }
