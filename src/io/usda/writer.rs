@@ -124,41 +124,46 @@ fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<(
     let stateless = || ();
     match data {
         Data::Token(token) => out.write_all(format!("\"{token}\"").as_bytes()),
-        Data::Ints { values, components: 1 } => {
-            write_array(out, values, stateless, |(), text, &v| text.push_int(v))
-        }
+        Data::Ints { values, components: 1 } => write_array(out, values, stateless, |(), text, &v| {
+            text.push_fixed(SEPARATOR);
+            text.push_int(v);
+        }),
         Data::Ints { values, components } => {
             let tuples: Vec<&[i32]> = values.chunks_exact(*components).collect();
             write_array(out, &tuples, stateless, |(), text, t| {
-                push_tuple(text, t, |text, &v| text.push_int(v))
+                text.push_fixed(SEPARATOR);
+                push_tuple(text, t, |text, &v| text.push_int(v));
             })
         }
-        Data::Bools(values) => {
-            write_array(out, values, stateless, |(), text, &v| text.push_fixed(if v { b"1" } else { b"0" }))
-        }
+        Data::Bools(values) => write_array(out, values, stateless, |(), text, &v| {
+            text.push_fixed(if v { b", 1" } else { b", 0" });
+        }),
         Data::Int(value) => out.write_all(value.to_string().as_bytes()),
         Data::Floats { values, components: 1 } => {
-            write_array(out, values, RecentSpellings::new, |recent, text, &v| recent.push(text, v))
+            write_array(out, values, RecentSpellings::new, |recent, text, &v| recent.push_separated(text, v))
         }
         Data::Floats { values, components: 3 } => {
-            let tuples: &[[f32; 3]] = bytemuck::cast_slice(values);
-            write_array(out, tuples, stateless, |(), text, t| {
-                push_tuple(text, t, |text, &v| text.push_f32(v))
-            })
+            let points: &[[f32; 3]] = bytemuck::cast_slice(values);
+            write_array(out, points, stateless, |(), text, &point| text.push_separated_point(point))
         }
         Data::Floats { values, components } => {
             let tuples: Vec<&[f32]> = values.chunks_exact(*components).collect();
             write_array(out, &tuples, stateless, |(), text, t| {
-                push_tuple(text, t, |text, &v| text.push_f32(v))
+                text.push_fixed(SEPARATOR);
+                push_tuple(text, t, |text, &v| text.push_f32(v));
             })
         }
     }
 }
 
+/// What goes before every element of an array but the first.
+const SEPARATOR: &[u8; 2] = b", ";
+
 /// `[a, b, …]`, formatting chunks of elements in parallel and writing them in order. The next
 /// batch is formatted on the pool while this thread writes the last one, so disk and formatting
 /// overlap. Each chunk's formatting starts from a fresh `state()`, so the text does not depend on
-/// how the array is split.
+/// how the array is split. `format` appends [`SEPARATOR`] and an element (one store for both in
+/// the hot cases); the array's first element loses its separator.
 fn write_array<T: Sync, S>(
     out: &mut (impl Write + ?Sized),
     items: &[T],
@@ -177,13 +182,14 @@ fn write_array<T: Sync, S>(
             .map(|(c, chunk)| {
                 let mut text = Text::with_capacity(chunk.len() * (text_per_item + 8));
                 let mut state = state();
-                for (i, item) in chunk.iter().enumerate() {
-                    if b + c + i > 0 {
-                        text.push_fixed(b", ");
-                    }
+                for item in chunk {
                     format(&mut state, &mut text, item);
                 }
-                text.into_bytes()
+                let mut bytes = text.into_bytes();
+                if b + c == 0 {
+                    bytes.drain(..SEPARATOR.len());
+                }
+                bytes
             })
             .collect()
     };
@@ -201,37 +207,44 @@ fn write_array<T: Sync, S>(
     out.write_all(b"]")
 }
 
-/// A chunk's text, written in fixed-size stores: a piece is stored as a whole window of
-/// [`WINDOW`] bytes at the end of the text, of which only its length is kept. Copies of the
-/// exact length are calls to `memcpy`, which cost as much as making a spelling.
+/// A chunk's text, written in fixed-size stores: a piece is stored as a whole window of `N`
+/// bytes at the end of the text, of which only its length is kept. Copies of the exact length
+/// are calls to `memcpy`, which cost as much as making a spelling.
 struct Text {
-    /// The text, then at least a window of scratch bytes.
+    /// The text, then at least [`SCRATCH`] bytes that pieces are stored into.
     bytes: Vec<u8>,
     len: usize,
 }
 
+/// Bytes after the text that one store may write: a point's, the largest.
+const SCRATCH: usize = POINT_STORE;
+/// `, (x, y, z)` as three spelling windows and five bytes between and around them.
+const POINT_STORE: usize = 3 * WINDOW + 5;
+
 impl Text {
     fn with_capacity(capacity: usize) -> Self {
-        Self { bytes: vec![0; capacity + WINDOW], len: 0 }
+        Self { bytes: vec![0; capacity + SCRATCH], len: 0 }
     }
 
-    /// Appends the first `write(window)` bytes of what `write` stores into the window after the
-    /// text.
-    #[inline]
-    fn push_with(&mut self, write: impl FnOnce(&mut [u8; WINDOW]) -> usize) {
-        if self.len + WINDOW > self.bytes.len() {
-            self.bytes.resize(2 * self.bytes.len() + WINDOW, 0);
+    /// Appends the first `write(store)` bytes of what `write` stores into the `N` bytes after
+    /// the text: one capacity check however many pieces `write` lays out in them.
+    // Always inlined: a call per element costs its register saves (~12 instructions).
+    #[inline(always)]
+    fn push_with<const N: usize>(&mut self, write: impl FnOnce(&mut [u8; N]) -> usize) {
+        const { assert!(N <= SCRATCH) };
+        if self.len + N > self.bytes.len() {
+            self.bytes.resize(2 * self.bytes.len() + SCRATCH, 0);
         }
-        let window = (&mut self.bytes[self.len..self.len + WINDOW]).try_into().expect("a window");
-        let length = write(window);
-        debug_assert!(length <= WINDOW);
+        let store = (&mut self.bytes[self.len..self.len + N]).try_into().expect("a store");
+        let length = write(store);
+        debug_assert!(length <= N);
         self.len += length;
     }
 
     #[inline]
     fn push_fixed<const N: usize>(&mut self, bytes: &[u8; N]) {
-        self.push_with(|window| {
-            window[..N].copy_from_slice(bytes);
+        self.push_with::<N>(|store| {
+            store.copy_from_slice(bytes);
             N
         });
     }
@@ -241,12 +254,27 @@ impl Text {
         self.push_with(|window| spell::spell(value, window));
     }
 
+    /// Appends `, (x, y, z)` in one store.
+    #[inline]
+    fn push_separated_point(&mut self, [x, y, z]: [f32; 3]) {
+        self.push_with::<POINT_STORE>(|store| {
+            store[..3].copy_from_slice(b", (");
+            let end = spell_at(store, 3, x);
+            store[end..end + 2].copy_from_slice(SEPARATOR);
+            let end = spell_at(store, end + 2, y);
+            store[end..end + 2].copy_from_slice(SEPARATOR);
+            let end = spell_at(store, end + 2, z);
+            store[end] = b')';
+            end + 1
+        });
+    }
+
     fn push_int(&mut self, value: i32) {
         let mut buffer = itoa::Buffer::new();
         let spelled = buffer.format(value).as_bytes();
         let (spelling, length) = (padded(spelled), spelled.len());
-        self.push_with(|window| {
-            window[..24].copy_from_slice(&spelling);
+        self.push_with::<24>(|store| {
+            *store = spelling;
             length
         });
     }
@@ -255,6 +283,14 @@ impl Text {
         self.bytes.truncate(self.len);
         self.bytes
     }
+}
+
+/// Stores `value`'s spelling at `at` in `store` and returns where it ends.
+#[inline]
+fn spell_at<const N: usize>(store: &mut [u8; N], at: usize, value: f32) -> usize {
+    let window = (&mut store[at..at + WINDOW]).try_into().expect("a window");
+    // A spelling never fills its window; the bound lets the compiler drop the later checks.
+    at + spell::spell(value, window).min(WINDOW)
 }
 
 fn push_tuple<T>(text: &mut Text, values: &[T], push: impl Fn(&mut Text, &T)) {
@@ -316,12 +352,15 @@ impl RecentSpellings {
         Self { bits: [0; RECENT_SLOTS], text: [zero; RECENT_SLOTS], looked_up: 0, found: 0 }
     }
 
-    /// Appends `value` as [`spell::spell`] spells it.
-    #[inline]
-    fn push(&mut self, text: &mut Text, value: f32) {
+    /// Appends [`SEPARATOR`] and `value` as [`spell::spell`] spells it, in one store.
+    #[inline(always)]
+    fn push_separated(&mut self, text: &mut Text, value: f32) {
         if self.looked_up >= RECENT_TRIAL && self.found < RECENT_TRIAL / 8 {
             // Below about one repeat in eight, looking up costs more than it saves.
-            return text.push_f32(value);
+            return text.push_with::<{ 2 + WINDOW }>(|store| {
+                store[..2].copy_from_slice(SEPARATOR);
+                spell_at(store, 2, value)
+            });
         }
         self.looked_up += 1;
         let bits = value.to_bits();
@@ -330,17 +369,19 @@ impl RecentSpellings {
         let cached = &mut self.text[slot];
         if self.bits[slot] == bits {
             self.found += 1;
-            text.push_with(|window| {
-                window[..24].copy_from_slice(cached);
-                usize::from(cached[23])
+            text.push_with::<{ 2 + WINDOW }>(|store| {
+                store[..2].copy_from_slice(SEPARATOR);
+                store[2..26].copy_from_slice(cached);
+                2 + usize::from(cached[23])
             });
         } else {
             self.bits[slot] = bits;
-            text.push_with(|window| {
-                let length = spell::spell(value, window);
-                cached.copy_from_slice(&window[..24]);
-                cached[23] = length as u8;
-                length
+            text.push_with::<{ 2 + WINDOW }>(|store| {
+                store[..2].copy_from_slice(SEPARATOR);
+                let end = spell_at(store, 2, value);
+                cached.copy_from_slice(&store[2..26]);
+                cached[23] = (end - 2) as u8;
+                end
             });
         }
     }
@@ -400,8 +441,32 @@ mod tests {
             text.push_fixed(b", ");
             text.push_f32(i as f32 * 0.37);
             expected.extend(format!("{}, {}", i * 7919, zmij::Buffer::new().format(i as f32 * 0.37)).bytes());
+            let point = [i as f32 * -1.7e-4, 0.1, i as f32 * 3.3e5];
+            text.push_separated_point(point);
+            let [x, y, z] = point.map(|v| zmij::Buffer::new().format(v).to_string());
+            expected.extend(format!(", ({x}, {y}, {z})").bytes());
         }
         assert_eq!(text.into_bytes(), expected);
+    }
+
+    #[test]
+    fn points_are_their_spellings_in_tuples() {
+        // More points than a chunk holds, with values spelled longest or oddly.
+        let odd =
+            [0.0, -0.0, -1.234_567_9e-6, 1e-45, f32::MAX, -f32::MIN_POSITIVE, 1e13, f32::NAN, f32::INFINITY];
+        let values: Vec<f32> =
+            (0..200_001u32).map(|i| f32::from_bits(0xbe80_0000 + 7919 * i)).chain(odd).collect();
+        let mut text = Vec::new();
+        write_data(&Data::Floats { values: values[..].into(), components: 3 }, &mut text).unwrap();
+        let spelled = |v: &f32| {
+            let array = spelled_one_by_one(&[*v]);
+            String::from_utf8(array[1..array.len() - 1].to_vec()).unwrap()
+        };
+        let expected: Vec<String> = values
+            .chunks(3)
+            .map(|t| format!("({})", t.iter().map(spelled).collect::<Vec<_>>().join(", ")))
+            .collect();
+        assert_eq!(String::from_utf8(text).unwrap(), format!("[{}]", expected.join(", ")));
     }
 
     fn written(values: &[f32]) -> Vec<u8> {
