@@ -454,8 +454,10 @@ mod tests {
         // More points than a chunk holds, with values spelled longest or oddly.
         let odd =
             [0.0, -0.0, -1.234_567_9e-6, 1e-45, f32::MAX, -f32::MIN_POSITIVE, 1e13, f32::NAN, f32::INFINITY];
-        let values: Vec<f32> =
-            (0..200_001u32).map(|i| f32::from_bits(0xbe80_0000 + 7919 * i)).chain(odd).collect();
+        let values: Vec<f32> = (0..200_001u32)
+            .map(|i| f32::from_bits(0xbe80_0000u32.wrapping_add(7919 * i)))
+            .chain(odd)
+            .collect();
         let mut text = Vec::new();
         write_data(&Data::Floats { values: values[..].into(), components: 3 }, &mut text).unwrap();
         let spelled = |v: &f32| {
