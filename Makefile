@@ -9,9 +9,12 @@ CARGO ?= cargo
 COIF := target/release/coif
 DEMO_OUT ?= out/demo
 
-.PHONY: setup build demo test bench grooms golden clean check-blender fuzz-alembic fuzz-usdc
+.PHONY: setup setup-bpy build demo test bench grooms golden clean check-blender fuzz-alembic fuzz-usdc
 
 setup: .deps/.setup-done
+
+setup-bpy:
+	bash scripts/check_blender_setup.sh
 
 .deps/.setup-done: scripts/setup.sh
 	bash scripts/setup.sh
@@ -23,7 +26,9 @@ build: setup
 demo: build
 	bash scripts/demo.sh $(COIF) $(DEMO_OUT)
 
-test: setup
+# The tests include Blender's own importers reading coif's files (tests/blender_grooms.rs), so
+# `make test` installs bpy too (idempotent: a no-op once `import bpy` works).
+test: setup setup-bpy
 	$(CARGO) fmt --check
 	$(CARGO) clippy --locked --all-targets -- -D warnings
 	@# The fuzz targets build beside the test suite, on the cores its single-threaded tests leave idle.
@@ -41,11 +46,10 @@ bench: setup
 grooms: build
 	bash scripts/make_grooms.sh $(COIF)
 
-# Optional, not in CI: Blender's own Alembic importer (bpy, ~370 MB in .deps/bpy-venv) opens a
-# static and an animated file written by coif; counts, positions and radii must match. Then the
-# blender_grooms tests run with bpy: styled and animated-converted grooms against Blender's own.
-check-blender: setup
-	bash scripts/check_blender_setup.sh
+# Blender's own Alembic importer (bpy, ~370 MB in .deps/bpy-venv) opens a static and an animated
+# file written by coif; counts, positions and radii must match. Then the blender_grooms tests run
+# with bpy: styled and animated-converted grooms against Blender's own (`make test` runs those too).
+check-blender: setup setup-bpy
 	$(CARGO) run --release --locked --example alembic_check_files -- out/check-blender
 	$(CARGO) run --release --locked -- convert tests/data/blender_groom.abc out/check-blender/blender_groom.abc
 	$(CARGO) run --release --locked -- convert tests/data/blender_groom.usda out/check-blender/blender_groom_usd.abc
@@ -97,7 +101,7 @@ clean:
 .PHONY: bench-peers
 bench-peers: setup
 	bash scripts/peers_setup.sh
-	bash scripts/check_blender_setup.sh
+	$(MAKE) setup-bpy
 	$(CARGO) build --release --locked
 	.deps/mitsuba-venv/bin/python scripts/bench_peers.py --coif target/release/coif \
 		--cycles-python .deps/bpy-venv/bin/python --out out/bench-peers $(BENCH_PEERS_ARGS)
