@@ -11,14 +11,15 @@
 //! - `stretch`: straight and curly strands hanging from the root, simulated 2 s at Δt 1/30 and
 //!   1/360: the largest edge stretch.
 //!
-//! `cargo bench --bench accuracy [-- FILTER]`; `cargo test --locked --bench accuracy -- FILTER`
-//! runs it in the (optimised) test profile without a release build.
+//! `cargo bench --bench accuracy [-- FILTER] [--direct]`; `cargo test --locked --bench accuracy --
+//! FILTER` runs it in the (optimised) test profile without a release build. `--direct` runs every
+//! figure with the direct strand solver (`StrandSolver::Direct`) instead of Gauss–Seidel.
 
 use std::path::Path;
 use std::time::Instant;
 
 use coif::generate::{generate, GenerateParams, Style};
-use coif::sim::{Cuticle, Material, NoHooks, SettleOptions, SimParams, Simulation};
+use coif::sim::{Cuticle, Material, NoHooks, SettleOptions, SimParams, Simulation, StrandSolver};
 use coif::style::{recipe, style, StyleOptions};
 use coif::Groom;
 use glam::Vec3;
@@ -26,14 +27,20 @@ use glam::Vec3;
 fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     let run = |name: &str| filter.as_deref().is_none_or(|f| name.contains(f));
+    let solver = if std::env::args().any(|a| a == "--direct") {
+        StrandSolver::Direct
+    } else {
+        StrandSolver::GaussSeidel
+    };
+    println!("solver: {solver:?}");
     if run("invariance") {
-        invariance();
+        invariance(solver);
     }
     if run("cantilever") {
-        cantilever();
+        cantilever(solver);
     }
     if run("stretch") {
-        stretch();
+        stretch(solver);
     }
 }
 
@@ -61,7 +68,7 @@ fn difference(a: &[Vec3], b: &[Vec3], length: f32) -> (f32, f32) {
     (100.0 * mean / length, 100.0 * max / length)
 }
 
-fn invariance() {
+fn invariance(solver: StrandSolver) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let preset = std::fs::read_to_string(root.join("grooms/recipes/bedhead_scene1.toml")).expect("preset");
     assert!(preset.contains("dt = 0.0027777778") && preset.contains("iterations = 5"));
@@ -80,6 +87,10 @@ fn invariance() {
         let text = preset
             .replace("dt = 0.0027777778", &format!("dt = {}", 1.0 / rate as f64))
             .replace("iterations = 5", &format!("iterations = {iterations}"));
+        let text = match solver {
+            StrandSolver::Direct => text.replace("[settings]", "[settings]\nsolver = \"direct\""),
+            StrandSolver::GaussSeidel => text,
+        };
         let recipe = recipe::parse(&text, &root.join("grooms/recipes/bedhead_scene1.toml")).expect("recipe");
         let start = Instant::now();
         let out = style(&groom, &recipe, &StyleOptions::default()).expect("style");
@@ -117,7 +128,7 @@ fn invariance() {
     }
 }
 
-fn cantilever() {
+fn cantilever(solver: StrandSolver) {
     let width = 80e-6f32;
     // No cuticle gradient, so E·I is uniform.
     let material = Material { cuticle: Cuticle { share: 0.0, ..Cuticle::default() }, ..Material::default() };
@@ -140,6 +151,7 @@ fn cantilever() {
                 iterations,
                 gravity: Vec3::new(0.0, -g as f32, 0.0),
                 damping: 20.0,
+                solver,
                 ..SimParams::default()
             };
             let mut sim = Simulation::new(&groom, params).expect("cantilever");
@@ -158,7 +170,7 @@ fn cantilever() {
     }
 }
 
-fn stretch() {
+fn stretch(solver: StrandSolver) {
     println!("stretch: 20 strands × 32 vertices, 24 cm, hanging 2 s; largest edge strain (stretch > 0)");
     for (name, style_kind) in
         [("straight", Style::Straight), ("curly", Style::Curly { radius: 0.01, pitch: 0.03 })]
@@ -173,7 +185,7 @@ fn stretch() {
         })
         .expect("groom");
         for rate in [30u32, 360] {
-            let params = SimParams { dt: 1.0 / rate as f32, ..SimParams::default() };
+            let params = SimParams { dt: 1.0 / rate as f32, solver, ..SimParams::default() };
             let mut sim = Simulation::new(&groom, params).expect("sim");
             for _ in 0..2 * rate {
                 sim.step();

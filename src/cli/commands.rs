@@ -179,6 +179,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
             args.influences[3],
         ]),
         material: coif::sim::Material { youngs_modulus: args.youngs_modulus, ..defaults.material },
+        solver: args.solver.into(),
         ..defaults
     };
     let seconds = args.seconds as f64 + if args.settle { args.settle_seconds as f64 } else { 0.0 };

@@ -27,6 +27,8 @@ pub(crate) struct StepConstants {
     pub gravity: Vec3,
     /// Velocity factor per step, `exp(−damping·Δt)`, so damping per second does not depend on Δt.
     pub velocity_keep: f32,
+    /// Bend–twist and stretch–shear of the free tail solved together (`strand_solve`).
+    pub direct: bool,
 }
 
 /// A raw pointer with its slice's length that may cross threads; strands hand out disjoint
@@ -138,6 +140,7 @@ impl<'a> Parts<'a> {
 }
 
 thread_local! {
+    static STRAND_SCRATCH: RefCell<super::strand_solve::Scratch> = RefCell::new(Default::default());
     static LANE_SCRATCH: RefCell<lanes::Scratch> = RefCell::new(lanes::Scratch::default());
 }
 
@@ -174,6 +177,7 @@ pub(crate) fn step_all(
         broken,
     };
     units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
+        let in_lanes = in_lanes && !k.direct;
         // SAFETY: work units cover each strand once (checked in `Rods::from_groom`), and strand
         // ranges are disjoint because the offsets ascend (same check); bounds are checked in
         // `SharedMut::slice`.
@@ -366,7 +370,27 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
     // passes a correction only one edge against its direction per iteration, and a hanging strand
     // needs tension carried from the tip up as much as positions carried from the root down.
     for iteration in 0..k.iterations {
-        solve_stretch_shear(&mut s);
+        if k.direct {
+            let start = free_tail(s.kinematic);
+            let pair_k = s.pair_k;
+            let compliance = |e: usize| pair_k[e].compliance_dt2;
+            let mut state = super::strand_solve::StrandState {
+                x: s.x,
+                q: s.q,
+                lambda: s.lambda,
+                w: s.w,
+                wq: s.wq,
+                length: s.length,
+                rest: s.rest,
+                compliance_dt2: &compliance,
+            };
+            STRAND_SCRATCH
+                .with(|scratch| super::strand_solve::solve(&mut state, start, &mut scratch.borrow_mut()));
+        } else {
+            solve_stretch_shear(&mut s);
+        }
+        // With the direct strand solve, Gauss–Seidel only keeps the held span before the free tail.
+        let edges = if k.direct { free_tail(s.kinematic) } else { edges };
         if iteration % 2 == 0 {
             for e in 0..edges {
                 project_edge(&mut s, e);

@@ -75,6 +75,9 @@ pub struct Settings {
     /// the style is the only change. Off: the groom's shape, or a styled groom's exported
     /// `rest_darboux`, is the rest shape.
     pub sag_free: bool,
+    /// `"gauss-seidel"` (default) or `"direct"`: how each iteration solves a strand
+    /// (`sim::StrandSolver`).
+    pub solver: crate::sim::StrandSolver,
 }
 
 impl Default for Settings {
@@ -91,6 +94,7 @@ impl Default for Settings {
             damping: 2.0,
             seed: 1,
             sag_free: false,
+            solver: crate::sim::StrandSolver::GaussSeidel,
         }
     }
 }

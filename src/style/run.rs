@@ -990,6 +990,7 @@ pub fn sim_params(recipe: &Recipe) -> SimParams {
             ..Material::default()
         },
         influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
+        solver: settings.solver,
         ..SimParams::default()
     }
 }
