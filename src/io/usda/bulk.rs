@@ -43,18 +43,25 @@ impl Number for f32 {
     /// Straight-line: the integer digits and up to two groups of eight fraction digits, each
     /// found and converted by one [`leading_digits`], then Clinger's fast path. A read of many
     /// numbers waits on where each ends (the next one's loads need it), so the loads depend on
-    /// as few earlier results as possible: both signs' integer words are loaded, and both
-    /// fraction groups are loaded at fixed offsets from the point.
+    /// as few earlier results as possible: a one-digit integer part is taken for granted until
+    /// shown otherwise, and both fraction groups are loaded at fixed offsets from the point.
     #[inline(always)]
     fn written(window: &[u8; WRITTEN_WINDOW]) -> Option<(f32, usize)> {
         let word_at = |at: usize| u64::from_le_bytes(window[at..at + 8].try_into().unwrap());
         let negative = window[0] == b'-';
-        let integer_word = if negative { word_at(1) } else { word_at(0) };
-        let (mut mantissa, integer_digits) = leading_digits(integer_word);
+        let sign = usize::from(negative);
+        // One integer digit (a groom's coordinates in metres) by a predicted branch, so the
+        // fraction's loads need not wait for the integer's digits to be counted.
+        let (mut mantissa, integer_digits) = if window[sign + 1] == b'.' && window[sign].is_ascii_digit() {
+            (u64::from(window[sign] - b'0'), 1)
+        } else {
+            let integer_word = if negative { word_at(1) } else { word_at(0) };
+            leading_digits(integer_word)
+        };
         if integer_digits == 8 {
             return None;
         }
-        let mut at = usize::from(negative) + integer_digits;
+        let mut at = sign + integer_digits;
         let mut fraction_digits = 0;
         if window[at] == b'.' {
             let (high, high_count) = leading_digits(word_at(at + 1));
@@ -668,7 +675,8 @@ mod tests {
     /// Whatever the written-spelling reader takes must be `str::parse`'s value bit for bit:
     /// every count of integer and fraction digits (with leading zeros, past 19 digits, past the
     /// window), signs, what may follow a number, the halfway points Clinger's path must refuse,
-    /// and every f32 spelling the writer makes. The spellings a writer makes must not fall back.
+    /// and every f32 spelling the writer makes; those below 10^7 without an exponent must not
+    /// fall back.
     #[test]
     fn written_spellings_equal_str_parse_bit_for_bit() {
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
