@@ -180,7 +180,7 @@ impl Decimal {
 /// path): the digits and the power of ten are exact in `f64`, so their product or quotient is
 /// the correctly rounded `f64`; rounding that to `f32` is right unless it lands exactly halfway
 /// between two `f32`s (then `None`), as every `f32` halfway point is an `f64` and both roundings
-/// are monotonic.
+/// are monotonic. A quotient is first tried as a product ([`scaled_f32`]).
 #[inline(always)]
 fn exact_f32(negative: bool, mantissa: u64, exponent: i64) -> Option<f32> {
     const POWERS: [f64; 23] = [
@@ -209,8 +209,8 @@ fn exact_f32(negative: bool, mantissa: u64, exponent: i64) -> Option<f32> {
 /// [`exact_f32`] for `mantissa` / 10^`places` without a division (whose latency a read of
 /// millions of numbers waits on): the product of the mantissa (exact) and the `f64` nearest
 /// 10^-`places` carries two roundings, so it lies within 2 `f64` ulps of the true quotient; an
-/// `f32` halfway point between the two would leave the product's 29 low bits within 3 of the
-/// halfway pattern, and then (`None`) the exact division decides.
+/// `f32` halfway point between the two would leave the product's 29 low bits within 2 of the
+/// halfway pattern (4 here, to spare), and then (`None`) the exact division decides.
 #[inline(always)]
 fn scaled_f32(negative: bool, mantissa: u64, places: usize) -> Option<f32> {
     const RECIPROCALS: [f64; 23] = [
