@@ -12,7 +12,11 @@
 //! is its net torque `τ = θ/(w_q·Δt²)`. The residuals are their norms relative to gravity's: the
 //! weight of each free vertex (`‖m·g‖`) and, per edge, the largest moment gravity can exert on
 //! the strand beyond it (`‖g·Σ_j m_j·|p_j − p_e|‖`), with standard gravity when gravity is off.
-//! The solve is converged when both are at most the tolerance. A state that
+//! The solve is converged when both are at most the tolerance. Where the stepper relaxes a
+//! strand as an overdamped creep (quasi-static frames drag bends open geometrically, with no
+//! kinetic-energy peak to reset at), the state sampled every `PROBE_INTERVAL` gives the creep's
+//! rate and decay time, and the rest of it is added at once (`Creep`): a jump changes where the
+//! solve starts, not the equilibrium it converges to. A state that
 //! cannot get there (a solver limit cycle, contacts that fight each other) is reported with the
 //! residual it reached. The velocities are zero when the solve ends. The solve runs twice: with
 //! light frames, then with the simulation's own frames, so that the result is also at rest for
@@ -263,9 +267,9 @@ impl Creep {
             v[range].iter().map(|d| d.as_dvec3().length_squared()).sum()
         };
         if let Some((positions, frames, before)) = self.undo.take() {
-            for strand in 0..strands {
+            for (strand, &before) in before.iter().enumerate() {
                 let range = s.rods.strand_range(strand);
-                if before[strand] > 0.0 && norm2(&rate, range.clone()) > before[strand] {
+                if before > 0.0 && norm2(&rate, range.clone()) > before {
                     s.rods.positions_mut()[range.clone()].copy_from_slice(&positions[range.clone()]);
                     s.rods.frames_mut()[range.clone()].copy_from_slice(&frames[range]);
                     self.cap[strand] *= 0.25;
@@ -305,12 +309,12 @@ impl Creep {
                     }
                 }
                 let per_step = inv * factor;
-                for e in range.start..range.end - 1 {
+                for (e, &was) in last_frames.iter().enumerate().take(range.end - 1).skip(range.start) {
                     if s.rods.frame_inv_inertia()[e] <= 0.0 {
                         continue;
                     }
                     let now = s.rods.frames()[e];
-                    let mut was = last_frames[e];
+                    let mut was = was;
                     if was.dot(now) < 0.0 {
                         was = -was;
                     }
