@@ -32,8 +32,8 @@ fn resimulate(groom: &Groom, params: SimParams, colliders: Vec<Shape>, sag_free:
 }
 
 /// The bed-head and the water set: settled with gravity on the seed head, their outputs hold
-/// still (0.87 and 0.85 mm in 2 s; 2.5 and 2.4 mm before the rest state was exported in the
-/// frames a reader rebuilds).
+/// still (0.43 and 0.45 mm in 2 s; 0.87 and 0.85 mm before the settle extrapolated its creep, 2.5
+/// and 2.4 mm before the rest state was exported in the frames a reader rebuilds).
 #[test]
 fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
     presets_hold_still(&[
@@ -42,14 +42,18 @@ fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
     ]);
 }
 
+/// The perm's 48 cm curls, settled without gravity to its tolerance 1e-4, hold still (0.62 mm in
+/// 2 s; 3.9 mm when its settle stopped at 1e-3).
 #[test]
-#[ignore = "fails: the blow-dry's output moves 1.5 mm in 2 s (its settle stops unconverged at torque \
-            residual 1.4e-3) and the perm's 3.9 mm (48 cm tight curls settled without gravity)"]
-fn styled_blow_dry_and_perm_hold_still_when_simulated_again() {
-    presets_hold_still(&[
-        ("blowdry_scene2", "seed_200x24cm.hair", 10),
-        ("perm_scene3", "seed_100x48cm.hair", 10),
-    ]);
+fn styled_perm_holds_still_when_simulated_again() {
+    presets_hold_still(&[("perm_scene3", "seed_100x48cm.hair", 10)]);
+}
+
+#[test]
+#[ignore = "fails: the blow-dry's output moves 1.5 mm in 2 s whatever its settle reaches (torque \
+            residual 1.5e-3, 1.0e-3 or 4.5e-4: 1.48-1.53 mm), so the gap is not the settle's"]
+fn styled_blow_dry_holds_still_when_simulated_again() {
+    presets_hold_still(&[("blowdry_scene2", "seed_200x24cm.hair", 10)]);
 }
 
 /// Each preset styles every `step`-th strand of its groom; the output, simulated again for 2 s

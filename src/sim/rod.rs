@@ -311,6 +311,10 @@ impl Rods {
         &self.velocities
     }
 
+    pub(super) fn positions_mut(&mut self) -> &mut [Vec3] {
+        &mut self.positions
+    }
+
     pub(super) fn velocities_mut(&mut self) -> &mut [Vec3] {
         &mut self.velocities
     }

@@ -12,7 +12,11 @@
 //! is its net torque `τ = θ/(w_q·Δt²)`. The residuals are their norms relative to gravity's: the
 //! weight of each free vertex (`‖m·g‖`) and, per edge, the largest moment gravity can exert on
 //! the strand beyond it (`‖g·Σ_j m_j·|p_j − p_e|‖`), with standard gravity when gravity is off.
-//! The solve is converged when both are at most the tolerance. A state that
+//! The solve is converged when both are at most the tolerance. Where the stepper relaxes a
+//! strand as an overdamped creep (quasi-static frames drag bends open geometrically, with no
+//! kinetic-energy peak to reset at), the state sampled every `PROBE_INTERVAL` gives the creep's
+//! rate and decay time, and the rest of it is added at once (`Creep`): a jump changes where the
+//! solve starts, not the equilibrium it converges to. A state that
 //! cannot get there (a solver limit cycle, contacts that fight each other) is reported with the
 //! residual it reached. The velocities are zero when the solve ends. The solve runs twice: with
 //! light frames, then with the simulation's own frames, so that the result is also at rest for
@@ -189,9 +193,11 @@ fn relax<C>(
     let mut kinetic = f64::INFINITY;
     // Start from rest: the first steps are a probe.
     let mut reset = true;
+    let mut creep = Creep::default();
     while report.steps < max_steps {
         if reset {
             let s = sim(context);
+            creep.sample(s, report.steps, probe_every);
             s.rods.velocities_mut().iter_mut().for_each(|v| *v = Vec3::ZERO);
             probe = Some((s.rods.positions().to_vec(), s.rods.frames().to_vec()));
             report.resets += 1;
@@ -216,6 +222,113 @@ fn relax<C>(
         let now = s.kinetic_energy();
         reset = since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
         kinetic = now;
+    }
+}
+
+/// Largest jump along a creep, in steps' worth of its last displacement rate.
+const MAX_CREEP_STEPS: f64 = 5000.0;
+
+/// Extrapolation of a monotone creep (an overdamped mode the stepper relaxes geometrically): the
+/// state is sampled at resets at least `every` steps apart; when a strand's displacements over two
+/// successive samples point the same way and their rates fall like `e^(−t/τ)`, the rest of the
+/// creep, `τ` times the rate now, is added at once. A strand that moves faster over the interval
+/// after its jump than before it is put back and its later jumps are shorter.
+#[derive(Default)]
+struct Creep {
+    /// State and step count at the last sample.
+    last: Option<(Vec<Vec3>, Vec<Quat>, u64)>,
+    /// Displacement per step over the interval before and that interval's length.
+    rate: Option<(Vec<Vec3>, u64)>,
+    /// The state before the last jumps, and per strand the squared rate before its jump (zero:
+    /// it did not jump).
+    undo: Option<(Vec<Vec3>, Vec<Quat>, Vec<f64>)>,
+    /// Per strand, the largest jump in steps' worth of its displacement rate.
+    cap: Vec<f64>,
+}
+
+impl Creep {
+    fn sample(&mut self, s: &mut Simulation, step: u64, every: u64) {
+        let strands = s.rods.strand_count();
+        if self.cap.len() != strands {
+            self.cap = vec![MAX_CREEP_STEPS; strands];
+        }
+        if self.last.as_ref().is_some_and(|l| step - l.2 < every) {
+            return;
+        }
+        let Some((last_positions, last_frames, at)) = self.last.take() else {
+            self.last = Some((s.rods.positions().to_vec(), s.rods.frames().to_vec(), step));
+            return;
+        };
+        let length = step - at;
+        let inv = 1.0 / length as f32;
+        let rate: Vec<Vec3> =
+            s.rods.positions().iter().zip(&last_positions).map(|(&a, &b)| (a - b) * inv).collect();
+        let norm2 = |v: &[Vec3], range: std::ops::Range<usize>| -> f64 {
+            v[range].iter().map(|d| d.as_dvec3().length_squared()).sum()
+        };
+        if let Some((positions, frames, before)) = self.undo.take() {
+            for (strand, &before) in before.iter().enumerate() {
+                let range = s.rods.strand_range(strand);
+                if before > 0.0 && norm2(&rate, range.clone()) > before {
+                    s.rods.positions_mut()[range.clone()].copy_from_slice(&positions[range.clone()]);
+                    s.rods.frames_mut()[range.clone()].copy_from_slice(&frames[range]);
+                    self.cap[strand] *= 0.25;
+                }
+            }
+            self.last = Some((s.rods.positions().to_vec(), s.rods.frames().to_vec(), step));
+            return;
+        }
+        let mut jumps = vec![0.0f64; strands];
+        let undo = (s.rods.positions().to_vec(), s.rods.frames().to_vec());
+        if let Some((before, before_length)) = self.rate.take() {
+            let gap = 0.5 * (length + before_length) as f64;
+            for (strand, jump) in jumps.iter_mut().enumerate() {
+                let range = s.rods.strand_range(strand);
+                let (mut dot, mut bb) = (0.0f64, 0.0f64);
+                for i in range.clone() {
+                    dot += rate[i].as_dvec3().dot(before[i].as_dvec3());
+                    bb += before[i].as_dvec3().length_squared();
+                }
+                let nn = norm2(&rate, range.clone());
+                if nn <= 0.0 || bb <= 0.0 {
+                    continue;
+                }
+                let cos = dot / (nn * bb).sqrt();
+                let ratio = dot / bb;
+                if cos < 0.99 || !(ratio > 0.0 && ratio < 0.99) {
+                    continue;
+                }
+                let tau = -gap / ratio.ln();
+                // The rate at the end of the last interval, times τ.
+                let steps = (tau * ratio.powf(0.5 * length as f64 / gap)).min(self.cap[strand]);
+                let factor = steps as f32;
+                *jump = nn;
+                for i in range.clone() {
+                    if !s.rods.kinematic()[i] {
+                        s.rods.positions_mut()[i] += factor * rate[i];
+                    }
+                }
+                let per_step = inv * factor;
+                for (e, &was) in last_frames.iter().enumerate().take(range.end - 1).skip(range.start) {
+                    if s.rods.frame_inv_inertia()[e] <= 0.0 {
+                        continue;
+                    }
+                    let now = s.rods.frames()[e];
+                    let mut was = was;
+                    if was.dot(now) < 0.0 {
+                        was = -was;
+                    }
+                    s.rods.frames_mut()[e] = (now + (now - was) * per_step).normalize();
+                }
+            }
+        }
+        if jumps.iter().any(|&j| j > 0.0) {
+            self.undo = Some((undo.0, undo.1, jumps));
+            self.rate = None;
+        } else {
+            self.rate = Some((rate, length));
+        }
+        self.last = Some((s.rods.positions().to_vec(), s.rods.frames().to_vec(), step));
     }
 }
 

@@ -19,8 +19,19 @@ pub struct BulkError {
     pub message: String,
 }
 
+/// Bytes [`Number::written`] may look at from a number's start: the longest spelling it takes
+/// (sign, 7 integer digits, point, 15 fraction digits) and the byte after it, with room to spare.
+const WRITTEN_WINDOW: usize = 32;
+
 /// A number type an array is read as.
-pub trait Number: Copy + Send {
+pub trait Number: Copy + Send + Default {
+    /// The number at the start of `window` if it is spelled the way writers spell array values
+    /// (`-0.0123`: no exponent, at most 19 digits), and its length in bytes; `None` sends it
+    /// through [`Number::prefix`], which reads every decimal and gives the same value.
+    #[inline(always)]
+    fn written(_window: &[u8; WRITTEN_WINDOW]) -> Option<(Self, usize)> {
+        None
+    }
     /// A plain decimal at the start of `bytes` and its length in bytes; `None` sends the token
     /// through [`Number::token`].
     fn prefix(bytes: &[u8]) -> Option<(Self, usize)>;
@@ -29,6 +40,54 @@ pub trait Number: Copy + Send {
 }
 
 impl Number for f32 {
+    /// Straight-line: the integer digits and up to two groups of eight fraction digits, each
+    /// found and converted by one [`leading_digits`], then Clinger's fast path. A read of many
+    /// numbers waits on where each ends (the next one's loads need it), so the loads depend on
+    /// as few earlier results as possible: a one-digit integer part is taken for granted until
+    /// shown otherwise, and both fraction groups are loaded at fixed offsets from the point.
+    #[inline(always)]
+    fn written(window: &[u8; WRITTEN_WINDOW]) -> Option<(f32, usize)> {
+        let word_at = |at: usize| u64::from_le_bytes(window[at..at + 8].try_into().unwrap());
+        let negative = window[0] == b'-';
+        let sign = usize::from(negative);
+        // One integer digit (a groom's coordinates in metres) by a predicted branch, so the
+        // fraction's loads need not wait for the integer's digits to be counted.
+        let (mut mantissa, integer_digits) = if window[sign + 1] == b'.' && window[sign].is_ascii_digit() {
+            (u64::from(window[sign] - b'0'), 1)
+        } else {
+            let integer_word = if negative { word_at(1) } else { word_at(0) };
+            leading_digits(integer_word)
+        };
+        if integer_digits == 8 {
+            return None;
+        }
+        let mut at = sign + integer_digits;
+        let mut fraction_digits = 0;
+        if window[at] == b'.' {
+            let (high, high_count) = leading_digits(word_at(at + 1));
+            let (low, low_count) = leading_digits(word_at(at + 9));
+            // The second group counts only after eight digits in the first (no branch: a
+            // fraction's length varies from number to number, and a branch on it is mispredicted).
+            let (low, low_count) = if high_count == 8 { (low, low_count) } else { (0, 0) };
+            if low_count == 8 {
+                return None;
+            }
+            // Up to 22 digits: wraps past 19, which is refused below.
+            mantissa = (mantissa * POWERS_OF_TEN[high_count] + high)
+                .wrapping_mul(POWERS_OF_TEN[low_count])
+                .wrapping_add(low);
+            fraction_digits = high_count + low_count;
+            at += 1 + fraction_digits;
+        }
+        let digits = integer_digits + fraction_digits;
+        // A letter (an exponent, `inf`), a second point or sign: the general path decides.
+        if digits == 0 || digits > 19 || continues_token(Some(&window[at])) {
+            return None;
+        }
+        let value = exact_f32(negative, mantissa, -(fraction_digits as i64))?;
+        Some((value, at))
+    }
+
     #[inline(always)]
     fn prefix(bytes: &[u8]) -> Option<(f32, usize)> {
         let decimal = Decimal::scan(bytes)?;
@@ -107,31 +166,63 @@ impl Decimal {
         Some(Decimal { negative, mantissa, digits, exponent, len: at })
     }
 
-    /// The nearest `f32`, when one exact `f64` operation and a rounding to `f32` give it
-    /// (Clinger's fast path): the digits and the power of ten are exact in `f64`, so their
-    /// product or quotient is the correctly rounded `f64`; rounding that to `f32` is right unless
-    /// it lands exactly halfway between two `f32`s (then `None`), as every `f32` halfway point is
-    /// an `f64` and both roundings are monotonic.
     #[inline]
     fn exact_f32(&self) -> Option<f32> {
-        const POWERS: [f64; 23] = [
-            1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
-            1e18, 1e19, 1e20, 1e21, 1e22,
-        ];
-        if self.digits > 19 || self.mantissa > 1 << 53 || self.exponent.unsigned_abs() > 22 {
+        if self.digits > 19 {
             return None;
         }
-        let mantissa = self.mantissa as f64;
-        let power = POWERS[self.exponent.unsigned_abs() as usize];
-        let nearest = if self.exponent >= 0 { mantissa * power } else { mantissa / power };
-        // The 29 bits an f64 has below an f32's precision (the value is a normal f32 here:
-        // between 1e-22 and 9.1e37, or zero).
-        if nearest.to_bits() & 0x1fff_ffff == 0x1000_0000 {
-            return None;
-        }
-        let value = nearest as f32;
-        Some(if self.negative { -value } else { value })
+        exact_f32(self.negative, self.mantissa, self.exponent)
     }
+}
+
+/// The nearest `f32` to `mantissa` × 10^`exponent` (negated if `negative`; the mantissa at most
+/// 19 digits), when one exact `f64` operation and a rounding to `f32` give it (Clinger's fast
+/// path): the digits and the power of ten are exact in `f64`, so their product or quotient is
+/// the correctly rounded `f64`; rounding that to `f32` is right unless it lands exactly halfway
+/// between two `f32`s (then `None`), as every `f32` halfway point is an `f64` and both roundings
+/// are monotonic. A quotient is first tried as a product ([`scaled_f32`]).
+#[inline(always)]
+fn exact_f32(negative: bool, mantissa: u64, exponent: i64) -> Option<f32> {
+    const POWERS: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
+        1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    if mantissa > 1 << 53 || exponent.unsigned_abs() > 22 {
+        return None;
+    }
+    if exponent < 0 {
+        if let Some(value) = scaled_f32(negative, mantissa, exponent.unsigned_abs() as usize) {
+            return Some(value);
+        }
+    }
+    let power = POWERS[exponent.unsigned_abs() as usize];
+    let nearest = if exponent >= 0 { mantissa as f64 * power } else { mantissa as f64 / power };
+    // The 29 bits an f64 has below an f32's precision (the value is a normal f32 here:
+    // between 1e-22 and 9.1e37, or zero).
+    if nearest.to_bits() & 0x1fff_ffff == 0x1000_0000 {
+        return None;
+    }
+    let value = nearest as f32;
+    Some(if negative { -value } else { value })
+}
+
+/// [`exact_f32`] for `mantissa` / 10^`places` without a division (whose latency a read of
+/// millions of numbers waits on): the product of the mantissa (exact) and the `f64` nearest
+/// 10^-`places` carries two roundings, so it lies within 2 `f64` ulps of the true quotient; an
+/// `f32` halfway point between the two would leave the product's 29 low bits within 2 of the
+/// halfway pattern (4 here, to spare), and then (`None`) the exact division decides.
+#[inline(always)]
+fn scaled_f32(negative: bool, mantissa: u64, places: usize) -> Option<f32> {
+    const RECIPROCALS: [f64; 23] = [
+        1e0, 1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15,
+        1e-16, 1e-17, 1e-18, 1e-19, 1e-20, 1e-21, 1e-22,
+    ];
+    let near = mantissa as f64 * RECIPROCALS[places];
+    if (near.to_bits() & 0x1fff_ffff).abs_diff(0x1000_0000) <= 4 {
+        return None;
+    }
+    let value = near as f32;
+    Some(if negative { -value } else { value })
 }
 
 /// Appends the decimal digits at `at` to `mantissa` (wrapping: the caller counts the digits);
@@ -175,12 +266,11 @@ fn leading_digits(word: u64) -> (u64, usize) {
     // test of the bytes after it, never of those before, so the first non-digit is exact.
     let not_digit = ((word & HIGH) ^ ZEROS) | ((word.wrapping_add(0x0606_0606_0606_0606) & HIGH) ^ ZEROS);
     let count = (not_digit.trailing_zeros() / 8) as usize;
-    if count == 0 {
-        return (0, 0);
-    }
     // The digits' values moved to the top bytes (leading zeros in front), then combined in
-    // pairs, fours and eights by multiply-and-shift.
-    let mut value = (word.wrapping_sub(ZEROS)) << (8 * (8 - count));
+    // pairs, fours and eights by multiply-and-shift. No branch on the count: with none, two
+    // shifts of 32 clear the word.
+    let shift = 4 * (8 - count) as u32;
+    let mut value = (word.wrapping_sub(ZEROS)) << shift << shift;
     value = value.wrapping_mul(10).wrapping_add(value >> 8) & 0x00ff_00ff_00ff_00ff;
     value = (value.wrapping_mul(1 + (100 << 16)) >> 16) & 0x0000_ffff_0000_ffff;
     value = value.wrapping_mul(1 + (10_000 << 32)) >> 32;
@@ -355,6 +445,60 @@ fn read_number<N: Number>(text: &[u8], at: usize, values: &mut Vec<N>) -> Result
     }
 }
 
+/// Most components a tuple read by [`written_element`] may have (`float4`, `quatf`).
+const MAX_WRITTEN_COMPONENTS: usize = 4;
+
+/// The element at `at` if it is laid out as writers lay elements out — `, (x, y, z)` or `, x`
+/// (the separator only when one is due), every number [`Number::written`] — appended to
+/// `values`; returns the offset after it. `None` (nothing appended) leaves the element to the
+/// general path, which reads every layout and gives these values too.
+#[inline(always)]
+fn written_element<N: Number>(
+    text: &[u8],
+    mut at: usize,
+    need_separator: bool,
+    components: usize,
+    values: &mut Vec<N>,
+) -> Option<usize> {
+    // Not a closure: a closure called twice was not inlined, and the call cost a fifth of a number.
+    #[inline(always)]
+    fn number<N: Number>(text: &[u8], at: usize) -> Option<(N, usize)> {
+        N::written(text.get(at..at + WRITTEN_WINDOW)?.try_into().unwrap())
+    }
+    if need_separator {
+        if text.get(at..at + 2)? != b", " {
+            return None;
+        }
+        at += 2;
+    }
+    if components == 1 {
+        let (value, len) = number::<N>(text, at)?;
+        values.push(value);
+        return Some(at + len);
+    }
+    if text.get(at) != Some(&b'(') {
+        return None;
+    }
+    at += 1;
+    let mut tuple = [N::default(); MAX_WRITTEN_COMPONENTS];
+    for (k, slot) in tuple[..components].iter_mut().enumerate() {
+        if k > 0 {
+            if text.get(at..at + 2)? != b", " {
+                return None;
+            }
+            at += 2;
+        }
+        let (value, len) = number::<N>(text, at)?;
+        *slot = value;
+        at += len;
+    }
+    if text.get(at) != Some(&b')') {
+        return None;
+    }
+    values.extend_from_slice(&tuple[..components]);
+    Some(at + 1)
+}
+
 fn parse_piece<N: Number>(
     text: &[u8],
     components: usize,
@@ -363,6 +507,13 @@ fn parse_piece<N: Number>(
     let mut values = Vec::with_capacity(text.len() / 8);
     let mut at = 0;
     loop {
+        if (1..=MAX_WRITTEN_COMPONENTS).contains(&components) {
+            while let Some(end) = written_element(text, at, need_separator, components, &mut values) {
+                at = end;
+                need_separator = true;
+            }
+        }
+        // Anything else, one separator or element at a time.
         at = skip_blank(text, at);
         if at == text.len() {
             return Ok((values, need_separator));
@@ -510,6 +661,169 @@ mod tests {
                 .unwrap_or_else(|e| panic!("{spelling}: {}", e.message));
             assert_eq!(values.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), [expected.to_bits(); 2]);
         }
+    }
+
+    /// The written-spelling reader on `spelling` followed by `after`, in a window as it sees one.
+    fn written(spelling: &str, after: &str) -> Option<(f32, usize)> {
+        let mut window = [b' '; WRITTEN_WINDOW];
+        let text = format!("{spelling}{after}");
+        let len = text.len().min(WRITTEN_WINDOW);
+        window[..len].copy_from_slice(&text.as_bytes()[..len]);
+        f32::written(&window)
+    }
+
+    /// Whatever the written-spelling reader takes must be `str::parse`'s value bit for bit:
+    /// every count of integer and fraction digits (with leading zeros, past 19 digits, past the
+    /// window), signs, what may follow a number, the halfway points Clinger's path must refuse,
+    /// and every f32 spelling the writer makes; those below 10^7 without an exponent must not
+    /// fall back.
+    #[test]
+    fn written_spellings_equal_str_parse_bit_for_bit() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut spellings: Vec<String> = [
+            "0",
+            "-0",
+            "0.0",
+            "-0.0",
+            ".5",
+            "5.",
+            "-.25",
+            "0.000001",
+            "00012.5000",
+            "1234567.1234567",
+            "9999999.999999999999",
+            "0.0000000000000000001",
+            "0.00000000000000000001",
+            "8388609.5",
+            "-8388609.5",
+            "9999999.5",
+            "4194304.25",
+            "4194304.75",
+            "8388609.5000000001",
+            "8388609.4999999999",
+            "0.30000001192092896",
+            "16777217",
+            "3.4028235",
+            "0.000000000000001",
+        ]
+        .map(String::from)
+        .to_vec();
+        for _ in 0..100_000 {
+            let r = next();
+            let integer_digits = (r % 9) as usize;
+            let fraction_digits = ((r >> 8) % 18) as usize;
+            let digits = |count: usize, r: u64| {
+                (0..count).map(|k| char::from(b'0' + ((r >> (3 * k)) % 10) as u8)).collect::<String>()
+            };
+            let sign = ["", "-", "+"][((r >> 16) % 3) as usize];
+            let point = if (r >> 20) % 8 == 0 { "" } else { "." };
+            spellings.push(format!(
+                "{sign}{}{point}{}",
+                digits(integer_digits, next()),
+                if point.is_empty() { String::new() } else { digits(fraction_digits, next()) }
+            ));
+        }
+        // Within a few f64 ulps of f32 halfway points: where the reciprocal must defer to division.
+        for _ in 0..100_000 {
+            let r = next();
+            let value = f32::from_bits(0x3a00_0000 + (r as u32 % 0x1100_0000)); // 4.9e-4 .. 8.4e6
+            let halfway = (f64::from(value) + f64::from(f32::from_bits(value.to_bits() + 1))) / 2.0;
+            let integer_digits = format!("{}", halfway.trunc()).len();
+            let nudged = f64::from_bits(halfway.to_bits().wrapping_add((r >> 40) % 9).wrapping_sub(4));
+            spellings.push(format!("{:.*}", 15 - integer_digits.min(15), nudged));
+            spellings.push(format!("{:.*}", 17 - integer_digits.min(17), nudged));
+        }
+        let mut made = Vec::new();
+        for _ in 0..200_000 {
+            let value = f32::from_bits(next() as u32);
+            if value.is_finite() {
+                made.push(zmij::Buffer::new().format_finite(value).to_string());
+                made.push(zmij::Buffer::new().format_finite(value * 1e-30).to_string());
+            }
+        }
+        let mut taken = 0;
+        for spelling in spellings.iter().chain(&made) {
+            let Some(expected) = super::super::lexer::parse_f32(spelling) else { continue };
+            for after in [", ", ")", " ", "]", "\n", "#"] {
+                if let Some((value, len)) = written(spelling, after) {
+                    assert_eq!((value.to_bits(), len), (expected.to_bits(), spelling.len()), "{spelling:?}");
+                    taken += 1;
+                }
+            }
+        }
+        assert!(taken > 100_000, "{taken}");
+        // What the writer makes below 10^7 with no exponent (every point and width of a groom in
+        // metres or centimetres) is always taken.
+        let below_ten_million = |s: &&String| s.trim_start_matches('-').find('.').is_some_and(|i| i < 8);
+        for spelling in made.iter().filter(|s| !s.contains('e')).filter(below_ten_million) {
+            assert!(written(spelling, ", ").is_some(), "{spelling}");
+        }
+        for (spelling, after) in [
+            ("1.5", "e3"),
+            ("1.5", ".3"),
+            ("1.5", "-2"),
+            ("1", "e5"),
+            ("", "inf"),
+            ("-", "inf"),
+            ("", "nan"),
+            ("-", ""),
+            (".", ""),
+            ("1", "x"),
+        ] {
+            assert_eq!(written(spelling, after), None, "{spelling}{after}");
+        }
+    }
+
+    /// Arrays in the writers' layout read the same as in any other layout (which the general
+    /// path reads), values the written reader refuses included, at any thread count.
+    #[test]
+    fn written_layout_reads_as_any_layout_at_any_thread_count() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut spellings = Vec::new();
+        for k in 0..90_000u32 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let value = f32::from_bits(state as u32) * [1.0, 1e-35, 1e30][k as usize % 3];
+            spellings.push(match k % 1000 {
+                0 => "inf".to_string(),
+                1 => "nan".to_string(),
+                2 => "1234567890.5".to_string(),
+                3 => "0.000000000000000000012345".to_string(),
+                _ if value.is_finite() => zmij::Buffer::new().format_finite(value).to_string(),
+                _ => "-0".to_string(),
+            });
+        }
+        let expected: Vec<u32> =
+            spellings.iter().map(|s| super::super::lexer::parse_f32(s).unwrap().to_bits()).collect();
+        let bits = |values: Vec<f32>| values.into_iter().map(f32::to_bits).collect::<Vec<u32>>();
+        let tuples = |open: &str, separator: &str, close: &str| {
+            spellings.chunks(3).map(|c| format!("{open}{}{close}", c.join(separator))).collect::<Vec<_>>()
+        };
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                assert_eq!(bits(parse_all(&spellings.join(", "), 1).unwrap()), expected);
+                assert_eq!(bits(parse_all(&spellings.join(" ,\n"), 1).unwrap()), expected);
+                assert_eq!(bits(parse_all(&tuples("(", ", ", ")").join(", "), 3).unwrap()), expected);
+                assert_eq!(bits(parse_all(&tuples("( ", " ,", " )").join(",\n"), 3).unwrap()), expected);
+            });
+        }
+        // A tuple one number short is refused in either layout, naming where it starts.
+        assert_eq!(
+            parse_all::<f32>("(1, 2, 3), (4, 5)", 3).unwrap_err(),
+            "at 11: expected 3 numbers in a tuple, found 2"
+        );
+        assert_eq!(
+            parse_all::<f32>("(1, 2, 3), (4, 5, 6, 7)", 3).unwrap_err(),
+            "at 11: expected 3 numbers in a tuple, found 4"
+        );
     }
 
     /// Words and bad tokens leave the one-pass reader to the token path: USD's `inf`/`nan` read,
