@@ -120,14 +120,6 @@ pub struct SimParams {
     pub solver: StrandSolver,
 }
 
-/// The direct solve's least frame inertia factor ([`SimParams::frame_inertia_factor`]): frames
-/// are quasi-static, so their inertia is a drag `I/Δt` on every bend, which made the bed-head's
-/// rest curves depend on Δt (5.1 % of the strand length on average between Δt 1/240 and 1/1440,
-/// 15 % at worst). Gauss–Seidel needs heavy frames to pass bending on to the vertices; the
-/// direct solve does not, so it keeps them light (measured with the accuracy bench: 0.12 / 0.86 %
-/// at 100, 0.27 / 1.36 % at 12).
-pub const DIRECT_FRAME_INERTIA_FACTOR: f32 = 100.0;
-
 /// How each solver iteration solves a strand's constraints.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -329,16 +321,8 @@ impl Simulation {
     /// Advances one time step with callbacks.
     pub fn step_with(&mut self, hooks: &dyn Hooks) {
         if self.masses_dirty || self.coefficients_dt != self.params.dt {
-            let direct = self.params.solver == StrandSolver::Direct;
-            let frame_inertia_factor = if direct {
-                self.params.frame_inertia_factor.max(DIRECT_FRAME_INERTIA_FACTOR)
-            } else {
-                self.params.frame_inertia_factor
-            };
-            self.rods.update_inverse_masses(frame_inertia_factor);
-            // Gauss–Seidel needs frames no lighter than the bending compliance α/Δt²; the
-            // direct solve does not.
-            self.rods.update_coefficients(self.params.dt, !direct);
+            self.rods.update_inverse_masses(self.params.frame_inertia_factor);
+            self.rods.update_coefficients(self.params.dt);
             self.masses_dirty = false;
             self.coefficients_dt = self.params.dt;
         }

@@ -416,7 +416,7 @@ impl Rods {
 
     /// Recomputes the constraint projections' constants (they depend on masses, frame inertia,
     /// compliance and Δt, none of which changes inside a step).
-    pub(crate) fn update_coefficients(&mut self, dt: f32, cap_frames: bool) {
+    pub(crate) fn update_coefficients(&mut self, dt: f32) {
         let inv_dt2 = 1.0 / (dt * dt);
         for strand in 0..self.strand_count() {
             let range = self.strand_range(strand);
@@ -433,7 +433,7 @@ impl Rods {
                         count += 1.0;
                     }
                 }
-                if count > 0.0 && cap_frames {
+                if count > 0.0 {
                     let cap = sum / count * inv_dt2;
                     self.frame_inv_inertia[e] = self.frame_inv_inertia[e].min(cap);
                 }
