@@ -8,6 +8,7 @@
 //! putting the styled ones back — goes through one function, [`assemble`].
 use std::borrow::Cow;
 
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::groom::{Attribute, AttributeRate, CurveBasis, Groom, GroomError};
@@ -167,32 +168,20 @@ impl Groom {
     /// objects); meshes are moved along. The data is copied once however many parts there are.
     /// Attributes a part lacks are padded with zeros and recorded as missing from its groups.
     /// An error names the index of the first part that does not fit the ones before it.
-    pub fn concat(mut parts: Vec<Groom>) -> Result<Groom, (usize, GroomError)> {
-        if parts.len() == 1 {
-            return Ok(parts.pop().expect("one part"));
-        }
-        // The one conflict `assemble` refuses: an attribute name with two component counts.
-        let mut components: Vec<(&str, usize)> = Vec::new();
-        for (index, part) in parts.iter().enumerate() {
-            for attribute in &part.attributes {
-                match components.iter().find(|(name, _)| *name == attribute.name) {
-                    Some(&(_, first)) if first != attribute.components => {
-                        let name = attribute.name.clone();
-                        let components = attribute.components;
-                        return Err((index, GroomError::AttributeComponents { name, components }));
-                    }
-                    Some(_) => {}
-                    None => components.push((&attribute.name, attribute.components)),
-                }
-            }
-        }
-        let meshes: Vec<SurfaceMesh> = parts.iter_mut().flat_map(|p| std::mem::take(&mut p.meshes)).collect();
-        let strands: Vec<Vec<usize>> = parts.iter().map(|p| (0..p.strand_count()).collect()).collect();
-        let sources: Vec<(&Groom, &[usize])> =
-            parts.iter().zip(&strands).map(|(p, s)| (p, s.as_slice())).collect();
-        let mut whole = assemble(&sources).map_err(|e| (parts.len().saturating_sub(1), e))?;
-        whole.meshes = meshes;
-        Ok(whole)
+    pub fn concat(parts: Vec<Groom>) -> Result<Groom, (usize, GroomError)> {
+        concat_parts(parts, None)
+    }
+
+    /// [`Groom::concat`] of parts whose points and widths a reader put straight into `points`
+    /// and `widths`, one part after another (the parts' own are left empty): those arrays
+    /// become the whole groom's as they are, so the bulk of a file is copied once, from the
+    /// file. An error also when the arrays do not hold exactly the parts' vertices.
+    pub fn concat_placed(
+        parts: Vec<Groom>,
+        points: Vec<Vec3>,
+        widths: Vec<f32>,
+    ) -> Result<Groom, (usize, GroomError)> {
+        concat_parts(parts, Some(PlacedVertices { points, widths }))
     }
 
     /// One groom per group, each with a one-entry group table and only the attributes its group
@@ -287,12 +276,69 @@ impl Groom {
     }
 }
 
+/// Points and widths a reader already laid out for all parts of a [`Groom::concat_placed`].
+struct PlacedVertices {
+    points: Vec<Vec3>,
+    widths: Vec<f32>,
+}
+
+fn concat_parts(mut parts: Vec<Groom>, placed: Option<PlacedVertices>) -> Result<Groom, (usize, GroomError)> {
+    if parts.len() == 1 {
+        let mut whole = parts.pop().expect("one part");
+        if let Some(placed) = placed {
+            let vertices = whole.strand_offsets.last().copied().unwrap_or(0) as usize;
+            if placed.points.len() != vertices || placed.widths.len() != vertices {
+                return Err((0, placed_length_error(vertices, &placed)));
+            }
+            whole.points = placed.points;
+            whole.widths = placed.widths;
+        }
+        return Ok(whole);
+    }
+    // The one conflict `assemble` refuses: an attribute name with two component counts.
+    let mut components: Vec<(&str, usize)> = Vec::new();
+    for (index, part) in parts.iter().enumerate() {
+        for attribute in &part.attributes {
+            match components.iter().find(|(name, _)| *name == attribute.name) {
+                Some(&(_, first)) if first != attribute.components => {
+                    let name = attribute.name.clone();
+                    let components = attribute.components;
+                    return Err((index, GroomError::AttributeComponents { name, components }));
+                }
+                Some(_) => {}
+                None => components.push((&attribute.name, attribute.components)),
+            }
+        }
+    }
+    let meshes: Vec<SurfaceMesh> = parts.iter_mut().flat_map(|p| std::mem::take(&mut p.meshes)).collect();
+    let strands: Vec<Vec<usize>> = parts.iter().map(|p| (0..p.strand_count()).collect()).collect();
+    let sources: Vec<(&Groom, &[usize])> =
+        parts.iter().zip(&strands).map(|(p, s)| (p, s.as_slice())).collect();
+    let mut whole = assemble_with(&sources, placed).map_err(|e| (parts.len() - 1, e))?;
+    whole.meshes = meshes;
+    Ok(whole)
+}
+
+fn placed_length_error(vertices: usize, placed: &PlacedVertices) -> GroomError {
+    let (what, found) = if placed.points.len() != vertices {
+        ("placed points", placed.points.len())
+    } else {
+        ("placed widths", placed.widths.len())
+    };
+    GroomError::Length { what: what.into(), expected: vertices, found }
+}
+
 /// A groom made of the listed strands of several grooms, in order. Group tables are merged by
 /// group (equal name, basis, wrap and purpose); per-strand data missing from a source is filled
 /// (ids renumbered only if some source has none, root UVs zero, not a guide); an attribute a
 /// source lacks is zero for its strands and recorded in its groups' `missing`; per-strand and
 /// per-vertex versions of one attribute become per-vertex.
 pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
+    assemble_with(parts, None)
+}
+
+/// [`assemble`]; with `placed`, the parts' points and widths are those arrays, laid out already.
+fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -> Result<Groom, GroomError> {
     let mut out = Groom { strand_offsets: vec![0], ..Default::default() };
     // The output group of each source group, per part.
     let mut group_maps: Vec<Vec<u32>> = Vec::with_capacity(parts.len());
@@ -320,8 +366,16 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
     let strand_total: usize = parts.iter().map(|(_, strands)| strands.len()).sum();
     let vertex_total: usize =
         parts.iter().flat_map(|(g, strands)| strands.iter().map(|&s| g.strand_range(s).len())).sum();
-    out.points.reserve_exact(vertex_total);
-    out.widths.reserve_exact(vertex_total);
+    if let Some(placed) = &placed {
+        if placed.points.len() != vertex_total || placed.widths.len() != vertex_total {
+            return Err(placed_length_error(vertex_total, placed));
+        }
+    } else {
+        out.points.reserve_exact(vertex_total);
+        out.widths.reserve_exact(vertex_total);
+        crate::io::input::advise_huge_pages(out.points.spare_capacity_mut());
+        crate::io::input::advise_huge_pages(out.widths.spare_capacity_mut());
+    }
     out.strand_offsets.reserve_exact(strand_total);
     out.strand_ids.reserve_exact(strand_total);
     out.group_ids.reserve_exact(strand_total);
@@ -332,9 +386,11 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
         for run in runs(groom, strands) {
             let (first, last) = (run.start, run.end - 1);
             let vertices = groom.strand_range(first).start..groom.strand_range(last).end;
-            let (from, to) = (vertices.start as u32, out.points.len() as u32);
-            out.points.extend_from_slice(&groom.points[vertices.clone()]);
-            out.widths.extend_from_slice(&groom.widths[vertices]);
+            let (from, to) = (vertices.start as u32, *out.strand_offsets.last().expect("starts with 0"));
+            if placed.is_none() {
+                out.points.extend_from_slice(&groom.points[vertices.clone()]);
+                out.widths.extend_from_slice(&groom.widths[vertices]);
+            }
             out.strand_offsets
                 .extend(groom.strand_offsets[first + 1..=run.end].iter().map(|&o| o - from + to));
             match groom.strand_ids.get(run.clone()) {
@@ -356,6 +412,10 @@ pub fn assemble(parts: &[(&Groom, &[usize])]) -> Result<Groom, GroomError> {
     }
     out.root_uvs = any_uvs.then_some(uvs);
     out.guides = any_guides.then_some(guides);
+    if let Some(placed) = placed {
+        out.points = placed.points;
+        out.widths = placed.widths;
+    }
 
     let mut names: Vec<&str> =
         parts.iter().flat_map(|(g, _)| g.attributes.iter().map(|a| a.name.as_str())).collect();

@@ -152,13 +152,16 @@ impl MeshPrimvar {
             ));
         }
         let available = self.values.len() / self.components;
-        if let Some(i) = self.indices.iter().flatten().position(|&i| i as usize >= available) {
+        let indices = self.indices.as_deref().unwrap_or_default();
+        if !all_below(indices, available) {
+            let i = indices.iter().position(|&i| i as usize >= available).expect("an index is out of range");
             return Err(format!(
                 "primvar '{name}': index {i} is {}, but there are {available} values",
-                self.indices.as_ref().unwrap()[i]
+                indices[i]
             ));
         }
-        if let Some(i) = self.values.iter().position(|v| !v.is_finite()) {
+        if !crate::groom::all_finite(&self.values) {
+            let i = self.values.iter().position(|v| !v.is_finite()).expect("a value is not finite");
             return Err(format!("primvar '{name}': value {i} is not finite ({})", self.values[i]));
         }
         Ok(())
@@ -166,26 +169,47 @@ impl MeshPrimvar {
 }
 
 impl SurfaceMesh {
+    /// The primvar that is the mesh's main UV set (Alembic's `uv`): the one named
+    /// [`MeshPrimvar::UV`], else the first pair of texture coordinates (a UV set keeps the name
+    /// its file gave it, such as Blender's `UVMap`).
+    pub fn main_uv(&self) -> Option<usize> {
+        let uv_pair = |p: &MeshPrimvar| p.kind == AttributeKind::TexCoord && p.components == 2;
+        self.primvars
+            .iter()
+            .position(|p| p.name == MeshPrimvar::UV)
+            .or_else(|| self.primvars.iter().position(uv_pair))
+    }
+
     /// Checks the topology against the points: the first problem, in words (readers prefix the
     /// file and prim).
+    /// Every array is checked whole without a branch per element (a read mesh is checked on
+    /// every import); only a failed check searches for the first fault.
     pub fn check(&self) -> Result<(), String> {
-        if let Some(i) = self.points.iter().position(|p| !p.is_finite()) {
+        if !crate::groom::all_finite(bytemuck::cast_slice(&self.points)) {
+            let i = self.points.iter().position(|p| !p.is_finite()).expect("a point is not finite");
             return Err(format!("point {i} is not finite ({})", self.points[i]));
         }
-        if let Some(face) = self.face_counts.iter().position(|&c| c < 3) {
+        let (total, smallest) =
+            self.face_counts.iter().fold((0u64, u32::MAX), |(sum, min), &c| (sum + c as u64, min.min(c)));
+        if smallest < 3 {
+            let face = self.face_counts.iter().position(|&c| c < 3).expect("a face is too small");
             return Err(format!(
                 "face {face} has {} vertices; a face needs at least 3",
                 self.face_counts[face]
             ));
         }
-        let total: u64 = self.face_counts.iter().map(|&c| c as u64).sum();
         if total != self.face_indices.len() as u64 {
             return Err(format!(
                 "face vertex counts add up to {total} but there are {} face vertex indices",
                 self.face_indices.len()
             ));
         }
-        if let Some(i) = self.face_indices.iter().position(|&v| v as usize >= self.points.len()) {
+        if !all_below(&self.face_indices, self.points.len()) {
+            let i = self
+                .face_indices
+                .iter()
+                .position(|&v| v as usize >= self.points.len())
+                .expect("out of range");
             return Err(format!(
                 "face vertex index {i} is {}, but the mesh has {} points",
                 self.face_indices[i],
@@ -263,6 +287,19 @@ impl SurfaceMesh {
         }
         TriangleMesh { points: self.points.clone(), triangles }
     }
+}
+
+/// Whether `name` is a plain identifier (letters, digits, `_`; not starting with a digit): a name
+/// a USD primvar and Alembic metadata can both carry as it is.
+pub fn is_identifier(name: &str) -> bool {
+    let mut chars = name.chars();
+    chars.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Whether every index is below `len`: the largest one, found without a branch per index.
+fn all_below(indices: &[u32], len: usize) -> bool {
+    indices.is_empty() || (indices.iter().fold(0u32, |max, &i| max.max(i)) as usize) < len
 }
 
 /// Reverses the order of each face's corners in `values` (`components` per corner, faces of

@@ -94,6 +94,48 @@ fn each_blender_groom_imports_with_exact_counts_per_group_and_its_head_mesh() {
 }
 
 #[test]
+fn the_alembic_uv_set_keeps_blenders_name_through_conversions() {
+    // Blender's Alembic head names its UV set in the `uv` parameter's `sourceName` metadata
+    // (`UVMap`, the name Blender's importer gives the map). coif keeps it: read, it is the set's
+    // name; written to Alembic, the same metadata on `uv` (the file's own bytes say so); to USD,
+    // the primvar `UVMap` with the texCoord role (as pxr reads it). Values unchanged throughout.
+    let source = Path::new("tests/data/blender_groom.abc");
+    assert!(names_its_uv_set(&std::fs::read(source).unwrap(), "UVMap"), "Blender's file names its map");
+    let groom = load("blender_groom.abc");
+    let uv_of = |groom: &Groom| head(groom).primvars[head(groom).main_uv().expect("a UV set")].clone();
+    let uv = uv_of(&groom);
+    assert_eq!(uv.name, "UVMap");
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["abc", "usda", "usdc"] {
+        let out = dir.path().join(format!("head.{ext}"));
+        let run = common::coif(&["convert", source.to_str().unwrap(), common::path_str(&out)]);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        let back = read_groom(&out, &ImportOptions::default()).unwrap().groom;
+        let again = uv_of(&back);
+        assert_eq!((&again.name, again.expanded()), (&uv.name, uv.expanded()), "{ext}: the UV set read back");
+        if ext == "abc" {
+            assert!(names_its_uv_set(&std::fs::read(&out).unwrap(), "UVMap"), "coif's .abc names the map");
+        } else {
+            let stage = common::usd::pxr_dump(&out, None);
+            let primvars = &stage["meshes"][0]["primvars"];
+            assert_eq!(primvars["UVMap"]["role"], "TextureCoordinate", "{ext}: {primvars}");
+            assert!(primvars.get("st").is_none(), "{ext}: one UV set, by its name");
+            let flat: Vec<f32> = uv.expanded().into_owned();
+            assert_eq!(common::usd::f32s(&primvars["UVMap"]["values"]), flat, "{ext}: pxr's UVs");
+        }
+    }
+}
+
+/// Whether an Alembic file's metadata holds `sourceName=` exactly once, naming `name` (read from
+/// the raw bytes; a metadata string ends where its stored length says, so only the prefix is told).
+fn names_its_uv_set(bytes: &[u8], name: &str) -> bool {
+    const KEY: &[u8] = b"sourceName=";
+    let found: Vec<usize> =
+        (0..bytes.len().saturating_sub(KEY.len())).filter(|&at| bytes[at..].starts_with(KEY)).collect();
+    found.len() == 1 && bytes[found[0] + KEY.len()..].starts_with(name.as_bytes())
+}
+
+#[test]
 fn alembic_and_usd_of_one_scene_agree_in_coif_space() {
     // Blender's Alembic (metres, Y up) and USD (centimetres, Z up, a scale on the root Xform)
     // of the same scene must land on the same points once coif converts both.
@@ -649,22 +691,16 @@ fn converted_files_re_import_in_blender_as_blenders_own_files() {
 }
 
 /// The head mesh `got` of Blender's import of coif's output against `want`, Blender's import of
-/// its own file: the same number of UV maps, each map's UVs at every face corner (maps in
-/// order: Blender names an Alembic map by the `sourceName` its exporter writes, which coif does
-/// not keep), custom normals, and corner normals in world space (Blender turns a Y-up file's
-/// object, not its data) with a mean dot of at least 0.999.
+/// its own file: the same UV maps by name (Blender names an Alembic map by the `sourceName` its
+/// exporter writes, a USD one by its primvar), each map's UVs at every face corner, custom
+/// normals, and corner normals in world space (Blender turns a Y-up file's object, not its
+/// data) with a mean dot of at least 0.999.
 fn assert_same_head_uvs_and_normals(label: &str, got: &serde_json::Value, want: &serde_json::Value) {
     use common::usd::f32s;
     let maps = |m: &serde_json::Value| m["uvs"].as_object().unwrap().values().map(f32s).collect::<Vec<_>>();
     let (got_uvs, want_uvs) = (maps(got), maps(want));
     assert!(!want_uvs.is_empty(), "{label}: Blender's head has UVs");
-    assert_eq!(
-        got_uvs.len(),
-        want_uvs.len(),
-        "{label}: head UV maps {} vs {}",
-        got["uv_maps"],
-        want["uv_maps"]
-    );
+    assert_eq!(got["uv_maps"], want["uv_maps"], "{label}: head UV map names");
     for (g, w) in got_uvs.iter().zip(&want_uvs) {
         assert_eq!(g.len(), w.len(), "{label}: head UV corners");
         let worst = g.iter().zip(w).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);

@@ -681,7 +681,8 @@ fn scalp_mesh_primvars_survive_usd_and_alembic_conversion_to_y_up() {
 #[test]
 fn blender_alembic_head_keeps_its_uvs_and_normals() {
     // Blender's own .abc head: `uv` (sourceName UVMap) and `N`, both face-varying; its USD
-    // export of the same scene holds the same UVs and normals, corner for corner.
+    // export of the same scene holds the same UVs (as `st`: Blender's USD exporter renames the
+    // active map) and normals, corner for corner. coif's USD output names the set as the .abc did.
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("from_abc.usda");
@@ -690,7 +691,8 @@ fn blender_alembic_head_keeps_its_uvs_and_normals() {
     let (usd, written) = (pxr_dump(&data.join("blender_groom.usda"), None), pxr_dump(&out, None));
     let (a, b) = (&usd["meshes"][0], &written["meshes"][0]);
     assert_eq!(a["indices"], b["indices"], "the same faces in the same winding");
-    let st = &b["primvars"]["st"];
+    assert!(b["primvars"].get("st").is_none(), "the set keeps its name: {}", b["primvars"]);
+    let st = &b["primvars"]["UVMap"];
     assert_eq!(
         (&st["type"], &st["interpolation"]),
         (&Value::from("texCoord2f[]"), &Value::from("faceVarying"))

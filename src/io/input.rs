@@ -76,3 +76,23 @@ pub fn read_text(path: &Path) -> Result<String> {
         Error::format(path, format!("line {line}: not UTF-8 text (invalid byte at offset {at})"))
     })
 }
+
+/// Asks the kernel to back a large, not yet touched buffer with huge pages: the copy into it
+/// then takes one page fault per 2 MB instead of per 4 kB (a third of a read's system time on a
+/// 100 MB groom). Advisory; ignored where unsupported. `buffer` may be spare capacity.
+#[cfg(target_os = "linux")]
+pub(crate) fn advise_huge_pages<T>(buffer: &mut [T]) {
+    const HUGE: usize = 2 << 20;
+    let start = (buffer.as_ptr() as usize).next_multiple_of(HUGE);
+    let end = (buffer.as_ptr() as usize + std::mem::size_of_val(buffer)) / HUGE * HUGE;
+    if end > start {
+        // SAFETY: the range lies inside `buffer`, which we borrow mutably; MADV_HUGEPAGE changes
+        // how pages are backed, never their contents.
+        unsafe {
+            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
+        }
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+pub(crate) fn advise_huge_pages<T>(_buffer: &mut [T]) {}

@@ -375,18 +375,79 @@ impl<'a> Sampled<'a> {
         Ok(bytes.chunks_exact(size).map(|b| pod_to_f64(self.pod, b)).collect())
     }
 
+    /// Sample `index` of an integer property as `u32` values, read as integers (no detour
+    /// through floats: ids past 2^24 stay exact). A negative or too large value is an error
+    /// naming its entry.
+    pub fn read_u32(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<u32>> {
+        let bytes = self.sample_bytes(ogawa, index)?;
+        let size = self.pod.size();
+        if !matches!(
+            self.pod,
+            Pod::U8 | Pod::I8 | Pod::U16 | Pod::I16 | Pod::U32 | Pod::I32 | Pod::U64 | Pod::I64
+        ) || bytes.len() % (size * self.extent as usize) != 0
+        {
+            return fail(format!(
+                "{} is {}×{} ({} bytes), integers expected",
+                self.name,
+                self.pod.name(),
+                self.extent,
+                bytes.len()
+            ));
+        }
+        let in_range = |b: &[u8]| (0.0..=u32::MAX as f64).contains(&pod_to_f64(self.pod, b));
+        let values: Vec<u32> = match self.pod {
+            // A negative `i32` keeps its top bit set as `u32`: one test over the whole array.
+            Pod::U32 | Pod::I32 => {
+                bytes.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().unwrap())).collect()
+            }
+            pod => bytes
+                .chunks_exact(size)
+                .map(|b| if in_range(b) { pod_to_f64(pod, b) as u32 } else { 0 })
+                .collect(),
+        };
+        let negative = self.pod == Pod::I32 && values.iter().fold(0, |bits, &v| bits | v) & 0x8000_0000 != 0;
+        if negative || !matches!(self.pod, Pod::U32 | Pod::I32) {
+            if let Some(i) = bytes.chunks_exact(size).position(|b| !in_range(b)) {
+                let value = pod_to_f64(self.pod, &bytes[i * size..(i + 1) * size]);
+                return fail(format!("{}: entry {i} is {value}, not a count or index", self.name));
+            }
+        }
+        Ok(values)
+    }
+
     /// Sample `index` as f32 values (other numeric PODs are converted).
     pub fn read_f32(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<f32>> {
+        let mut out = Vec::new();
+        self.append_f32(ogawa, index, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Self::read_f32`], appended to `out`.
+    pub fn append_f32(&self, ogawa: &OgawaReader<'a>, index: u32, out: &mut Vec<f32>) -> OgawaResult<()> {
         if self.pod != Pod::F32 {
-            return Ok(self.read_f64(ogawa, index)?.into_iter().map(|v| v as f32).collect());
+            out.extend(self.read_f64(ogawa, index)?.into_iter().map(|v| v as f32));
+            return Ok(());
         }
-        self.read_f32_as(ogawa, index)
+        self.append_f32_as(ogawa, index, out)
     }
 
     /// Sample `index` of a float32 property as `T` (`f32`, `Vec3`, …) by one plain copy: the
     /// file is little-endian like the host, and the copy does not care that Ogawa blocks are
     /// packed without alignment.
     pub fn read_f32_as<T: bytemuck::Pod>(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<T>> {
+        let mut out = Vec::new();
+        self.append_f32_as(ogawa, index, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Self::read_f32_as`], appended to `out` (a reader putting several objects' arrays one
+    /// after another copies each once).
+    pub fn append_f32_as<T: bytemuck::Pod>(
+        &self,
+        ogawa: &OgawaReader<'a>,
+        index: u32,
+        out: &mut Vec<T>,
+    ) -> OgawaResult<()> {
         let bytes = self.sample_bytes(ogawa, index)?;
         let stride = 4 * self.extent as usize;
         if self.pod != Pod::F32 || std::mem::size_of::<T>() % 4 != 0 || stride % std::mem::size_of::<T>() != 0
@@ -406,9 +467,19 @@ impl<'a> Sampled<'a> {
                 self.extent
             ));
         }
-        let mut out = vec![T::zeroed(); bytes.len() / std::mem::size_of::<T>()];
-        bytemuck::cast_slice_mut::<T, u8>(&mut out).copy_from_slice(bytes);
-        Ok(out)
+        // One plain copy into the spare capacity (not zeroed first: the pages of a large
+        // reserved array are touched once).
+        let count = bytes.len() / std::mem::size_of::<T>();
+        out.reserve(count);
+        let spare = &mut out.spare_capacity_mut()[..count];
+        // SAFETY: `spare` holds `count` elements of `T`, exactly `bytes.len()` bytes, and does
+        // not overlap `bytes` (a borrow of the file); `T: Pod` takes any bytes, so the first
+        // `count` spare elements are initialized by the copy before the length covers them.
+        unsafe {
+            std::ptr::copy_nonoverlapping(bytes.as_ptr(), spare.as_mut_ptr().cast::<u8>(), bytes.len());
+            out.set_len(out.len() + count);
+        }
+        Ok(())
     }
 
     /// A string sample: NUL-terminated strings, concatenated.

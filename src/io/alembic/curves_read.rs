@@ -50,6 +50,32 @@ pub struct CurvesArchive<'a> {
     pub epic_groom: bool,
 }
 
+/// The points and widths of every curves object read so far, one object after another.
+struct Placed {
+    points: Vec<Vec3>,
+    widths: Vec<f32>,
+}
+
+/// One curves object's strands as its parameters count them: vertex offsets from 0, and basis.
+struct Strands<'s> {
+    offsets: &'s [u32],
+    basis: CurveBasis,
+}
+
+impl Strands<'_> {
+    fn strand_count(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    fn vertex_count(&self) -> usize {
+        *self.offsets.last().expect("starts with 0") as usize
+    }
+
+    fn vertex_counts(&self) -> impl Iterator<Item = usize> + '_ {
+        self.offsets.windows(2).map(|w| (w[1] - w[0]) as usize)
+    }
+}
+
 struct CurvesObject<'o, 'a> {
     path: String,
     geom: &'o Compound<'a>,
@@ -175,11 +201,19 @@ impl<'a> CurvesArchive<'a> {
     pub fn read_at_time(&self, time: f64) -> OgawaResult<Groom> {
         let mut parts = Vec::with_capacity(self.curves.len());
         let mut paths = Vec::with_capacity(self.curves.len());
+        let objects: Vec<CurvesObject<'_, 'a>> =
+            (0..self.curves.len()).map(|index| self.resolve(index)).collect::<OgawaResult<_>>()?;
+        // Every object's points and widths go straight into the whole groom's arrays, sized
+        // once from the sizes of the samples (a hint: a wrong one only costs a reallocation).
+        let vertices: usize = objects.iter().map(|o| self.vertex_count_hint(o, time)).sum();
+        let mut placed =
+            Placed { points: Vec::with_capacity(vertices), widths: Vec::with_capacity(vertices) };
+        crate::io::input::advise_huge_pages(placed.points.spare_capacity_mut());
+        crate::io::input::advise_huge_pages(placed.widths.spare_capacity_mut());
         // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
         let mut largest_id: Option<u32> = None;
-        for index in 0..self.curves.len() {
-            let object = self.resolve(index)?;
-            let mut groom = self.read_object(&object, time)?;
+        for (index, object) in objects.iter().enumerate() {
+            let mut groom = self.read_object(object, time, &mut placed)?;
             if index > 0 {
                 let next_id = largest_id.map_or(0, |m| m.wrapping_add(1));
                 groom.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
@@ -188,7 +222,7 @@ impl<'a> CurvesArchive<'a> {
             parts.push(groom);
             paths.push(object.path.clone());
         }
-        let mut groom = Groom::concat(parts).map_err(|(index, e)| {
+        let mut groom = Groom::concat_placed(parts, placed.points, placed.widths).map_err(|(index, e)| {
             OgawaError(format!("{}: does not fit the curves objects before it: {e}", paths[index]))
         })?;
         groom.drop_default_group_named(super::curves_write::DEFAULT_OBJECT_NAME);
@@ -206,22 +240,14 @@ impl<'a> CurvesArchive<'a> {
     fn read_mesh(&self, object: &CurvesObject<'_, 'a>, time: f64) -> OgawaResult<Option<SurfaceMesh>> {
         let ogawa = &self.archive.ogawa;
         let path = &object.path;
-        let points = self.points_at(required(object, "P")?, time)?;
+        let mut points = Vec::new();
+        self.points_at(required(object, "P")?, time, &mut points)?;
         let indices = |name: &str| -> OgawaResult<Vec<u32>> {
             let property = required(object, name)?;
             property.expect(&[Pod::I32, Pod::U32], 1)?;
-            let values = property.read_f64(ogawa, self.index_at(property, time))?;
-            values
-                .iter()
-                .enumerate()
-                .map(|(i, &v)| {
-                    if (0.0..=u32::MAX as f64).contains(&v) {
-                        Ok(v as u32)
-                    } else {
-                        fail(format!("{path}: {name} entry {i} is {v}"))
-                    }
-                })
-                .collect()
+            property
+                .read_u32(ogawa, self.index_at(property, time))
+                .map_err(|e| OgawaError(format!("{path}: {}", e.0)))
         };
         let face_counts = indices(".faceCounts")?;
         let face_indices = indices(".faceIndices")?;
@@ -232,15 +258,19 @@ impl<'a> CurvesArchive<'a> {
         let mut mesh =
             SurfaceMesh { path: path.clone(), points, face_counts, face_indices, primvars: Vec::new() };
         let arb = object.geom.compound(".arbGeomParams");
-        let named = [("N", MeshPrimvar::NORMALS), ("uv", MeshPrimvar::UV)];
-        let params = named
-            .iter()
-            .filter_map(|&(param, name)| object.geom.get(param).map(|p| (p, name.to_string())))
-            .chain(
-                arb.map(|c| c.members.as_slice()).unwrap_or(&[]).iter().map(|m| (m, m.name().to_string())),
-            );
-        for (property, name) in params {
-            if let Some(primvar) = self.mesh_primvar(property, name, &mesh, time)? {
+        let arb_members = arb.map(|c| c.members.as_slice()).unwrap_or(&[]);
+        // The UV set keeps the name its `sourceName` gives (Blender writes its map's, `UVMap`).
+        let uv = object.geom.get("uv").map(|p| {
+            let named = uv_source_name(p)
+                .filter(|n| *n != MeshPrimvar::NORMALS && arb_members.iter().all(|m| m.name() != *n));
+            (p, named.unwrap_or(MeshPrimvar::UV).to_string(), Some(AttributeKind::TexCoord))
+        });
+        let normals =
+            object.geom.get("N").map(|p| (p, MeshPrimvar::NORMALS.to_string(), Some(AttributeKind::Normal)));
+        let params =
+            normals.into_iter().chain(uv).chain(arb_members.iter().map(|m| (m, m.name().to_string(), None)));
+        for (property, name, kind) in params {
+            if let Some(primvar) = self.mesh_primvar(property, name, kind, &mesh, time)? {
                 mesh.primvars.push(primvar);
             }
         }
@@ -254,12 +284,14 @@ impl<'a> CurvesArchive<'a> {
     }
 
     /// A PolyMesh geometry parameter (plain array or `.vals`/`.indices` compound) at `time`, kept
-    /// indexed, its interpolation from `geoScope` or else from its count on `mesh`; `None` for
-    /// data no mesh primvar holds (strings, more than 4 components).
+    /// indexed, its interpolation from `geoScope` or else from its count on `mesh`, its kind
+    /// `kind` or else from its POD and interpretation; `None` for data no mesh primvar holds
+    /// (strings, more than 4 components).
     fn mesh_primvar(
         &self,
         property: &Property<'a>,
         name: String,
+        kind: Option<AttributeKind>,
         mesh: &SurfaceMesh,
         time: f64,
     ) -> OgawaResult<Option<MeshPrimvar>> {
@@ -280,13 +312,7 @@ impl<'a> CurvesArchive<'a> {
         let indices = match indices {
             None => None,
             Some(indices) => {
-                let raw = indices.read_f64(ogawa, self.index_at(indices, time))?;
-                let converted = raw.iter().map(|&i| (0.0..=u32::MAX as f64).contains(&i).then_some(i as u32));
-                Some(
-                    converted
-                        .collect::<Option<Vec<u32>>>()
-                        .ok_or_else(|| fail_here("a negative index".into()))?,
-                )
+                Some(indices.read_u32(ogawa, self.index_at(indices, time)).map_err(|e| fail_here(e.0))?)
             }
         };
         let count = indices.as_ref().map_or(values.len() / extent as usize, Vec::len);
@@ -304,11 +330,7 @@ impl<'a> CurvesArchive<'a> {
             .find(|i| i.count(mesh) == count)
             .unwrap_or(MeshInterpolation::Vertex),
         };
-        let kind = match name.as_str() {
-            MeshPrimvar::NORMALS => AttributeKind::Normal,
-            MeshPrimvar::UV => AttributeKind::TexCoord,
-            _ => param_kind(property, extent),
-        };
+        let kind = kind.unwrap_or_else(|| param_kind(property, extent));
         Ok(Some(MeshPrimvar { name, kind, components: extent as usize, interpolation, values, indices }))
     }
 
@@ -379,18 +401,35 @@ impl<'a> CurvesArchive<'a> {
         Ok(values)
     }
 
-    /// Positions (`P`, float or double) at `time`, interpolated as [`Self::read_f64_at`].
-    fn points_at(&self, positions: &Sampled<'a>, time: f64) -> OgawaResult<Vec<Vec3>> {
+    /// Positions (`P`, float or double) at `time`, interpolated as [`Self::read_f64_at`],
+    /// appended to `out`.
+    fn points_at(&self, positions: &Sampled<'a>, time: f64, out: &mut Vec<Vec3>) -> OgawaResult<()> {
         positions.expect(&[Pod::F32, Pod::F64], 3)?;
         let (i0, _, weight) = self.samples_around(positions, time);
         if positions.pod == Pod::F32 && weight == 0.0 {
-            return positions.read_f32_as(&self.archive.ogawa, i0);
+            return positions.append_f32_as(&self.archive.ogawa, i0, out);
         }
         let flat = self.read_f64_at(positions, time)?;
-        Ok(flat.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2]).as_vec3()).collect())
+        out.extend(flat.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2]).as_vec3()));
+        Ok(())
     }
 
-    fn read_object(&self, object: &CurvesObject<'_, 'a>, time: f64) -> OgawaResult<Groom> {
+    /// How many points a curves object has at `time`, from the size of its `P` sample (0 when
+    /// that cannot be told; reading says what is wrong).
+    fn vertex_count_hint(&self, object: &CurvesObject<'_, 'a>, time: f64) -> usize {
+        let Some(positions) = object.geom.sampled("P") else { return 0 };
+        let bytes = positions.sample_bytes(&self.archive.ogawa, self.index_at(positions, time));
+        bytes.map_or(0, |b| b.len() / (positions.pod.size() * 3).max(1))
+    }
+
+    /// One curves object at `time`: its points and widths appended to `placed`, the rest as a
+    /// one-group groom whose own points and widths are empty (for [`Groom::concat_placed`]).
+    fn read_object(
+        &self,
+        object: &CurvesObject<'_, 'a>,
+        time: f64,
+        placed: &mut Placed,
+    ) -> OgawaResult<Groom> {
         let ogawa = &self.archive.ogawa;
         let path = &object.path;
         let bounds = required(object, ".selfBnds")?;
@@ -407,57 +446,63 @@ impl<'a> CurvesArchive<'a> {
         };
         let basis = curve_basis(basis_bytes, path, orders)?;
 
-        let mut points = self.points_at(required(object, "P")?, time)?;
+        let first = placed.points.len();
+        self.points_at(required(object, "P")?, time, &mut placed.points)?;
+        let point_count = placed.points.len() - first;
         let counts_property = required(object, "nVertices")?;
         counts_property.expect(&[Pod::I32, Pod::U32, Pod::I16, Pod::U16], 1)?;
-        let counts = counts_property.read_f64(ogawa, self.index_at(counts_property, time))?;
+        let counts = counts_property
+            .read_u32(ogawa, self.index_at(counts_property, time))
+            .map_err(|e| OgawaError(format!("{path}: {}", e.0)))?;
         let mut offsets = Vec::with_capacity(counts.len() + 1);
         offsets.push(0u32);
         let mut total = 0u64;
-        for (curve, &count) in counts.iter().enumerate() {
-            if count < 0.0 {
-                return fail(format!("{path}: curve {curve} has {count} vertices"));
-            }
+        for &count in &counts {
             total += count as u64;
-            if total > points.len() as u64 {
-                return fail(format!(
-                    "{path}: nVertices add up to more than the {} points of P",
-                    points.len()
-                ));
+            if total > point_count as u64 {
+                return fail(format!("{path}: nVertices add up to more than the {point_count} points of P"));
             }
             offsets.push(total as u32);
         }
-        if total != points.len() as u64 {
-            return fail(format!("{path}: nVertices add up to {total}, P has {} points", points.len()));
+        if total != point_count as u64 {
+            return fail(format!("{path}: nVertices add up to {total}, P has {point_count} points"));
         }
-        let strands = counts.len();
+        let strands = Strands { offsets: &offsets, basis };
         let matrix = self.world_matrix(object, time)?;
         if matrix != DMat4::IDENTITY {
+            let points = &mut placed.points[first..];
             points.iter_mut().for_each(|p| *p = matrix.transform_point3(p.as_dvec3()).as_vec3());
         }
-        let mut groom = Groom { points, strand_offsets: offsets, basis, ..Default::default() };
 
         let arb = object.geom.compound(".arbGeomParams");
         let epic_width = arb.and_then(|c| c.get(epic::WIDTH));
-        let width = match epic_width.or_else(|| object.geom.get("width")) {
-            Some(p) => Some(self.expand(p, time, &groom, 1, path)?),
-            None => None,
-        };
-        let width_interpolation = width.as_ref().and_then(|w| w.interpolation);
-        groom.widths = match width {
-            Some(param) => param.into_vertices(&groom),
-            None => vec![
-                DEFAULT_WIDTH * if self.epic_groom { epic::UNITS_PER_METRE } else { 1.0 };
-                groom.vertex_count()
-            ],
-        };
-        groom.strand_ids = (0..strands as u32).collect();
+        let mut width_interpolation = None;
+        match epic_width.or_else(|| object.geom.get("width")) {
+            Some(p) => {
+                let (rate, interpolation) =
+                    self.expand_into(p, time, &strands, 1, path, &mut placed.widths)?;
+                width_interpolation = interpolation;
+                if rate != Rate::Vertex {
+                    let start =
+                        placed.widths.len() - if rate == Rate::Constant { 1 } else { strands.strand_count() };
+                    let values = placed.widths.split_off(start);
+                    let param = Param { values, extent: 1, rate };
+                    placed.widths.extend(param.into_vertices(&strands));
+                }
+            }
+            None => placed.widths.extend(std::iter::repeat_n(
+                DEFAULT_WIDTH * if self.epic_groom { epic::UNITS_PER_METRE } else { 1.0 },
+                point_count,
+            )),
+        }
+        let mut groom = Groom { basis, ..Default::default() };
+        groom.strand_ids = (0..counts.len() as u32).collect();
 
         let uv = arb.and_then(|c| c.get(epic::ROOT_UV)).or_else(|| object.geom.get("uv"));
         if let Some(p) = uv {
-            let param = self.expand(p, time, &groom, 2, path)?;
+            let param = self.expand(p, time, &strands, 2, path)?;
             groom.root_uvs =
-                Some(param.to_strand_roots(&groom).chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+                Some(param.to_strand_roots(&strands).chunks_exact(2).map(|c| [c[0], c[1]]).collect());
         }
         for member in arb.map(|c| c.members.as_slice()).unwrap_or(&[]) {
             let name = member.name();
@@ -468,11 +513,17 @@ impl<'a> CurvesArchive<'a> {
             if !(1..=4).contains(&extent) {
                 continue; // not something a groom attribute can hold
             }
-            let param = self.expand(member, time, &groom, extent, path)?;
+            if name == epic::ID {
+                if let Some(ids) = self.strand_ids(member, time, &strands) {
+                    groom.strand_ids = ids;
+                    continue;
+                }
+            }
+            let param = self.expand(member, time, &strands, extent, path)?;
             match name {
-                epic::ID => groom.strand_ids = param.to_strands(&groom).iter().map(|&v| v as u32).collect(),
+                epic::ID => groom.strand_ids = param.to_strands(&strands).iter().map(|&v| v as u32).collect(),
                 epic::GUIDE => {
-                    groom.guides = Some(param.to_strands(&groom).iter().map(|&v| v != 0.0).collect())
+                    groom.guides = Some(param.to_strands(&strands).iter().map(|&v| v != 0.0).collect())
                 }
                 // One value for the whole object: the object is the group (coif writes that).
                 epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
@@ -480,7 +531,7 @@ impl<'a> CurvesArchive<'a> {
                     let canonical = canonical_name(name);
                     let (rate, data) = match param.rate {
                         Rate::Vertex => (AttributeRate::Vertex, param.values),
-                        _ => (AttributeRate::Strand, param.to_strands(&groom)),
+                        _ => (AttributeRate::Strand, param.to_strands(&strands)),
                     };
                     let kind = param_kind(member, extent);
                     let mut attribute =
@@ -490,10 +541,26 @@ impl<'a> CurvesArchive<'a> {
                 }
             }
         }
+        groom.strand_offsets = offsets;
         let mut group = CurveGroup::new(path.clone(), basis, wrap_of(basis));
         group.width_interpolation = width_interpolation;
         groom.set_single_group(group);
         Ok(groom)
+    }
+
+    /// Epic's `groom_id` as integers, one per strand (no detour through floats: ids past 2^24
+    /// stay exact); `None` when it is not a plain per-strand integer array (then it is read as
+    /// any parameter).
+    fn strand_ids(&self, property: &Property<'a>, time: f64, strands: &Strands<'_>) -> Option<Vec<u32>> {
+        let Property::Sampled(ids) = property else { return None };
+        let integer = matches!(ids.pod, Pod::I32 | Pod::U32);
+        let scope = ids.metadata.get("geoScope");
+        if !integer || ids.extent != 1 || !matches!(scope, None | Some("uni")) {
+            return None;
+        }
+        // Negative or out-of-range ids fall back to the float reading too.
+        let values = ids.read_u32(&self.archive.ogawa, self.index_at(ids, time)).ok();
+        values.filter(|v| v.len() == strands.strand_count())
     }
 
     /// The product of the Xform chain above a curves object, at `time`.
@@ -535,19 +602,35 @@ impl<'a> CurvesArchive<'a> {
         &self,
         property: &Property<'a>,
         time: f64,
-        groom: &Groom,
+        strands: &Strands<'_>,
         extent: u8,
         path: &str,
     ) -> OgawaResult<Param> {
+        let mut values = Vec::new();
+        let (rate, _) = self.expand_into(property, time, strands, extent, path, &mut values)?;
+        Ok(Param { values, extent: extent as usize, rate })
+    }
+
+    /// [`Self::expand`] with the values appended to `out` (per vertex when the rate is
+    /// [`Rate::Vertex`], `var` values spread onto the vertices), so a reader can put them where
+    /// they belong without a second copy; with the rate the file gave, when not per vertex
+    /// (what a writer gives back).
+    fn expand_into(
+        &self,
+        property: &Property<'a>,
+        time: f64,
+        strands: &Strands<'_>,
+        extent: u8,
+        path: &str,
+        out: &mut Vec<f32>,
+    ) -> OgawaResult<(Rate, Option<Interpolation>)> {
         let ogawa = &self.archive.ogawa;
-        let (values, metadata_scope, name) = match property {
+        let start = out.len();
+        let (metadata_scope, name) = match property {
             Property::Sampled(s) => {
                 s.expect(NUMERIC, extent)?;
-                (
-                    s.read_f32(ogawa, self.index_at(s, time))?,
-                    s.metadata.get("geoScope").map(str::to_string),
-                    s.name.clone(),
-                )
+                s.append_f32(ogawa, self.index_at(s, time), out)?;
+                (s.metadata.get("geoScope").map(str::to_string), s.name.clone())
             }
             Property::Compound(c) => {
                 let vals = c
@@ -555,71 +638,70 @@ impl<'a> CurvesArchive<'a> {
                     .ok_or_else(|| OgawaError(format!("{path}: {} has no .vals", c.name)))?;
                 vals.expect(NUMERIC, extent)?;
                 let raw = vals.read_f32(ogawa, self.index_at(vals, time))?;
-                let values = match c.sampled(".indices") {
+                match c.sampled(".indices") {
                     Some(indices) => {
-                        let indices = indices.read_f64(ogawa, self.index_at(indices, time))?;
+                        let indices = indices
+                            .read_u32(ogawa, self.index_at(indices, time))
+                            .map_err(|e| OgawaError(format!("{path}: {}: {}", c.name, e.0)))?;
                         let e = extent as usize;
-                        let mut out = Vec::with_capacity(indices.len() * e);
+                        out.reserve(indices.len() * e);
                         for &i in &indices {
                             let at = i as usize * e;
                             match raw.get(at..at + e) {
-                                Some(v) if i >= 0.0 => out.extend_from_slice(v),
-                                _ => return fail(format!("{path}: {} index {i} is out of range", c.name)),
+                                Some(v) => out.extend_from_slice(v),
+                                None => return fail(format!("{path}: {} index {i} is out of range", c.name)),
                             }
                         }
-                        out
                     }
-                    None => raw,
-                };
+                    None => out.extend_from_slice(&raw),
+                }
                 let scope =
                     c.metadata.get("geoScope").or_else(|| vals.metadata.get("geoScope")).map(str::to_string);
-                (values, scope, format!("{path}/{}", c.name))
+                (scope, format!("{path}/{}", c.name))
             }
         };
-        let count = values.len() / extent as usize;
-        let (strands, vertices) = (groom.strand_count(), groom.vertex_count());
+        let count = (out.len() - start) / extent as usize;
+        let (strand_count, vertices) = (strands.strand_count(), strands.vertex_count());
         // `var` is one value per segment end (RenderMan's rule: Alembic has no pinned curves);
         // Houdini writes point attributes under `var` too, so a per-vertex count is per vertex.
-        let varying_count = |n: usize| primvar_rates::varying_count(groom.basis, CurveWrap::Nonperiodic, n);
-        let varying: usize = groom.vertex_counts().map(varying_count).sum();
+        let varying_count = |n: usize| primvar_rates::varying_count(strands.basis, CurveWrap::Nonperiodic, n);
+        let varying: usize = strands.vertex_counts().map(varying_count).sum();
         let (rate, interpolation) = match metadata_scope.as_deref() {
             Some("var") if count == varying => (Rate::Vertex, Some(Interpolation::Varying)),
             Some("var") if count != vertices => {
                 return fail(format!(
                     "{name}: {count} values, its scope needs {vertices} (one per vertex) or {varying} \
                      (one per segment end of the {:?} curves)",
-                    groom.basis
+                    strands.basis
                 ));
             }
             Some("vtx") | Some("var") | Some("fvr") => (Rate::Vertex, None),
             Some("uni") => (Rate::Strand, Some(Interpolation::Uniform)),
             Some("con") => (Rate::Constant, Some(Interpolation::Constant)),
             _ if count == vertices => (Rate::Vertex, None),
-            _ if count == strands => (Rate::Strand, Some(Interpolation::Uniform)),
+            _ if count == strand_count => (Rate::Strand, Some(Interpolation::Uniform)),
             _ => (Rate::Constant, Some(Interpolation::Constant)),
         };
         let expected = match (rate, interpolation) {
             (Rate::Vertex, Some(Interpolation::Varying)) => varying,
             (Rate::Vertex, _) => vertices,
-            (Rate::Strand, _) => strands,
+            (Rate::Strand, _) => strand_count,
             (Rate::Constant, _) => 1,
         };
         if count != expected {
             return fail(format!("{name}: {count} values, its scope needs {expected}"));
         }
-        let values = if interpolation == Some(Interpolation::Varying) && varying != vertices {
-            let counts = groom.vertex_counts();
-            primvar_rates::varying_to_vertex(
-                groom.basis,
+        if interpolation == Some(Interpolation::Varying) && varying != vertices {
+            let values = out.split_off(start);
+            out.extend(primvar_rates::varying_to_vertex(
+                strands.basis,
                 CurveWrap::Nonperiodic,
-                counts,
+                strands.vertex_counts(),
                 &values,
                 extent as usize,
-            )
-        } else {
-            values
-        };
-        Ok(Param { values, extent: extent as usize, rate, interpolation })
+            ));
+        }
+        Ok((rate, interpolation))
     }
 }
 
@@ -725,16 +807,14 @@ struct Param {
     values: Vec<f32>,
     extent: usize,
     rate: Rate,
-    /// The rate the file gave, when not per vertex (what a writer gives back).
-    interpolation: Option<Interpolation>,
 }
 
 impl Param {
-    fn into_vertices(self, groom: &Groom) -> Vec<f32> {
+    fn into_vertices(self, strands: &Strands<'_>) -> Vec<f32> {
         match self.rate {
             Rate::Vertex => self.values,
-            Rate::Constant => self.values.repeat(groom.vertex_count()),
-            Rate::Strand => groom
+            Rate::Constant => self.values.repeat(strands.vertex_count()),
+            Rate::Strand => strands
                 .vertex_counts()
                 .enumerate()
                 .flat_map(|(s, n)| self.values[s * self.extent..(s + 1) * self.extent].repeat(n))
@@ -742,26 +822,39 @@ impl Param {
         }
     }
 
-    fn to_strands(&self, groom: &Groom) -> Vec<f32> {
+    fn to_strands(&self, strands: &Strands<'_>) -> Vec<f32> {
         match self.rate {
             Rate::Strand => self.values.clone(),
-            Rate::Constant => self.values.repeat(groom.strand_count()),
-            Rate::Vertex => self.to_strand_roots(groom),
+            Rate::Constant => self.values.repeat(strands.strand_count()),
+            Rate::Vertex => self.to_strand_roots(strands),
         }
     }
 
     /// Per-strand values, taking a per-vertex parameter at each strand's root.
-    fn to_strand_roots(&self, groom: &Groom) -> Vec<f32> {
+    fn to_strand_roots(&self, strands: &Strands<'_>) -> Vec<f32> {
         match self.rate {
-            Rate::Vertex => (0..groom.strand_count())
+            Rate::Vertex => (0..strands.strand_count())
                 .flat_map(|s| {
-                    let root = groom.strand_offsets[s] as usize * self.extent;
+                    let root = strands.offsets[s] as usize * self.extent;
                     self.values.get(root..root + self.extent).unwrap_or(&[]).to_vec()
                 })
                 .collect(),
-            _ => self.to_strands(groom),
+            _ => self.to_strands(strands),
         }
     }
+}
+
+/// The name a PolyMesh's `uv` parameter gives its UV set in `sourceName` metadata (what
+/// Blender's exporter writes and its importer names the map by), when it is a plain identifier.
+fn uv_source_name<'p>(property: &'p Property<'_>) -> Option<&'p str> {
+    let name = match property {
+        Property::Sampled(s) => s.metadata.get("sourceName"),
+        Property::Compound(c) => c
+            .metadata
+            .get("sourceName")
+            .or_else(|| c.sampled(".vals").and_then(|v| v.metadata.get("sourceName"))),
+    }?;
+    crate::surface_mesh::is_identifier(name).then_some(name)
 }
 
 /// What a geometry parameter's values are, from its POD and `interpretation`, so writers give

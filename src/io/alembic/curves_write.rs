@@ -658,10 +658,11 @@ fn add_polymesh<W: Write + Seek>(
     clockwise.transform(DMat4::from_scale(glam::DVec3::splat(scale as f64)));
     let clockwise_indices = clockwise.face_indices.iter().map(|&i| i as i32).collect();
     let mut arb = None;
-    let written = clockwise.primvars.iter().try_for_each(|primvar| {
+    let main_uv = clockwise.main_uv();
+    let written = clockwise.primvars.iter().enumerate().try_for_each(|(index, primvar)| {
         let (parent, name) = match primvar.name.as_str() {
             MeshPrimvar::NORMALS => (geom, "N"),
-            MeshPrimvar::UV => (geom, "uv"),
+            _ if Some(index) == main_uv => (geom, "uv"),
             other => (
                 *arb.get_or_insert_with(|| archive.add_compound(geom, ".arbGeomParams", MetaData::new())),
                 other,
@@ -700,6 +701,12 @@ fn add_mesh_param<W: Write + Seek>(
         Pod::I32 => primvar.values.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect(),
         Pod::Bool => primvar.values.iter().map(|&v| (v != 0.0) as u8).collect(),
         _ => bytemuck::cast_slice(&primvar.values).to_vec(),
+    };
+    // The UV set's name goes where Blender writes and reads it (its importer names the map so).
+    let metadata = if name == "uv" && crate::surface_mesh::is_identifier(&primvar.name) {
+        metadata.with("sourceName", &primvar.name)
+    } else {
+        metadata
     };
     let elements = (primvar.values.len() / primvar.components) as u64;
     // The C++ library and ogawa-rs read a PolyMesh's `uv` as an indexed compound (Blender

@@ -978,7 +978,7 @@ impl Crate<'_> {
         // Zeroed by the allocator (fresh pages, untouched until the copy), not element by element.
         let mut out: Vec<T> = bytemuck::zeroed_vec(bytes.len() / std::mem::size_of::<T>());
         let target = bytemuck::cast_slice_mut::<T, u8>(&mut out);
-        advise_huge_pages(target);
+        crate::io::input::advise_huge_pages(target);
         match self.file {
             Some(file) => {
                 use std::os::unix::fs::FileExt;
@@ -990,26 +990,6 @@ impl Crate<'_> {
         Ok(out)
     }
 }
-
-/// Asks the kernel to back a large, not yet touched buffer with huge pages: the copy into it
-/// then takes one page fault per 2 MB instead of per 4 kB (a third of a read's system time on a
-/// 100 MB groom). Advisory; ignored where unsupported.
-#[cfg(target_os = "linux")]
-fn advise_huge_pages(buffer: &mut [u8]) {
-    const HUGE: usize = 2 << 20;
-    let start = (buffer.as_ptr() as usize).next_multiple_of(HUGE);
-    let end = (buffer.as_ptr() as usize + buffer.len()) / HUGE * HUGE;
-    if end > start {
-        // SAFETY: the range lies inside `buffer`, which we borrow mutably; MADV_HUGEPAGE changes
-        // how pages are backed, never their contents.
-        unsafe {
-            libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE);
-        }
-    }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn advise_huge_pages(_buffer: &mut [u8]) {}
 
 /// IEEE half to single precision.
 fn half_to_f32(h: u16) -> f32 {
