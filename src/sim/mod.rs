@@ -13,7 +13,9 @@
 //! * [`cuticle`]: S1-13/14 stiffness gradient.
 //! * [`solver`]: the stepper: per iteration a direct (block-tridiagonal) solve of every edge's
 //!   stretch–shear along the strand's free tail, then Gauss–Seidel sweeps of stretch–shear and
-//!   bend–twist along each strand, alternating direction; strands in parallel.
+//!   bend–twist along each strand, alternating direction; strands in parallel. With
+//!   [`StrandSolver::Direct`] each iteration instead solves both constraints of the free tail
+//!   together (`strand_solve`, 6×6 blocks), and the sweeps cover only the held span before it.
 //! * [`settle`]: static equilibrium with a convergence report; zero-stress rest curves; export.
 //!
 //! # Stiffness: XPBD with physical moduli

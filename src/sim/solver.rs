@@ -3,6 +3,8 @@
 //! sweep along the strand
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`; sweeps alternate
 //! direction) → velocity update. Lane groups of 8 strands run the same sequence in `lanes`.
+//! With `StepConstants::direct` the free tail's stretch–shear and bend–twist are solved together
+//! (`strand_solve`), the sweeps cover only the held span before it, and no strand runs in lanes.
 //! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
 //! results are bit-identical at any thread count and any chunking.
 use std::cell::RefCell;
