@@ -542,7 +542,7 @@ impl From<HeadArg> for HeadMode {
 }
 
 /// `--solver`.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+#[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum SolverArg {
     GaussSeidel,
     Direct,

@@ -371,11 +371,11 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
     // Gauss–Seidel along the strand, alternating root→tip and tip→root sweeps: a one-way sweep
     // passes a correction only one edge against its direction per iteration, and a hanging strand
     // needs tension carried from the tip up as much as positions carried from the root down.
+    // With the direct strand solve, Gauss–Seidel only keeps the held span before the free tail.
+    let free_from = free_tail(s.kinematic);
+    let swept_edges = if k.direct { free_from } else { edges };
     for iteration in 0..k.iterations {
         if k.direct {
-            let start = free_tail(s.kinematic);
-            let pair_k = s.pair_k;
-            let compliance = |e: usize| pair_k[e].compliance_dt2;
             let mut state = super::strand_solve::StrandState {
                 x: s.x,
                 q: s.q,
@@ -384,15 +384,14 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
                 wq: s.wq,
                 length: s.length,
                 rest: s.rest,
-                compliance_dt2: &compliance,
+                pair_k: s.pair_k,
             };
             STRAND_SCRATCH
-                .with(|scratch| super::strand_solve::solve(&mut state, start, &mut scratch.borrow_mut()));
+                .with(|scratch| super::strand_solve::solve(&mut state, free_from, &mut scratch.borrow_mut()));
         } else {
             solve_stretch_shear(&mut s);
         }
-        // With the direct strand solve, Gauss–Seidel only keeps the held span before the free tail.
-        let edges = if k.direct { free_tail(s.kinematic) } else { edges };
+        let edges = swept_edges;
         if iteration % 2 == 0 {
             for e in 0..edges {
                 project_edge(&mut s, e);

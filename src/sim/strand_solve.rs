@@ -19,7 +19,7 @@
 //! compliance, so the converged state is the same static equilibrium at any Δt and iteration count.
 use glam::{DMat3, DVec3, Quat, Vec3};
 
-use super::constraints::director3;
+use super::constraints::{director3, BendTwistCoefficients};
 
 /// A symmetric 6×6 block as 2×2 blocks of 3×3: `[bend–twist, stretch–shear]`.
 #[derive(Clone, Copy, Default)]
@@ -83,7 +83,8 @@ pub(crate) struct StrandState<'a> {
     pub wq: &'a [f32],
     pub length: &'a [f32],
     pub rest: &'a [Vec3],
-    pub compliance_dt2: &'a dyn Fn(usize) -> Vec3,
+    /// Per pair centre: the bend–twist coefficients (their `α/Δt²`).
+    pub pair_k: &'a [BendTwistCoefficients],
 }
 
 /// One linearised solve of the constraints from edge `start` on (the free tail: frames and
@@ -140,7 +141,7 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
         let mut rhs: Pair = [DVec3::ZERO, DVec3::ZERO];
         if has_pair(e) {
             let g = sc.g[e];
-            let alpha = (s.compliance_dt2)(e).as_dvec3();
+            let alpha = s.pair_k[e].compliance_dt2.as_dvec3();
             let frames = turn_w(e - 1) + we;
             diag.0[0][0] = g * g.transpose() * frames + DMat3::from_diagonal(alpha);
             diag.0[0][1] = g * shear.transpose() * we;
@@ -277,7 +278,7 @@ mod tests {
         w[0] = 0.0;
         let mut wq: Vec<f32> = (0..n).map(|i| 0.1 * 1.0e6 / (length[i] * length[i]).max(1e-12)).collect();
         wq[0] = 0.0;
-        let zero = |_: usize| Vec3::ZERO;
+        let rigid = vec![BendTwistCoefficients::default(); n];
         let mut scratch = Scratch::default();
         let residual = |x: &[Vec3], q: &[Quat]| {
             let mut worst = 0.0f32;
@@ -302,7 +303,7 @@ mod tests {
                 wq: &wq,
                 length: &length,
                 rest: &rest,
-                compliance_dt2: &zero,
+                pair_k: &rigid,
             };
             solve(&mut state, 0, &mut scratch);
         }
