@@ -50,8 +50,9 @@ fn styled_perm_holds_still_when_simulated_again() {
 }
 
 #[test]
-#[ignore = "fails: the blow-dry's output moves 1.5 mm in 2 s whatever its settle reaches (torque \
-            residual 1.5e-3, 1.0e-3 or 4.5e-4: 1.48-1.53 mm), so the gap is not the settle's"]
+#[ignore = "fails: the blow-dry's output moves 1.11 mm in 2 s (1.49 mm before its water's weight \
+            was simulated again), whatever its settle reaches (tolerance 1e-3 or 1e-4): two crown \
+            strands lying on the head shift ~1 mm within the first second"]
 fn styled_blow_dry_holds_still_when_simulated_again() {
     presets_hold_still(&[("blowdry_scene2", "seed_200x24cm.hair", 10)]);
 }
@@ -156,4 +157,49 @@ fn dcc_groom_holds_still(style_kind: Style, solver: StrandSolver, rates: &[u32])
         assert!(fall > 1e-2, "{style_kind:?}: without the option the groom should sag: {fall} m");
         assert!(worst < 1e-3, "{style_kind:?}, Δt 1/{rate}: the sag-free groom moves {worst} m in 2 s");
     }
+}
+
+/// A damp groom (a styled output the dryer did not finish, or hair fresh from a wet stage) is
+/// simulated with its water's weight, as styling simulated it: a clamped hair settles to a sag
+/// `1 + mass_gain·w` times the dry one's (small deflections scale with the load).
+#[test]
+fn damp_hair_is_simulated_with_its_waters_weight() {
+    use coif::groom::{Attribute, AttributeRate};
+    use coif::interact::wetness::{mass_scale, WetnessParams, WETNESS};
+    use coif::sim::{Cuticle, Material, SettleOptions};
+    let (segment, width, wetness) = (0.005f32, 80e-6f32, 0.5f32);
+    let points: Vec<Vec3> = (0..9).map(|i| Vec3::new(segment * i as f32, 0.0, 0.0)).collect();
+    let dry = Groom::from_strands(&[points], width);
+    let mut damp = dry.clone();
+    let vertices = damp.vertex_count();
+    damp.set_attribute(Attribute::new(WETNESS, AttributeRate::Vertex, 1, vec![wetness; vertices]));
+    // Gravity scaled to a small deflection (about 0.5 % of the length when dry).
+    let material = Material { cuticle: Cuticle { share: 0.0, ..Cuticle::default() }, ..Material::default() };
+    let r = 0.5 * width;
+    let ei = material.youngs_modulus * std::f32::consts::PI * r.powi(4) / 4.0;
+    let weight = material.density * std::f32::consts::PI * r * r;
+    let length = 8.0 * segment;
+    let g = 0.005 * length * 8.0 * ei / (weight * length.powi(4));
+    let sag = |groom: &Groom| {
+        let params =
+            SimParams { material, gravity: Vec3::new(0.0, -g, 0.0), damping: 20.0, ..SimParams::default() };
+        let settle = SettleOptions { tolerance: 1e-5, max_seconds: 40.0, iterations: None };
+        let options = SimulateOptions {
+            params,
+            seconds: 0.0,
+            settle: Some(settle),
+            sag_free: false,
+            colliders: vec![],
+        };
+        let (out, summary) = simulate(groom, &options).unwrap();
+        assert!(summary.settle.unwrap().converged, "{summary:?}");
+        let tip = *out.points.last().unwrap();
+        assert!(tip.is_finite());
+        -tip.y
+    };
+    let (dry_sag, damp_sag) = (sag(&dry), sag(&damp));
+    let expected = mass_scale(wetness, &WetnessParams::default());
+    eprintln!("damp / dry sag {:.4} (expected {expected})", damp_sag / dry_sag);
+    assert!(dry_sag > 0.002 * length, "the dry hair sags: {dry_sag} m");
+    assert!((damp_sag / dry_sag / expected - 1.0).abs() < 0.02, "damp {damp_sag} m, dry {dry_sag} m");
 }

@@ -6,6 +6,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// The per-vertex attribute a groom carries its wetness in (0 dry … 1 soaked).
+pub const WETNESS: &str = "wetness";
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WetnessParams {

@@ -7,8 +7,9 @@ use serde::Serialize;
 use super::settle::settle_with;
 use super::{Energy, SettleOptions, SettleReport, SimParams, Simulation};
 use crate::error::{Error, Result};
-use crate::groom::Groom;
+use crate::groom::{AttributeRate, Groom};
 use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
+use crate::interact::wetness::{mass_scale, WetnessParams, WETNESS};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulateOptions {
@@ -68,6 +69,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
         settle.check("--settle-tolerance", "--settle-seconds")?;
     }
     let mut sim = Simulation::new(groom, options.params.clone())?;
+    carry_water(&mut sim, groom);
     let rest = if options.sag_free {
         sim.make_sag_free();
         "sag_free"
@@ -95,6 +97,20 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
         energy: sim.energy(),
     };
     Ok((out, summary))
+}
+
+/// Wet hair is heavier: a groom that carries `wetness` (a styled output still damp, or a wet
+/// groom) is simulated with the water's weight, as styling simulated it, so its exported rest
+/// state holds it still. Readers refuse non-finite values; `mass_scale` clamps to [0, 1].
+fn carry_water(sim: &mut Simulation, groom: &Groom) {
+    let Some(wetness) = groom.attribute(WETNESS) else { return };
+    if wetness.rate != AttributeRate::Vertex || wetness.components != 1 {
+        return;
+    }
+    let params = WetnessParams::default();
+    for (vertex, &w) in wetness.data.iter().enumerate() {
+        sim.set_mass_scale(vertex, mass_scale(w, &params));
+    }
 }
 
 /// The rod solver with contacts against fixed colliders.

@@ -375,7 +375,7 @@ impl Session {
             .collect();
         let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
         let n = groom.vertex_count();
-        let wetness = match groom.attribute("wetness") {
+        let wetness = match groom.attribute(wetness::WETNESS) {
             Some(a) if a.rate == AttributeRate::Vertex && a.components == 1 => a.data.clone(),
             _ => vec![0.0; n],
         };
@@ -445,7 +445,7 @@ impl Session {
     /// What styling changes beside the positions: the simulation's state attributes and wetness.
     fn state(&self) -> Vec<Attribute> {
         let mut state = self.sim.state_attributes();
-        state.push(Attribute::new("wetness", AttributeRate::Vertex, 1, self.wetness.clone()));
+        state.push(Attribute::new(wetness::WETNESS, AttributeRate::Vertex, 1, self.wetness.clone()));
         state
     }
 
