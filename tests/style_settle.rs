@@ -70,3 +70,45 @@ fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
     );
     assert!(still * 100 >= moved.len() * 97, "only {still} strands hold still");
 }
+
+/// A settle finds the rest shape of the chemistry the hair has when it starts: damp hair whose
+/// water would wick towards the roots leaves the settle with the wetness (and so the hydrogen
+/// bonds and weight) it came in with. Left to wick, the blow-dry's damp hair kept changing its
+/// bonds, and its settle never reached the residual within its 10 s.
+#[test]
+fn a_settle_holds_the_chemistry_it_starts_with() {
+    use coif::generate::{generate, GenerateParams};
+    use coif::groom::{Attribute, AttributeRate};
+    use coif::interact::wetness::WETNESS;
+    let mut groom =
+        generate(&GenerateParams { strands: 12, vertices_per_strand: 12, seed: 3, ..Default::default() })
+            .unwrap();
+    // Wet tips, dry roots: wicking would move water along every strand.
+    let mut wetness = vec![0.0f32; groom.vertex_count()];
+    for s in 0..groom.strand_count() {
+        let range = groom.strand_range(s);
+        let n = range.len() as f32;
+        for (k, i) in range.enumerate() {
+            wetness[i] = k as f32 / (n - 1.0);
+        }
+    }
+    groom.set_attribute(Attribute::new(WETNESS, AttributeRate::Vertex, 1, wetness.clone()));
+    let text = r#"
+frame = "head"
+[settings]
+gravity = [0.0, -9.8, 0.0]
+[wetness]
+diffusion = 0.001
+[[stages]]
+kind = "settle"
+max_seconds = 4.0
+"#;
+    let recipe = coif::style::recipe::parse(text, Path::new("settle.toml")).unwrap();
+    let styled = coif::style::style(&groom, &recipe, &Default::default()).unwrap();
+    let settle = styled.report.stages.last().unwrap().settle.unwrap();
+    assert!(settle.converged, "{settle:?}");
+    assert!(styled.groom.points.iter().all(|p| p.is_finite()));
+    let after = &styled.groom.attribute(WETNESS).unwrap().data;
+    let changed = after.iter().zip(&wetness).filter(|(a, b)| a != b).count();
+    assert_eq!(changed, 0, "{changed} of {} vertices changed wetness while settling", wetness.len());
+}
