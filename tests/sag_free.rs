@@ -136,7 +136,7 @@ fn dcc_groom_holds_still(style_kind: Style, solver: StrandSolver, rates: &[u32])
     // Not a vacuous test: most strands count (19 of 30 curly, 22 straight).
     assert!(counted.len() >= groom.strand_count() / 2, "{} strands counted", counted.len());
     for &rate in rates {
-        let params = SimParams { dt: 1.0 / rate as f32, solver, ..SimParams::default() };
+        let params = SimParams { dt: 1.0 / rate as f32, ..SimParams::for_solver(solver) };
         let held = resimulate(&groom, params.clone(), colliders.clone(), true);
         let options = SimulateOptions {
             params,

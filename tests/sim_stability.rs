@@ -134,7 +134,7 @@ fn direct_solver_runs_are_finite_energy_bounded_and_thread_count_independent() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
             let params =
-                SimParams { iterations: 2, solver: coif::sim::StrandSolver::Direct, ..SimParams::default() };
+                SimParams { iterations: 2, ..SimParams::for_solver(coif::sim::StrandSolver::Direct) };
             let mut sim = Simulation::new(&groom, params).unwrap();
             let mut energies = vec![sim.energy().total()];
             for step in 1..=720 {

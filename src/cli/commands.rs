@@ -166,7 +166,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     super::checks::simulate(&args)?;
     io::Format::from_extension(&args.output)?;
     let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
-    let defaults = SimParams::default();
+    let defaults = SimParams::for_solver(args.solver.into());
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
         iterations: args.iterations,
@@ -179,7 +179,6 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
             args.influences[3],
         ]),
         material: coif::sim::Material { youngs_modulus: args.youngs_modulus, ..defaults.material },
-        solver: args.solver.into(),
         ..defaults
     };
     let seconds = args.seconds as f64 + if args.settle { args.settle_seconds as f64 } else { 0.0 };

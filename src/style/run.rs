@@ -1004,8 +1004,7 @@ pub fn sim_params(recipe: &Recipe) -> SimParams {
             ..Material::default()
         },
         influences: BondInfluences([b.hydrogen, b.ionic, b.disulfide, b.peptide]),
-        solver: settings.solver,
-        ..SimParams::default()
+        ..SimParams::for_solver(settings.solver)
     }
 }
 
