@@ -61,8 +61,7 @@ impl<'a> Lexer<'a> {
         self.buffer.copy_within(self.pos..self.end, 0);
         self.end -= self.pos;
         self.pos = 0;
-        let input = &mut self.input;
-        read_up_to(input, &mut self.buffer, &mut self.end, n, &mut self.eof, &mut self.read_error);
+        read_up_to(&mut self.input, &mut self.buffer, &mut self.end, n, &mut self.eof, &mut self.read_error);
     }
 
     #[inline]
