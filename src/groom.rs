@@ -4,6 +4,7 @@
 use std::ops::Range;
 
 use glam::Vec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::surface_mesh::SurfaceMesh;
@@ -237,12 +238,16 @@ impl Groom {
             check_len("guide flags", strands, guides.len())?;
         }
         crate::groups::validate(self)?;
-        // Branch-free passes over the whole arrays first (a read groom is checked whole, so this
-        // is on every import's path); only a groom that fails one is searched for the first fault.
-        let finite = all_finite(bytemuck::cast_slice(&self.points));
+        // Branch-free passes over the whole arrays first, on all threads (a read groom is checked
+        // whole, so this is on every import's path; the passes give booleans and counts, which
+        // do not depend on the split); only a groom that fails one is searched for the first fault.
+        const CHUNK: usize = 1 << 16;
+        let finite = bytemuck::cast_slice::<Vec3, f32>(&self.points).par_chunks(CHUNK).all(all_finite);
         // Finite and not negative: below +inf's bits, or -0.
-        let widths_ok =
-            self.widths.iter().fold(true, |ok, &w| ok & ((w.to_bits() < 0x7f80_0000) | (w == 0.0)));
+        let widths_ok = self
+            .widths
+            .par_chunks(CHUNK)
+            .all(|chunk| chunk.iter().fold(true, |ok, &w| ok & ((w.to_bits() < 0x7f80_0000) | (w == 0.0))));
         let counts_ok = self.strand_offsets.windows(2).fold(true, |ok, w| ok & (w[1] - w[0] >= 2));
         let min_squared = MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH;
         let short = |a: &Vec3, b: &Vec3| (a.distance_squared(*b) <= min_squared) as usize;
@@ -250,7 +255,13 @@ impl Groom {
         // straddle two strands (a strand's tip and the next one's root).
         let long = strands == 0
             || (counts_ok && {
-                let pairs = short_pairs(&self.points, min_squared);
+                // Each chunk with the next one's first point: every pair is counted once.
+                let pairs: usize = (0..vertices.div_ceil(CHUNK))
+                    .into_par_iter()
+                    .map(|k| {
+                        short_pairs(&self.points[k * CHUNK..((k + 1) * CHUNK + 1).min(vertices)], min_squared)
+                    })
+                    .sum();
                 let straddling = self.strand_offsets[1..strands]
                     .iter()
                     .map(|&o| short(&self.points[o as usize - 1], &self.points[o as usize]))
@@ -470,6 +481,30 @@ mod tests {
         assert!(zero.validate().is_ok());
         zero.widths[7] = -f32::from_bits(1);
         assert!(matches!(zero.validate(), Err(GroomError::BadWidth { strand: 0, vertex: 7, .. })));
+    }
+
+    /// The whole-array checks run in chunks of 2^16 points on all threads: a zero-length
+    /// segment across a chunk's end is found, a strand's root touching the previous tip there
+    /// is no segment.
+    #[test]
+    fn whole_array_checks_see_segments_across_chunk_ends() {
+        const CHUNK: usize = 1 << 16;
+        // 48 vertices a strand: the chunk's end falls inside strand 1365 (its vertex 16).
+        let strands: Vec<Vec<Vec3>> =
+            (0..1400).map(|s| (0..48).map(|k| Vec3::new(s as f32, k as f32 * 0.01, 0.0)).collect()).collect();
+        let groom = Groom::from_strands(&strands, 1e-4);
+        assert!(groom.validate().is_ok());
+        for (vertex, strand, segment) in [(CHUNK, 1365, 15), (CHUNK + 1, 1365, 16)] {
+            let mut bad = groom.clone();
+            bad.points[vertex] = bad.points[vertex - 1];
+            assert_eq!(bad.validate(), Err(GroomError::ZeroLengthSegment { strand, segment }));
+        }
+        // 64 vertices a strand: the chunk's end is a strand's end.
+        let strands: Vec<Vec<Vec3>> =
+            (0..1040).map(|s| (0..64).map(|k| Vec3::new(s as f32, k as f32 * 0.01, 0.0)).collect()).collect();
+        let mut touching = Groom::from_strands(&strands, 1e-4);
+        touching.points[CHUNK] = touching.points[CHUNK - 1];
+        assert!(touching.validate().is_ok());
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! Fast path for large numeric arrays (points, widths, primvars): the array's text is taken a
 //! window at a time, cut at element boundaries, and the pieces are parsed on all threads, then
-//! appended in order. Same grammar and errors as the element-by-element path, same values.
+//! appended in order; the reading thread meanwhile appends the previous window's numbers and
+//! reads and cuts the next window (`Lexer::bulk_array`), so only the parse is on the critical
+//! path. Same grammar and errors as the element-by-element path, same values.
 //!
 //! Each number is read in one pass where it starts: a plain decimal (what every writer emits) is
 //! scanned into its digits (eight bytes at a time) and power of ten, and converted exactly
@@ -321,6 +323,7 @@ fn continues_token(byte: Option<&u8>) -> bool {
 pub struct Comments(bool);
 
 impl Comments {
+    #[cfg(test)]
     pub fn in_text(text: &[u8]) -> Self {
         Comments(memchr::memchr(b'#', text).is_some())
     }
@@ -366,17 +369,58 @@ pub fn needs_separator_after_cut(components: usize) -> bool {
     components > 1
 }
 
+/// Where a window of an array's text (from just after the `[`, or after the previous cut) ends
+/// what can be parsed now.
+pub enum Cut {
+    /// The first `len` bytes are whole elements; `closed`: the array's `]` is at `len`.
+    Elements { len: usize, closed: bool, comments: Comments },
+    /// No element ends in the window: a longer window is needed.
+    Longer,
+    /// The input ended before the `]`.
+    Unclosed,
+}
+
+/// Where `window` (the input's end if `eof`) is cut for parsing. One pass over the window in
+/// the usual case: an array without comments, its `]` the first `#` or `]`.
+pub fn cut(window: &[u8], eof: bool, components: usize) -> Cut {
+    let comments = match memchr::memchr2(b'#', b']', window) {
+        Some(i) if window[i] == b']' => {
+            // No comment before the close: none in the elements cut here.
+            return Cut::Elements { len: i, closed: true, comments: Comments(false) };
+        }
+        Some(_) => Comments(true),
+        None => Comments(false),
+    };
+    // Without a `#`, the scan above has shown there is no `]` either.
+    match comments.0.then(|| find_close(window, comments)).flatten() {
+        Some(i) => Cut::Elements { len: i, closed: true, comments },
+        None if eof => Cut::Unclosed,
+        None => match boundary_before(window, window.len(), components, comments) {
+            Some(len) => Cut::Elements { len, closed: false, comments },
+            None => Cut::Longer,
+        },
+    }
+}
+
+/// The numbers of a run of array elements, piece by piece in order (flattened tuples).
+pub struct Parsed<N> {
+    pub pieces: Vec<Vec<N>>,
+    /// Whether a separator is due after the last element.
+    pub need_separator: bool,
+    /// Newlines in the run's text.
+    pub newlines: usize,
+}
+
 /// Parses a run of array elements, `need_separator` saying whether a `,` must come before the
-/// first element. Splits big runs across threads and hands each piece's numbers (flattened) to
-/// `append` in order. Returns whether a separator is due after the last element.
+/// first element. Big runs are split at element boundaries and the pieces parsed on all
+/// threads; the values and the first error (in text order) do not depend on the split.
 pub fn parse_segment<N: Number>(
     text: &[u8],
     components: usize,
     need_separator: bool,
     comments: Comments,
-    mut append: impl FnMut(Vec<N>),
-) -> Result<bool, BulkError> {
-    let pieces = (text.len() / MIN_PIECE).clamp(1, 2 * rayon::current_num_threads().max(1));
+) -> Result<Parsed<N>, BulkError> {
+    let pieces = (text.len() / MIN_PIECE).clamp(1, 8 * rayon::current_num_threads().max(1));
     let mut cuts = vec![0];
     for k in 1..pieces {
         let target = text.len() * k / pieces;
@@ -387,22 +431,26 @@ pub fn parse_segment<N: Number>(
         }
     }
     cuts.push(text.len());
-    let results: Vec<Result<(Vec<N>, bool), BulkError>> = cuts
+    let results: Vec<Result<Parsed<N>, BulkError>> = cuts
         .par_windows(2)
         .enumerate()
         .map(|(k, w)| {
             let need = if k == 0 { need_separator } else { needs_separator_after_cut(components) };
-            parse_piece(&text[w[0]..w[1]], components, need)
-                .map_err(|e| BulkError { offset: w[0] + e.offset, ..e })
+            let piece = &text[w[0]..w[1]];
+            let (values, need) = parse_piece(piece, components, need)
+                .map_err(|e| BulkError { offset: w[0] + e.offset, ..e })?;
+            let newlines = memchr::memchr_iter(b'\n', piece).count();
+            Ok(Parsed { pieces: vec![values], need_separator: need, newlines })
         })
         .collect();
-    let mut need = need_separator;
-    for result in results {
-        let (piece, piece_need) = result?;
-        append(piece);
-        need = piece_need;
+    let mut parsed = Parsed { pieces: Vec::with_capacity(results.len()), need_separator, newlines: 0 };
+    for piece in results {
+        let piece = piece?;
+        parsed.pieces.extend(piece.pieces);
+        parsed.need_separator = piece.need_separator;
+        parsed.newlines += piece.newlines;
     }
-    Ok(need)
+    Ok(parsed)
 }
 
 fn error(offset: usize, message: String) -> BulkError {
@@ -445,19 +493,47 @@ fn read_number<N: Number>(text: &[u8], at: usize, values: &mut Vec<N>) -> Result
     }
 }
 
-/// Most components a tuple read by [`written_element`] may have (`float4`, `quatf`).
-const MAX_WRITTEN_COMPONENTS: usize = 4;
+/// Reads elements laid out as writers lay them out (see [`written_element`]) from `at` on, as
+/// long as they come; returns the offset after the last. `components` from 1 to 4 (`float4`,
+/// `quatf`); others go to the general path.
+fn written_elements<N: Number>(
+    text: &[u8],
+    at: usize,
+    need_separator: &mut bool,
+    components: usize,
+    values: &mut Vec<N>,
+) -> usize {
+    // A constant tuple size, so each tuple is copied out by fixed stores, not a `memmove` call.
+    fn run<N: Number, const C: usize>(
+        text: &[u8],
+        mut at: usize,
+        need_separator: &mut bool,
+        values: &mut Vec<N>,
+    ) -> usize {
+        while let Some(end) = written_element::<N, C>(text, at, *need_separator, values) {
+            at = end;
+            *need_separator = true;
+        }
+        at
+    }
+    match components {
+        1 => run::<N, 1>(text, at, need_separator, values),
+        2 => run::<N, 2>(text, at, need_separator, values),
+        3 => run::<N, 3>(text, at, need_separator, values),
+        4 => run::<N, 4>(text, at, need_separator, values),
+        _ => at,
+    }
+}
 
 /// The element at `at` if it is laid out as writers lay elements out — `, (x, y, z)` or `, x`
 /// (the separator only when one is due), every number [`Number::written`] — appended to
 /// `values`; returns the offset after it. `None` (nothing appended) leaves the element to the
 /// general path, which reads every layout and gives these values too.
 #[inline(always)]
-fn written_element<N: Number>(
+fn written_element<N: Number, const C: usize>(
     text: &[u8],
     mut at: usize,
     need_separator: bool,
-    components: usize,
     values: &mut Vec<N>,
 ) -> Option<usize> {
     // Not a closure: a closure called twice was not inlined, and the call cost a fifth of a number.
@@ -471,7 +547,7 @@ fn written_element<N: Number>(
         }
         at += 2;
     }
-    if components == 1 {
+    if C == 1 {
         let (value, len) = number::<N>(text, at)?;
         values.push(value);
         return Some(at + len);
@@ -480,8 +556,8 @@ fn written_element<N: Number>(
         return None;
     }
     at += 1;
-    let mut tuple = [N::default(); MAX_WRITTEN_COMPONENTS];
-    for (k, slot) in tuple[..components].iter_mut().enumerate() {
+    let mut tuple = [N::default(); C];
+    for (k, slot) in tuple.iter_mut().enumerate() {
         if k > 0 {
             if text.get(at..at + 2)? != b", " {
                 return None;
@@ -495,7 +571,7 @@ fn written_element<N: Number>(
     if text.get(at) != Some(&b')') {
         return None;
     }
-    values.extend_from_slice(&tuple[..components]);
+    values.extend_from_slice(&tuple);
     Some(at + 1)
 }
 
@@ -507,12 +583,7 @@ fn parse_piece<N: Number>(
     let mut values = Vec::with_capacity(text.len() / 8);
     let mut at = 0;
     loop {
-        if (1..=MAX_WRITTEN_COMPONENTS).contains(&components) {
-            while let Some(end) = written_element(text, at, need_separator, components, &mut values) {
-                at = end;
-                need_separator = true;
-            }
-        }
+        at = written_elements(text, at, &mut need_separator, components, &mut values);
         // Anything else, one separator or element at a time.
         at = skip_blank(text, at);
         if at == text.len() {
@@ -581,10 +652,9 @@ mod tests {
     use super::*;
 
     fn parse_all<N: Number>(text: &str, components: usize) -> Result<Vec<N>, String> {
-        let mut values = Vec::new();
         let comments = Comments::in_text(text.as_bytes());
-        parse_segment(text.as_bytes(), components, false, comments, |v: Vec<N>| values.extend(v))
-            .map(|_| values)
+        parse_segment::<N>(text.as_bytes(), components, false, comments)
+            .map(|parsed| parsed.pieces.concat())
             .map_err(|e| format!("at {}: {}", e.offset, e.message))
     }
 

@@ -5,6 +5,10 @@ use std::io::Read;
 
 /// Bytes read from the input at a time.
 const WINDOW: usize = 1 << 20;
+/// A large array's read window: each is cut into pieces for the threads, and a thread left
+/// without a piece at a window's end waits, so a window holds many pieces. Tests use small
+/// windows so that small files span many.
+const BULK_WINDOW: usize = if cfg!(test) { 256 << 10 } else { 4 << 20 };
 /// Longest number token accepted; anything longer is a bad number.
 const MAX_NUMBER: usize = 64;
 
@@ -20,6 +24,8 @@ pub type LexResult<T> = Result<T, LexError>;
 pub struct Lexer<'a> {
     input: Box<dyn Read + 'a>,
     buffer: Vec<u8>,
+    /// The next window of a large array, read while the current one is parsed.
+    spare: Vec<u8>,
     pos: usize,
     end: usize,
     eof: bool,
@@ -33,6 +39,7 @@ impl<'a> Lexer<'a> {
         Lexer {
             input: Box::new(input),
             buffer: vec![0; WINDOW],
+            spare: Vec::new(),
             pos: 0,
             end: 0,
             eof: false,
@@ -54,20 +61,7 @@ impl<'a> Lexer<'a> {
         self.buffer.copy_within(self.pos..self.end, 0);
         self.end -= self.pos;
         self.pos = 0;
-        if self.buffer.len() < n {
-            self.buffer.resize(n, 0);
-        }
-        while self.end < n && !self.eof {
-            match self.input.read(&mut self.buffer[self.end..]) {
-                Ok(0) => self.eof = true,
-                Ok(count) => self.end += count,
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(e) => {
-                    self.read_error = Some(e);
-                    self.eof = true;
-                }
-            }
-        }
+        read_up_to(&mut self.input, &mut self.buffer, &mut self.end, n, &mut self.eof, &mut self.read_error);
     }
 
     #[inline]
@@ -377,20 +371,21 @@ impl Lexer<'_> {
         components: usize,
         mut append: impl FnMut(Vec<N>),
     ) -> LexResult<()> {
+        use super::bulk::Cut;
         /// An element longer than this is not a number tuple.
         const MAX_WINDOW: usize = 64 << 20;
         let start_line = self.line;
         let mut need_separator = false;
-        let mut want = WINDOW;
+        // Numbers parsed from the previous window, appended while the next one is parsed.
+        let mut pending: Vec<Vec<N>> = Vec::new();
+        self.fill(BULK_WINDOW);
+        let mut cut = super::bulk::cut(&self.buffer[self.pos..self.end], self.eof, components);
         loop {
-            self.fill(want);
-            let window = &self.buffer[self.pos..self.end];
             let newlines = |bytes: &[u8]| memchr::memchr_iter(b'\n', bytes).count() as u32;
-            let comments = super::bulk::Comments::in_text(window);
-            let (len, closed) = match super::bulk::find_close(window, comments) {
-                Some(i) => (i, true),
-                None if self.eof => {
-                    let line = self.line + newlines(window);
+            let (len, closed, comments) = match cut {
+                Cut::Elements { len, closed, comments } => (len, closed, comments),
+                Cut::Unclosed => {
+                    let line = self.line + newlines(&self.buffer[self.pos..self.end]);
                     return Err(LexError {
                         line,
                         message: format!(
@@ -398,29 +393,87 @@ impl Lexer<'_> {
                         ),
                     });
                 }
-                None => match super::bulk::boundary_before(window, window.len(), components, comments) {
-                    Some(cut) => (cut, false),
-                    None if window.len() < MAX_WINDOW => {
-                        want = window.len() * 2;
-                        continue;
-                    }
-                    None => return self.error("an array element is too long"),
-                },
+                Cut::Longer if self.end - self.pos < MAX_WINDOW => {
+                    self.fill((2 * (self.end - self.pos)).max(BULK_WINDOW));
+                    cut = super::bulk::cut(&self.buffer[self.pos..self.end], self.eof, components);
+                    continue;
+                }
+                Cut::Longer => return self.error("an array element is too long"),
             };
-            let segment = &window[..len];
-            match super::bulk::parse_segment(segment, components, need_separator, comments, &mut append) {
-                Ok(need) => need_separator = need,
+            // Workers parse this window while this thread appends the previous one's numbers,
+            // reads the next window and finds where to cut it: only the parse is on the path.
+            let segment = &self.buffer[self.pos..self.pos + len];
+            let mut parsed = None;
+            let mut next = None;
+            rayon::in_place_scope(|scope| {
+                scope.spawn(|_| {
+                    parsed =
+                        Some(super::bulk::parse_segment::<N>(segment, components, need_separator, comments))
+                });
+                pending.drain(..).for_each(&mut append);
+                if !closed {
+                    let carried = &self.buffer[self.pos + len..self.end];
+                    self.spare.resize(self.spare.len().max(carried.len() + BULK_WINDOW), 0);
+                    self.spare[..carried.len()].copy_from_slice(carried);
+                    let mut end = carried.len();
+                    let (eof, error) = (&mut self.eof, &mut self.read_error);
+                    read_up_to(
+                        &mut self.input,
+                        &mut self.spare,
+                        &mut end,
+                        carried.len() + BULK_WINDOW,
+                        eof,
+                        error,
+                    );
+                    next = Some((end, super::bulk::cut(&self.spare[..end], self.eof, components)));
+                }
+            });
+            let parsed = match parsed.expect("the scope waits for the parse") {
+                Ok(parsed) => parsed,
                 Err(e) => {
                     let line = self.line + newlines(&segment[..e.offset]);
                     return Err(LexError { line, message: e.message });
                 }
+            };
+            self.line += parsed.newlines as u32;
+            need_separator = parsed.need_separator;
+            pending = parsed.pieces;
+            match next {
+                None => {
+                    self.pos += len + 1;
+                    pending.into_iter().for_each(append);
+                    return Ok(());
+                }
+                Some((end, next_cut)) => {
+                    std::mem::swap(&mut self.buffer, &mut self.spare);
+                    (self.pos, self.end, cut) = (0, end, next_cut);
+                }
             }
-            self.line += newlines(segment);
-            self.pos += len;
-            want = WINDOW;
-            if closed {
-                self.pos += 1;
-                return Ok(());
+        }
+    }
+}
+
+/// Reads from `input` into `buffer[*end..]` until `*end` reaches `n` or the input ends
+/// (`eof`; an I/O error is kept in `read_error` and ends the input too).
+fn read_up_to(
+    input: &mut dyn Read,
+    buffer: &mut Vec<u8>,
+    end: &mut usize,
+    n: usize,
+    eof: &mut bool,
+    read_error: &mut Option<std::io::Error>,
+) {
+    if buffer.len() < n {
+        buffer.resize(n, 0);
+    }
+    while *end < n && !*eof {
+        match input.read(&mut buffer[*end..]) {
+            Ok(0) => *eof = true,
+            Ok(count) => *end += count,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => {
+                *read_error = Some(e);
+                *eof = true;
             }
         }
     }
@@ -468,6 +521,12 @@ pub fn describe(byte: u8) -> String {
 #[cfg(test)]
 pub fn tests_window() -> usize {
     WINDOW
+}
+
+/// A large array's read window in tests.
+#[cfg(test)]
+pub fn tests_bulk_window() -> usize {
+    BULK_WINDOW
 }
 
 #[cfg(test)]

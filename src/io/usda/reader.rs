@@ -920,6 +920,103 @@ mod tests {
         );
     }
 
+    /// A stage whose points, widths and two primvars each span many read windows, numbers
+    /// spelled as writers spell them and otherwise (exponents, `-0`, 25 digits, integers), a
+    /// comment holding `)`, `]` and `,` between elements now and then. Returns the text and
+    /// the values each array must read as (by `str::parse`); `bad`: a bad number at that index
+    /// of the scalar primvar, and the line it is on.
+    fn big_arrays_stage(bad: Option<usize>) -> (String, [Vec<f32>; 4], usize) {
+        const VERTICES: usize = 60_000;
+        let mut rng = <rand_pcg::Pcg64Mcg as rand::SeedableRng>::seed_from_u64(0x05ee_d0fa_11a7_7a75);
+        let mut text = String::from(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"C\"\n{\n    uniform token type = \"linear\"\n",
+        );
+        text += &format!("    int[] curveVertexCounts = [{}]\n", vec!["30"; VERTICES / 30].join(", "));
+        let mut expected: [Vec<f32>; 4] = Default::default();
+        let mut bad_line = 0;
+        let arrays = [
+            ("point3f[] points", 3, ""),
+            ("float[] widths", 1, " (interpolation = \"vertex\")"),
+            ("float3[] primvars:bias", 3, " (interpolation = \"vertex\")"),
+            ("float[] primvars:wetness", 1, " (interpolation = \"vertex\")"),
+        ];
+        for (k, (declaration, components, metadata)) in arrays.into_iter().enumerate() {
+            text += &format!("    {declaration} = [");
+            for i in 0..VERTICES * components {
+                if i > 0 {
+                    text += ", ";
+                }
+                if i % components == 0 && i % 5_001 == 17 {
+                    text += "# a comment with ), ] and , inside\n        ";
+                }
+                if components > 1 && i % components == 0 {
+                    text += "(";
+                }
+                let value = rand::Rng::random_range(&mut rng, -2.0f32..2.0);
+                let spelling = match i % 211 {
+                    0 => format!("{value:e}"),
+                    1 => "-0".to_string(),
+                    2 => format!("{:.25}", f64::from(value)),
+                    3 => format!("{}", value.round()),
+                    _ => format!("{value}"),
+                };
+                if k == 3 && Some(i) == bad {
+                    bad_line = text.matches('\n').count() + 1;
+                    text += "0.5x";
+                } else {
+                    expected[k].push(spelling.parse().unwrap());
+                    text += &spelling;
+                }
+                if components > 1 && i % components == components - 1 {
+                    text += ")";
+                }
+            }
+            text += &format!("]{metadata}\n");
+        }
+        text += "}\n";
+        (text, expected, bad_line)
+    }
+
+    fn read_on_threads(text: &str, threads: usize) -> crate::error::Result<ReadOutcome> {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None))
+    }
+
+    #[test]
+    fn large_arrays_read_to_the_same_bits_and_errors_at_any_thread_count() {
+        let (text, expected, _) = big_arrays_stage(None);
+        // The smallest array (widths) spans two windows, the others many.
+        assert!(text.len() > 20 * crate::io::usda::lexer::tests_bulk_window(), "{} bytes", text.len());
+        let bits = |values: &[f32]| values.iter().map(|v| v.to_bits()).collect::<Vec<u32>>();
+        let mut reads = Vec::new();
+        for threads in [1, 3] {
+            let Ok(ReadOutcome::Groom(groom)) = read_on_threads(&text, threads) else {
+                panic!("a groom on {threads} threads");
+            };
+            let attribute = |name: &str| bits(&groom.attribute(name).expect(name).data);
+            let read = [
+                bits(bytemuck::cast_slice(&groom.points)),
+                bits(&groom.widths),
+                attribute("bias"),
+                attribute("wetness"),
+            ];
+            for (array, (read, expected)) in read.iter().zip(&expected).enumerate() {
+                assert!(*read == bits(expected), "array {array} on {threads} threads");
+            }
+            reads.push(read);
+        }
+        assert!(reads[0] == reads[1]);
+
+        // A bad number deep in the last array: the same message, naming its line, whatever
+        // the thread count.
+        let (text, _, line) = big_arrays_stage(Some(47_011));
+        let errors: Vec<String> = [1, 3]
+            .map(|threads| read_on_threads(&text, threads).err().expect("a bad number").to_string())
+            .into();
+        assert!(errors[0].contains(&format!("line {line}: bad number '0.5x'")), "{}", errors[0]);
+        assert_eq!(errors[0], errors[1]);
+    }
+
     #[test]
     fn varying_values_on_cubic_curves_go_to_the_control_points_at_their_segment_ends() {
         // A 4-point B-spline has 2 segment ends, next to points 1 and 2: 0.1 there and on the
