@@ -7,6 +7,7 @@
 //! Every way of combining strands — readers appending prims, `--group` selecting some groups and
 //! putting the styled ones back — goes through one function, [`assemble`].
 use std::borrow::Cow;
+use std::ops::Range;
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -273,6 +274,71 @@ impl Groom {
         let mut whole = assemble(&parts)?;
         whole.meshes = self.meshes.clone();
         Ok(whole)
+    }
+}
+
+/// The strands of one group: a contiguous range (slices are borrowed) or a list (gathered).
+pub(crate) enum Strands {
+    Range(Range<usize>),
+    List(Vec<usize>),
+}
+
+impl Strands {
+    pub(crate) fn of_group(groom: &Groom, group: usize) -> Strands {
+        if groom.groups.len() <= 1 {
+            return Strands::Range(if group == 0 { 0..groom.strand_count() } else { 0..0 });
+        }
+        let list = groom.group_strands(group);
+        match (list.first(), list.last()) {
+            (Some(&a), Some(&b)) if b + 1 - a == list.len() => Strands::Range(a..b + 1),
+            _ => Strands::List(list),
+        }
+    }
+
+    pub(crate) fn is_empty(&self) -> bool {
+        match self {
+            Strands::Range(r) => r.is_empty(),
+            Strands::List(l) => l.is_empty(),
+        }
+    }
+
+    /// Per-strand data (`components` values per strand).
+    pub(crate) fn per_strand<'d, T: Clone>(&self, data: &'d [T], components: usize) -> Cow<'d, [T]> {
+        match self {
+            Strands::Range(r) => Cow::Borrowed(&data[r.start * components..r.end * components]),
+            Strands::List(l) => Cow::Owned(
+                l.iter().flat_map(|&s| data[s * components..(s + 1) * components].iter().cloned()).collect(),
+            ),
+        }
+    }
+
+    /// Per-vertex data (`components` values per vertex).
+    pub(crate) fn per_vertex<'d, T: Clone>(
+        &self,
+        groom: &Groom,
+        data: &'d [T],
+        components: usize,
+    ) -> Cow<'d, [T]> {
+        let vertices = |r: Range<usize>| r.start * components..r.end * components;
+        match self {
+            Strands::Range(r) if r.is_empty() => Cow::Borrowed(&data[..0]),
+            Strands::Range(r) => {
+                let first = groom.strand_range(r.start).start;
+                let last = groom.strand_range(r.end - 1).end;
+                Cow::Borrowed(&data[vertices(first..last)])
+            }
+            Strands::List(l) => Cow::Owned(
+                l.iter().flat_map(|&s| data[vertices(groom.strand_range(s))].iter().cloned()).collect(),
+            ),
+        }
+    }
+
+    pub(crate) fn counts(&self, groom: &Groom) -> Vec<i32> {
+        let count = |s: usize| groom.strand_range(s).len() as i32;
+        match self {
+            Strands::Range(r) => r.clone().map(count).collect(),
+            Strands::List(l) => l.iter().map(|&s| count(s)).collect(),
+        }
     }
 }
 

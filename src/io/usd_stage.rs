@@ -18,7 +18,6 @@
 //! strands are contiguous, which they are for every groom a reader built; only small per-strand
 //! integer arrays are converted.
 use std::borrow::Cow;
-use std::ops::Range;
 use std::path::Path;
 
 use glam::Vec3;
@@ -26,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
-use crate::groups::Interpolation;
+use crate::groups::{Interpolation, Strands};
 use crate::io::usda::names;
 use crate::primvar_rates;
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
@@ -374,66 +373,6 @@ fn insert<'g>(nodes: &mut Vec<Prim<'g>>, path: &[String], leaf: Prim<'g>) {
         node.properties = leaf.properties;
     } else {
         insert(&mut nodes[index].children, rest, leaf);
-    }
-}
-
-/// The strands of one group: a contiguous range (slices are borrowed) or a list (gathered).
-enum Strands {
-    Range(Range<usize>),
-    List(Vec<usize>),
-}
-
-impl Strands {
-    fn of_group(groom: &Groom, group: usize) -> Strands {
-        if groom.groups.len() <= 1 {
-            return Strands::Range(if group == 0 { 0..groom.strand_count() } else { 0..0 });
-        }
-        let list = groom.group_strands(group);
-        match (list.first(), list.last()) {
-            (Some(&a), Some(&b)) if b + 1 - a == list.len() => Strands::Range(a..b + 1),
-            _ => Strands::List(list),
-        }
-    }
-
-    fn is_empty(&self) -> bool {
-        match self {
-            Strands::Range(r) => r.is_empty(),
-            Strands::List(l) => l.is_empty(),
-        }
-    }
-
-    /// Per-strand data (`components` values per strand).
-    fn per_strand<'d, T: Clone>(&self, data: &'d [T], components: usize) -> Cow<'d, [T]> {
-        match self {
-            Strands::Range(r) => Cow::Borrowed(&data[r.start * components..r.end * components]),
-            Strands::List(l) => Cow::Owned(
-                l.iter().flat_map(|&s| data[s * components..(s + 1) * components].iter().cloned()).collect(),
-            ),
-        }
-    }
-
-    /// Per-vertex data (`components` values per vertex).
-    fn per_vertex<'d, T: Clone>(&self, groom: &Groom, data: &'d [T], components: usize) -> Cow<'d, [T]> {
-        let vertices = |r: Range<usize>| r.start * components..r.end * components;
-        match self {
-            Strands::Range(r) if r.is_empty() => Cow::Borrowed(&data[..0]),
-            Strands::Range(r) => {
-                let first = groom.strand_range(r.start).start;
-                let last = groom.strand_range(r.end - 1).end;
-                Cow::Borrowed(&data[vertices(first..last)])
-            }
-            Strands::List(l) => Cow::Owned(
-                l.iter().flat_map(|&s| data[vertices(groom.strand_range(s))].iter().cloned()).collect(),
-            ),
-        }
-    }
-
-    fn counts(&self, groom: &Groom) -> Vec<i32> {
-        let count = |s: usize| groom.strand_range(s).len() as i32;
-        match self {
-            Strands::Range(r) => r.clone().map(count).collect(),
-            Strands::List(l) => l.iter().map(|&s| count(s)).collect(),
-        }
     }
 }
 

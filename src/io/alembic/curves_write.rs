@@ -14,8 +14,8 @@ use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
 use super::curves_read::POLYMESH_SCHEMA;
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
-use crate::groom::{attr, AttributeKind, AttributeRate, CurveBasis, CurveWrap, Groom};
-use crate::groups::Interpolation;
+use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groups::{Interpolation, Strands};
 use crate::primvar_rates;
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 
@@ -130,12 +130,63 @@ struct MeshObject {
     clockwise_indices: Vec<i32>,
 }
 
-/// The curves object of one group: its properties, the group's index and, when the groom has
-/// several groups, the group's strands.
+/// The curves object of one group: its properties, the group's index and its strands.
 struct GroupObject {
     properties: CurveProperties,
     group: usize,
-    strands: Option<Vec<usize>>,
+    strands: Strands,
+}
+
+/// What one curves object is written from: its group's strands, borrowed from the whole groom
+/// when they lie in one run (readers keep each prim's or object's strands together), else
+/// gathered — never a copy of the whole groom.
+struct GroupPart<'g> {
+    group: Cow<'g, CurveGroup>,
+    points: Cow<'g, [Vec3]>,
+    widths: Cow<'g, [f32]>,
+    counts: Vec<i32>,
+    strand_ids: Cow<'g, [u32]>,
+    guides: Option<Cow<'g, [bool]>>,
+    root_uvs: Option<Cow<'g, [[f32; 2]]>>,
+    /// The attributes the group carries, with its strands' values.
+    attributes: Vec<(&'g Attribute, Cow<'g, [f32]>)>,
+}
+
+impl<'g> GroupPart<'g> {
+    fn of(groom: &'g Groom, group: usize, strands: &Strands) -> Self {
+        let group = groom.group(group);
+        let attributes = groom
+            .attributes
+            .iter()
+            .filter(|a| group.carries(&a.name))
+            .map(|a| {
+                let data = match a.rate {
+                    AttributeRate::Strand => strands.per_strand(&a.data, a.components),
+                    AttributeRate::Vertex => strands.per_vertex(groom, &a.data, a.components),
+                };
+                (a, data)
+            })
+            .collect();
+        GroupPart {
+            points: strands.per_vertex(groom, &groom.points, 1),
+            widths: strands.per_vertex(groom, &groom.widths, 1),
+            counts: strands.counts(groom),
+            strand_ids: strands.per_strand(&groom.strand_ids, 1),
+            guides: groom.guides.as_deref().map(|g| strands.per_strand(g, 1)),
+            root_uvs: groom.root_uvs.as_deref().map(|u| strands.per_strand(u, 1)),
+            attributes,
+            group,
+        }
+    }
+
+    fn strand_count(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// Attribute `name` and its values.
+    fn attribute(&self, name: &str) -> Option<(&'g Attribute, &[f32])> {
+        self.attributes.iter().find(|(a, _)| a.name == name).map(|(a, data)| (*a, &data[..]))
+    }
 }
 
 /// Writes curves samples into an Alembic stream: one sample for a static groom, or one per
@@ -185,26 +236,36 @@ impl<W: Write + Seek> CurvesWriter<W> {
         if let Some(matrix) = options.xform {
             parent = add_xform(&mut archive, parent, "xform", Some(matrix))?;
         }
-        let parts = if with_curves { first.split_groups().map_err(io::Error::other)? } else { Vec::new() };
-        let several = parts.len() > 1;
+        // One curves object per group with strands (a groom of one plain group gets its object
+        // even when it has none).
+        let plain = first.groups.len() <= 1 && first.group(0).missing.is_empty();
+        let groups: Vec<(usize, Strands)> = if with_curves {
+            (0..first.group_count())
+                .map(|g| (g, Strands::of_group(first, g)))
+                .filter(|(_, strands)| plain || !strands.is_empty())
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let several = groups.len() > 1;
         let mut tree = Tree { parent, nodes: Vec::new() };
-        let mut objects = Vec::with_capacity(parts.len());
-        for (group, curve_group, part) in &parts {
+        let mut objects = Vec::with_capacity(groups.len());
+        for (group, strands) in groups {
+            let part = GroupPart::of(first, group, &strands);
             // A group's path becomes Xforms above a curves object named after its last part.
             let properties =
-                tree.place(&mut archive, &curve_group.name, &options.object_name, |a, at, name| {
+                tree.place(&mut archive, &part.group.name, &options.object_name, |a, at, name| {
                     add_curves(
                         a,
                         at,
                         name,
-                        part,
-                        (*group, several),
+                        &part,
+                        (group, several),
                         (options.unreal, animated && options.velocities),
                         time_sampling,
                     )
                 })?;
-            let strands = several.then(|| first.group_strands(*group));
-            objects.push(GroupObject { properties, group: *group, strands });
+            objects.push(GroupObject { properties, group, strands });
         }
         let mut meshes = Vec::new();
         if options.objects != Objects::Curves {
@@ -304,17 +365,10 @@ impl<W: Write + Seek> CurvesWriter<W> {
             }
         }
         for k in 0..self.objects.len() {
-            let Some(strands) = &self.objects[k].strands else {
-                self.write_object_sample(k, groom, velocities)?;
-                continue;
-            };
-            let mut part = crate::groups::assemble(&[(groom, strands)]).map_err(io::Error::other)?;
-            let group = groom.group(self.objects[k].group).into_owned();
-            part.attributes.retain(|a| group.carries(&a.name));
-            part.set_single_group(group);
-            let part_velocities: Option<Vec<Vec3>> = velocities
-                .map(|v| strands.iter().flat_map(|&s| v[groom.strand_range(s)].iter().copied()).collect());
-            self.write_object_sample(k, &part, part_velocities.as_deref())?;
+            let GroupObject { group, strands, .. } = &self.objects[k];
+            let part = GroupPart::of(groom, *group, strands);
+            let velocities = velocities.map(|v| strands.per_vertex(groom, v, 1));
+            self.write_object_sample(k, &part, velocities.as_deref())?;
         }
         Ok(())
     }
@@ -322,31 +376,31 @@ impl<W: Write + Seek> CurvesWriter<W> {
     fn write_object_sample(
         &mut self,
         object: usize,
-        groom: &Groom,
+        part: &GroupPart,
         velocities: Option<&[Vec3]>,
     ) -> io::Result<()> {
         let scale = self.scale;
         let points: Cow<[Vec3]> = if scale == 1.0 {
-            Cow::Borrowed(&groom.points)
+            Cow::Borrowed(&part.points)
         } else {
-            Cow::Owned(groom.points.iter().map(|p| *p * scale).collect())
+            Cow::Owned(part.points.iter().map(|p| *p * scale).collect())
         };
         let p = &self.objects[object].properties;
-        let counts: Vec<i32> = groom.vertex_counts().map(|c| c as i32).collect();
+        let counts = &part.counts;
         let velocities: Vec<Vec3> = velocities.unwrap_or(&[]).iter().map(|v| *v * scale).collect();
-        let mut basis = basis_bytes(groom.basis);
-        basis[1] = (groom.group(0).wrap == CurveWrap::Periodic) as u8;
+        let mut basis = basis_bytes(part.group.basis);
+        basis[1] = (part.group.wrap == CurveWrap::Periodic) as u8;
         // Samples in the order the C++ writer sets them (.arbGeomParams members before the
         // optional schema properties), so files match it byte for byte.
         let mut samples: Vec<(PropertyId, Cow<[u8]>, u64)> = vec![
             (p.bounds, Cow::Owned(bounds_bytes(&points)), 1),
             (p.positions, Cow::Borrowed(bytemuck::cast_slice(&points)), points.len() as u64),
-            (p.vertex_counts, Cow::Borrowed(bytemuck::cast_slice(&counts)), counts.len() as u64),
+            (p.vertex_counts, Cow::Borrowed(bytemuck::cast_slice(counts)), counts.len() as u64),
             (p.basis, Cow::Owned(basis.to_vec()), 1),
         ];
         let widths: Cow<[f32]> = match p.width_rate {
-            None => Cow::Borrowed(&groom.widths),
-            Some(rate) => match group_widths(groom, Some(rate)) {
+            None => Cow::Borrowed(&part.widths),
+            Some(rate) => match group_widths(part, Some(rate)) {
                 Some((_, values)) => Cow::Owned(values),
                 None => {
                     return Err(io::Error::new(
@@ -354,7 +408,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
                         format!(
                             "frame {}: the widths of {} no longer fit the rate of the first frame ({})",
                             self.frames,
-                            groom.group(0).name,
+                            part.group.name,
                             rate.alembic_scope()
                         ),
                     ))
@@ -362,17 +416,17 @@ impl<W: Write + Seek> CurvesWriter<W> {
             },
         };
         for (id, source) in &p.params {
-            let (bytes, elements) = param_bytes(groom, source, &widths, scale);
+            let (bytes, elements) = param_bytes(part, source, &widths, scale);
             samples.push((*id, bytes, elements));
         }
         if let Some(id) = p.velocities {
             samples.push((id, Cow::Borrowed(bytemuck::cast_slice(&velocities)), velocities.len() as u64));
         }
         if let Some(id) = p.uv {
-            let (bytes, elements) = param_bytes(groom, &ParamSource::RootUvs, &widths, scale);
+            let (bytes, elements) = param_bytes(part, &ParamSource::RootUvs, &widths, scale);
             samples.push((id, bytes, elements));
         }
-        let (bytes, elements) = param_bytes(groom, &ParamSource::Widths, &widths, scale);
+        let (bytes, elements) = param_bytes(part, &ParamSource::Widths, &widths, scale);
         samples.push((p.width, bytes, elements));
         // Keys are pure functions of the bytes: hash on every core, then write in order.
         let keys: Vec<[u8; 16]> = samples.par_iter().map(|(_, bytes, _)| sample_key(bytes)).collect();
@@ -395,13 +449,13 @@ fn layout(groom: &Groom) -> Vec<(String, AttributeRate, usize)> {
         groom.attributes.iter().map(|a| (a.name.clone(), a.rate, a.components)).collect();
     layout.push(("(root uvs)".into(), AttributeRate::Strand, groom.root_uvs.is_some() as usize));
     layout.push(("(guides)".into(), AttributeRate::Strand, groom.guides.is_some() as usize));
-    layout.push(("(ids)".into(), AttributeRate::Strand, has_custom_ids(groom) as usize));
+    layout.push(("(ids)".into(), AttributeRate::Strand, has_custom_ids(&groom.strand_ids) as usize));
     layout
 }
 
 /// Strand ids are only worth writing when they are not simply 0, 1, 2, …
-fn has_custom_ids(groom: &Groom) -> bool {
-    groom.strand_ids.iter().enumerate().any(|(i, &id)| id != i as u32)
+fn has_custom_ids(ids: &[u32]) -> bool {
+    ids.iter().enumerate().any(|(i, &id)| id != i as u32)
 }
 
 fn velocities(
@@ -419,14 +473,14 @@ fn velocities(
     })
 }
 
-/// The widths of a one-group groom at the rate its file gave them, while they fit it
-/// (`rate`: the one the first frame chose, which a later frame must fit too); `None`: per vertex.
+/// The widths of a group at the rate its file gave them, while they fit it (`rate`: the one the
+/// first frame chose, which a later frame must fit too); `None`: per vertex.
 /// Alembic has no pinned curves: `var` counts segment ends as on nonperiodic ones.
-fn group_widths(groom: &Groom, rate: Option<Interpolation>) -> Option<(Interpolation, Vec<f32>)> {
-    let group = groom.group(0);
-    let counts: Vec<usize> = groom.vertex_counts().collect();
+fn group_widths(part: &GroupPart, rate: Option<Interpolation>) -> Option<(Interpolation, Vec<f32>)> {
+    let group = &part.group;
+    let counts: Vec<usize> = part.counts.iter().map(|&c| c as usize).collect();
     let rate = rate.or(group.width_interpolation);
-    primvar_rates::widths_at(rate, group.basis, CurveWrap::Nonperiodic, &counts, &groom.widths)
+    primvar_rates::widths_at(rate, group.basis, CurveWrap::Nonperiodic, &counts, &part.widths)
 }
 
 fn geom_param_metadata(scope: &str, pod: Pod, extent: u8, interpretation: &str) -> MetaData {
@@ -499,7 +553,7 @@ fn add_curves<W: Write + Seek>(
     archive: &mut ArchiveWriter<W>,
     parent: ObjectId,
     name: &str,
-    groom: &Groom,
+    part: &GroupPart,
     (group, several_groups): (usize, bool),
     (unreal, with_velocities): (bool, bool),
     ts: u32,
@@ -509,7 +563,7 @@ fn add_curves<W: Write + Seek>(
     let basis = archive.add_scalar(geom, "curveBasisAndType", MetaData::new(), Pod::U8, 4, ts);
 
     // Unreal reads widths per file, strand or vertex, but not per segment end.
-    let width_rate = group_widths(groom, None)
+    let width_rate = group_widths(part, None)
         .map(|(rate, _)| rate)
         .filter(|&rate| !(unreal && rate == Interpolation::Varying));
     let width_scope = width_rate.map_or("vtx", Interpolation::alembic_scope);
@@ -517,19 +571,19 @@ fn add_curves<W: Write + Seek>(
     if unreal {
         sources.push((epic::WIDTH.to_string(), ParamSource::Widths));
     }
-    if unreal || has_custom_ids(groom) {
+    if unreal || has_custom_ids(&part.strand_ids) {
         sources.push((epic::ID.to_string(), ParamSource::StrandIds));
     }
-    if groom.guides.is_some() {
+    if part.guides.is_some() {
         sources.push((epic::GUIDE.to_string(), ParamSource::Guides));
     }
     if unreal || several_groups {
         sources.push((epic::GROUP_ID.to_string(), ParamSource::GroupId(group as u32)));
     }
-    if unreal && groom.root_uvs.is_some() {
+    if unreal && part.root_uvs.is_some() {
         sources.push((epic::ROOT_UV.to_string(), ParamSource::RootUvs));
     }
-    for attribute in &groom.attributes {
+    for (attribute, _) in &part.attributes {
         let name = match (unreal, attribute.name.as_str()) {
             (false, name) => name.to_string(),
             (true, attr::COLOR) => epic::COLOR.to_string(),
@@ -549,7 +603,7 @@ fn add_curves<W: Write + Seek>(
                 }
                 ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
                 ParamSource::Attribute(a) => {
-                    let a = groom.attribute(a).expect("listed from the groom");
+                    let (a, _) = part.attribute(a).expect("listed from the group");
                     let pod = pod(a.kind, &a.name);
                     (pod, a.components as u8, a.rate, interpretation(a.kind, &a.name, a.components))
                 }
@@ -572,7 +626,7 @@ fn add_curves<W: Write + Seek>(
             ts,
         )
     });
-    let uv = groom.root_uvs.is_some().then(|| {
+    let uv = part.root_uvs.is_some().then(|| {
         let metadata = geom_param_metadata("uni", Pod::F32, 2, "vector");
         archive.add_array(geom, "uv", metadata, Pod::F32, 2, ts)
     });
@@ -808,7 +862,7 @@ fn written_as_int32(name: &str) -> bool {
 
 /// The bytes and element count of a parameter; `widths` are the groom's at the rate written.
 fn param_bytes<'g>(
-    groom: &'g Groom,
+    part: &'g GroupPart,
     source: &ParamSource,
     widths: &'g [f32],
     scale: f32,
@@ -823,32 +877,32 @@ fn param_bytes<'g>(
     match source {
         ParamSource::Widths => (floats(widths, scale), widths.len() as u64),
         ParamSource::StrandIds => (
-            Cow::Owned(groom.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect()),
-            groom.strand_ids.len() as u64,
+            Cow::Owned(part.strand_ids.iter().flat_map(|&id| (id as i32).to_le_bytes()).collect()),
+            part.strand_ids.len() as u64,
         ),
         ParamSource::Guides => {
-            let guides = groom.guides.as_deref().unwrap_or(&[]);
+            let guides = part.guides.as_deref().unwrap_or(&[]);
             (Cow::Owned(guides.iter().flat_map(|&g| (g as i32).to_le_bytes()).collect()), guides.len() as u64)
         }
         ParamSource::GroupId(group) => {
-            let count = groom.strand_count();
+            let count = part.strand_count();
             (Cow::Owned(group.to_le_bytes().repeat(count)), count as u64)
         }
         ParamSource::RootUvs => {
-            let uvs = groom.root_uvs.as_deref().unwrap_or(&[]);
+            let uvs = part.root_uvs.as_deref().unwrap_or(&[]);
             (floats(bytemuck::cast_slice(uvs), 1.0), uvs.len() as u64)
         }
         ParamSource::Attribute(name) => {
-            let a = groom.attribute(name).expect("layout is fixed by the first frame");
+            let (a, data) = part.attribute(name).expect("layout is fixed by the first frame");
             // Rest positions are positions: they follow the unit change.
             let factor = if name == "rest" { scale } else { 1.0 };
+            let elements = (data.len() / a.components.max(1)) as u64;
             match pod(a.kind, name) {
-                Pod::I32 => (
-                    Cow::Owned(a.data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()),
-                    a.len() as u64,
-                ),
-                Pod::Bool => (Cow::Owned(a.data.iter().map(|&v| (v != 0.0) as u8).collect()), a.len() as u64),
-                _ => (floats(&a.data, factor), a.len() as u64),
+                Pod::I32 => {
+                    (Cow::Owned(data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()), elements)
+                }
+                Pod::Bool => (Cow::Owned(data.iter().map(|&v| (v != 0.0) as u8).collect()), elements),
+                _ => (floats(data, factor), elements),
             }
         }
     }

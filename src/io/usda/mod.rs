@@ -26,9 +26,10 @@ pub use crate::io::usd_stage::{check_writable, unsupported, TimeCodes, DEFAULT_P
 pub use writer::{write, write_animated, write_stage};
 // The crate-file module writes the same stage and reads into the same layer model.
 pub(crate) use parser::{offer_sample, wanted};
-pub use parser::{Attribute, Layer, LayerTimeline, Prim, Site, Specifier, Value};
+pub use parser::{Attribute, FileArray, FileArrays, Layer, LayerTimeline, Prim, Site, Specifier, Value};
 pub(crate) use reader::{
-    groom_from_layer, local_transform, places_with_time_samples, stage_transform, value_at,
+    groom_from_layer, groom_from_layer_in, local_transform, places_with_time_samples, stage_transform,
+    value_at,
 };
 
 /// Errors about a spec name the file and line where it was authored: on a composed stage, the

@@ -23,6 +23,31 @@ pub enum Value {
     Blocked,
     /// A value coif does not read (parsed for syntax only).
     Ignored,
+    /// A plain float array still in a crate file; the groom is read from such arrays straight
+    /// into its own (see [`FileArrays`]). Only the crate reader's groom path makes these.
+    InFile(FileArray),
+}
+
+/// Where a [`Value::InFile`] array lies in its file: `bytes` bytes at `offset`, `components`
+/// `f32`s per element.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FileArray {
+    pub offset: u64,
+    pub bytes: usize,
+    pub components: usize,
+}
+
+impl FileArray {
+    pub fn elements(&self) -> usize {
+        self.bytes / (4 * self.components.max(1))
+    }
+}
+
+/// The file [`Value::InFile`] arrays are read from.
+pub trait FileArrays {
+    /// Appends `array`'s floats to `out`; an error says why it could not (`out` is then as it
+    /// was).
+    fn append_floats(&self, array: &FileArray, out: &mut Vec<f32>) -> std::result::Result<(), String>;
 }
 
 impl Value {

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
-use super::parser::{Attribute, Layer, Prim, Site, Value};
+use super::parser::{Attribute, FileArray, FileArrays, Layer, Prim, Site, Value};
 use super::{names, SiteFiles, DEFAULT_WIDTH};
 use crate::error::{Error, Result};
 use crate::groom::{
@@ -27,8 +27,11 @@ struct Curves {
     wrap: CurveWrap,
     purpose: Option<String>,
     counts: Vec<u32>,
-    points: Vec<Vec3>,
-    widths: Vec<f32>,
+    /// In the file's space until [`merge`] puts them in coif's with `to_coif`.
+    points: Bulk<Vec3>,
+    /// Per vertex; `None`: not authored (coif's default width).
+    widths: Option<Bulk<f32>>,
+    to_coif: DMat4,
     strand_ids: Option<Vec<u32>>,
     root_uvs: Option<Vec<[f32; 2]>>,
     guides: Option<Vec<bool>>,
@@ -36,6 +39,22 @@ struct Curves {
     /// Attributes read from `constant` or exactly-per-vertex `varying` primvars.
     interpolations: Vec<(String, Interpolation)>,
     width_interpolation: Option<Interpolation>,
+}
+
+/// A prim's points or widths: read, or still in a crate file (read by [`merge`] straight into
+/// their place in the groom).
+enum Bulk<T> {
+    Read(Vec<T>),
+    InFile(FileArray),
+}
+
+impl<T> Bulk<T> {
+    fn len(&self) -> usize {
+        match self {
+            Bulk::Read(values) => values.len(),
+            Bulk::InFile(array) => array.elements(),
+        }
+    }
 }
 
 /// The transform from a layer's space to coif's (metres, Y up), applied after each prim's world
@@ -85,7 +104,18 @@ pub fn places_with_time_samples(layer: &Layer) -> bool {
 
 /// Builds the groom a layer describes, at `time` (see [`value_at`]).
 pub fn groom_from_layer(
+    layer: Layer,
+    path: &Path,
+    options: &ImportOptions,
+    time: Option<f64>,
+) -> Result<Groom> {
+    groom_from_layer_in(layer, None, path, options, time)
+}
+
+/// [`groom_from_layer`] of a layer whose [`Value::InFile`] arrays are in `arrays`.
+pub fn groom_from_layer_in(
     mut layer: Layer,
+    arrays: Option<&dyn FileArrays>,
     path: &Path,
     options: &ImportOptions,
     time: Option<f64>,
@@ -94,7 +124,8 @@ pub fn groom_from_layer(
     let layer_lines = layer.lines;
     let sources = std::mem::take(&mut layer.sources);
     let files = SiteFiles::new(path, &sources);
-    let mut walker = Walker { files, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
+    let mut walker =
+        Walker { files, arrays, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
     for prim in layer.prims {
         walker.visit(prim, "", DMat4::IDENTITY, None)?;
     }
@@ -115,13 +146,14 @@ pub fn groom_from_layer(
             ));
         }
     }
-    let mut groom = merge(walker.found, files, path, layer_lines)?;
+    let mut groom = merge(walker.found, arrays, files, path, layer_lines)?;
     groom.meshes = walker.meshes;
     Ok(groom)
 }
 
 struct Walker<'a> {
     files: SiteFiles<'a>,
+    arrays: Option<&'a dyn FileArrays>,
     time: Option<f64>,
     stage: DMat4,
     found: Vec<Curves>,
@@ -220,6 +252,17 @@ impl Walker<'_> {
         self.files.error(site, format!("prim <{prim_path}>: {message}"))
     }
 
+    /// `value`, read from the file if it is still there.
+    fn read(&self, value: Value) -> std::result::Result<Value, String> {
+        let Value::InFile(array) = value else { return Ok(value) };
+        let mut floats = Vec::with_capacity(array.bytes / 4);
+        append_array(self.arrays, &array, &mut floats)?;
+        Ok(match array.components {
+            3 => Value::Vec3(vec3s(floats)),
+            _ => Value::F32(floats),
+        })
+    }
+
     /// Reads one `Mesh` prim (a scalp, head or body) in coif's space, wound counter-clockwise;
     /// `None` when it has no points or faces (an empty placeholder).
     fn mesh(&self, prim: &mut Prim, prim_path: &str, world: DMat4) -> Result<Option<SurfaceMesh>> {
@@ -229,7 +272,8 @@ impl Walker<'_> {
             return Ok(None);
         };
         let points_site = points_attr.site;
-        let points: Vec<Vec3> = match take_value(points_attr, time) {
+        let points = take_value(points_attr, time).map(|v| self.read(v)).transpose();
+        let points: Vec<Vec3> = match points.map_err(|m| at_prim(points_site, format!("points: {m}")))? {
             None => return Ok(None),
             Some(Value::Vec3(points)) => points,
             Some(other) => match other.to_f32() {
@@ -323,12 +367,17 @@ impl Walker<'_> {
         let points_site = points_attr.site;
         let points = match take_value(points_attr, time) {
             None => return Ok(None),
-            Some(Value::Vec3(points)) => points,
+            Some(Value::InFile(array)) if array.components == 3 => Bulk::InFile(array),
+            Some(Value::Vec3(points)) => Bulk::Read(points),
             // point3d[] and other numeric spellings of 3-vectors.
-            Some(other) => match other.to_f32() {
-                Some(flat) if flat.len() % 3 == 0 => flat.chunks_exact(3).map(Vec3::from_slice).collect(),
-                _ => return Err(at_prim(points_site, "'points' must be a point3f[] array".into())),
-            },
+            Some(other) => {
+                match self.read(other).map_err(|m| at_prim(points_site, format!("points: {m}")))?.to_f32() {
+                    Some(flat) if flat.len() % 3 == 0 => {
+                        Bulk::Read(flat.chunks_exact(3).map(Vec3::from_slice).collect())
+                    }
+                    _ => return Err(at_prim(points_site, "'points' must be a point3f[] array".into())),
+                }
+            }
         };
         let counts_attr = prim.attribute("curveVertexCounts");
         let counts_site = counts_attr.map_or(prim.site, |a| a.site);
@@ -360,7 +409,16 @@ impl Walker<'_> {
                 let interpolation = attr.interpolation.clone().unwrap_or_else(|| "vertex".into());
                 match take_value(attr, time) {
                     None => None,
+                    // Per-vertex widths in a crate file: read by `merge`, straight into place.
+                    Some(Value::InFile(array))
+                        if interpolation == "vertex"
+                            && array.components == 1
+                            && array.elements() == points.len() =>
+                    {
+                        Some(Bulk::InFile(array))
+                    }
                     Some(value) => {
+                        let value = self.read(value).map_err(|m| at_prim(site, format!("widths: {m}")))?;
                         let values = value
                             .into_f32()
                             .ok_or_else(|| at_prim(site, "'widths' must be a float[] array".into()))?;
@@ -374,7 +432,7 @@ impl Walker<'_> {
                             "varying" => Some(Interpolation::Varying),
                             _ => None,
                         };
-                        Some(layout.to_vertex(rate, 1, data))
+                        Some(Bulk::Read(layout.to_vertex(rate, 1, data)))
                     }
                 }
             }
@@ -388,7 +446,8 @@ impl Walker<'_> {
             purpose,
             counts: counts.clone(),
             points,
-            widths: Vec::new(),
+            widths,
+            to_coif: self.stage * world,
             strand_ids: None,
             root_uvs: None,
             guides: None,
@@ -415,6 +474,7 @@ impl Walker<'_> {
             let (kind_components, element_size) =
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
             let Some(value) = take_value(attr, time) else { continue };
+            let value = self.read(value).map_err(|m| at_prim(site, format!("primvars:{name}: {m}")))?;
             // Strand ids one per curve, as integers: through `f32` ids past 2^24 would round.
             if let (names::GROOM_ID, "uniform", None, Value::Int(ids)) =
                 (name.as_str(), interpolation.as_str(), &indices, &value)
@@ -475,22 +535,10 @@ impl Walker<'_> {
             }
         }
 
-        // World transform composed with the stage's units and up axis.
-        let to_coif = self.stage * world;
-        if to_coif != DMat4::IDENTITY {
-            let width_scale = to_coif.determinant().abs().cbrt() as f32;
-            let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
-            curves.points.iter_mut().for_each(|p| *p = transform(*p));
-            crate::io::transform_attributes(&mut curves.attributes, to_coif);
-            curves.widths = match widths {
-                Some(mut w) => {
-                    w.iter_mut().for_each(|w| *w *= width_scale);
-                    w
-                }
-                None => vec![DEFAULT_WIDTH; curves.points.len()],
-            };
-        } else {
-            curves.widths = widths.unwrap_or_else(|| vec![DEFAULT_WIDTH; curves.points.len()]);
+        // World transform composed with the stage's units and up axis (points and widths follow
+        // in `merge`).
+        if curves.to_coif != DMat4::IDENTITY {
+            crate::io::transform_attributes(&mut curves.attributes, curves.to_coif);
         }
         Ok(Some(curves))
     }
@@ -645,6 +693,18 @@ impl Layout<'_> {
                 out
             }
         }
+    }
+}
+
+/// Appends `array`'s floats, read from `arrays`, to `out`.
+fn append_array(
+    arrays: Option<&dyn FileArrays>,
+    array: &FileArray,
+    out: &mut Vec<f32>,
+) -> std::result::Result<(), String> {
+    match arrays {
+        Some(arrays) => arrays.append_floats(array, out),
+        None => Err(format!("an array of {} bytes left in a file coif does not have", array.bytes)),
     }
 }
 
@@ -832,9 +892,17 @@ fn xform_op(name: &str, v: &[f64]) -> std::result::Result<DMat4, String> {
     })
 }
 
-/// One groom from all curve prims, one group per prim. Strand ids are renumbered unless every
-/// prim has them; a lone prim named as coif writes it gets no group table.
-fn merge(found: Vec<Curves>, files: SiteFiles, path: &Path, lines: u32) -> Result<Groom> {
+/// One groom from all curve prims, one group per prim, points and widths in coif's space.
+/// Strand ids are renumbered unless every prim has them; a lone prim named as coif writes it
+/// gets no group table. Arrays still in a crate file are read straight into their place in the
+/// groom, so its bulk is copied once, from the file.
+fn merge(
+    found: Vec<Curves>,
+    arrays: Option<&dyn FileArrays>,
+    files: SiteFiles,
+    path: &Path,
+    lines: u32,
+) -> Result<Groom> {
     if found.is_empty() {
         return Err(Error::format(
             path,
@@ -843,11 +911,41 @@ fn merge(found: Vec<Curves>, files: SiteFiles, path: &Path, lines: u32) -> Resul
     }
     let all_ids = found.iter().all(|c| c.strand_ids.is_some());
     let sites: Vec<(String, Site)> = found.iter().map(|c| (c.path.clone(), c.site)).collect();
-    let mut groom =
-        Groom::concat(found.into_iter().map(Curves::into_groom).collect()).map_err(|(index, e)| {
-            let (prim_path, site) = &sites[index];
-            files.error(*site, format!("prim <{prim_path}> does not fit the prims before it: {e}"))
-        })?;
+    let in_file = found
+        .iter()
+        .any(|c| matches!(c.points, Bulk::InFile(_)) || matches!(c.widths, Some(Bulk::InFile(_))));
+    let joined = if in_file {
+        let total: usize = found.iter().map(|c| c.points.len()).sum();
+        let (mut points, mut widths) = (Vec::with_capacity(3 * total), Vec::with_capacity(total));
+        crate::io::input::advise_huge_pages(points.spare_capacity_mut());
+        crate::io::input::advise_huge_pages(widths.spare_capacity_mut());
+        for curves in &found {
+            curves.append_vertices(&mut points, &mut widths, arrays).map_err(|m| {
+                files.error(curves.site, format!("prim <{}>: reading its points or widths: {m}", curves.path))
+            })?;
+        }
+        let parts = found.into_iter().map(|c| c.into_groom(Vec::new(), Vec::new())).collect();
+        Groom::concat_placed(parts, vec3s(points), widths)
+    } else {
+        let parts = found.into_iter().map(|mut c| {
+            let mut points = match std::mem::replace(&mut c.points, Bulk::Read(Vec::new())) {
+                Bulk::Read(points) => points,
+                Bulk::InFile(_) => unreachable!("no array is in a file"),
+            };
+            let (mut widths, authored) = match c.widths.take() {
+                Some(Bulk::Read(widths)) => (widths, true),
+                None => (vec![DEFAULT_WIDTH; points.len()], false),
+                Some(Bulk::InFile(_)) => unreachable!("no array is in a file"),
+            };
+            to_coif_space(c.to_coif, &mut points, &mut widths, authored);
+            c.into_groom(points, widths)
+        });
+        Groom::concat(parts.collect())
+    };
+    let mut groom = joined.map_err(|(index, e)| {
+        let (prim_path, site) = &sites[index];
+        files.error(*site, format!("prim <{prim_path}> does not fit the prims before it: {e}"))
+    })?;
     if !all_ids {
         groom.strand_ids = (0..groom.strand_count() as u32).collect();
     }
@@ -855,8 +953,60 @@ fn merge(found: Vec<Curves>, files: SiteFiles, path: &Path, lines: u32) -> Resul
     Ok(groom)
 }
 
+/// Points and widths in coif's space: transformed by `to_coif`, authored widths (`authored`)
+/// by its scale (coif's default width is not scaled).
+fn to_coif_space(to_coif: DMat4, points: &mut [Vec3], widths: &mut [f32], authored: bool) {
+    if to_coif != DMat4::IDENTITY {
+        let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
+        points.iter_mut().for_each(|p| *p = transform(*p));
+        if authored {
+            let width_scale = to_coif.determinant().abs().cbrt() as f32;
+            widths.iter_mut().for_each(|w| *w *= width_scale);
+        }
+    }
+}
+
+/// Floats three by three as points (moved when the allocation allows, else copied).
+fn vec3s(floats: Vec<f32>) -> Vec<Vec3> {
+    bytemuck::allocation::try_cast_vec(floats)
+        .unwrap_or_else(|(_, floats)| floats.chunks_exact(3).map(Vec3::from_slice).collect())
+}
+
 impl Curves {
-    fn into_groom(self) -> Groom {
+    /// Appends the prim's points (three floats each) and widths, in coif's space, to `points`
+    /// and `widths`, reading what is still in the file from `arrays`.
+    fn append_vertices(
+        &self,
+        points: &mut Vec<f32>,
+        widths: &mut Vec<f32>,
+        arrays: Option<&dyn FileArrays>,
+    ) -> std::result::Result<(), String> {
+        let first = widths.len();
+        match &self.points {
+            Bulk::Read(read) => points.extend_from_slice(bytemuck::cast_slice(read)),
+            Bulk::InFile(array) => append_array(arrays, array, points)?,
+        }
+        let authored = match &self.widths {
+            None => {
+                widths.resize(first + self.points.len(), DEFAULT_WIDTH);
+                false
+            }
+            Some(Bulk::Read(read)) => {
+                widths.extend_from_slice(read);
+                true
+            }
+            Some(Bulk::InFile(array)) => {
+                append_array(arrays, array, widths)?;
+                true
+            }
+        };
+        let placed: &mut [Vec3] = bytemuck::cast_slice_mut(&mut points[3 * first..]);
+        to_coif_space(self.to_coif, placed, &mut widths[first..], authored);
+        Ok(())
+    }
+
+    /// The prim as a groom of one group, with these points and widths.
+    fn into_groom(self, points: Vec<Vec3>, widths: Vec<f32>) -> Groom {
         let mut groom = Groom { strand_offsets: vec![0], ..Default::default() };
         let mut offset = 0u32;
         groom.strand_offsets.extend(self.counts.iter().map(|&c| {
@@ -864,8 +1014,8 @@ impl Curves {
             offset
         }));
         groom.strand_ids = self.strand_ids.unwrap_or_else(|| (0..self.counts.len() as u32).collect());
-        groom.points = self.points;
-        groom.widths = self.widths;
+        groom.points = points;
+        groom.widths = widths;
         groom.root_uvs = self.root_uvs;
         // Houdini marks guide curves by the prim's purpose rather than a per-strand flag.
         groom.guides = self

@@ -31,11 +31,21 @@ pub fn read(
     options: &ImportOptions,
     time: Option<f64>,
 ) -> Result<ReadOutcome> {
-    let layer = read_layer(bytes, file, path, time)?;
+    let bad = |message: String| Error::format(path, format!("crate file: {message}"));
+    let mut crate_file = Crate::parse(bytes).map_err(bad)?;
+    crate_file.file = file;
+    // Points and widths stay in the file until the groom has a place for them, so they are
+    // copied once, from the file, however many prims there are.
+    crate_file.leave_in_file = true;
+    let layer = crate_file.layer(time).map_err(bad)?;
     if layer.composes() {
-        return Ok(ReadOutcome::NeedsComposition(Box::new(layer)));
+        // Composition reads the layer as any other: with every value decoded.
+        crate_file.leave_in_file = false;
+        return Ok(ReadOutcome::NeedsComposition(Box::new(crate_file.layer(time).map_err(bad)?)));
     }
-    usda::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom).map_err(unline)
+    usda::groom_from_layer_in(layer, Some(&crate_file), path, options, time)
+        .map(ReadOutcome::Groom)
+        .map_err(unline)
 }
 
 /// The layer model's line numbers mean nothing in a binary file.
@@ -86,6 +96,9 @@ struct Crate<'a> {
     /// The file `bytes` maps, if any: large arrays are read from it straight into the groom's
     /// memory, so their pages never enter the map (half the peak memory, no page faults).
     file: Option<&'a std::fs::File>,
+    /// Attributes' plain `points` (`float3` kinds) and `widths` (`float`) arrays are left in the
+    /// file as [`Value::InFile`], for the groom reader to read into place.
+    leave_in_file: bool,
     version: (u8, u8, u8),
     tokens: Vec<String>,
     strings: Vec<u32>,
@@ -267,7 +280,18 @@ impl<'a> Crate<'a> {
             }
             specs.push(Spec { path, fieldset, kind });
         }
-        Ok(Crate { bytes, file: None, version, tokens, strings, fields, fieldsets, paths, specs })
+        Ok(Crate {
+            bytes,
+            file: None,
+            leave_in_file: false,
+            version,
+            tokens,
+            strings,
+            fields,
+            fieldsets,
+            paths,
+            specs,
+        })
     }
 
     fn token(&self, index: u64) -> Checked<&str> {
@@ -584,8 +608,15 @@ impl<'a> Crate<'a> {
                 "interpolation" => attribute.interpolation = Some(self.text(value).map_err(fail)?),
                 "elementSize" => attribute.element_size = self.number(value).map_err(fail)?.map(|n| n as i64),
                 "default" => {
-                    attribute.default =
-                        Some(if keep { self.value(value).map_err(fail)? } else { Value::Ignored })
+                    let in_file =
+                        self.leave_in_file && matches!(attribute.name.as_str(), "points" | "widths");
+                    attribute.default = Some(if !keep {
+                        Value::Ignored
+                    } else if in_file {
+                        self.value_or_in_file(value).map_err(fail)?
+                    } else {
+                        self.value(value).map_err(fail)?
+                    })
                 }
                 "timeSamples" if keep => attribute.samples = self.time_samples(value, time).map_err(fail)?,
                 _ => {}
@@ -685,6 +716,28 @@ impl<'a> Crate<'a> {
     fn value(&self, value: u64) -> Checked<Value> {
         let kind = Self::kind(value)?;
         self.value_as(value, kind)
+    }
+
+    /// [`Crate::value`], but a plain (uncompressed) array of `float`s or `float3`s stays in the
+    /// file as a [`Value::InFile`].
+    fn value_or_in_file(&self, value: u64) -> Checked<Value> {
+        let kind = Self::kind(value)?;
+        let components = match kind {
+            Type::Float => 1,
+            Type::Vec3f => 3,
+            _ => return self.value_as(value, kind),
+        };
+        // Compressed arrays are decoded, once, as any other value.
+        if !rep::is_array(value) || rep::is_inline(value) || rep::is_compressed(value) {
+            return self.value_as(value, kind);
+        }
+        match self.array(value, Elem::F32, components)? {
+            ArrayData::Raw(bytes) if !bytes.is_empty() => {
+                let offset = (bytes.as_ptr() as usize - self.bytes.as_ptr() as usize) as u64;
+                Ok(Value::InFile(usda::FileArray { offset, bytes: bytes.len(), components }))
+            }
+            _ => self.value_as(value, kind),
+        }
     }
 
     /// Decodes `value`, whose element type is `kind` (a double vector reads as doubles).
@@ -988,6 +1041,51 @@ impl Crate<'_> {
             None => target.copy_from_slice(bytes),
         }
         Ok(out)
+    }
+}
+
+impl usda::FileArrays for Crate<'_> {
+    fn append_floats(&self, array: &usda::FileArray, out: &mut Vec<f32>) -> Checked<()> {
+        let bytes = self.at(array.offset, array.bytes)?;
+        let count = bytes.len() / 4;
+        if bytes.len() != count * 4 {
+            return Err(format!("an array of {} bytes is not a whole number of floats", bytes.len()));
+        }
+        // Straight into the spare capacity: the pages of a large reserved array are touched once,
+        // by the copy, not zeroed first.
+        out.reserve(count);
+        let target = out.spare_capacity_mut()[..count].as_mut_ptr().cast::<u8>();
+        match self.file {
+            Some(file) => {
+                use std::os::fd::AsRawFd;
+                let mut done = 0;
+                while done < bytes.len() {
+                    let at = (array.offset + done as u64) as libc::off_t;
+                    // SAFETY: writes at most the `bytes.len() - done` bytes left of the `count`
+                    // spare floats reserved above, which nothing else refers to.
+                    let read = unsafe {
+                        libc::pread(file.as_raw_fd(), target.add(done).cast(), bytes.len() - done, at)
+                    };
+                    match read {
+                        0 => return Err("reading an array: the file ends early".into()),
+                        n if n > 0 => done += n as usize,
+                        _ => {
+                            let error = std::io::Error::last_os_error();
+                            if error.kind() != std::io::ErrorKind::Interrupted {
+                                return Err(format!("reading an array: {error}"));
+                            }
+                        }
+                    }
+                }
+            }
+            // SAFETY: `bytes` (a borrow of the map) and the spare floats reserved above do not
+            // overlap, and the spare capacity holds `bytes.len()` bytes.
+            None => unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), target, bytes.len()) },
+        }
+        // SAFETY: every byte of the first `count` spare floats was written above; an f32 takes
+        // any bits.
+        unsafe { out.set_len(out.len() + count) };
+        Ok(())
     }
 }
 

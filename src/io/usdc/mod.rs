@@ -47,7 +47,9 @@
 //! The writer emits version 0.8.0 (what usd-core writes); the reader accepts 0.4.0 to 0.12.x.
 //! Reading builds the same layer model as the `.usda` parser, arcs included, so both formats
 //! give the same groom and `io::usd_compose` composes either — no Python is ever started for a
-//! crate file.
+//! crate file. A groom read leaves plain `points` and `widths` arrays in the file until the
+//! groom's arrays are sized, then reads each prim's into its place: one copy, from the file,
+//! however many prims (a composed file decodes every value first, as `.usda` does).
 mod compress;
 mod decode;
 mod encode;
@@ -134,4 +136,60 @@ fn with_file<T>(path: &Path, read: impl FnOnce(&[u8], Option<&std::fs::File>) ->
     // files by renaming, never truncating them in place (as for `input::map_file`).
     let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| Error::io(path, e))?;
     read(&map, Some(&file))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::groom::{CurveBasis, CurveWrap};
+    use crate::groups::{CurveGroup, Interpolation};
+
+    /// Two groups: per-vertex widths of all-different values (a plain array the read leaves in
+    /// the file) and uniform ones (decoded with the layer).
+    fn two_groups() -> Groom {
+        let part = |strands: usize, name: &str, uniform: bool| {
+            let lines: Vec<Vec<Vec3>> = (0..strands)
+                .map(|s| {
+                    (0..5).map(|k| Vec3::new(s as f32 * 0.37, k as f32 * 0.011, 0.25 - s as f32)).collect()
+                })
+                .collect();
+            let mut groom = Groom::from_strands(&lines, 0.0);
+            groom.widths = (0..groom.points.len())
+                .map(|v| if uniform { 2e-4 + (v / 5) as f32 * 1e-6 } else { 1e-4 + v as f32 * 1.3e-7 })
+                .collect();
+            let mut group = CurveGroup::new(name, CurveBasis::Linear, CurveWrap::Nonperiodic);
+            group.width_interpolation = uniform.then_some(Interpolation::Uniform);
+            groom.set_single_group(group);
+            groom
+        };
+        Groom::concat(vec![part(3, "/Groom/A", false), part(4, "/Groom/B", true), part(2, "/Groom/C", false)])
+            .unwrap()
+    }
+
+    #[test]
+    fn points_and_widths_read_into_place_from_the_file_or_its_bytes_equal_the_usda_reading() {
+        let groom = two_groups();
+        let dir = tempfile::tempdir().unwrap();
+        let (usdc, usda) = (dir.path().join("g.usdc"), dir.path().join("g.usda"));
+        write(&usdc, &groom).unwrap();
+        let mut text = Vec::new();
+        usda::write(&groom, &mut text).unwrap();
+        let groom_of = |outcome: ReadOutcome| match outcome {
+            ReadOutcome::Groom(groom) => groom,
+            ReadOutcome::NeedsComposition(_) => panic!("nothing to compose"),
+        };
+        let options = ImportOptions::default();
+        let from_file = groom_of(read_file(&usdc, &options, None).unwrap());
+        let bytes = std::fs::read(&usdc).unwrap();
+        let from_bytes = groom_of(read(&bytes, &usdc, &options, None).unwrap());
+        let from_text = groom_of(usda::read(text.as_slice(), &usda, &options, None).unwrap());
+        for read in [&from_file, &from_bytes] {
+            assert_eq!(*read, from_text);
+            assert_eq!(read.points, groom.points);
+            assert_eq!(read.widths, groom.widths);
+            assert_eq!(read.strand_offsets, groom.strand_offsets);
+            let names: Vec<&str> = read.groups.iter().map(|g| g.name.as_str()).collect();
+            assert_eq!(names, ["/Groom/A", "/Groom/B", "/Groom/C"]);
+        }
+    }
 }
