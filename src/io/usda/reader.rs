@@ -281,21 +281,29 @@ impl Walker<'_> {
                 _ => return Err(at_prim(points_site, "'points' must be a point3f[] array".into())),
             },
         };
-        let ints = |name: &str| -> Result<Option<Vec<u32>>> {
-            let Some(attribute) = prim.attribute(name) else { return Ok(None) };
-            match value_at(attribute, time) {
+        // Taken, not copied, from the layer (the scalp's indices are the mesh's bulk); every
+        // value is checked before any is narrowed.
+        let mut ints = |name: &str| -> Result<Option<Vec<u32>>> {
+            let Some(attribute) = prim.attributes.iter_mut().find(|a| a.name == name) else {
+                return Ok(None);
+            };
+            match take_value(attribute, time) {
                 None => Ok(None),
-                Some(Value::Int(values)) => values
-                    .iter()
-                    .map(|&v| u32::try_from(v).ok())
-                    .collect::<Option<Vec<u32>>>()
-                    .map(Some)
-                    .ok_or_else(|| at_prim(attribute.site, format!("'{name}' holds a negative value"))),
+                // Branch-free: a negative value is above u32::MAX as u64 too.
+                Some(Value::Int(values))
+                    if values.iter().fold(0, |high, &v| high.max(v as u64)) <= u32::MAX as u64 =>
+                {
+                    Ok(Some(values.into_iter().map(|v| v as u32).collect()))
+                }
+                Some(Value::Int(_)) => {
+                    Err(at_prim(attribute.site, format!("'{name}' holds a negative value")))
+                }
                 Some(_) => Err(at_prim(attribute.site, format!("'{name}' must be an int[] array"))),
             }
         };
-        let (Some(face_counts), Some(face_indices)) = (ints("faceVertexCounts")?, ints("faceVertexIndices")?)
-        else {
+        let face_counts = ints("faceVertexCounts")?;
+        let face_indices = ints("faceVertexIndices")?;
+        let (Some(face_counts), Some(face_indices)) = (face_counts, face_indices) else {
             return Ok(None);
         };
         if face_counts.is_empty() {

@@ -765,6 +765,7 @@ impl<'a> Crate<'a> {
             match self.array(value, elem, components)? {
                 ArrayData::Scalars(scalars) => scalars,
                 ArrayData::Floats(values) => return Ok(Value::F32(values)),
+                ArrayData::Ints(values) => return Ok(Value::Int(values)),
                 // Plain float arrays (points, widths, primvars) are copied as they lie.
                 ArrayData::Raw(bytes) if elem == Elem::F32 && !matches!(kind, Quatf) => {
                     return Ok(if components == 3 {
@@ -772,6 +773,12 @@ impl<'a> Crate<'a> {
                     } else {
                         Value::F32(self.copy_out(bytes)?)
                     });
+                }
+                // Integers (mesh faces, indices, ids) straight to the layer model's, no `Scalar`s.
+                ArrayData::Raw(bytes) if matches!(elem, Elem::U8 | Elem::I32 | Elem::U32 | Elem::I64) => {
+                    return Ok(Value::Int(
+                        bytes.chunks_exact(elem.size()).map(|c| elem.read(c).i64()).collect(),
+                    ));
                 }
                 ArrayData::Raw(bytes) => bytes.chunks_exact(elem.size()).map(|c| elem.read(c)).collect(),
             }
@@ -865,7 +872,7 @@ impl<'a> Crate<'a> {
         let integer = matches!(elem, Elem::I32 | Elem::U32 | Elem::I64) && components == 1;
         let float = matches!(elem, Elem::Half | Elem::F32 | Elem::F64) && components == 1;
         if compressed && integer {
-            return Ok(ArrayData::Scalars(ints(at, elem)?.into_iter().map(Scalar::I64).collect()));
+            return Ok(ArrayData::Ints(ints(at, elem)?));
         }
         if compressed && float && self.version.1 >= 6 {
             return Ok(ArrayData::Scalars(match self.at(at, 1)?[0] {
@@ -919,6 +926,8 @@ impl<'a> Crate<'a> {
 enum ArrayData<'a> {
     Raw(&'a [u8]),
     Floats(Vec<f32>),
+    /// A compressed integer array, decoded.
+    Ints(Vec<i64>),
     Scalars(Vec<Scalar>),
 }
 
