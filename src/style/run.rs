@@ -785,8 +785,8 @@ impl Session {
         self.run_steps(steps, progress, |s, _| apply(s));
     }
 
-    /// The static solve (`sim::settle`) with this session's full step: forces, contacts and
-    /// wetness.
+    /// The static solve (`sim::settle`) with this session's forces and contacts, its chemistry
+    /// held ([`Self::settle_step`]).
     fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> SettleReport {
         let budget = self.steps_for(options.max_seconds).max(1);
         let report = settle_with(self, |s| &mut s.sim, Self::settle_step, options, || progress.inc(1));
