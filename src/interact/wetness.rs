@@ -6,6 +6,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::sim::Simulation;
+
 /// The per-vertex attribute a groom carries its wetness in (0 dry … 1 soaked).
 pub const WETNESS: &str = "wetness";
 
@@ -37,6 +39,13 @@ pub fn hydrogen_rate(wetness: f32) -> f32 {
 /// Mass multiplier of a vertex with this wetness.
 pub fn mass_scale(wetness: f32, params: &WetnessParams) -> f32 {
     1.0 + params.mass_gain * wetness.clamp(0.0, 1.0)
+}
+
+/// Gives every vertex of `sim` the weight of the water it holds (`wetness` per vertex).
+pub fn carry_water(sim: &mut Simulation, wetness: &[f32], params: &WetnessParams) {
+    for (vertex, &w) in wetness.iter().enumerate() {
+        sim.set_mass_scale(vertex, mass_scale(w, params));
+    }
 }
 
 /// One step of evaporation: ambient drying scaled by heat, plus S1-19's drying by wind, where

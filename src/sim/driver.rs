@@ -9,7 +9,7 @@ use super::{Energy, SettleOptions, SettleReport, SimParams, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::{AttributeRate, Groom};
 use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
-use crate::interact::wetness::{mass_scale, WetnessParams, WETNESS};
+use crate::interact::wetness::{carry_water, WetnessParams, WETNESS};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulateOptions {
@@ -69,7 +69,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
         settle.check("--settle-tolerance", "--settle-seconds")?;
     }
     let mut sim = Simulation::new(groom, options.params.clone())?;
-    carry_water(&mut sim, groom);
+    water_weight(&mut sim, groom);
     let rest = if options.sag_free {
         sim.make_sag_free();
         "sag_free"
@@ -102,14 +102,11 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
 /// Wet hair is heavier: a groom that carries `wetness` (a styled output still damp, or a wet
 /// groom) is simulated with the water's weight, as styling simulated it, so its exported rest
 /// state holds it still. Readers refuse non-finite values; `mass_scale` clamps to [0, 1].
-fn carry_water(sim: &mut Simulation, groom: &Groom) {
-    let Some(wetness) = groom.attribute(WETNESS) else { return };
-    if wetness.rate != AttributeRate::Vertex || wetness.components != 1 {
-        return;
-    }
-    let params = WetnessParams::default();
-    for (vertex, &w) in wetness.data.iter().enumerate() {
-        sim.set_mass_scale(vertex, mass_scale(w, &params));
+fn water_weight(sim: &mut Simulation, groom: &Groom) {
+    if let Some(wetness) = groom.attribute(WETNESS) {
+        if wetness.rate == AttributeRate::Vertex && wetness.components == 1 {
+            carry_water(sim, &wetness.data, &WetnessParams::default());
+        }
     }
 }
 

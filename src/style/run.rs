@@ -612,9 +612,7 @@ impl Session {
     }
 
     fn apply_mass(&mut self) {
-        for (v, &w) in self.wetness.iter().enumerate() {
-            self.sim.set_mass_scale(v, wetness::mass_scale(w, &self.wetness_params));
-        }
+        wetness::carry_water(&mut self.sim, &self.wetness, &self.wetness_params);
     }
 
     fn run_steps(&mut self, steps: u64, progress: &Progress, mut each: impl FnMut(&mut Self, u64)) {
