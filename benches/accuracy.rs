@@ -1,7 +1,8 @@
 //! Solver accuracy (issue 15), as figures rather than pass/fail, so the solver's progress can be
 //! followed and compared between branches:
-//! - `invariance`: the bed-head preset on a thin groom (every 20th strand of
-//!   `seed_200x24cm.hair`) styled at Δt 1/240 … 1/1440 and 5, 10, 20 iterations. Mean and largest
+//! - `invariance`: the bed-head, water-set and perm presets on thin seed grooms (every 20th strand
+//!   of `seed_200x24cm.hair`, every 10th of `seed_100x48cm.hair`) styled at Δt 1/240 … 1/1440 and
+//!   5, 10, 20 iterations (FILTER may name one preset). Mean and largest
 //!   distance of the settled shape and of the `rest` curves to the finest run (Δt 1/1440, 20
 //!   iterations), in % of the strand length; the largest collider penetration of any stage.
 //! - `cantilever`: a clamped horizontal hair of 8 segments of 2 mm … 3 cm, settled under a gravity
@@ -33,9 +34,7 @@ fn main() {
         StrandSolver::GaussSeidel
     };
     println!("solver: {solver:?}");
-    if run("invariance") {
-        invariance(solver);
-    }
+    invariance(solver, &run);
     if run("cantilever") {
         cantilever(solver);
     }
@@ -68,30 +67,51 @@ fn difference(a: &[Vec3], b: &[Vec3], length: f32) -> (f32, f32) {
     (100.0 * mean / length, 100.0 * max / length)
 }
 
-fn invariance(solver: StrandSolver) {
+/// The presets the invariance figures style: recipe, groom and which strands of it (every n-th).
+const INVARIANCE_PRESETS: [(&str, &str, usize); 3] = [
+    ("bedhead_scene1", "seed_200x24cm.hair", 20),
+    ("water_set", "seed_200x24cm.hair", 20),
+    ("perm_scene3", "seed_100x48cm.hair", 10),
+];
+
+fn invariance(solver: StrandSolver, run: &dyn Fn(&str) -> bool) {
+    for (name, groom, step) in INVARIANCE_PRESETS {
+        if run("invariance") || run(name) {
+            invariance_of(solver, name, groom, step);
+        }
+    }
+}
+
+fn invariance_of(solver: StrandSolver, name: &str, groom_file: &str, step: usize) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let preset = std::fs::read_to_string(root.join("grooms/recipes/bedhead_scene1.toml")).expect("preset");
-    assert!(preset.contains("dt = 0.0027777778") && preset.contains("iterations = 5"));
-    let groom = coif::io::read_groom(&root.join("grooms/seed_200x24cm.hair"), &Default::default())
+    let recipe_path = root.join(format!("grooms/recipes/{name}.toml"));
+    let preset = std::fs::read_to_string(&recipe_path).expect("preset");
+    let dt_key = preset.lines().find(|l| l.starts_with("dt = ")).expect("the preset sets dt").to_owned();
+    let iterations_key = preset
+        .lines()
+        .find(|l| l.starts_with("iterations = "))
+        .expect("the preset sets iterations")
+        .to_owned();
+    let groom = coif::io::read_groom(&root.join("grooms").join(groom_file), &Default::default())
         .expect("seed groom")
         .groom;
-    let groom = thin(&groom, 20);
+    let groom = thin(&groom, step);
     let length: f32 = groom.strand_points(0).windows(2).map(|w| w[0].distance(w[1])).sum();
     println!(
-        "invariance: bedhead_scene1 on {} strands of {:.3} m; distances to Δt 1/1440 × 20 iterations, \
+        "invariance: {name} on {} strands of {:.3} m; distances to Δt 1/1440 × 20 iterations, \
          % of the strand length",
         groom.strand_count(),
         length
     );
     let styled = |rate: u32, iterations: u32| {
         let text = preset
-            .replace("dt = 0.0027777778", &format!("dt = {}", 1.0 / rate as f64))
-            .replace("iterations = 5", &format!("iterations = {iterations}"));
+            .replace(&dt_key, &format!("dt = {}", 1.0 / rate as f64))
+            .replace(&iterations_key, &format!("iterations = {iterations}"));
         let text = match solver {
             StrandSolver::Direct => text.replace("[settings]", "[settings]\nsolver = \"direct\""),
             StrandSolver::GaussSeidel => text,
         };
-        let recipe = recipe::parse(&text, &root.join("grooms/recipes/bedhead_scene1.toml")).expect("recipe");
+        let recipe = recipe::parse(&text, &recipe_path).expect("recipe");
         let start = Instant::now();
         let out = style(&groom, &recipe, &StyleOptions::default()).expect("style");
         (out, start.elapsed().as_secs_f64())
