@@ -180,7 +180,10 @@ fn same_recipe_same_bytes_on_one_and_two_threads() {
 #[test]
 fn malformed_recipes_exit_2_with_the_line_and_write_nothing() {
     let base = std::fs::read_to_string(repo("grooms/recipes/perm_scene3.toml")).unwrap();
-    let line_of = |needle: &str, text: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
+    // The last line containing `needle` (the preset settles first and last).
+    let line_of = |needle: &str, text: &str| {
+        text.lines().collect::<Vec<_>>().iter().rposition(|l| l.contains(needle)).unwrap() + 1
+    };
     let cases: Vec<(&str, String, String)> = vec![
         {
             let t = base.replace("iterations = 5", "iterations = 5\nsubstep = 2");

@@ -813,8 +813,10 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                 held = None;
             }
             Stage::Settle { max_seconds, tolerance, .. } => {
-                if index != last {
-                    return fail("settle must be the last stage".into());
+                // First, it hangs the groom at rest before the style (so the style does not
+                // depend on how a groom out of balance falls); last, it relaxes the styled hair.
+                if index != 0 && index != last {
+                    return fail("settle must be the first or the last stage".into());
                 }
                 if let Some(holder) = held {
                     return fail(format!("the hair is still held by the earlier {holder}; release it first"));
@@ -947,11 +949,21 @@ kind = "settle"
         let e = error_of(&no_release);
         assert!(e.contains("settle") && e.contains("release it first"), "{e}");
 
-        let early_settle = PERM.replace(
+        // A settle may hang the groom at rest first, but not interrupt the style.
+        let hang_first = PERM.replace(
             "[[stages]]\nkind = \"wrap\"",
             "[[stages]]\nkind = \"settle\"\n\n[[stages]]\nkind = \"wrap\"",
         );
-        assert!(error_of(&early_settle).contains("last stage"));
+        assert_eq!(parse(&hang_first, Path::new("r.toml")).unwrap().stages.len(), 6);
+        let settle_between = PERM.replace(
+            "[[stages]]\nkind = \"lotion\"",
+            "[[stages]]\nkind = \"settle\"\n\n[[stages]]\nkind = \"lotion\"",
+        );
+        assert!(
+            error_of(&settle_between).contains("first or the last stage"),
+            "{}",
+            error_of(&settle_between)
+        );
 
         let neutralise_first = PERM.replace(
             "kind = \"lotion\"\nduration = 1.0\nbreak = { ionic = 1.0, disulfide = 0.2 }",
