@@ -124,29 +124,35 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
     if start >= edges {
         return;
     }
+    // Every array as long as the strand, stated once, lets the compiler drop bounds checks.
+    assert!([s.q.len(), s.lambda.len(), s.w.len(), s.wq.len(), s.length.len(), s.rest.len(), s.pair_k.len()]
+        .iter()
+        .all(|&len| len == n));
     let sc = scratch;
     reserve(&mut sc.eliminated, n);
     reserve(&mut sc.values, n);
     reserve(&mut sc.g, n);
     reserve(&mut sc.d, n);
     reserve(&mut sc.c_bt, n);
+    let (eliminated, values) = (&mut sc.eliminated[..n], &mut sc.values[..n]);
+    let (g, d3, c_bt) = (&mut sc.g[..n], &mut sc.d[..n], &mut sc.c_bt[..n]);
 
     let turn_w = |e: usize| if e >= start { 4.0 * s.wq[e] as f64 } else { 0.0 };
     let has_pair = |e: usize| e >= 1 && e >= start.max(1);
     // Constraint values and Jacobian pieces.
     for e in start..edges {
         let q = s.q[e];
-        sc.d[e] = director3(q).as_dvec3();
+        d3[e] = director3(q).as_dvec3();
         if has_pair(e) {
             let u = s.q[e - 1].conjugate() * q;
             let v = DVec3::new(u.x as f64, u.y as f64, u.z as f64);
             let rest = s.rest[e];
             let w0 = (1.0 - rest.length_squared()).max(0.0).sqrt();
             let rest = if u.w * w0 + Vec3::new(u.x, u.y, u.z).dot(rest) < 0.0 { -rest } else { rest };
-            sc.c_bt[e] = v - rest.as_dvec3();
+            c_bt[e] = v - rest.as_dvec3();
             let k = (DMat3::from_diagonal(DVec3::splat(u.w as f64)) - cross_matrix(v)) * 0.5;
             let r_prev = DMat3::from_quat(s.q[e - 1].as_dquat());
-            sc.g[e] = k * r_prev.transpose();
+            g[e] = k * r_prev.transpose();
         }
     }
     // Assemble, factor and eliminate forward. `schur` is what the previous edge's elimination
@@ -155,19 +161,18 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
     let mut schur = [DMat3::ZERO; 3];
     for e in start..edges {
         let l = s.length[e] as f64;
-        let d = sc.d[e];
+        let d = d3[e];
         let we = turn_w(e);
         let (w1, w2) = (s.w[e] as f64, s.w[e + 1] as f64);
         let (mut p00, mut p10);
         let mut rhs: Pair = [DVec3::ZERO, DVec3::ZERO];
         if has_pair(e) {
-            let g = sc.g[e];
+            let g_e = g[e];
             let alpha = s.pair_k[e].compliance_dt2.as_dvec3();
             let frames = turn_w(e - 1) + we;
-            p00 = g * g.transpose() * frames + DMat3::from_diagonal(alpha);
-            p10 = cross_columns(d, g.transpose()) * (l * we); // ∂C_ss/∂θ_e = l·[d]×
-
-            rhs[0] = -sc.c_bt[e] - alpha * s.lambda[e].as_dvec3();
+            p00 = g_e * g_e.transpose() * frames + DMat3::from_diagonal(alpha);
+            p10 = cross_columns(d, g_e.transpose()) * (l * we); // ∂C_ss/∂θ_e = l·[d]×
+            rhs[0] = -c_bt[e] - alpha * s.lambda[e].as_dvec3();
         } else {
             p00 = DMat3::IDENTITY;
             p10 = DMat3::ZERO;
@@ -185,23 +190,23 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
             *m += DMat3::from_diagonal(DVec3::splat(scale * 1e-9));
         }
         if e > start {
-            let previous = &sc.eliminated[e - 1];
+            let previous = &eliminated[e - 1];
             p00 -= schur[0];
             p10 -= schur[1].transpose();
             p11 -= schur[2];
-            let carried = previous.coupling_transposed(sc.values[e - 1]);
+            let carried = previous.coupling_transposed(values[e - 1]);
             rhs = [rhs[0] - carried[0], rhs[1] - carried[1]];
         }
         let p00_inv = p00.inverse();
         let f = p10 * p00_inv;
         let s_inv = (p11 - f * p10.transpose()).inverse();
         let mut el = Eliminated { f, p00_inv, s_inv, x: DMat3::ZERO, y: DMat3::ZERO, w: w2 };
-        sc.values[e] = el.lower_solve(rhs);
+        values[e] = el.lower_solve(rhs);
         // The coupling to edge e + 1: U = [[A, 0], [B, −w·I]], L⁻¹·U = [[A, 0], [B − F·A, −w·I]].
         if e + 1 < edges {
             let (a, b) = if has_pair(e + 1) {
-                let g_next_t = sc.g[e + 1].transpose();
-                let a = if has_pair(e) { -(sc.g[e] * g_next_t) * we } else { DMat3::ZERO };
+                let g_next_t = g[e + 1].transpose();
+                let a = if has_pair(e) { -(g[e] * g_next_t) * we } else { DMat3::ZERO };
                 (a, cross_columns(d, g_next_t) * (-l * we))
             } else {
                 (DMat3::ZERO, DMat3::ZERO)
@@ -212,20 +217,20 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
             // (L⁻¹·U)ᵀ·D⁻¹·(L⁻¹·U), with P00⁻¹ and S⁻¹ symmetric.
             schur = [a.transpose() * el.x + b.transpose() * el.y, el.y.transpose() * -w2, s_inv * (w2 * w2)];
         }
-        sc.eliminated[e] = el;
+        eliminated[e] = el;
     }
     // Back substitution: y_e = L⁻ᵀ·(D⁻¹·t_e − D⁻¹·L⁻¹·U·y_{e+1}).
     for e in (start..edges).rev() {
-        let el = &sc.eliminated[e];
-        let mut r = el.pivot_solve(sc.values[e]);
+        let el = &eliminated[e];
+        let mut r = el.pivot_solve(values[e]);
         if e + 1 < edges {
-            let next = el.coupling(sc.values[e + 1]);
+            let next = el.coupling(values[e + 1]);
             r = [r[0] - next[0], r[1] - next[1]];
         }
-        sc.values[e] = el.upper_solve(r);
+        values[e] = el.upper_solve(r);
     }
-    let bend_twist = |e: usize| sc.values[e][0];
-    let stretch_shear = |e: usize| sc.values[e][1];
+    let bend_twist = |e: usize| values[e][0];
+    let stretch_shear = |e: usize| values[e][1];
     // Apply: Δx = W·Jᵀ·Δμ, Δθ = 4wq·Jᵀ·Δμ, λ += Δλ.
     for j in start..=edges {
         let before = if j > start { stretch_shear(j - 1) } else { DVec3::ZERO };
@@ -241,12 +246,12 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
             continue;
         }
         let l = s.length[e] as f64;
-        let mut turn = l * cross_matrix(sc.d[e]).transpose() * stretch_shear(e);
+        let mut turn = l * cross_matrix(d3[e]).transpose() * stretch_shear(e);
         if has_pair(e) {
-            turn += sc.g[e].transpose() * bend_twist(e);
+            turn += g[e].transpose() * bend_twist(e);
         }
         if e + 1 < edges && has_pair(e + 1) {
-            turn -= sc.g[e + 1].transpose() * bend_twist(e + 1);
+            turn -= g[e + 1].transpose() * bend_twist(e + 1);
         }
         let turn = (turn * we).as_vec3();
         let q = s.q[e];
