@@ -15,8 +15,14 @@
 //!
 //! Constraints of neighbouring edges share a vertex or a frame and nothing else, so
 //! `J·W·Jᵀ + α̃` is block tridiagonal in 6×6 blocks and block Thomas elimination solves it in
-//! linear time. Bend–twist keeps its XPBD multiplier (`rhs = −C − α̃·λ`), stretch–shear has zero
-//! compliance, so the converged state is the same static equilibrium at any Δt and iteration count.
+//! linear time (each eliminated block factored as `L·D·Lᵀ` in 3×3 blocks, [`Eliminated`]).
+//! Bend–twist keeps its XPBD multiplier (`rhs = −C − α̃·λ`), stretch–shear has zero compliance, so
+//! the converged state is the same static equilibrium at any Δt and iteration count.
+//!
+//! Speed: one strand at a time in scalar f64, ~2,000 instructions per edge and iteration
+//! (callgrind), two thirds of them arithmetic: assembly builds `G` and three 3×3 products, the
+//! elimination two 3×3 inverses and seven products, and it is a serial chain along the strand.
+//! Groups of strands in SIMD lanes (as `lanes` does for Gauss–Seidel) are the next lever.
 use glam::{DMat3, DVec3, Quat, Vec3};
 
 use super::constraints::{director3, BendTwistCoefficients};
