@@ -2,7 +2,8 @@
 //! followed and compared between branches:
 //! - `invariance`: the bed-head, water-set and perm presets on thin seed grooms (every 20th strand
 //!   of `seed_200x24cm.hair`, every 10th of `seed_100x48cm.hair`) styled at Δt 1/240 … 1/1440 and
-//!   5, 10, 20 iterations (FILTER may name one preset). Mean and largest
+//!   5, 10, 20 iterations (the direct solver also at 1 and 2: `cargo bench --bench sim` finds its
+//!   single iteration as accurate per step; FILTER may name one preset). Mean and largest
 //!   distance of the settled shape and of the `rest` curves to the finest run (Δt 1/1440, 20
 //!   iterations), in % of the strand length; the largest collider penetration of any stage.
 //! - `cantilever`: a clamped horizontal hair of 8 segments of 2 mm … 3 cm, settled under a gravity
@@ -121,8 +122,12 @@ fn invariance_of(solver: StrandSolver, name: &str, groom_file: &str, step: usize
     println!(
         "  Δt      iter  shape mean/max %   rest mean/max %   deepest mm  settle (converged, s)  wall s"
     );
+    let counts: &[u32] = match solver {
+        StrandSolver::Direct => &[1, 2, 5, 10, 20],
+        StrandSolver::GaussSeidel => &[5, 10, 20],
+    };
     for rate in [240u32, 360, 720, 1440] {
-        for iterations in [5u32, 10, 20] {
+        for &iterations in counts {
             let fresh;
             let (out, wall) = if (rate, iterations) == (1440, 20) {
                 (&reference, 0.0)
