@@ -2,11 +2,15 @@
 //! the same driver `coif style` uses (forces from a snapshot, solver with obstacle contacts,
 //! wetness update). Configurations from issue 4: seed 2's groom (10,000 strands × 6 vertices,
 //! 4 iterations) with 0, 100 and 1,000 droplets and contacts on (and, for reference, none and contacts off); a production groom
-//! (100,000 × 32, 5 iterations) with contacts on and off. Medians of 3 runs, 1 and 2 threads.
+//! (100,000 × 32, 5 iterations) with contacts on and off. Medians of 3 runs, 1 and 2 threads:
+//! wall ms per step of the `process` stage, and CPU ms (all threads) per step of the whole
+//! `style` call (set-up and the first list build included), which stays comparable under load.
+//! Each configuration's checksum of the styled points (the same at any thread count, or the
+//! line says it differs) shows whether a change altered the physics.
 //! `cargo bench --bench interactions [-- FILTER]`.
 
 mod common;
-use common::median;
+use common::{cpu_seconds, load, median};
 use std::path::Path;
 
 use coif::generate::{generate, GenerateParams};
@@ -110,7 +114,7 @@ const CONFIGS: [Config; 8] = [
 fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    println!("cores available: {cores}; ms per step of the `process` stage, median of 3 runs");
+    println!("cores available: {cores}; ms per step, median of 3 runs; load {}", load());
     for config in CONFIGS.iter().filter(|c| filter.as_deref().is_none_or(|f| c.name.contains(f))) {
         let groom = generate(&GenerateParams {
             strands: config.strands,
@@ -132,16 +136,40 @@ fn main() {
             config.iterations, config.contacts, config.spacing
         );
         let recipe = recipe::parse(&text, Path::new("bench.toml")).expect("benchmark recipe parses");
+        let mut checksums = Vec::new();
         for threads in [1, cores.min(2)] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let runs: Vec<f64> = (0..3)
-                .map(|_| {
-                    let styled = pool.install(|| style(&groom, &recipe, &StyleOptions::default())).unwrap();
-                    let process = &styled.report.stages[1];
-                    1e3 * process.wall_seconds / process.steps as f64
-                })
-                .collect();
-            println!("{:<36} {threads} thread(s): {:8.2} ms/step", config.name, median(runs));
+            let (mut wall, mut cpu) = (Vec::new(), Vec::new());
+            for _ in 0..3 {
+                let cpu_before = cpu_seconds();
+                let styled = pool.install(|| style(&groom, &recipe, &StyleOptions::default())).unwrap();
+                let process = &styled.report.stages[1];
+                wall.push(1e3 * process.wall_seconds / process.steps as f64);
+                cpu.push(1e3 * (cpu_seconds() - cpu_before) / process.steps as f64);
+                checksums.push(checksum(&styled.groom.points));
+            }
+            println!(
+                "{:<36} {threads} thread(s): {:8.2} ms/step wall, {:8.2} ms/step CPU",
+                config.name,
+                median(wall),
+                median(cpu)
+            );
         }
+        let same = checksums.iter().all(|c| c.to_bits() == checksums[0].to_bits());
+        println!(
+            "{:<36} checksum {:.9}{}",
+            config.name,
+            checksums[0],
+            if same { "" } else { " (DIFFERS between runs or thread counts)" }
+        );
     }
+}
+
+/// A weighted sum of the styled points' coordinates: any change in any vertex shows.
+fn checksum(points: &[glam::Vec3]) -> f64 {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i % 97) as f64 * (p.x as f64 + 2.0 * p.y as f64 + 3.0 * p.z as f64))
+        .sum()
 }
