@@ -112,3 +112,38 @@ max_seconds = 4.0
     let changed = after.iter().zip(&wetness).filter(|(a, b)| a != b).count();
     assert_eq!(changed, 0, "{changed} of {} vertices changed wetness while settling", wetness.len());
 }
+
+/// A settle as the first stage hangs the groom at rest before it is styled: the stages after it
+/// start from a groom that no longer moves (a `process` stage, which only waits, leaves it within
+/// 1 mm), while the same groom not hung first falls during that wait.
+#[test]
+fn a_first_settle_hangs_the_groom_at_rest_before_the_style() {
+    use coif::generate::{generate, GenerateParams};
+    let groom =
+        generate(&GenerateParams { strands: 12, vertices_per_strand: 12, seed: 5, ..Default::default() })
+            .unwrap();
+    let run = |stages: &str| {
+        let text = format!(
+            "frame = \"head\"\n[settings]\ngravity = [0.0, -9.8, 0.0]\n\n[[obstacles]]\nname = \"head\"\n\
+             shape = \"scalp\"\n{stages}"
+        );
+        let recipe = coif::style::recipe::parse(&text, Path::new("hang.toml")).unwrap();
+        coif::style::style(&groom, &recipe, &Default::default()).unwrap()
+    };
+    let hang = "\n[[stages]]\nkind = \"settle\"\nmax_seconds = 10.0\n";
+    let wait = "\n[[stages]]\nkind = \"process\"\nduration = 0.5\n";
+    let hung = run(hang);
+    let hung_then_waited = run(&format!("{hang}{wait}"));
+    let waited = run(wait);
+    let first = hung_then_waited.report.stages[0].settle.expect("the first stage settles");
+    assert!(first.converged, "{first:?}");
+    let largest = |a: &Groom, b: &Groom| {
+        a.points.iter().zip(&b.points).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max)
+    };
+    let still = largest(&hung.groom, &hung_then_waited.groom);
+    let fell = largest(&groom, &waited.groom);
+    eprintln!("after the hang, a 0.5 s wait moves the hair {still:.2e} m; without it {fell:.2e} m");
+    assert!(hung_then_waited.groom.points.iter().all(|p| p.is_finite()));
+    assert!(still < 1e-3, "the hung groom moved {still} m while the style waited");
+    assert!(fell > 10e-3, "control: the groom out of balance should fall, moved {fell} m");
+}
