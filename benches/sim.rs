@@ -79,10 +79,14 @@ fn iterations_tried(solver: StrandSolver) -> (&'static [u32], u32) {
     }
 }
 
+/// Positions after [`ACCURACY_STEPS`] steps from rest with `solver`'s defaults and `iterations`.
+fn positions_after(groom: &Groom, solver: StrandSolver, iterations: u32) -> Vec<Vec3> {
+    positions_with(groom, SimParams { iterations, ..SimParams::for_solver(solver) })
+}
+
 /// Positions after [`ACCURACY_STEPS`] steps from rest (on the global pool: results do not depend
 /// on the thread count).
-fn positions_after(groom: &Groom, solver: StrandSolver, iterations: u32) -> Vec<Vec3> {
-    let params = SimParams { iterations, ..SimParams::for_solver(solver) };
+fn positions_with(groom: &Groom, params: SimParams) -> Vec<Vec3> {
     let mut sim = Simulation::new(groom, params).expect("bench simulation");
     (0..ACCURACY_STEPS).for_each(|_| sim.step());
     sim.rods().positions().to_vec()
@@ -180,9 +184,7 @@ fn step_cost(config: &StepConfig) {
         frame_inertia_factor: gauss_seidel_frames,
         ..SimParams::for_solver(StrandSolver::Direct)
     };
-    let mut sim = Simulation::new(&sample, params).expect("bench simulation");
-    (0..ACCURACY_STEPS).for_each(|_| sim.step());
-    let (same_mean, same_worst) = distance(&sample, sim.rods().positions(), &references[0]);
+    let (same_mean, same_worst) = distance(&sample, &positions_with(&sample, params), &references[0]);
     println!(
         "  the two converged runs differ by {mean:.3} / {worst:.3} %; with Gauss–Seidel's frame inertia \
          ({gauss_seidel_frames}) the direct one is {same_mean:.3} / {same_worst:.3} % from Gauss–Seidel's"
