@@ -97,6 +97,13 @@ pub fn darboux_canonical(q1: Quat, q2: Quat) -> Vec3 {
     }
 }
 
+/// The turn with non-negative real part whose Darboux vector is `omega` (the inverse of
+/// [`darboux_canonical`]; lengths beyond 1 are clamped).
+pub fn turn_of(omega: Vec3) -> Quat {
+    let o = omega.clamp_length_max(1.0);
+    Quat::from_xyzw(o.x, o.y, o.z, (1.0 - o.length_squared()).max(0.0).sqrt())
+}
+
 /// Projects the stretch–shear constraint of one edge. `w1`, `w2` are the vertices' inverse masses,
 /// `wq` the edge frame's inverse inertia, `l` its rest length.
 #[inline(always)]

@@ -25,7 +25,8 @@ use glam::{Quat, Vec3};
 use serde::Serialize;
 
 use super::bonds::BondKind;
-use super::constraints::{darboux_canonical, director3};
+use super::constraints::{darboux_canonical, director3, turn_of};
+use super::sag_free::{MATERIAL_FRAME, REST_DARBOUX};
 use super::{Hooks, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
@@ -421,9 +422,7 @@ impl Simulation {
             points[first] = p;
             for i in first..range.end - 1 {
                 if i > first {
-                    let o = omega0[i].clamp_length_max(1.0);
-                    let w = (1.0 - o.length_squared()).max(0.0).sqrt();
-                    frame = (frame * Quat::from_xyzw(o.x, o.y, o.z, w)).normalize();
+                    frame = (frame * turn_of(omega0[i])).normalize();
                 }
                 p += r.rest_lengths()[i] * director3(frame);
                 points[i + 1] = p;
@@ -444,12 +443,15 @@ impl Simulation {
     }
 
     /// The simulated state beside the positions, as per-vertex attributes: `rest` (zero-stress
-    /// rest curves), `rest_darboux` (Ω0) and `bond_*` (rates per kind).
+    /// rest curves), `rest_darboux` (Ω0), `material_frame` (the edges' frames) and `bond_*`
+    /// (rates per kind).
     pub fn state_attributes(&self) -> Vec<Attribute> {
         let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+        let frames = self.rods.frames().iter().flat_map(|q| q.to_array()).collect();
         let mut attributes = vec![
             Attribute::new("rest", AttributeRate::Vertex, 3, flat(&self.rest_curves())),
-            Attribute::new("rest_darboux", AttributeRate::Vertex, 3, flat(&self.exported_rest_darboux())),
+            Attribute::new(REST_DARBOUX, AttributeRate::Vertex, 3, flat(&self.exported_rest_darboux())),
+            Attribute::new(MATERIAL_FRAME, AttributeRate::Vertex, 4, frames),
         ];
         for kind in BondKind::ALL {
             attributes.push(Attribute::new(
