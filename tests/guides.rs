@@ -150,10 +150,22 @@ fn children_of_one_guide_do_not_collapse_onto_it() {
 fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     let groom = &FULL.permed().groom;
     groom.validate().unwrap();
-    for name in ["rest", "rest_darboux", "bond_hydrogen", "bond_disulfide", "wetness"] {
+    for name in ["rest", "rest_darboux", "material_frame", "bond_hydrogen", "bond_disulfide", "wetness"] {
         let a = groom.attribute(name).unwrap_or_else(|| panic!("no {name}"));
         assert_eq!(a.rate, AttributeRate::Vertex);
         assert!(a.data.iter().all(|v| v.is_finite()), "{name}");
+    }
+    // Every strand's material frames run along its own edges (a child's are rebuilt on its
+    // curve, not blended from its guides', which follow other edges).
+    let frames = groom.attribute("material_frame").unwrap();
+    for s in 0..FULL.strands {
+        let range = groom.strand_range(s);
+        for e in range.start..range.end - 1 {
+            let q = glam::Quat::from_slice(&frames.data[4 * e..4 * e + 4]);
+            let edge = (groom.points[e + 1] - groom.points[e]).normalize();
+            let cos = coif::sim::constraints::director3(q).dot(edge);
+            assert!(cos > 0.996, "strand {s} edge {e}: frame {:.2}° off its edge", cos.acos().to_degrees());
+        }
     }
     // The perm set 67 % of the disulfide bonds on the rods, in children as in guides: rates are
     // carried, not left at the unstyled 1.

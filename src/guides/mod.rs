@@ -20,6 +20,8 @@ use crate::analysis::resample_groom;
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::sim::rod::transport_frames;
+use crate::sim::sag_free::MATERIAL_FRAME;
 use crate::style::head_frame::HeadFrame;
 use crate::style::recipe::Recipe;
 use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled, WaterSnapshots};
@@ -178,9 +180,15 @@ pub fn style(
     push_out(&mut child_points, &children.strand_offsets, &radii, &shapes);
 
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
-    // points, the others blended; merged with the guides' own over every strand. The same for
-    // each captured frame of `--frames` output, from that frame's guides.
-    let carried = |from: &Children, from_pose: &Curves, after: &Curves, guide_attributes: &[Attribute]| {
+    // points, the material frames rebuilt along the children's own curves (as a reader would:
+    // the guides' frames follow other edges), the others blended; merged with the guides' own
+    // over every strand. The same for each captured frame of `--frames` output, from that frame's
+    // guides.
+    let carried = |from: &Children,
+                   from_pose: &Curves,
+                   after: &Curves,
+                   child_points: &[Vec3],
+                   guide_attributes: &[Attribute]| {
         guide_attributes
             .iter()
             .filter(|a| a.rate == AttributeRate::Vertex)
@@ -188,6 +196,8 @@ pub fn style(
                 let data = if attribute.name == "rest" && attribute.components == 3 {
                     let rest: Vec<Vec3> = attribute.data.chunks_exact(3).map(Vec3::from_slice).collect();
                     deform::deform(from, from_pose, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
+                } else if attribute.name == MATERIAL_FRAME {
+                    rebuilt_frames(child_points, &children.strand_offsets)
                 } else {
                     deform::blend_attribute(&bound, after, &attribute.data, attribute.components)
                 };
@@ -201,7 +211,7 @@ pub fn style(
     let mut out = groom.clone();
     scatter_points(&mut out, &guide_ids, &styled.groom.points);
     scatter_points(&mut out, &child_ids, &child_points);
-    for attribute in carried(&last, last_pose, &after, &styled.groom.attributes) {
+    for attribute in carried(&last, last_pose, &after, &child_points, &styled.groom.attributes) {
         out.set_attribute(attribute);
     }
     let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
@@ -222,7 +232,7 @@ pub fn style(
         scatter(&mut all, &out, &child_ids, &points);
         frames.push(all);
         if let Some(guide_attributes) = styled.frame_attributes.get(index) {
-            frame_attributes.push(carried(&from, from_pose, &after, guide_attributes));
+            frame_attributes.push(carried(&from, from_pose, &after, &points, guide_attributes));
         }
     }
     let mut report = styled.report;
@@ -237,6 +247,17 @@ pub fn style(
         frames_per_second: styled.frames_per_second,
         droplets: Vec::new(),
     })
+}
+
+/// Every strand's frames parallel-transported along its points (`sim::rod::transport_frames`),
+/// as `material_frame` data.
+fn rebuilt_frames(points: &[Vec3], offsets: &[u32]) -> Vec<f32> {
+    let mut frames = vec![glam::Quat::IDENTITY; points.len()];
+    for strand in offsets.windows(2) {
+        let range = strand[0] as usize..strand[1] as usize;
+        transport_frames(&points[range.clone()], &mut frames[range]);
+    }
+    frames.iter().flat_map(|q| q.to_array()).collect()
 }
 
 /// The bindings a file brought as `groom_closest_guides` / `groom_guide_weights` (per strand,
