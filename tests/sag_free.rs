@@ -43,9 +43,9 @@ fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
     ]);
 }
 
-/// The perm's 48 cm curls, settled without gravity towards its tolerance 1e-4, hold still (0.82 mm
-/// in 2 s, with or without the material frames: the settle stops at its 30 s with a force
-/// residual of 1.7e-4 and the curls' tips still creep; 3.9 mm when its settle stopped at 1e-3).
+/// The perm's 48 cm curls, settled without gravity to its tolerance 1e-4, hold still (0.51 mm in
+/// 2 s; 0.82 mm, with or without the material frames, when the settle stopped at 30 s short of
+/// its tolerance, force residual 1.7e-4; 3.9 mm when its settle stopped at 1e-3).
 #[test]
 fn styled_perm_holds_still_when_simulated_again() {
     presets_hold_still(&[("perm_scene3", "seed_100x48cm.hair", 10, "usdc")]);
