@@ -319,9 +319,14 @@ fn eliminate<T: Real>(start: usize, work: &mut Work<T>, n: usize) {
         rhs[1] = d.scale(l) - i.dx;
         // Tiny relative regularisation: a pair between two held frames, or a stiff pair with no
         // compliance, keeps an invertible pivot without changing solvable systems measurably.
+        // Added to the diagonal only: the off-diagonal entries are never −0 here (each is a sum
+        // with +0 or a difference from +0), so adding the +0 of a diagonal matrix kept them.
         for m in [&mut p00, &mut p11] {
             let scale = m.x_axis.x.abs().max(m.y_axis.y.abs()).max(m.z_axis.z.abs()).max(T::splat(1e-30));
-            *m = *m + M3::from_diagonal(V3::splat(scale * T::splat(1e-9)));
+            let add = scale * T::splat(1e-9);
+            m.x_axis.x = m.x_axis.x + add;
+            m.y_axis.y = m.y_axis.y + add;
+            m.z_axis.z = m.z_axis.z + add;
         }
         if e > start {
             let previous = &eliminated[e - 1];
@@ -421,6 +426,76 @@ mod tests {
     use super::*;
     use crate::sim::rod::transport_frames;
 
+    /// A strand's arrays, owned.
+    #[derive(Clone)]
+    struct Strand {
+        rest_points: Vec<Vec3>,
+        x: Vec<Vec3>,
+        q: Vec<Quat>,
+        lambda: Vec<Vec3>,
+        w: Vec<f32>,
+        wq: Vec<f32>,
+        length: Vec<f32>,
+        rest: Vec<Vec3>,
+        pair_k: Vec<BendTwistCoefficients>,
+    }
+
+    impl Strand {
+        /// A helix of `n` vertices at rest (turning `turn` radians a vertex), rigid, started bent
+        /// and stretched: every vertex but the root pushed sideways and down by `push` a vertex.
+        fn bent(n: usize, turn: f32, push: Vec3) -> Strand {
+            let rest_points: Vec<Vec3> = (0..n)
+                .map(|i| {
+                    let a = i as f32 * turn;
+                    Vec3::new(0.01 * a.sin(), -0.008 * i as f32, 0.01 * a.cos())
+                })
+                .collect();
+            let mut frames = vec![Quat::IDENTITY; n];
+            transport_frames(&rest_points, &mut frames);
+            let length: Vec<f32> = (0..n)
+                .map(|i| if i + 1 < n { rest_points[i].distance(rest_points[i + 1]) } else { 0.0 })
+                .collect();
+            let rest: Vec<Vec3> = (0..n)
+                .map(|i| {
+                    if i >= 1 && i + 1 < n {
+                        super::super::constraints::darboux_canonical(frames[i - 1], frames[i])
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+                .collect();
+            let x = rest_points.iter().enumerate().map(|(i, p)| *p + push * i as f32).collect();
+            let mut w = vec![1.0e6f32; n];
+            w[0] = 0.0;
+            let mut wq: Vec<f32> = (0..n).map(|i| 0.1 * 1.0e6 / (length[i] * length[i]).max(1e-12)).collect();
+            wq[0] = 0.0;
+            Strand {
+                rest_points,
+                x,
+                q: frames,
+                lambda: vec![Vec3::ZERO; n],
+                w,
+                wq,
+                length,
+                rest,
+                pair_k: vec![BendTwistCoefficients::default(); n],
+            }
+        }
+
+        fn state(&mut self) -> StrandState<'_> {
+            StrandState {
+                x: &mut self.x,
+                q: &mut self.q,
+                lambda: &mut self.lambda,
+                w: &self.w,
+                wq: &self.wq,
+                length: &self.length,
+                rest: &self.rest,
+                pair_k: &self.pair_k,
+            }
+        }
+    }
+
     /// With zero compliance a free strand has as many constraints as freedoms (three per vertex,
     /// three per frame), so Newton steps of the direct solve reach a state where every edge runs
     /// its rest length along its frame and every pair has its rest turn, from a start far from
@@ -428,39 +503,9 @@ mod tests {
     #[test]
     fn newton_steps_satisfy_every_constraint_of_a_strand() {
         let n = 12;
-        let rest_points: Vec<Vec3> = (0..n)
-            .map(|i| {
-                Vec3::new(0.01 * (i as f32 * 0.7).sin(), -0.008 * i as f32, 0.01 * (i as f32 * 0.7).cos())
-            })
-            .collect();
-        let mut frames = vec![Quat::IDENTITY; n];
-        transport_frames(&rest_points, &mut frames);
-        let length: Vec<f32> = (0..n)
-            .map(|i| if i + 1 < n { rest_points[i].distance(rest_points[i + 1]) } else { 0.0 })
-            .collect();
-        let rest: Vec<Vec3> = (0..n)
-            .map(|i| {
-                if i >= 1 && i + 1 < n {
-                    super::super::constraints::darboux_canonical(frames[i - 1], frames[i])
-                } else {
-                    Vec3::ZERO
-                }
-            })
-            .collect();
-        // Start bent and stretched: every vertex but the root pushed sideways and down.
-        let mut x: Vec<Vec3> = rest_points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| *p + Vec3::new(0.003, -0.002, 0.0) * i as f32)
-            .collect();
-        let mut q = frames.clone();
-        let mut lambda = vec![Vec3::ZERO; n];
-        let mut w = vec![1.0e6f32; n];
-        w[0] = 0.0;
-        let mut wq: Vec<f32> = (0..n).map(|i| 0.1 * 1.0e6 / (length[i] * length[i]).max(1e-12)).collect();
-        wq[0] = 0.0;
-        let rigid = vec![BendTwistCoefficients::default(); n];
+        let mut s = Strand::bent(n, 0.7, Vec3::new(0.003, -0.002, 0.0));
         let mut scratch = Scratch::default();
+        let (length, rest) = (s.length.clone(), s.rest.clone());
         let residual = |x: &[Vec3], q: &[Quat]| {
             let mut worst = 0.0f32;
             for e in 0..n - 1 {
@@ -474,24 +519,64 @@ mod tests {
             }
             worst
         };
-        let before = residual(&x, &q);
+        let before = residual(&s.x, &s.q);
         for _ in 0..6 {
-            let mut state = StrandState {
-                x: &mut x,
-                q: &mut q,
-                lambda: &mut lambda,
-                w: &w,
-                wq: &wq,
-                length: &length,
-                rest: &rest,
-                pair_k: &rigid,
-            };
-            solve(&mut state, 0, &mut scratch);
+            solve(&mut s.state(), 0, &mut scratch);
         }
-        let after = residual(&x, &q);
+        let after = residual(&s.x, &s.q);
         assert!(before > 0.1, "the start is far from rest: {before}");
         assert!(after < 1e-4, "relative residual after 6 Newton steps: {after} (from {before})");
         // The root stays put.
-        assert_eq!(x[0], rest_points[0]);
+        assert_eq!(s.x[0], s.rest_points[0]);
+    }
+
+    /// Four different strands solved in lanes end with the bits each gets solved alone: compliant
+    /// and rigid pairs, multipliers carried between Newton steps, a held frame in the middle, and
+    /// free tails starting at the root and further out.
+    #[test]
+    fn lanes_give_each_strand_the_bits_of_its_own_solve() {
+        let n = 9;
+        let strands: Vec<Strand> = (0..4)
+            .map(|k| {
+                let k = k as f32;
+                let mut s = Strand::bent(n, 0.4 + 0.3 * k, Vec3::new(0.002 * k, -0.003, 0.001 * (k - 1.5)));
+                if k >= 2.0 {
+                    for (i, c) in s.pair_k.iter_mut().enumerate() {
+                        *c = BendTwistCoefficients::new(
+                            1e4,
+                            2e4,
+                            Vec3::new(1e-6, 2e-6, 3e-6) * (1.0 + i as f32),
+                        );
+                    }
+                }
+                if k == 3.0 {
+                    s.wq[4] = 0.0;
+                }
+                s
+            })
+            .collect();
+        for start in [0, 1, 3] {
+            let mut alone = strands.clone();
+            let mut lanes = strands.clone();
+            let mut scratch = Scratch::default();
+            for _ in 0..3 {
+                for s in alone.iter_mut() {
+                    solve(&mut s.state(), start, &mut scratch);
+                }
+                let mut states = lanes.iter_mut().map(Strand::state);
+                let mut states: [_; 4] = std::array::from_fn(|_| states.next().unwrap());
+                solve_lanes(&mut states, start, &mut scratch);
+            }
+            for ((a, l), original) in alone.iter().zip(&lanes).zip(&strands) {
+                let bits = |s: &Strand| {
+                    let mut b: Vec<u32> = s.x.iter().flat_map(|v| v.to_array()).map(f32::to_bits).collect();
+                    b.extend(s.q.iter().flat_map(|q| q.to_array()).map(f32::to_bits));
+                    b.extend(s.lambda.iter().flat_map(|v| v.to_array()).map(f32::to_bits));
+                    b
+                };
+                assert_ne!(a.x, original.x, "the solve moved the strand");
+                assert_eq!(bits(a), bits(l), "free tail from edge {start}");
+            }
+        }
     }
 }
