@@ -342,7 +342,7 @@ pub(crate) struct SimulateArgs {
     pub(crate) iterations: u32,
     /// How each iteration solves a strand: `gauss-seidel` sweeps, or `direct` (stretch–shear and
     /// bend–twist together: the static shape does not depend on Δt; one iteration per step stays
-    /// within 0.03 % of the strand length of a converged solve and costs ~1.5× a 5-sweep step).
+    /// within 0.03 % of the strand length of a converged solve and costs ~0.75× a 5-sweep step).
     #[arg(long, value_enum, default_value = "gauss-seidel")]
     pub(crate) solver: SolverArg,
     /// Time step, seconds or a fraction.
