@@ -113,7 +113,7 @@ fn step_cpu_ns(groom: &Groom, solver: StrandSolver, iterations: u32) -> (f64, us
     let params = SimParams { iterations, ..SimParams::for_solver(solver) };
     let mut sim = Simulation::new(groom, params).expect("bench simulation");
     let vertices = groom.points.len() as f64;
-    let guess_ns = iterations as f64 * if solver == StrandSolver::Direct { 200.0 } else { 17.0 };
+    let guess_ns = iterations as f64 * if solver == StrandSolver::Direct { 80.0 } else { 17.0 };
     let steps = ((2e8 / (vertices * guess_ns)).ceil() as usize).max(1);
     pool.install(|| sim.step()); // coefficients, caches and pages
     let runs: Vec<f64> = (0..3)

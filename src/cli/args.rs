@@ -341,7 +341,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 5)]
     pub(crate) iterations: u32,
     /// How each iteration solves a strand: `gauss-seidel` sweeps, or `direct` (stretch–shear and
-    /// bend–twist together: the static shape does not depend on Δt; one iteration costs ~1.5× a
+    /// bend–twist together: the static shape does not depend on Δt; one iteration costs ~0.75× a
     /// 5-sweep step and is enough for a falling groom or a bed-head, a perm needs about five).
     #[arg(long, value_enum, default_value = "gauss-seidel")]
     pub(crate) solver: SolverArg,

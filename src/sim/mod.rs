@@ -59,7 +59,9 @@
 //! # Speed
 //! Groups of 8 consecutive strands with equal vertex counts are solved together, one strand per
 //! SIMD lane (`lanes`, AVX when the CPU has it, same bits as SSE2; a [`Hooks::project`] callback
-//! is called one lane at a time); other strands go through the scalar path. No allocation happens
+//! is called one lane at a time); other strands go through the scalar path. With
+//! [`StrandSolver::Direct`] such a group's strands are solved 4 at a time in f64 lanes, with the
+//! bits of the one-strand solve (`strand_solve`, `lane_algebra`). No allocation happens
 //! in a step after the first. `cargo bench --bench sim` prints ns per vertex-iteration, and the cost
 //! of a step at a stated accuracy for both solvers (`-- step`).
 //!
@@ -86,6 +88,7 @@ pub mod bonds;
 pub mod constraints;
 pub mod cuticle;
 pub mod driver;
+mod lane_algebra;
 mod lanes;
 pub mod rod;
 pub mod sag_free;

@@ -4,7 +4,8 @@
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`; sweeps alternate
 //! direction) → velocity update. Lane groups of 8 strands run the same sequence in `lanes`.
 //! With `StepConstants::direct` the free tail's stretch–shear and bend–twist are solved together
-//! (`strand_solve`), the sweeps cover only the held span before it, and no strand runs in lanes.
+//! (`strand_solve`), the sweeps cover only the held span before it, and a lane group's strands
+//! are solved 4 at a time in f64 lanes (`strand_solve::solve_lanes`, the scalar solve's bits).
 //! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
 //! results are bit-identical at any thread count and any chunking.
 use std::cell::RefCell;
@@ -179,11 +180,18 @@ pub(crate) fn step_all(
         broken,
     };
     units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
-        let in_lanes = in_lanes && !k.direct;
         // SAFETY: work units cover each strand once (checked in `Rods::from_groom`), and strand
         // ranges are disjoint because the offsets ascend (same check); bounds are checked in
         // `SharedMut::slice`.
-        if in_lanes {
+        if in_lanes && k.direct {
+            let mut views: [Strand<'_>; lanes::LANES] =
+                std::array::from_fn(|l| unsafe { parts.strand(first_strand + l) });
+            for (l, view) in views.iter_mut().enumerate() {
+                let strand = first_strand + l;
+                begin_step(view, k, hooks, strand, parts.range(strand).start);
+            }
+            finish_step_direct_lanes(&mut views, k, hooks, first_strand, |strand| parts.range(strand).start);
+        } else if in_lanes {
             let mut views: [Strand<'_>; lanes::LANES] =
                 std::array::from_fn(|l| unsafe { parts.strand(first_strand + l) });
             for (l, view) in views.iter_mut().enumerate() {
@@ -355,64 +363,124 @@ fn begin_step(s: &mut Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: 
     hooks.accelerate(strand, first, s.x, s.v, dt);
 }
 
-/// Prediction, iterations and velocity update of one strand.
-fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
-    let n = s.x.len();
-    let edges = n - 1;
-    let dt = k.dt;
-    // Prediction.
-    for i in 0..n {
+/// Prediction: kinematic vertices to their targets, the others along their velocities.
+fn predict(s: &mut Strand<'_>, dt: f32) {
+    for i in 0..s.x.len() {
         s.x_prev[i] = s.x[i];
         s.x[i] = if s.kinematic[i] { s.targets[i] } else { s.x[i] + s.v[i] * dt };
     }
+}
+
+/// The direct solve's view of one strand.
+fn direct_state<'s>(s: &'s mut Strand<'_>) -> super::strand_solve::StrandState<'s> {
+    super::strand_solve::StrandState {
+        x: s.x,
+        q: s.q,
+        lambda: s.lambda,
+        w: s.w,
+        wq: s.wq,
+        length: s.length,
+        rest: s.rest,
+        pair_k: s.pair_k,
+    }
+}
+
+/// Gauss–Seidel along the first `edges` edges, alternating root→tip and tip→root sweeps: a
+/// one-way sweep passes a correction only one edge against its direction per iteration, and a
+/// hanging strand needs tension carried from the tip up as much as positions carried from the root
+/// down. With the direct strand solve, Gauss–Seidel only keeps the held span before the free tail.
+fn sweep(s: &mut Strand<'_>, edges: usize, iteration: u32) {
+    if iteration % 2 == 0 {
+        for e in 0..edges {
+            project_edge(s, e);
+            if e >= 1 {
+                project_pair(s, e);
+            }
+        }
+    } else {
+        for e in (0..edges).rev() {
+            project_edge(s, e);
+            if e + 1 < edges {
+                project_pair(s, e + 1);
+            }
+        }
+    }
+}
+
+/// Velocities from the positions actually reached.
+fn update_velocities(s: &mut Strand<'_>, k: &StepConstants) {
+    let inv_dt = 1.0 / k.dt;
+    for i in 0..s.x.len() {
+        s.v[i] = (s.x[i] - s.x_prev[i]) * (inv_dt * k.velocity_keep);
+    }
+}
+
+/// Prediction, iterations and velocity update of one strand.
+fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, strand: usize, first: usize) {
+    predict(&mut s, k.dt);
     // Frames are quasi-static: they carry no angular momentum and start each step where the
     // last ended. (Hair's rotational inertia is negligible, the frame inertia here is only a
     // conditioning choice, and integrating frame angular velocities fed energy into resting curls.)
-    // Gauss–Seidel along the strand, alternating root→tip and tip→root sweeps: a one-way sweep
-    // passes a correction only one edge against its direction per iteration, and a hanging strand
-    // needs tension carried from the tip up as much as positions carried from the root down.
-    // With the direct strand solve, Gauss–Seidel only keeps the held span before the free tail.
     let free_from = free_tail(s.kinematic);
-    let swept_edges = if k.direct { free_from } else { edges };
+    let swept_edges = if k.direct { free_from } else { s.x.len() - 1 };
     for iteration in 0..k.iterations {
         if k.direct {
-            let mut state = super::strand_solve::StrandState {
-                x: s.x,
-                q: s.q,
-                lambda: s.lambda,
-                w: s.w,
-                wq: s.wq,
-                length: s.length,
-                rest: s.rest,
-                pair_k: s.pair_k,
-            };
-            STRAND_SCRATCH
-                .with(|scratch| super::strand_solve::solve(&mut state, free_from, &mut scratch.borrow_mut()));
+            STRAND_SCRATCH.with(|scratch| {
+                super::strand_solve::solve(&mut direct_state(&mut s), free_from, &mut scratch.borrow_mut())
+            });
         } else {
             solve_stretch_shear(&mut s);
         }
-        let edges = swept_edges;
-        if iteration % 2 == 0 {
-            for e in 0..edges {
-                project_edge(&mut s, e);
-                if e >= 1 {
-                    project_pair(&mut s, e);
-                }
-            }
-        } else {
-            for e in (0..edges).rev() {
-                project_edge(&mut s, e);
-                if e + 1 < edges {
-                    project_pair(&mut s, e + 1);
-                }
-            }
-        }
+        sweep(&mut s, swept_edges, iteration);
         hooks.project(strand, first, s.x, s.w);
     }
+    update_velocities(&mut s, k);
+}
 
-    // Velocities from the positions actually reached.
-    let inv_dt = 1.0 / dt;
-    for i in 0..n {
-        s.v[i] = (s.x[i] - s.x_prev[i]) * (inv_dt * k.velocity_keep);
+/// Strands solved at once by the direct solve's lanes.
+const DIRECT_LANES: usize = 4;
+const _: () = assert!(lanes::LANES % DIRECT_LANES == 0);
+
+/// [`finish_step_scalar`] with the direct solve for a lane group's strands (equal vertex counts):
+/// 4 strands whose free tails start at the same edge share one lane solve, others are solved
+/// alone; either way each strand gets the bits [`finish_step_scalar`] gives it, and the sweeps and
+/// hooks see each strand as they would there.
+fn finish_step_direct_lanes(
+    views: &mut [Strand<'_>; lanes::LANES],
+    k: &StepConstants,
+    hooks: &dyn Hooks,
+    first_strand: usize,
+    first_vertex: impl Fn(usize) -> usize,
+) {
+    for s in views.iter_mut() {
+        predict(s, k.dt);
+    }
+    let free_from: [usize; lanes::LANES] = std::array::from_fn(|l| free_tail(views[l].kinematic));
+    for iteration in 0..k.iterations {
+        STRAND_SCRATCH.with(|scratch| {
+            let scratch = &mut scratch.borrow_mut();
+            for (group, free) in
+                views.chunks_exact_mut(DIRECT_LANES).zip(free_from.chunks_exact(DIRECT_LANES))
+            {
+                if free.iter().all(|&f| f == free[0]) {
+                    let mut states = group.iter_mut().map(direct_state);
+                    let mut states: [_; DIRECT_LANES] =
+                        std::array::from_fn(|_| states.next().expect("a lane"));
+                    super::strand_solve::solve_lanes(&mut states, free[0], scratch);
+                } else {
+                    for (s, &f) in group.iter_mut().zip(free) {
+                        super::strand_solve::solve(&mut direct_state(s), f, scratch);
+                    }
+                }
+            }
+        });
+        for (l, s) in views.iter_mut().enumerate() {
+            sweep(s, free_from[l], iteration);
+            let strand = first_strand + l;
+            hooks.project(strand, first_vertex(strand), s.x, s.w);
+        }
+    }
+    for s in views.iter_mut() {
+        update_velocities(s, k);
     }
 }

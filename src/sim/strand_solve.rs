@@ -19,25 +19,34 @@
 //! Bend–twist keeps its XPBD multiplier (`rhs = −C − α̃·λ`), stretch–shear has zero compliance, so
 //! the converged state is the same static equilibrium at any Δt and iteration count.
 //!
-//! Speed: one strand at a time in scalar f64, ~2,000 instructions per edge and iteration
-//! (callgrind), two thirds of them arithmetic: assembly builds `G` and three 3×3 products, the
-//! elimination two 3×3 inverses and seven products, and it is a serial chain along the strand.
-//! Groups of strands in SIMD lanes (as `lanes` does for Gauss–Seidel) are the next lever.
-use glam::{DMat3, DVec3, Quat, Vec3};
+//! Speed: groups of 4 strands with equal vertex counts and free tails run in f64×4 lanes
+//! ([`solve_lanes`], AVX when the CPU has it), one strand per lane, the rest one at a time: the same
+//! generic code does both ([`Real`]), and each lane rounds exactly as the scalar solve, so a strand
+//! gets the same bits either way. The f32 parts (directors, relative turns, the final frame update)
+//! run per strand with glam while the lanes are gathered and scattered. Per edge and iteration:
+//! assembly builds `G` and three 3×3 products, the elimination two 3×3 inverses and seven
+//! products, and it is a serial chain along the strand. Callgrind, a step of one iteration: 2,155
+//! instructions per vertex one strand at a time, 1,055 in lanes (of which ~800 the lane solve,
+//! half of that loads and stores of 3×3 lane matrices: 16 AVX registers hold less than two).
+use glam::{DVec3, Quat, Vec3};
 
 use super::constraints::{director3, BendTwistCoefficients};
+use super::lane_algebra::{F64x4, Real, M3, V3};
 
 /// Two 3-vectors: `[bend–twist, stretch–shear]`.
-type Pair = [DVec3; 2];
+type Pair<T> = [V3<T>; 2];
 
 /// `[v]×`, the cross-product matrix: `[v]×·a = v × a`.
-fn cross_matrix(v: DVec3) -> DMat3 {
-    DMat3::from_cols(DVec3::new(0.0, v.z, -v.y), DVec3::new(-v.z, 0.0, v.x), DVec3::new(v.y, -v.x, 0.0))
+#[inline(always)]
+fn cross_matrix<T: Real>(v: V3<T>) -> M3<T> {
+    let z = T::splat(0.0);
+    M3::from_cols(V3::new(z, v.z, -v.y), V3::new(-v.z, z, v.x), V3::new(v.y, -v.x, z))
 }
 
 /// `[d]×·m`, column by column (the same products as the matrix product, without its zeros).
-fn cross_columns(d: DVec3, m: DMat3) -> DMat3 {
-    DMat3::from_cols(d.cross(m.x_axis), d.cross(m.y_axis), d.cross(m.z_axis))
+#[inline(always)]
+fn cross_columns<T: Real>(d: V3<T>, m: M3<T>) -> M3<T> {
+    M3::from_cols(d.cross(m.x_axis), d.cross(m.y_axis), d.cross(m.z_axis))
 }
 
 /// One edge's eliminated diagonal block `P = [[P00, P10ᵀ], [P10, P11]]` as `L·D·Lᵀ` with
@@ -46,40 +55,48 @@ fn cross_columns(d: DVec3, m: DMat3) -> DMat3 {
 /// `D⁻¹·L⁻¹·U = [[X, 0], [Y, −w·S⁻¹]]` (bend–twist of the next pair meets only this frame;
 /// stretch–shear of the next edge only the shared vertex).
 #[derive(Clone, Copy, Default)]
-struct Eliminated {
-    f: DMat3,
-    p00_inv: DMat3,
-    s_inv: DMat3,
-    x: DMat3,
-    y: DMat3,
+struct Eliminated<T> {
+    f: M3<T>,
+    p00_inv: M3<T>,
+    s_inv: M3<T>,
+    x: M3<T>,
+    y: M3<T>,
     /// The shared vertex's inverse mass.
-    w: f64,
+    w: T,
 }
 
-impl Eliminated {
+impl<T: Real> Eliminated<T> {
     /// `L⁻¹·v`.
-    fn lower_solve(&self, v: Pair) -> Pair {
-        [v[0], v[1] - self.f * v[0]]
+    #[inline(always)]
+    fn lower_solve(&self, v: Pair<T>) -> Pair<T> {
+        [v[0], v[1] - self.f.mul_vec(v[0])]
     }
 
     /// `D⁻¹·v`.
-    fn pivot_solve(&self, v: Pair) -> Pair {
-        [self.p00_inv * v[0], self.s_inv * v[1]]
+    #[inline(always)]
+    fn pivot_solve(&self, v: Pair<T>) -> Pair<T> {
+        [self.p00_inv.mul_vec(v[0]), self.s_inv.mul_vec(v[1])]
     }
 
     /// `L⁻ᵀ·v`.
-    fn upper_solve(&self, v: Pair) -> Pair {
-        [v[0] - self.f.transpose() * v[1], v[1]]
+    #[inline(always)]
+    fn upper_solve(&self, v: Pair<T>) -> Pair<T> {
+        [v[0] - self.f.transpose().mul_vec(v[1]), v[1]]
     }
 
     /// `(D⁻¹·L⁻¹·U)·v`.
-    fn coupling(&self, v: Pair) -> Pair {
-        [self.x * v[0], self.y * v[0] - self.s_inv * v[1] * self.w]
+    #[inline(always)]
+    fn coupling(&self, v: Pair<T>) -> Pair<T> {
+        [self.x.mul_vec(v[0]), self.y.mul_vec(v[0]) - self.s_inv.mul_vec(v[1]).scale(self.w)]
     }
 
     /// `(D⁻¹·L⁻¹·U)ᵀ·v`.
-    fn coupling_transposed(&self, v: Pair) -> Pair {
-        [self.x.transpose() * v[0] + self.y.transpose() * v[1], self.s_inv * v[1] * -self.w]
+    #[inline(always)]
+    fn coupling_transposed(&self, v: Pair<T>) -> Pair<T> {
+        [
+            self.x.transpose().mul_vec(v[0]) + self.y.transpose().mul_vec(v[1]),
+            self.s_inv.mul_vec(v[1]).scale(-self.w),
+        ]
     }
 }
 
@@ -90,18 +107,49 @@ fn reserve<T: Clone + Default>(v: &mut Vec<T>, n: usize) {
     }
 }
 
-/// Per-thread working memory of [`solve`].
+/// What the solve reads of one vertex and the edge (and pair) starting at it, widened to f64:
+/// the f32 arithmetic (directors, relative turns, edge vectors) is done per strand with glam.
+#[derive(Clone, Copy, Default)]
+struct Input<T> {
+    /// Inverse mass of the vertex.
+    w: T,
+    /// Edge: `d3` of its frame, rest length, `4·wq` (the frame's inverse inertia as a rotation),
+    /// and `x_{e+1} − x_e`.
+    d: V3<T>,
+    length: T,
+    wq4: T,
+    dx: V3<T>,
+    /// Pair ending at the edge: `u = q̄_{e−1}⊗q_e` as vector and scalar part, the rest turn on
+    /// `u`'s side of the double cover, the previous frame, `α/Δt²` and the multiplier.
+    v: V3<T>,
+    uw: T,
+    rest: V3<T>,
+    q_prev: [T; 4],
+    alpha: V3<T>,
+    lambda: V3<T>,
+}
+
+/// Working memory of one lane width.
 #[derive(Default)]
-pub(crate) struct Scratch {
+struct Work<T> {
+    input: Vec<Input<T>>,
     /// Per edge: the eliminated diagonal block and coupling; the forward-eliminated right-hand
     /// side `L⁻¹·(…)` (then the solution).
-    eliminated: Vec<Eliminated>,
-    values: Vec<Pair>,
-    /// Per edge: `G` of the pair ending at it, `d3` of its frame.
-    g: Vec<DMat3>,
-    d: Vec<DVec3>,
-    /// Per pair: the bend–twist constraint's value.
-    c_bt: Vec<DVec3>,
+    eliminated: Vec<Eliminated<T>>,
+    values: Vec<Pair<T>>,
+    /// Per edge: `G` of the pair ending at it; per pair: the bend–twist constraint's value.
+    g: Vec<M3<T>>,
+    c_bt: Vec<V3<T>>,
+    /// Per vertex its move, per edge its frame's turn (a rotation vector).
+    moved: Vec<V3<T>>,
+    turn: Vec<V3<T>>,
+}
+
+/// Per-thread working memory of [`solve`] and [`solve_lanes`].
+#[derive(Default)]
+pub(crate) struct Scratch {
+    one: Work<f64>,
+    lanes: Work<F64x4>,
 }
 
 /// One strand's state as the direct solve needs it (slices over the strand's vertices; frames,
@@ -120,108 +168,198 @@ pub(crate) struct StrandState<'a> {
 
 /// One linearised solve of the constraints from edge `start` on (the free tail: frames and
 /// vertices before it are held), applied to positions, frames and bend–twist multipliers.
-///
-/// Block `L·D·Lᵀ` elimination along the strand ([`Eliminated`]).
-// Each edge reads its neighbours' entries of several arrays: index loops say that plainest.
-#[allow(clippy::needless_range_loop)]
 pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch) {
-    let n = s.x.len();
+    solve_group(std::slice::from_mut(s), start, &mut scratch.one);
+}
+
+/// [`solve`] for 4 strands of equal vertex count and free tail at once, one per f64 lane, with the
+/// same results bit for bit.
+///
+/// On x86-64 CPUs with AVX the same code is compiled a second time with 256-bit registers; AVX
+/// without FMA rounds every lane operation exactly as SSE2 does.
+pub(crate) fn solve_lanes(strands: &mut [StrandState<'_>; 4], start: usize, scratch: &mut Scratch) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU supports AVX (checked just above).
+        unsafe { solve_lanes_avx(strands, start, &mut scratch.lanes) };
+        return;
+    }
+    solve_group(strands, start, &mut scratch.lanes);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn solve_lanes_avx(strands: &mut [StrandState<'_>; 4], start: usize, work: &mut Work<F64x4>) {
+    solve_group(strands, start, work);
+}
+
+/// Gathers `T::LANES` strands into lanes, solves, scatters.
+#[inline(always)]
+fn solve_group<T: Real>(strands: &mut [StrandState<'_>], start: usize, work: &mut Work<T>) {
+    assert_eq!(strands.len(), T::LANES);
+    let n = strands[0].x.len();
+    // Every array of every strand as long as the first strand, stated once, lets the compiler drop
+    // bounds checks.
+    for s in strands.iter() {
+        assert!([s.x.len(), s.q.len(), s.lambda.len(), s.w.len(), s.wq.len(), s.length.len()]
+            .iter()
+            .chain(&[s.rest.len(), s.pair_k.len()])
+            .all(|&len| len == n));
+    }
     let edges = n - 1;
     if start >= edges {
         return;
     }
-    // Every array as long as the strand, stated once, lets the compiler drop bounds checks.
-    assert!([s.q.len(), s.lambda.len(), s.w.len(), s.wq.len(), s.length.len(), s.rest.len(), s.pair_k.len()]
-        .iter()
-        .all(|&len| len == n));
-    let sc = scratch;
-    reserve(&mut sc.eliminated, n);
-    reserve(&mut sc.values, n);
-    reserve(&mut sc.g, n);
-    reserve(&mut sc.d, n);
-    reserve(&mut sc.c_bt, n);
-    let (eliminated, values) = (&mut sc.eliminated[..n], &mut sc.values[..n]);
-    let (g, d3, c_bt) = (&mut sc.g[..n], &mut sc.d[..n], &mut sc.c_bt[..n]);
+    reserve(&mut work.values, n);
+    reserve(&mut work.input, n);
+    reserve(&mut work.eliminated, n);
+    reserve(&mut work.g, n);
+    for v in [&mut work.c_bt, &mut work.moved, &mut work.turn] {
+        reserve(v, n);
+    }
+    gather(strands, start, &mut work.input[..n]);
+    eliminate(start, work, n);
+    scatter(strands, start, work, n);
+}
 
-    let turn_w = |e: usize| if e >= start { 4.0 * s.wq[e] as f64 } else { 0.0 };
-    let has_pair = |e: usize| e >= 1 && e >= start.max(1);
+/// Whether edge `e` ends a pair of the free tail.
+#[inline(always)]
+fn has_pair(e: usize, start: usize) -> bool {
+    e >= 1 && e >= start.max(1)
+}
+
+/// Each lane's strand into `input`, with the f32 arithmetic of the scalar solve.
+#[inline(always)]
+fn gather<T: Real>(strands: &[StrandState<'_>], start: usize, input: &mut [Input<T>]) {
+    let n = input.len();
+    let edges = n - 1;
+    for (l, s) in strands.iter().enumerate() {
+        let (x, q) = (&s.x[..n], &s.q[..n]);
+        for e in start..n {
+            let i = &mut input[e];
+            i.w.set_lane(l, s.w[e] as f64);
+            if e == edges {
+                break;
+            }
+            let qe = q[e];
+            i.d.set_lane(l, director3(qe).as_dvec3());
+            i.length.set_lane(l, s.length[e] as f64);
+            i.wq4.set_lane(l, 4.0 * s.wq[e] as f64);
+            i.dx.set_lane(l, (x[e + 1] - x[e]).as_dvec3());
+            if has_pair(e, start) {
+                let u = q[e - 1].conjugate() * qe;
+                let rest = s.rest[e];
+                let w0 = (1.0 - rest.length_squared()).max(0.0).sqrt();
+                let rest = if u.w * w0 + Vec3::new(u.x, u.y, u.z).dot(rest) < 0.0 { -rest } else { rest };
+                i.v.set_lane(l, DVec3::new(u.x as f64, u.y as f64, u.z as f64));
+                i.uw.set_lane(l, u.w as f64);
+                i.rest.set_lane(l, rest.as_dvec3());
+                let p = q[e - 1].as_dquat();
+                for (c, v) in i.q_prev.iter_mut().zip([p.x, p.y, p.z, p.w]) {
+                    c.set_lane(l, v);
+                }
+                i.alpha.set_lane(l, s.pair_k[e].compliance_dt2.as_dvec3());
+                i.lambda.set_lane(l, s.lambda[e].as_dvec3());
+            }
+        }
+    }
+}
+
+/// Assembly, block `L·D·Lᵀ` elimination along the strand ([`Eliminated`]), back substitution, and
+/// the moves and turns: everything in f64, lane by lane.
+// Each edge reads its neighbours' entries of several arrays: index loops say that plainest.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn eliminate<T: Real>(start: usize, work: &mut Work<T>, n: usize) {
+    let edges = n - 1;
+    let input = &work.input[..n];
+    let (eliminated, values) = (&mut work.eliminated[..n], &mut work.values[..n]);
+    let (g, c_bt) = (&mut work.g[..n], &mut work.c_bt[..n]);
+    let (moved, turns) = (&mut work.moved[..n], &mut work.turn[..n]);
+    let zero = T::splat(0.0);
+    let turn_w = |e: usize| if e >= start { input[e].wq4 } else { zero };
+    let has_pair = |e: usize| has_pair(e, start);
     // Constraint values and Jacobian pieces.
     for e in start..edges {
-        let q = s.q[e];
-        d3[e] = director3(q).as_dvec3();
         if has_pair(e) {
-            let u = s.q[e - 1].conjugate() * q;
-            let v = DVec3::new(u.x as f64, u.y as f64, u.z as f64);
-            let rest = s.rest[e];
-            let w0 = (1.0 - rest.length_squared()).max(0.0).sqrt();
-            let rest = if u.w * w0 + Vec3::new(u.x, u.y, u.z).dot(rest) < 0.0 { -rest } else { rest };
-            c_bt[e] = v - rest.as_dvec3();
-            let k = (DMat3::from_diagonal(DVec3::splat(u.w as f64)) - cross_matrix(v)) * 0.5;
-            let r_prev = DMat3::from_quat(s.q[e - 1].as_dquat());
-            g[e] = k * r_prev.transpose();
+            let i = &input[e];
+            c_bt[e] = i.v - i.rest;
+            let k = (M3::from_diagonal(V3::splat(i.uw)) - cross_matrix(i.v)).scale(T::splat(0.5));
+            let r_prev = M3::from_quat(i.q_prev);
+            g[e] = k.mul_mat(&r_prev.transpose());
         }
     }
     // Assemble, factor and eliminate forward. `schur` is what the previous edge's elimination
     // takes off this edge's diagonal block, `Uᵀ·P⁻¹·U` of the previous edge, as 00, 01 (bend–twist
     // rows, stretch–shear columns) and 11 blocks.
-    let mut schur = [DMat3::ZERO; 3];
+    let mut schur = [M3::zero(); 3];
     for e in start..edges {
-        let l = s.length[e] as f64;
-        let d = d3[e];
+        let i = &input[e];
+        let l = i.length;
+        let d = i.d;
         let we = turn_w(e);
-        let (w1, w2) = (s.w[e] as f64, s.w[e + 1] as f64);
+        let (w1, w2) = (i.w, input[e + 1].w);
         let (mut p00, mut p10);
-        let mut rhs: Pair = [DVec3::ZERO, DVec3::ZERO];
+        let mut rhs: Pair<T> = [V3::zero(), V3::zero()];
         if has_pair(e) {
             let g_e = g[e];
-            let alpha = s.pair_k[e].compliance_dt2.as_dvec3();
+            let alpha = i.alpha;
             let frames = turn_w(e - 1) + we;
-            p00 = g_e * g_e.transpose() * frames + DMat3::from_diagonal(alpha);
-            p10 = cross_columns(d, g_e.transpose()) * (l * we); // ∂C_ss/∂θ_e = l·[d]×
-            rhs[0] = -c_bt[e] - alpha * s.lambda[e].as_dvec3();
+            p00 = g_e.mul_mat(&g_e.transpose()).scale(frames) + M3::from_diagonal(alpha);
+            p10 = cross_columns(d, g_e.transpose()).scale(l * we); // ∂C_ss/∂θ_e = l·[d]×
+            rhs[0] = -c_bt[e] - alpha.mul(i.lambda);
         } else {
-            p00 = DMat3::IDENTITY;
-            p10 = DMat3::ZERO;
+            p00 = M3::identity();
+            p10 = M3::zero();
         }
-        let vertices = (w1 + w2) * (1.0 + 1e-6);
+        let vertices = (w1 + w2) * T::splat(1.0 + 1e-6);
         // l²·[d]×·[d]×ᵀ = l²·(|d|²·I − d·dᵀ).
         let frame = l * l * we;
-        let mut p11 = DMat3::from_diagonal(DVec3::splat(vertices + frame * d.length_squared()))
-            - DMat3::from_cols(d * d.x, d * d.y, d * d.z) * frame;
-        rhs[1] = (l * d) - (s.x[e + 1] - s.x[e]).as_dvec3();
+        let mut p11 = M3::from_diagonal(V3::splat(vertices + frame * d.length_squared()))
+            - M3::from_cols(d.scale(d.x), d.scale(d.y), d.scale(d.z)).scale(frame);
+        rhs[1] = d.scale(l) - i.dx;
         // Tiny relative regularisation: a pair between two held frames, or a stiff pair with no
         // compliance, keeps an invertible pivot without changing solvable systems measurably.
+        // Added to the diagonal only: the off-diagonal entries are never −0 here (each is a sum
+        // with +0 or a difference from +0), so adding the +0 of a diagonal matrix kept them.
         for m in [&mut p00, &mut p11] {
-            let scale = m.x_axis.x.abs().max(m.y_axis.y.abs()).max(m.z_axis.z.abs()).max(1e-30);
-            *m += DMat3::from_diagonal(DVec3::splat(scale * 1e-9));
+            let scale = m.x_axis.x.abs().max(m.y_axis.y.abs()).max(m.z_axis.z.abs()).max(T::splat(1e-30));
+            let add = scale * T::splat(1e-9);
+            m.x_axis.x = m.x_axis.x + add;
+            m.y_axis.y = m.y_axis.y + add;
+            m.z_axis.z = m.z_axis.z + add;
         }
         if e > start {
             let previous = &eliminated[e - 1];
-            p00 -= schur[0];
-            p10 -= schur[1].transpose();
-            p11 -= schur[2];
+            p00 = p00 - schur[0];
+            p10 = p10 - schur[1].transpose();
+            p11 = p11 - schur[2];
             let carried = previous.coupling_transposed(values[e - 1]);
             rhs = [rhs[0] - carried[0], rhs[1] - carried[1]];
         }
         let p00_inv = p00.inverse();
-        let f = p10 * p00_inv;
-        let s_inv = (p11 - f * p10.transpose()).inverse();
-        let mut el = Eliminated { f, p00_inv, s_inv, x: DMat3::ZERO, y: DMat3::ZERO, w: w2 };
+        let f = p10.mul_mat(&p00_inv);
+        let s_inv = (p11 - f.mul_mat(&p10.transpose())).inverse();
+        let mut el = Eliminated { f, p00_inv, s_inv, x: M3::zero(), y: M3::zero(), w: w2 };
         values[e] = el.lower_solve(rhs);
         // The coupling to edge e + 1: U = [[A, 0], [B, −w·I]], L⁻¹·U = [[A, 0], [B − F·A, −w·I]].
         if e + 1 < edges {
             let (a, b) = if has_pair(e + 1) {
                 let g_next_t = g[e + 1].transpose();
-                let a = if has_pair(e) { -(g[e] * g_next_t) * we } else { DMat3::ZERO };
-                (a, cross_columns(d, g_next_t) * (-l * we))
+                let a = if has_pair(e) { (-g[e].mul_mat(&g_next_t)).scale(we) } else { M3::zero() };
+                (a, cross_columns(d, g_next_t).scale(-l * we))
             } else {
-                (DMat3::ZERO, DMat3::ZERO)
+                (M3::zero(), M3::zero())
             };
-            let b = b - f * a;
-            el.x = p00_inv * a;
-            el.y = s_inv * b;
+            let b = b - f.mul_mat(&a);
+            el.x = p00_inv.mul_mat(&a);
+            el.y = s_inv.mul_mat(&b);
             // (L⁻¹·U)ᵀ·D⁻¹·(L⁻¹·U), with P00⁻¹ and S⁻¹ symmetric.
-            schur = [a.transpose() * el.x + b.transpose() * el.y, el.y.transpose() * -w2, s_inv * (w2 * w2)];
+            schur = [
+                a.transpose().mul_mat(&el.x) + b.transpose().mul_mat(&el.y),
+                el.y.transpose().scale(-w2),
+                s_inv.scale(w2 * w2),
+            ];
         }
         eliminated[e] = el;
     }
@@ -237,32 +375,50 @@ pub(crate) fn solve(s: &mut StrandState<'_>, start: usize, scratch: &mut Scratch
     }
     let bend_twist = |e: usize| values[e][0];
     let stretch_shear = |e: usize| values[e][1];
-    // Apply: Δx = W·Jᵀ·Δμ, Δθ = 4wq·Jᵀ·Δμ, λ += Δλ.
+    // Δx = W·Jᵀ·Δμ, Δθ = 4wq·Jᵀ·Δμ.
     for j in start..=edges {
-        let before = if j > start { stretch_shear(j - 1) } else { DVec3::ZERO };
-        let after = if j < edges { stretch_shear(j) } else { DVec3::ZERO };
-        s.x[j] += (s.w[j] as f64 * (before - after)).as_vec3();
+        let before = if j > start { stretch_shear(j - 1) } else { V3::zero() };
+        let after = if j < edges { stretch_shear(j) } else { V3::zero() };
+        moved[j] = (before - after).scale(input[j].w);
     }
     for e in start..edges {
         let we = turn_w(e);
+        let l = input[e].length;
+        let mut turn = cross_matrix(input[e].d).transpose().scale(l).mul_vec(stretch_shear(e));
         if has_pair(e) {
-            s.lambda[e] += bend_twist(e).as_vec3();
-        }
-        if we <= 0.0 {
-            continue;
-        }
-        let l = s.length[e] as f64;
-        let mut turn = l * cross_matrix(d3[e]).transpose() * stretch_shear(e);
-        if has_pair(e) {
-            turn += g[e].transpose() * bend_twist(e);
+            turn = turn + g[e].transpose().mul_vec(bend_twist(e));
         }
         if e + 1 < edges && has_pair(e + 1) {
-            turn -= g[e + 1].transpose() * bend_twist(e + 1);
+            turn = turn - g[e + 1].transpose().mul_vec(bend_twist(e + 1));
         }
-        let turn = (turn * we).as_vec3();
-        let q = s.q[e];
-        let dq = Quat::from_xyzw(turn.x, turn.y, turn.z, 0.0) * q;
-        s.q[e] = (q + dq * 0.5).normalize();
+        turns[e] = turn.scale(we);
+    }
+}
+
+/// Applies each lane's moves, turns and multiplier increments to its strand, with the f32
+/// arithmetic of the scalar solve; frames that cannot turn keep their bits.
+#[inline(always)]
+fn scatter<T: Real>(strands: &mut [StrandState<'_>], start: usize, work: &Work<T>, n: usize) {
+    let edges = n - 1;
+    let (input, values) = (&work.input[..n], &work.values[..n]);
+    let (moved, turns) = (&work.moved[..n], &work.turn[..n]);
+    for (l, s) in strands.iter_mut().enumerate() {
+        let (x, q, lambda) = (&mut s.x[..n], &mut s.q[..n], &mut s.lambda[..n]);
+        for j in start..=edges {
+            x[j] += moved[j].lane(l).as_vec3();
+        }
+        for e in start..edges {
+            if has_pair(e, start) {
+                lambda[e] += values[e][0].lane(l).as_vec3();
+            }
+            if input[e].wq4.lane(l) <= 0.0 {
+                continue;
+            }
+            let turn = turns[e].lane(l).as_vec3();
+            let qe = q[e];
+            let dq = Quat::from_xyzw(turn.x, turn.y, turn.z, 0.0) * qe;
+            q[e] = (qe + dq * 0.5).normalize();
+        }
     }
 }
 
@@ -271,6 +427,76 @@ mod tests {
     use super::*;
     use crate::sim::rod::transport_frames;
 
+    /// A strand's arrays, owned.
+    #[derive(Clone)]
+    struct Strand {
+        rest_points: Vec<Vec3>,
+        x: Vec<Vec3>,
+        q: Vec<Quat>,
+        lambda: Vec<Vec3>,
+        w: Vec<f32>,
+        wq: Vec<f32>,
+        length: Vec<f32>,
+        rest: Vec<Vec3>,
+        pair_k: Vec<BendTwistCoefficients>,
+    }
+
+    impl Strand {
+        /// A helix of `n` vertices at rest (turning `turn` radians a vertex), rigid, started bent
+        /// and stretched: every vertex but the root pushed sideways and down by `push` a vertex.
+        fn bent(n: usize, turn: f32, push: Vec3) -> Strand {
+            let rest_points: Vec<Vec3> = (0..n)
+                .map(|i| {
+                    let a = i as f32 * turn;
+                    Vec3::new(0.01 * a.sin(), -0.008 * i as f32, 0.01 * a.cos())
+                })
+                .collect();
+            let mut frames = vec![Quat::IDENTITY; n];
+            transport_frames(&rest_points, &mut frames);
+            let length: Vec<f32> = (0..n)
+                .map(|i| if i + 1 < n { rest_points[i].distance(rest_points[i + 1]) } else { 0.0 })
+                .collect();
+            let rest: Vec<Vec3> = (0..n)
+                .map(|i| {
+                    if i >= 1 && i + 1 < n {
+                        super::super::constraints::darboux_canonical(frames[i - 1], frames[i])
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+                .collect();
+            let x = rest_points.iter().enumerate().map(|(i, p)| *p + push * i as f32).collect();
+            let mut w = vec![1.0e6f32; n];
+            w[0] = 0.0;
+            let mut wq: Vec<f32> = (0..n).map(|i| 0.1 * 1.0e6 / (length[i] * length[i]).max(1e-12)).collect();
+            wq[0] = 0.0;
+            Strand {
+                rest_points,
+                x,
+                q: frames,
+                lambda: vec![Vec3::ZERO; n],
+                w,
+                wq,
+                length,
+                rest,
+                pair_k: vec![BendTwistCoefficients::default(); n],
+            }
+        }
+
+        fn state(&mut self) -> StrandState<'_> {
+            StrandState {
+                x: &mut self.x,
+                q: &mut self.q,
+                lambda: &mut self.lambda,
+                w: &self.w,
+                wq: &self.wq,
+                length: &self.length,
+                rest: &self.rest,
+                pair_k: &self.pair_k,
+            }
+        }
+    }
+
     /// With zero compliance a free strand has as many constraints as freedoms (three per vertex,
     /// three per frame), so Newton steps of the direct solve reach a state where every edge runs
     /// its rest length along its frame and every pair has its rest turn, from a start far from
@@ -278,39 +504,9 @@ mod tests {
     #[test]
     fn newton_steps_satisfy_every_constraint_of_a_strand() {
         let n = 12;
-        let rest_points: Vec<Vec3> = (0..n)
-            .map(|i| {
-                Vec3::new(0.01 * (i as f32 * 0.7).sin(), -0.008 * i as f32, 0.01 * (i as f32 * 0.7).cos())
-            })
-            .collect();
-        let mut frames = vec![Quat::IDENTITY; n];
-        transport_frames(&rest_points, &mut frames);
-        let length: Vec<f32> = (0..n)
-            .map(|i| if i + 1 < n { rest_points[i].distance(rest_points[i + 1]) } else { 0.0 })
-            .collect();
-        let rest: Vec<Vec3> = (0..n)
-            .map(|i| {
-                if i >= 1 && i + 1 < n {
-                    super::super::constraints::darboux_canonical(frames[i - 1], frames[i])
-                } else {
-                    Vec3::ZERO
-                }
-            })
-            .collect();
-        // Start bent and stretched: every vertex but the root pushed sideways and down.
-        let mut x: Vec<Vec3> = rest_points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| *p + Vec3::new(0.003, -0.002, 0.0) * i as f32)
-            .collect();
-        let mut q = frames.clone();
-        let mut lambda = vec![Vec3::ZERO; n];
-        let mut w = vec![1.0e6f32; n];
-        w[0] = 0.0;
-        let mut wq: Vec<f32> = (0..n).map(|i| 0.1 * 1.0e6 / (length[i] * length[i]).max(1e-12)).collect();
-        wq[0] = 0.0;
-        let rigid = vec![BendTwistCoefficients::default(); n];
+        let mut s = Strand::bent(n, 0.7, Vec3::new(0.003, -0.002, 0.0));
         let mut scratch = Scratch::default();
+        let (length, rest) = (s.length.clone(), s.rest.clone());
         let residual = |x: &[Vec3], q: &[Quat]| {
             let mut worst = 0.0f32;
             for e in 0..n - 1 {
@@ -324,24 +520,64 @@ mod tests {
             }
             worst
         };
-        let before = residual(&x, &q);
+        let before = residual(&s.x, &s.q);
         for _ in 0..6 {
-            let mut state = StrandState {
-                x: &mut x,
-                q: &mut q,
-                lambda: &mut lambda,
-                w: &w,
-                wq: &wq,
-                length: &length,
-                rest: &rest,
-                pair_k: &rigid,
-            };
-            solve(&mut state, 0, &mut scratch);
+            solve(&mut s.state(), 0, &mut scratch);
         }
-        let after = residual(&x, &q);
+        let after = residual(&s.x, &s.q);
         assert!(before > 0.1, "the start is far from rest: {before}");
         assert!(after < 1e-4, "relative residual after 6 Newton steps: {after} (from {before})");
         // The root stays put.
-        assert_eq!(x[0], rest_points[0]);
+        assert_eq!(s.x[0], s.rest_points[0]);
+    }
+
+    /// Four different strands solved in lanes end with the bits each gets solved alone: compliant
+    /// and rigid pairs, multipliers carried between Newton steps, a held frame in the middle, and
+    /// free tails starting at the root and further out.
+    #[test]
+    fn lanes_give_each_strand_the_bits_of_its_own_solve() {
+        let n = 9;
+        let strands: Vec<Strand> = (0..4)
+            .map(|k| {
+                let k = k as f32;
+                let mut s = Strand::bent(n, 0.4 + 0.3 * k, Vec3::new(0.002 * k, -0.003, 0.001 * (k - 1.5)));
+                if k >= 2.0 {
+                    for (i, c) in s.pair_k.iter_mut().enumerate() {
+                        *c = BendTwistCoefficients::new(
+                            1e4,
+                            2e4,
+                            Vec3::new(1e-6, 2e-6, 3e-6) * (1.0 + i as f32),
+                        );
+                    }
+                }
+                if k == 3.0 {
+                    s.wq[4] = 0.0;
+                }
+                s
+            })
+            .collect();
+        for start in [0, 1, 3] {
+            let mut alone = strands.clone();
+            let mut lanes = strands.clone();
+            let mut scratch = Scratch::default();
+            for _ in 0..3 {
+                for s in alone.iter_mut() {
+                    solve(&mut s.state(), start, &mut scratch);
+                }
+                let mut states = lanes.iter_mut().map(Strand::state);
+                let mut states: [_; 4] = std::array::from_fn(|_| states.next().unwrap());
+                solve_lanes(&mut states, start, &mut scratch);
+            }
+            for ((a, l), original) in alone.iter().zip(&lanes).zip(&strands) {
+                let bits = |s: &Strand| {
+                    let mut b: Vec<u32> = s.x.iter().flat_map(|v| v.to_array()).map(f32::to_bits).collect();
+                    b.extend(s.q.iter().flat_map(|q| q.to_array()).map(f32::to_bits));
+                    b.extend(s.lambda.iter().flat_map(|v| v.to_array()).map(f32::to_bits));
+                    b
+                };
+                assert_ne!(a.x, original.x, "the solve moved the strand");
+                assert_eq!(bits(a), bits(l), "free tail from edge {start}");
+            }
+        }
     }
 }
