@@ -32,24 +32,32 @@ use super::grid::{NeighbourGrid, NeighbourSpread, Occupancy};
 /// depend on the thread count).
 const BUILD_CHUNK: usize = 2048;
 
-/// A piece of an edge, carrying what a query needs so candidates are read contiguously: the
-/// whole edge (every piece of an edge computes the same closest point, so exactly one claims
-/// it), its vertex index and strand, its mean radius, and which piece of how many it is. Its
-/// [`PieceSphere`] is kept apart.
+/// Which piece of an edge: the edge's first vertex, and the piece's index of how many.
 #[derive(Clone, Copy, Debug, Default)]
+struct PieceOf {
+    edge: u32,
+    index: u16,
+    count: u16,
+}
+
+/// A piece as a query's narrow test reads it: the whole edge (every piece of an edge computes
+/// the same closest point, so exactly one claims it: the piece holding that point), its mean
+/// radius, and which piece of how many it is. Half a cache line.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
 struct Piece {
     a: Vec3,
     b: Vec3,
-    edge: u32,
-    strand: u32,
     radius: f32,
-    index: u32,
-    count: u32,
+    index: u16,
+    count: u16,
 }
 
 /// A piece's middle (xyz) and reach (w: mean radius plus half its length): a vertex farther than
 /// the reach plus its own radius and the skin from the middle cannot be listed through this
-/// piece. Most pieces a query visits fail this test, so it reads these 16 bytes alone.
+/// piece. Most pieces a query visits fail this test or are of the query's own strand, so it
+/// reads these 16 bytes and the piece's edge alone: at 100,000 strands the queries are bound by
+/// memory, not arithmetic.
 type PieceSphere = Vec4;
 
 pub struct HairContacts {
@@ -58,20 +66,22 @@ pub struct HairContacts {
     skin: f32,
     spacing: f32,
     max_radius: f32,
-    /// Strand of each vertex, and whether the edge a vertex starts is followed by another of the
-    /// same strand.
+    /// Where each strand's vertices start (and the last one's end), the strand of each vertex,
+    /// and whether the edge a vertex starts is followed by another of the same strand.
+    strand_offsets: Vec<u32>,
     strand_of: Vec<u32>,
     edge_continues: Vec<bool>,
     /// First vertex of every edge.
     edges: Vec<u32>,
-    // Build scratch: each edge's first piece, the middles and edges of the pieces in edge order,
-    // their grid, and the pieces and their spheres in the grid's order.
+    // Build scratch: each edge's first piece, the middles of the pieces and which they are in
+    // edge order, their grid, and the pieces in the grid's order.
     first_piece: Vec<u32>,
     piece_mids: Vec<Vec3>,
-    piece_edges: Vec<u32>,
+    piece_of: Vec<PieceOf>,
     grid: NeighbourGrid,
     sorted_pieces: Vec<Piece>,
     sorted_spheres: Vec<PieceSphere>,
+    sorted_edges: Vec<u32>,
     /// Movable vertices to query, as (bucket << 32 | vertex), sorted.
     queries: Vec<u64>,
     // Verlet lists: `list_edges[list_starts[i]..list_starts[i + 1]]` are vertex i's candidates.
@@ -130,15 +140,17 @@ impl HairContacts {
             skin,
             spacing,
             max_radius,
+            strand_offsets: strand_offsets.to_vec(),
             strand_of,
             edge_continues,
             grid: NeighbourGrid::new(Self::cell_size(max_radius, skin, spacing)),
             edges,
             first_piece: Vec::new(),
             piece_mids: Vec::new(),
-            piece_edges: Vec::new(),
+            piece_of: Vec::new(),
             sorted_pieces: Vec::new(),
             sorted_spheres: Vec::new(),
+            sorted_edges: Vec::new(),
             queries: Vec::new(),
             list_starts: Vec::new(),
             list_edges: Vec::new(),
@@ -293,20 +305,10 @@ impl HairContacts {
             .sqrt()
     }
 
+    /// How many pieces edge `j` is cut into: at most `spacing` long, so the grid's cells span
+    /// half a piece beyond the search distance, and at most `u16::MAX`.
     fn pieces_of(&self, points: &[Vec3], j: usize) -> u32 {
-        ((points[j].distance(points[j + 1]) / self.spacing).ceil() as u32).max(1)
-    }
-
-    /// Piece `index` of edge `e`, and its sphere.
-    fn piece(&self, points: &[Vec3], radii: &[f32], e: usize, index: u32) -> (Piece, PieceSphere) {
-        let j = self.edges[e] as usize;
-        let (a, b) = (points[j], points[j + 1]);
-        let count = self.first_piece[e + 1] - self.first_piece[e];
-        let radius = 0.5 * (radii[j] + radii[j + 1]);
-        // A closest point rounded just past the piece's end still counts as in it.
-        let reach = radius + a.distance(b) / count as f32 * 0.505 + 1e-6;
-        let piece = Piece { a, b, edge: j as u32, strand: self.strand_of[j], radius, index, count };
-        (piece, Self::piece_mid(a, b, index, count).extend(reach))
+        ((points[j].distance(points[j + 1]) / self.spacing).ceil() as u32).clamp(1, u16::MAX as u32)
     }
 
     fn piece_mid(a: Vec3, b: Vec3, index: u32, count: u32) -> Vec3 {
@@ -317,12 +319,18 @@ impl HairContacts {
     /// queried (held on rods, or their lists still good), only edges near a queried vertex are
     /// cut: no other can be a candidate.
     fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], queried: usize) {
+        let longest_edge = self.longest_edge(points);
+        // Pieces are counted in 16 bits: edges longer than that many spacings get longer pieces,
+        // and the grid's cells grow with them.
+        if longest_edge > self.spacing * u16::MAX as f32 {
+            self.spacing = longest_edge / u16::MAX as f32 * 1.001;
+            self.set_skin(self.skin);
+        }
         let cull = queried < points.len() / 2;
         if cull {
             // An edge can hold a candidate only if a queried vertex lies within the edge's length
             // plus the query's reach of both its ends on every axis: with cells wider than that,
             // a lookup of each end's neighbourhood tells.
-            let longest_edge = self.longest_edge(points);
             let reach = 2.0 * self.max_radius + self.skin;
             let cell = (longest_edge + reach) * 1.01 + 1e-6;
             self.queried_cells.mark(cell, points, |i| self.queried[i]);
@@ -347,39 +355,53 @@ impl HairContacts {
         let total = *self.first_piece.last().unwrap() as usize;
         // The grid sorts the pieces' middles; the pieces themselves are made in its order.
         let mut mids = std::mem::take(&mut self.piece_mids);
-        let mut piece_edges = std::mem::take(&mut self.piece_edges);
+        let mut piece_of = std::mem::take(&mut self.piece_of);
         mids.resize(total, Vec3::ZERO);
-        piece_edges.resize(total, 0);
+        piece_of.resize(total, PieceOf::default());
         let this = &*self;
-        mids.par_chunks_mut(BUILD_CHUNK).zip(piece_edges.par_chunks_mut(BUILD_CHUNK)).enumerate().for_each(
-            |(c, (mids, piece_edges))| {
+        mids.par_chunks_mut(BUILD_CHUNK).zip(piece_of.par_chunks_mut(BUILD_CHUNK)).enumerate().for_each(
+            |(c, (mids, piece_of))| {
                 let first = c * BUILD_CHUNK;
                 let mut e = this.first_piece.partition_point(|&f| f as usize <= first) - 1;
-                for ((k, mid), piece_edge) in (first..).zip(mids).zip(piece_edges) {
+                for ((k, mid), of) in (first..).zip(mids).zip(piece_of) {
                     while this.first_piece[e + 1] as usize <= k {
                         e += 1;
                     }
                     let j = this.edges[e] as usize;
-                    let count = this.first_piece[e + 1] - this.first_piece[e];
-                    *mid = Self::piece_mid(points[j], points[j + 1], k as u32 - this.first_piece[e], count);
-                    *piece_edge = e as u32;
+                    let (index, count) =
+                        (k as u32 - this.first_piece[e], this.first_piece[e + 1] - this.first_piece[e]);
+                    *mid = Self::piece_mid(points[j], points[j + 1], index, count);
+                    *of = PieceOf { edge: j as u32, index: index as u16, count: count as u16 };
                 }
             },
         );
         self.grid.rebuild(&mids);
-        (self.piece_mids, self.piece_edges) = (mids, piece_edges);
+        (self.piece_mids, self.piece_of) = (mids, piece_of);
         let mut sorted = std::mem::take(&mut self.sorted_pieces);
         let mut spheres = std::mem::take(&mut self.sorted_spheres);
+        let mut edges = std::mem::take(&mut self.sorted_edges);
         sorted.resize(total, Piece::default());
         spheres.resize(total, PieceSphere::ZERO);
+        edges.resize(total, 0);
         let this = &*self;
-        sorted.par_iter_mut().zip(spheres.par_iter_mut()).zip(this.grid.sorted_items().par_iter()).for_each(
-            |((piece, sphere), &k)| {
-                let e = this.piece_edges[k as usize] as usize;
-                (*piece, *sphere) = this.piece(points, radii, e, k - this.first_piece[e]);
-            },
-        );
-        (self.sorted_pieces, self.sorted_spheres) = (sorted, spheres);
+        sorted
+            .par_iter_mut()
+            .zip(spheres.par_iter_mut())
+            .zip(edges.par_iter_mut())
+            .zip(this.grid.sorted_items().par_iter())
+            .for_each(|(((piece, sphere), edge), &k)| {
+                let of = this.piece_of[k as usize];
+                let j = of.edge as usize;
+                let (a, b) = (points[j], points[j + 1]);
+                let (index, count) = (of.index as u32, of.count as u32);
+                // A closest point rounded just past the piece's end still counts as in it.
+                let radius = 0.5 * (radii[j] + radii[j + 1]);
+                let reach = radius + a.distance(b) / count as f32 * 0.505 + 1e-6;
+                *sphere = Self::piece_mid(a, b, index, count).extend(reach);
+                *edge = of.edge;
+                *piece = Piece { a, b, radius, index: of.index, count: of.count };
+            });
+        (self.sorted_pieces, self.sorted_spheres, self.sorted_edges) = (sorted, spheres, edges);
     }
 
     /// Builds the lists of every movable vertex, or (`partial`) only of those whose pairs may
@@ -485,24 +507,29 @@ impl HairContacts {
     /// once, in the grid's order.
     fn candidates_of(&self, i: usize, points: &[Vec3], radii: &[f32], out: &mut Vec<u32>) {
         let p = points[i];
-        let strand = self.strand_of[i];
-        let own = radii[i] + self.skin;
+        let strand = self.strand_of[i] as usize;
+        // The vertices of i's strand: edges starting there are its own.
+        let own = self.strand_offsets[strand]..self.strand_offsets[strand + 1];
+        let near = radii[i] + self.skin;
         self.grid.for_each_near_run(p, |run| {
-            for (sphere, piece) in self.sorted_spheres[run.clone()].iter().zip(&self.sorted_pieces[run]) {
-                // Most pieces in the cells around are beyond reach of their middle: a cheap test
-                // before the closest point.
-                let near = own + sphere.w;
-                if p.distance_squared(sphere.truncate()) >= near * near || piece.strand == strand {
+            let spheres = self.sorted_spheres[run.clone()].iter();
+            for ((sphere, &edge), k) in spheres.zip(&self.sorted_edges[run.clone()]).zip(run) {
+                // Most pieces in the cells around are beyond reach of their middle, or of the
+                // query's strand: cheap tests before the closest point.
+                let reach = near + sphere.w;
+                if p.distance_squared(sphere.truncate()) >= reach * reach || own.contains(&edge) {
                     continue;
                 }
+                let piece = &self.sorted_pieces[k];
                 let ab = piece.b - piece.a;
                 let t = ((p - piece.a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
                 let reach = radii[i] + piece.radius + self.skin;
+                let (index, count) = (piece.index as u32, piece.count as u32);
                 // List the pair once: through the piece that holds the closest point.
                 if p.distance_squared(piece.a + ab * t) < reach * reach
-                    && piece.index == ((t * piece.count as f32) as u32).min(piece.count - 1)
+                    && index == ((t * count as f32) as u32).min(count - 1)
                 {
-                    out.push(piece.edge);
+                    out.push(edge);
                 }
             }
         });
@@ -548,6 +575,32 @@ mod tests {
         let mut v = vec![Vec3::ZERO; points.len()];
         contacts.apply(&points, &radii, &held, &mut v, dt);
         assert_eq!(v[3], Vec3::ZERO);
+    }
+
+    #[test]
+    fn edges_of_more_pieces_than_a_piece_index_holds_keep_their_contacts() {
+        // A 20 m edge cut at the 0.2 mm spacing asked for would need 100,000 pieces, more than a
+        // piece's 16-bit index holds: its pieces grow (and the grid's cells with them), and
+        // strands crossing it anywhere still touch it exactly once.
+        let r = 1e-4;
+        let mut points = vec![Vec3::new(-10.0, 0.0, 0.0), Vec3::new(10.0, 0.0, 0.0)];
+        let mut offsets = vec![0, 2];
+        // Crossings every 1.37 mm over 27 cm: at every position along a piece.
+        for k in 0..200 {
+            let x = -0.1 + 0.001_37 * k as f32;
+            points.extend([
+                Vec3::new(x, -0.01, 0.5 * r),
+                Vec3::new(x, 0.0, 0.5 * r),
+                Vec3::new(x, 0.01, 0.5 * r),
+            ]);
+            offsets.push(points.len() as u32);
+        }
+        let radii = vec![r; points.len()];
+        let fixed = vec![false; points.len()];
+        let mut contacts = HairContacts::new(&offsets, &radii, 2.0 * r, 100.0);
+        let touching = matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, 0);
+        // Each crossing vertex; the long edge's ends are 10 m away.
+        assert_eq!(touching, 200);
     }
 
     /// The penalty every vertex feels, by testing it against every edge of every other strand,
