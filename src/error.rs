@@ -54,6 +54,15 @@ impl Error {
         Error::Io { path: path.to_path_buf(), source }
     }
 
+    /// An error from working on the groom read from `path`: a groom invariant it breaks is that
+    /// file's (every other error already says where it comes from).
+    pub fn in_file(self, path: &Path) -> Self {
+        match self {
+            Error::Groom(source) => Error::InvalidGroom { path: path.to_path_buf(), source },
+            other => other,
+        }
+    }
+
     /// The process exit code the CLI uses for this error: 2 for bad input or usage, 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {

@@ -108,6 +108,9 @@ pub enum GroomError {
     AttributeComponents { name: String, components: usize },
     #[error("attribute '{name}' appears twice")]
     DuplicateAttribute { name: String },
+    /// A value the simulation cannot take (a rest state or frame it reads back).
+    #[error("attribute '{name}': {problem}")]
+    BadAttribute { name: String, problem: String },
     #[error("mesh <{path}>: {problem}")]
     Mesh { path: String, problem: String },
 }

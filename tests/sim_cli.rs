@@ -62,3 +62,31 @@ fn the_readme_influences_comma_form_parses() {
     let result = coif(&[&["simulate", path_str(&input), path_str(&output)][..], &args[..]].concat());
     assert!(result.status.success(), "{}", stderr(&result));
 }
+
+/// A styled groom's `material_frame` that is not a unit quaternion exits 2 naming the file, the
+/// attribute and the vertex, and writes nothing; the file as written re-simulates.
+#[test]
+fn a_broken_material_frame_exits_2_naming_the_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    assert!(coif(&["generate", "-o", path_str(&input), "--strands", "4", "--vertices", "6"])
+        .status
+        .success());
+    let settled = dir.path().join("settled.usda");
+    let run = coif(&["simulate", path_str(&input), path_str(&settled), "--seconds", "0.05"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = std::fs::read_to_string(&settled).unwrap();
+    let at = text.find("primvars:material_frame = [").expect("the frames are written");
+    let open = at + text[at..].find('(').unwrap();
+    let close = open + text[open..].find(')').unwrap();
+    let broken = dir.path().join("broken.usda");
+    std::fs::write(&broken, format!("{}(2, 0, 0, 0{}", &text[..open], &text[close..])).unwrap();
+    let again = dir.path().join("again.usda");
+    let result = coif(&["simulate", path_str(&broken), path_str(&again), "--seconds", "0.05"]);
+    assert_eq!(result.status.code(), Some(2), "{}", stderr(&result));
+    let message = stderr(&result);
+    assert!(message.contains("broken.usda: attribute 'material_frame': vertex 0"), "{message}");
+    assert!(!again.exists());
+    let result = coif(&["simulate", path_str(&settled), path_str(&again), "--seconds", "0.05"]);
+    assert!(result.status.success(), "{}", stderr(&result));
+}

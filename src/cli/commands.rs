@@ -78,10 +78,11 @@ fn run_style(args: StyleArgs) -> Result<()> {
     };
     let options = coif::style::StyleOptions { progress, frames_per_second, scalp };
     let styled = if args.groups.is_empty() {
-        coif::style::style(&loaded.groom, &recipe, &options)?
+        coif::style::style(&loaded.groom, &recipe, &options)
     } else {
-        style_groups(&loaded.groom, &args.groups, &recipe, &options)?
-    };
+        style_groups(&loaded.groom, &args.groups, &recipe, &options)
+    }
+    .map_err(|e| e.in_file(&args.groom))?;
     let (groom, report) = (&styled.groom, &styled.report);
     let warnings = io::write_animated(
         &args.output,
@@ -205,7 +206,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     };
     let options =
         SimulateOptions { params, seconds: args.seconds, settle, sag_free: args.sag_free, colliders };
-    let (groom, summary) = simulate(&loaded.groom, &options)?;
+    let (groom, summary) = simulate(&loaded.groom, &options).map_err(|e| e.in_file(&args.input))?;
     let unsettled = summary.settle.filter(|r| !r.converged);
     if let Some(report) = unsettled {
         eprintln!("coif: warning: {}", settle_failure(&report));

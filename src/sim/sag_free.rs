@@ -29,7 +29,7 @@ use super::constraints::{darboux_canonical, director3, turn_of};
 use super::rod::transport_frames;
 use super::Simulation;
 use crate::error::{Error, Result};
-use crate::groom::{AttributeRate, Groom};
+use crate::groom::{AttributeRate, Groom, GroomError};
 
 /// The attribute that carries the zero-stress Darboux vectors (written by `write_to_groom`).
 pub const REST_DARBOUX: &str = "rest_darboux";
@@ -42,6 +42,11 @@ pub const MATERIAL_FRAME: &str = "material_frame";
 /// frame to be taken (5°; a settled strand's shear is a fraction of a degree).
 const MAX_FRAME_TILT_COS: f32 = 0.996_194_7;
 
+/// A groom attribute the simulation cannot read back (the caller names the file it came from).
+fn bad_attribute(name: &str, problem: String) -> Error {
+    Error::Groom(GroomError::BadAttribute { name: name.to_string(), problem })
+}
+
 impl Simulation {
     /// Uses the groom's exported zero-stress shape (`rest_darboux`) as every bond kind's memory,
     /// keeping the bond rates. Returns whether the groom had one. `groom` must be the groom the
@@ -52,12 +57,13 @@ impl Simulation {
             || attribute.components != 3
             || attribute.data.len() != 3 * self.rods.vertex_count()
         {
-            return Err(Error::Usage(format!(
-                "attribute '{REST_DARBOUX}' must be three floats per vertex to give the rest shape"
-            )));
+            return Err(bad_attribute(
+                REST_DARBOUX,
+                "must be three floats per vertex to give the rest shape".into(),
+            ));
         }
         if let Some(i) = attribute.data.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Usage(format!("attribute '{REST_DARBOUX}': vertex {} is not finite", i / 3)));
+            return Err(bad_attribute(REST_DARBOUX, format!("vertex {} is not finite", i / 3)));
         }
         let mut shape: Vec<Vec3> = attribute
             .data
@@ -79,9 +85,10 @@ impl Simulation {
             || attribute.components != 4
             || attribute.data.len() != 4 * self.rods.vertex_count()
         {
-            return Err(Error::Usage(format!(
-                "attribute '{MATERIAL_FRAME}' must be a quaternion (four floats) per vertex"
-            )));
+            return Err(bad_attribute(
+                MATERIAL_FRAME,
+                "must be a quaternion (four floats) per vertex".into(),
+            ));
         }
         attribute
             .data
@@ -91,9 +98,10 @@ impl Simulation {
                 let q = Quat::from_xyzw(c[0], c[1], c[2], c[3]);
                 // A written unit quaternion is within f32 round-off of length 1.
                 if !(q.is_finite() && (q.length() - 1.0).abs() < 1e-3) {
-                    return Err(Error::Usage(format!(
-                        "attribute '{MATERIAL_FRAME}': vertex {i} is not a unit quaternion ({c:?})"
-                    )));
+                    return Err(bad_attribute(
+                        MATERIAL_FRAME,
+                        format!("vertex {i} is not a unit quaternion ({c:?})"),
+                    ));
                 }
                 Ok(q.normalize())
             })
