@@ -7,6 +7,8 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 use glam::DVec3;
 
+use super::lanes::lanewise;
+
 /// One f64, or one per lane.
 pub(crate) trait Real:
     Copy + Default + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
@@ -56,20 +58,9 @@ impl Real for f64 {
 #[repr(align(32))]
 pub(crate) struct F64x4(pub [f64; 4]);
 
-macro_rules! lanewise {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for F64x4 {
-            type Output = F64x4;
-            #[inline(always)]
-            fn $method(self, rhs: F64x4) -> F64x4 {
-                F64x4(from_fn(|l| self.0[l] $op rhs.0[l]))
-            }
-        }
-    };
-}
-lanewise!(Add, add, +);
-lanewise!(Sub, sub, -);
-lanewise!(Mul, mul, *);
+lanewise!(F64x4, Add, add, +);
+lanewise!(F64x4, Sub, sub, -);
+lanewise!(F64x4, Mul, mul, *);
 
 impl Neg for F64x4 {
     type Output = F64x4;

@@ -18,21 +18,24 @@ pub const LANES: usize = 8;
 #[repr(align(32))]
 pub struct F(pub [f32; LANES]);
 
+/// A binary operator (its trait in scope) on a lane type `$lanes(pub [_; N])`, lane by lane
+/// (`lane_algebra` uses it for its f64 lanes too).
 macro_rules! lanewise {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for F {
-            type Output = F;
+    ($lanes:ident, $trait:ident, $method:ident, $op:tt) => {
+        impl $trait for $lanes {
+            type Output = $lanes;
             #[inline(always)]
-            fn $method(self, rhs: F) -> F {
-                F(from_fn(|l| self.0[l] $op rhs.0[l]))
+            fn $method(self, rhs: $lanes) -> $lanes {
+                $lanes(std::array::from_fn(|l| self.0[l] $op rhs.0[l]))
             }
         }
     };
 }
-lanewise!(Add, add, +);
-lanewise!(Sub, sub, -);
-lanewise!(Mul, mul, *);
-lanewise!(Div, div, /);
+pub(super) use lanewise;
+lanewise!(F, Add, add, +);
+lanewise!(F, Sub, sub, -);
+lanewise!(F, Mul, mul, *);
+lanewise!(F, Div, div, /);
 
 impl Neg for F {
     type Output = F;
