@@ -29,7 +29,7 @@ use super::constraints::{darboux_canonical, director3, turn_of};
 use super::rod::transport_frames;
 use super::Simulation;
 use crate::error::{Error, Result};
-use crate::groom::{AttributeRate, Groom, GroomError};
+use crate::groom::{Attribute, AttributeRate, Groom, GroomError};
 
 /// The attribute that carries the zero-stress Darboux vectors (written by `write_to_groom`).
 pub const REST_DARBOUX: &str = "rest_darboux";
@@ -52,16 +52,11 @@ impl Simulation {
     /// keeping the bond rates. Returns whether the groom had one. `groom` must be the groom the
     /// simulation was built from.
     pub fn adopt_rest_state(&mut self, groom: &Groom) -> Result<bool> {
-        let Some(attribute) = groom.attribute(REST_DARBOUX) else { return Ok(false) };
-        if attribute.rate != AttributeRate::Vertex
-            || attribute.components != 3
-            || attribute.data.len() != 3 * self.rods.vertex_count()
-        {
-            return Err(bad_attribute(
-                REST_DARBOUX,
-                "must be three floats per vertex to give the rest shape".into(),
-            ));
-        }
+        let Some(attribute) =
+            self.per_vertex(groom, REST_DARBOUX, 3, "three floats per vertex to give the rest shape")?
+        else {
+            return Ok(false);
+        };
         if let Some(i) = attribute.data.iter().position(|v| !v.is_finite()) {
             return Err(bad_attribute(REST_DARBOUX, format!("vertex {} is not finite", i / 3)));
         }
@@ -78,18 +73,32 @@ impl Simulation {
         Ok(true)
     }
 
+    /// The groom's attribute `name`, checked to hold `components` values per vertex (`what` says
+    /// what they are); `None` without one.
+    fn per_vertex<'g>(
+        &self,
+        groom: &'g Groom,
+        name: &str,
+        components: usize,
+        what: &str,
+    ) -> Result<Option<&'g Attribute>> {
+        let Some(attribute) = groom.attribute(name) else { return Ok(None) };
+        if attribute.rate != AttributeRate::Vertex
+            || attribute.components != components
+            || attribute.data.len() != components * self.rods.vertex_count()
+        {
+            return Err(bad_attribute(name, format!("must be {what}")));
+        }
+        Ok(Some(attribute))
+    }
+
     /// The groom's `material_frame` attribute as unit quaternions, checked; `None` without one.
     fn written_frames(&self, groom: &Groom) -> Result<Option<Vec<Quat>>> {
-        let Some(attribute) = groom.attribute(MATERIAL_FRAME) else { return Ok(None) };
-        if attribute.rate != AttributeRate::Vertex
-            || attribute.components != 4
-            || attribute.data.len() != 4 * self.rods.vertex_count()
-        {
-            return Err(bad_attribute(
-                MATERIAL_FRAME,
-                "must be a quaternion (four floats) per vertex".into(),
-            ));
-        }
+        let Some(attribute) =
+            self.per_vertex(groom, MATERIAL_FRAME, 4, "a quaternion (four floats) per vertex")?
+        else {
+            return Ok(None);
+        };
         attribute
             .data
             .chunks_exact(4)
