@@ -102,7 +102,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     let groom = crate::io::read_groom(&task.groom, &Default::default())?.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
-    let styled = style(&groom, &recipe, &options)?;
+    let styled = style(&groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
     for output in &task.outputs {
         crate::io::write_groom(output, &styled.groom)?;
     }
