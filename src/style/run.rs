@@ -534,7 +534,10 @@ impl Session {
                 for i in self.groom.strand_range(strand) {
                     let mask = self.culling.mask(strand, positions[i]);
                     for (k, shape) in self.active.iter().enumerate() {
-                        if ObstacleCulling::tests(mask, k) {
+                        // Clear of the shape: its distance is at least the radius.
+                        if ObstacleCulling::tests(mask, k)
+                            && !self.culling.clear_of(k, positions[i], self.radii[i])
+                        {
                             deepest = deepest.max(self.radii[i] - shape.distance(positions[i]).0);
                         }
                     }
