@@ -85,24 +85,29 @@ pub fn diffuse(w: &mut [f32], p: &[Vec3], dt: f32, diffusivity: f32, scratch: &m
     if n < 2 || diffusivity <= 0.0 {
         return;
     }
-    let min_segment = p.windows(2).map(|s| s[0].distance(s[1])).fold(f32::MAX, f32::min).max(1e-6);
+    // Scratch: the edges' squared lengths (each vertex's two fluxes and every substep share
+    // them), then the substep's starting values.
+    scratch.clear();
+    scratch.extend(p.windows(2).map(|s| s[0].distance(s[1]).max(1e-6)));
+    let min_segment = scratch.iter().copied().fold(f32::MAX, f32::min);
+    scratch.iter_mut().for_each(|l| *l *= *l);
     let stable_dt = 0.4 * min_segment * min_segment / diffusivity;
     let substeps = (dt / stable_dt).ceil().max(1.0) as usize;
     let h = dt / substeps as f32;
+    let edges = n - 1;
     for _ in 0..substeps {
-        scratch.clear();
+        scratch.truncate(edges);
         scratch.extend_from_slice(w);
+        let (length2, old) = scratch.split_at(edges);
         for i in 0..n {
             let mut flux = 0.0;
             if i > 0 {
-                let l = p[i].distance(p[i - 1]).max(1e-6);
-                flux += (scratch[i - 1] - scratch[i]) / (l * l);
+                flux += (old[i - 1] - old[i]) / length2[i - 1];
             }
             if i + 1 < n {
-                let l = p[i].distance(p[i + 1]).max(1e-6);
-                flux += (scratch[i + 1] - scratch[i]) / (l * l);
+                flux += (old[i + 1] - old[i]) / length2[i];
             }
-            w[i] = (scratch[i] + diffusivity * h * flux).clamp(0.0, 1.0);
+            w[i] = (old[i] + diffusivity * h * flux).clamp(0.0, 1.0);
         }
     }
 }
