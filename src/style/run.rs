@@ -532,13 +532,13 @@ impl Session {
             .map(|strand| {
                 let mut deepest = 0.0f32;
                 for i in self.groom.strand_range(strand) {
-                    let mask = self.culling.mask(strand, positions[i]);
+                    let (p, radius) = (positions[i], self.radii[i]);
                     for (k, shape) in self.active.iter().enumerate() {
                         // Clear of the shape: its distance is at least the radius.
-                        if ObstacleCulling::tests(mask, k)
-                            && !self.culling.clear_of(k, positions[i], self.radii[i])
+                        if !self.culling.clear_of(k, p, radius)
+                            && ObstacleCulling::tests(self.culling.mask(strand, p), k)
                         {
-                            deepest = deepest.max(self.radii[i] - shape.distance(positions[i]).0);
+                            deepest = deepest.max(radius - shape.distance(p).0);
                         }
                     }
                 }
@@ -963,8 +963,19 @@ impl Session {
         radii.sort_by(f32::total_cmp);
         let mean = |kind: BondKind| {
             let rates = self.sim.bonds.rates(kind);
-            let centres: Vec<f32> =
-                (0..rates.len()).filter(|&v| self.sim.rods().is_pair_centre(v)).map(|v| rates[v]).collect();
+            // Each strand's interior vertices in order (the pair centres, without looking up
+            // every vertex's strand).
+            let centres: Vec<f32> = self
+                .sim
+                .rods()
+                .strand_offsets()
+                .windows(2)
+                .flat_map(|w| {
+                    rates[w[0] as usize + 1..(w[1] as usize).saturating_sub(1).max(w[0] as usize + 1)]
+                        .iter()
+                        .copied()
+                })
+                .collect();
             centres.iter().sum::<f32>() / centres.len().max(1) as f32
         };
         StageReport {
