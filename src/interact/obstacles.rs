@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::mesh_sdf::MeshSdf;
-use crate::sim::Hooks;
+use crate::sim::{Exclusion, Hooks};
 
 /// An obstacle's shape. Distances are signed: negative inside the solid.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -222,6 +222,9 @@ pub struct ObstacleCulling {
     masks: Vec<u128>,
     /// Per shape: a cheap form of its exact rejection test, where it has one.
     clearances: Vec<Option<Clearance>>,
+    /// The clearance tests for the largest radius, when every shape has one (see
+    /// [`Hooks::exclusions`]).
+    exclusions: Option<Vec<Exclusion>>,
 }
 
 /// A cheaper, conservative copy of [`resolve_contact`]'s rejection test for an ellipsoid: one
@@ -261,8 +264,23 @@ impl Clearance {
     /// Whether a vertex of `radius` at `p` certainly cannot touch the ellipsoid.
     #[inline(always)]
     fn clear(&self, p: Vec3, radius: f32) -> bool {
+        (self.to_unit * (p - self.center)).length_squared() > self.limit(radius)
+    }
+
+    fn limit(&self, radius: f32) -> f32 {
         let clear = 1.0 + radius * self.inv_min_radius;
-        (self.to_unit * (p - self.center)).length_squared() > clear * clear * (1.0 + Self::MARGIN)
+        clear * clear * (1.0 + Self::MARGIN)
+    }
+
+    /// The region [`Self::clear`] leaves for vertices of radius up to `max_radius`, widened by
+    /// the margin once more, so that a point outside it is clear however the two evaluations of
+    /// the same expression round.
+    fn exclusion(&self, max_radius: f32) -> Exclusion {
+        Exclusion {
+            center: self.center,
+            to_unit: self.to_unit,
+            limit: self.limit(max_radius) * (1.0 + Self::MARGIN),
+        }
     }
 }
 
@@ -280,6 +298,7 @@ impl ObstacleCulling {
         let shape_bounds: Vec<Option<(Vec3, Vec3)>> = shapes.iter().map(Shape::bounds).collect();
         self.clearances.clear();
         self.clearances.extend(shapes.iter().map(Clearance::new));
+        self.exclusions = self.clearances.iter().map(|c| c.map(|c| c.exclusion(max_radius))).collect();
         let grow = MARGIN + max_radius;
         self.boxes.par_iter_mut().zip(self.masks.par_iter_mut()).enumerate().for_each(|(s, (bx, mask))| {
             let range = strand_offsets[s] as usize..strand_offsets[s + 1] as usize;
@@ -335,6 +354,10 @@ pub struct ContactHooks<'a> {
 impl Hooks for ContactHooks<'_> {
     fn projects(&self) -> bool {
         !self.shapes.is_empty()
+    }
+
+    fn exclusions(&self) -> Option<&[Exclusion]> {
+        self.culling.exclusions.as_deref()
     }
 
     fn project(&self, strand: usize, first_vertex: usize, positions: &mut [Vec3], inverse_masses: &[f32]) {

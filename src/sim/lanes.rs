@@ -469,7 +469,12 @@ fn finish_step_impl(
 fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn Hooks) {
     let n = s.x.len();
     s.lane_x.resize(n, Vec3::ZERO);
+    let inside = hooks.exclusions().map(|exclusions| lanes_inside(s, exclusions));
     for (l, st) in strands.iter().enumerate() {
+        if inside.is_some_and(|inside| inside.0[l] == 0.0) {
+            // The hook would leave every vertex of this lane where it is.
+            continue;
+        }
         for i in 0..n {
             s.lane_x[i] = s.x[i].get(l);
         }
@@ -478,6 +483,25 @@ fn project_lanes(strands: &[LaneStrand<'_>; LANES], s: &mut Scratch, hooks: &dyn
             s.x[i].set(l, s.lane_x[i]);
         }
     }
+}
+
+/// Per lane: 1 where a free vertex lies in one of the `exclusions`, else 0.
+#[inline(always)]
+fn lanes_inside(s: &Scratch, exclusions: &[super::Exclusion]) -> F {
+    let mut inside = F::splat(0.0);
+    for e in exclusions {
+        let splat = |v: Vec3| V3 { x: F::splat(v.x), y: F::splat(v.y), z: F::splat(v.z) };
+        let (center, limit) = (splat(e.center), F::splat(e.limit));
+        let m = [splat(e.to_unit.x_axis), splat(e.to_unit.y_axis), splat(e.to_unit.z_axis)];
+        for (x, w) in s.x.iter().zip(&s.w) {
+            let d = *x - center;
+            let u = m[0].scale(d.x) + m[1].scale(d.y) + m[2].scale(d.z);
+            let r2 = u.dot(u);
+            // Kinematic vertices (w = 0) are never moved by the hook; NaN counts as inside.
+            inside = F(from_fn(|l| if !(r2.0[l] > limit.0[l]) && w.0[l] != 0.0 { 1.0 } else { inside.0[l] }));
+        }
+    }
+    inside
 }
 
 /// The scalar `solve_stretch_shear`, lane by lane.

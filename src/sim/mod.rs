@@ -240,6 +240,20 @@ pub trait Hooks: Sync {
     fn projects(&self) -> bool {
         true
     }
+    /// Regions outside all of which [`project`](Self::project) leaves every vertex where it is,
+    /// if the hooks know such (`None`: no promise). SIMD lanes test their vertices against them
+    /// at once and call `project` only for strands with a vertex inside one.
+    fn exclusions(&self) -> Option<&[Exclusion]> {
+        None
+    }
+}
+
+/// The ellipsoidal region `|to_unit · (p − center)|² ≤ limit`.
+#[derive(Clone, Copy, Debug)]
+pub struct Exclusion {
+    pub center: Vec3,
+    pub to_unit: glam::Mat3,
+    pub limit: f32,
 }
 
 /// No callbacks.
