@@ -393,6 +393,49 @@ mod tests {
     use super::*;
 
     #[test]
+    fn clearance_and_exclusions_reject_only_vertices_the_exact_test_rejects() {
+        let head = Shape::Ellipsoid {
+            center: Vec3::new(0.01, 1.6, -0.02),
+            radii: Vec3::new(0.078, 0.1, 0.095),
+            rotation: Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.5, 0.2),
+        };
+        let (center, rotation) = match &head {
+            Shape::Ellipsoid { center, rotation, .. } => (*center, *rotation),
+            _ => unreachable!(),
+        };
+        // Points along golden-spiral directions, from inside the head to 20 % beyond it.
+        let mut points = Vec::new();
+        for i in 0..400 {
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 400.0;
+            let phi = i as f32 * 2.399_963;
+            let dir = Vec3::new((1.0 - z * z).sqrt() * phi.cos(), z, (1.0 - z * z).sqrt() * phi.sin());
+            for k in 0..60 {
+                let scale = 0.9 + 0.005 * k as f32;
+                points.push(center + rotation * (dir * Vec3::new(0.078, 0.1, 0.095) * scale));
+            }
+        }
+        let max_radius = 0.004;
+        let mut culling = ObstacleCulling::default();
+        culling.update(std::slice::from_ref(&head), &[0, points.len() as u32], &points, max_radius);
+        let exclusion = culling.exclusions.as_ref().expect("an ellipsoid has a clearance")[0];
+        let (mut cleared, mut contacts) = (0, 0);
+        for &p in &points {
+            let outside = (exclusion.to_unit * (p - exclusion.center)).length_squared() > exclusion.limit;
+            for radius in [0.0001, 0.001, max_radius] {
+                let exact = resolve_contact(&head, p, p, radius, Friction::default());
+                contacts += exact.is_some() as usize;
+                if culling.clear_of(0, p, radius) {
+                    cleared += 1;
+                    assert!(exact.is_none() && head.distance(p).0 >= radius, "{p:?} {radius}");
+                }
+                assert!(!outside || culling.clear_of(0, p, radius), "{p:?} {radius}");
+            }
+        }
+        // Neither test is vacuous: most points are cleared, and some touch.
+        assert!(cleared > points.len() && contacts > 0, "{cleared} {contacts}");
+    }
+
+    #[test]
     fn signed_distances_match_geometry() {
         let sphere = Shape::Sphere { center: Vec3::ZERO, radius: 1.0 };
         assert_eq!(sphere.distance(Vec3::new(0.0, 3.0, 0.0)), (2.0, Vec3::Y));
