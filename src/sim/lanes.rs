@@ -498,7 +498,14 @@ fn lanes_inside(s: &Scratch, exclusions: &[super::Exclusion]) -> F {
             let u = m[0].scale(d.x) + m[1].scale(d.y) + m[2].scale(d.z);
             let r2 = u.dot(u);
             // Kinematic vertices (w = 0) are never moved by the hook; NaN counts as inside.
-            inside = F(from_fn(|l| if !(r2.0[l] > limit.0[l]) && w.0[l] != 0.0 { 1.0 } else { inside.0[l] }));
+            inside = F(from_fn(|l| {
+                let clear = r2.0[l] > limit.0[l];
+                if !clear && w.0[l] != 0.0 {
+                    1.0
+                } else {
+                    inside.0[l]
+                }
+            }));
         }
     }
     inside
