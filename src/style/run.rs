@@ -538,7 +538,7 @@ impl Session {
                         if !self.culling.clear_of(k, p, radius)
                             && ObstacleCulling::tests(self.culling.mask(strand, p), k)
                         {
-                            deepest = deepest.max(radius - shape.distance(p).0);
+                            deepest = deepest.max(radius - shape.signed_distance(p));
                         }
                     }
                 }
