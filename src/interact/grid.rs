@@ -17,14 +17,16 @@ pub struct NeighbourGrid {
     inv_cell_size: f32,
     /// Bits of the bucket index (the table has 2^bits buckets).
     bits: u32,
-    /// `starts[b]..starts[b + 1]` index `items` for bucket `b`.
-    starts: Vec<u32>,
-    /// Item indices sorted by bucket (and by index within a bucket).
-    items: Vec<u32>,
+    /// How many items the grid holds.
+    len: usize,
     /// One bit per bucket: whether it holds any item. Items cluster (hair is a shell) and the
     /// table has one to two buckets per item, so many a query visits are empty, and these bits
     /// (a 32nd of `starts`) stay in cache where `starts` does not.
     occupied: Vec<u64>,
+    /// `starts[b]..starts[b + 1]` index `items` for bucket `b`.
+    starts: Vec<u32>,
+    /// Item indices sorted by bucket (and by index within a bucket).
+    items: Vec<u32>,
     /// Scratch: each item's bucket, and each bucket's next free slot while scattering.
     buckets: Vec<u32>,
     cursor: Vec<u32>,
@@ -95,11 +97,29 @@ impl NeighbourGrid {
 
     /// Rebuilds the grid over `points` (item `i` sits at `points[i]`).
     pub fn rebuild(&mut self, points: &[Vec3]) {
+        let mut items = std::mem::take(&mut self.items);
+        items.resize(points.len(), 0);
+        self.sort(points, |i, slot| items[slot] = i as u32);
+        self.items = items;
+    }
+
+    /// Rebuilds the grid over `points` like [`rebuild`](Self::rebuild), but hands each item's
+    /// place in the sorted order to `place(i, slot)`, in increasing `i`, and keeps no
+    /// [`sorted_items`](Self::sorted_items) (left empty): callers lay out their own per-item
+    /// data in that order as they read it in theirs.
+    pub fn rebuild_placing(&mut self, points: &[Vec3], place: impl FnMut(usize, usize)) {
+        self.items.clear();
+        self.sort(points, place);
+    }
+
+    /// The counting sort behind both rebuilds.
+    fn sort(&mut self, points: &[Vec3], mut place: impl FnMut(usize, usize)) {
         // One to two buckets per item (2^k ≥ items), at most 2^30; at least 2^6, so every axis
         // wraps every 4 cells or more and a query's 27 cells never share a bucket. (A table of
         // 8^k buckets, up to 8 times the items, made this serial rebuild half the cost of
         // cutting contact pieces at 20k × 32.)
         self.bits = ((points.len().max(64) as f64).log2().ceil() as u32).min(30);
+        self.len = points.len();
         let table = 1usize << self.bits;
         let (inv, bits) = (self.inv_cell_size, self.bits);
         self.buckets.resize(points.len(), 0);
@@ -122,10 +142,9 @@ impl NeighbourGrid {
         // Scatter in index order: each bucket's cursor walks its next free slot.
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.starts[..table]);
-        self.items.resize(points.len(), 0);
         for (i, &b) in self.buckets.iter().enumerate() {
             let slot = &mut self.cursor[b as usize];
-            self.items[*slot as usize] = i as u32;
+            place(i, *slot as usize);
             *slot += 1;
         }
     }
@@ -136,7 +155,7 @@ impl NeighbourGrid {
         self.for_each_near_run(p, |run| self.items[run].iter().for_each(|&i| visit(i)));
     }
 
-    /// Item indices sorted by cell bucket: [`for_each_near_run`](Self::for_each_near_run) hands
+    /// Item indices sorted by cell bucket (after [`rebuild`](Self::rebuild)): [`for_each_near_run`](Self::for_each_near_run) hands
     /// out ranges of this order, so callers can keep per-item data in it and read it contiguously.
     pub fn sorted_items(&self) -> &[u32] {
         &self.items
@@ -145,7 +164,7 @@ impl NeighbourGrid {
     /// Calls `visit(range)` for the runs of [`sorted_items`](Self::sorted_items) in the cells
     /// around `p` that come within `cell_size` of it, each run at most once, in a fixed order.
     pub fn for_each_near_run(&self, p: Vec3, mut visit: impl FnMut(std::ops::Range<usize>)) {
-        if self.items.is_empty() {
+        if self.len == 0 {
             return;
         }
         // The 27 cells have 27 distinct buckets: the code wraps every 2^bits ≥ 4 cells per axis.
@@ -421,6 +440,33 @@ mod tests {
         fresh.for_each_near(Vec3::new(0.25, 0.0, 0.0), |i| visits[i as usize] += 1);
         assert!(visits.iter().all(|&v| v <= 1));
         assert!(visits.iter().sum::<i32>() >= 20);
+    }
+
+    #[test]
+    fn placing_hands_out_the_slots_rebuild_sorts_items_into() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+        let points: Vec<Vec3> =
+            (0..3000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 0.2).collect();
+        let mut sorted = NeighbourGrid::new(0.01);
+        sorted.rebuild(&points);
+        let mut placed = NeighbourGrid::new(0.01);
+        let mut order = Vec::new();
+        let mut slots = vec![usize::MAX; points.len()];
+        placed.rebuild_placing(&points, |i, slot| {
+            order.push(i);
+            slots[i] = slot;
+        });
+        assert!(order.iter().enumerate().all(|(k, &i)| k == i), "items are placed in index order");
+        assert!(sorted.sorted_items().iter().enumerate().all(|(slot, &i)| slots[i as usize] == slot));
+        assert!(placed.sorted_items().is_empty());
+        // Both hand out the same runs.
+        for q in points.iter().step_by(101) {
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            sorted.for_each_near_run(*q, |run| a.push(run));
+            placed.for_each_near_run(*q, |run| b.push(run));
+            assert!(!a.is_empty());
+            assert_eq!(a, b);
+        }
     }
 
     #[test]

@@ -23,7 +23,7 @@
 //! vertex–edge pair is listed once, through the piece that holds the closest point. Queries run
 //! in the grid's spatial order, and while most vertices are held only edges near movable ones
 //! are cut into pieces.
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::grid::{NeighbourGrid, NeighbourSpread, Occupancy};
@@ -32,33 +32,29 @@ use super::grid::{NeighbourGrid, NeighbourSpread, Occupancy};
 /// depend on the thread count).
 const BUILD_CHUNK: usize = 2048;
 
-/// Which piece of an edge: the edge's first vertex, and the piece's index of how many.
-#[derive(Clone, Copy, Debug, Default)]
-struct PieceOf {
-    edge: u32,
-    index: u16,
-    count: u16,
-}
+/// How far past its ends (in half-lengths) a piece still claims an edge's closest point, so that
+/// rounding never leaves a point at the joint of two pieces unclaimed.
+const PIECE_JOINT: f32 = 1e-3;
 
-/// A piece as a query's narrow test reads it: the whole edge (every piece of an edge computes
-/// the same closest point, so exactly one claims it: the piece holding that point), its mean
-/// radius, and which piece of how many it is. Half a cache line.
+/// A piece as a query reads it, all in one record, so that a query reads one run of memory per
+/// cell and the build writes one record per piece: its middle and half its length as a vector
+/// (the closest point and which piece holds it need no other data), the edge's mean radius, and
+/// the edge's first vertex with whether this is the edge's first or last piece. Half a cache line.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 struct Piece {
-    a: Vec3,
-    b: Vec3,
+    mid: Vec3,
     radius: f32,
-    index: u16,
-    count: u16,
+    half: Vec3,
+    /// The edge's first vertex (below 2^30), and the `FIRST` and `LAST` flags.
+    edge: u32,
 }
 
-/// A piece's middle (xyz) and reach (w: mean radius plus half its length): a vertex farther than
-/// the reach plus its own radius and the skin from the middle cannot be listed through this
-/// piece. Most pieces a query visits fail this test or are of the query's own strand, so it
-/// reads these 16 bytes and the piece's edge alone: at 100,000 strands the queries are bound by
-/// memory, not arithmetic.
-type PieceSphere = Vec4;
+impl Piece {
+    const FIRST: u32 = 1 << 31;
+    const LAST: u32 = 1 << 30;
+    const EDGE: u32 = Self::LAST - 1;
+}
 
 pub struct HairContacts {
     /// α, m/s²: the push at full overlap.
@@ -73,15 +69,12 @@ pub struct HairContacts {
     edge_continues: Vec<bool>,
     /// First vertex of every edge.
     edges: Vec<u32>,
-    // Build scratch: each edge's first piece, the middles of the pieces and which they are in
-    // edge order, their grid, and the pieces in the grid's order.
+    // Build scratch: each edge's first piece, the middles of the pieces in edge order, their
+    // grid, and the pieces in the grid's order.
     first_piece: Vec<u32>,
     piece_mids: Vec<Vec3>,
-    piece_of: Vec<PieceOf>,
     grid: NeighbourGrid,
     sorted_pieces: Vec<Piece>,
-    sorted_spheres: Vec<PieceSphere>,
-    sorted_edges: Vec<u32>,
     /// Movable vertices to query, as (bucket << 32 | vertex), sorted.
     queries: Vec<u64>,
     // Verlet lists: `list_edges[list_starts[i]..list_starts[i + 1]]` are vertex i's candidates.
@@ -117,6 +110,7 @@ impl HairContacts {
     /// grooms: it trades pieces for candidates per query, never accuracy).
     pub fn new(strand_offsets: &[u32], radii: &[f32], spacing: f32, stiffness: f32) -> Self {
         let vertices = *strand_offsets.last().unwrap_or(&0) as usize;
+        assert!(vertices <= Piece::EDGE as usize, "hair contacts number vertices in 30 bits");
         let mut strand_of = vec![0u32; vertices];
         let mut starts_edge = vec![true; vertices];
         let mut edge_continues = vec![true; vertices];
@@ -147,10 +141,7 @@ impl HairContacts {
             edges,
             first_piece: Vec::new(),
             piece_mids: Vec::new(),
-            piece_of: Vec::new(),
             sorted_pieces: Vec::new(),
-            sorted_spheres: Vec::new(),
-            sorted_edges: Vec::new(),
             queries: Vec::new(),
             list_starts: Vec::new(),
             list_edges: Vec::new(),
@@ -170,6 +161,10 @@ impl HairContacts {
             queried_cells: Occupancy::default(),
         }
     }
+
+    /// The most pieces an edge is cut into: a stray edge metres long must not take the memory of
+    /// millions.
+    const MAX_PIECES: u32 = u16::MAX as u32;
 
     /// Starting slack of the lists, metres. It adapts as the hair moves (see `adapt_skin`).
     pub const DEFAULT_SKIN: f32 = 0.0005;
@@ -306,9 +301,9 @@ impl HairContacts {
     }
 
     /// How many pieces edge `j` is cut into: at most `spacing` long, so the grid's cells span
-    /// half a piece beyond the search distance, and at most `u16::MAX`.
+    /// half a piece beyond the search distance, and at most `MAX_PIECES`.
     fn pieces_of(&self, points: &[Vec3], j: usize) -> u32 {
-        ((points[j].distance(points[j + 1]) / self.spacing).ceil() as u32).clamp(1, u16::MAX as u32)
+        ((points[j].distance(points[j + 1]) / self.spacing).ceil() as u32).clamp(1, Self::MAX_PIECES)
     }
 
     fn piece_mid(a: Vec3, b: Vec3, index: u32, count: u32) -> Vec3 {
@@ -320,10 +315,10 @@ impl HairContacts {
     /// cut: no other can be a candidate.
     fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], queried: usize) {
         let longest_edge = self.longest_edge(points);
-        // Pieces are counted in 16 bits: edges longer than that many spacings get longer pieces,
-        // and the grid's cells grow with them.
-        if longest_edge > self.spacing * u16::MAX as f32 {
-            self.spacing = longest_edge / u16::MAX as f32 * 1.001;
+        // Edges longer than `MAX_PIECES` spacings get longer pieces, and the grid's cells grow
+        // with them.
+        if longest_edge > self.spacing * Self::MAX_PIECES as f32 {
+            self.spacing = longest_edge / Self::MAX_PIECES as f32 * 1.001;
             self.set_skin(self.skin);
         }
         let cull = queried < points.len() / 2;
@@ -353,55 +348,45 @@ impl HairContacts {
             self.first_piece.push(self.first_piece.last().unwrap() + c);
         }
         let total = *self.first_piece.last().unwrap() as usize;
-        // The grid sorts the pieces' middles; the pieces themselves are made in its order.
+        // The grid sorts the pieces' middles, and each piece is written to its place in the
+        // grid's order as the sort meets it, in edge order.
         let mut mids = std::mem::take(&mut self.piece_mids);
-        let mut piece_of = std::mem::take(&mut self.piece_of);
         mids.resize(total, Vec3::ZERO);
-        piece_of.resize(total, PieceOf::default());
         let this = &*self;
-        mids.par_chunks_mut(BUILD_CHUNK).zip(piece_of.par_chunks_mut(BUILD_CHUNK)).enumerate().for_each(
-            |(c, (mids, piece_of))| {
-                let first = c * BUILD_CHUNK;
-                let mut e = this.first_piece.partition_point(|&f| f as usize <= first) - 1;
-                for ((k, mid), of) in (first..).zip(mids).zip(piece_of) {
-                    while this.first_piece[e + 1] as usize <= k {
-                        e += 1;
-                    }
-                    let j = this.edges[e] as usize;
-                    let (index, count) =
-                        (k as u32 - this.first_piece[e], this.first_piece[e + 1] - this.first_piece[e]);
-                    *mid = Self::piece_mid(points[j], points[j + 1], index, count);
-                    *of = PieceOf { edge: j as u32, index: index as u16, count: count as u16 };
+        mids.par_chunks_mut(BUILD_CHUNK).enumerate().for_each(|(c, mids)| {
+            let first = c * BUILD_CHUNK;
+            let mut e = this.first_piece.partition_point(|&f| f as usize <= first) - 1;
+            for (k, mid) in (first..).zip(mids) {
+                while this.first_piece[e + 1] as usize <= k {
+                    e += 1;
                 }
-            },
-        );
-        self.grid.rebuild(&mids);
-        (self.piece_mids, self.piece_of) = (mids, piece_of);
+                let j = this.edges[e] as usize;
+                let (index, count) =
+                    (k as u32 - this.first_piece[e], this.first_piece[e + 1] - this.first_piece[e]);
+                *mid = Self::piece_mid(points[j], points[j + 1], index, count);
+            }
+        });
         let mut sorted = std::mem::take(&mut self.sorted_pieces);
-        let mut spheres = std::mem::take(&mut self.sorted_spheres);
-        let mut edges = std::mem::take(&mut self.sorted_edges);
         sorted.resize(total, Piece::default());
-        spheres.resize(total, PieceSphere::ZERO);
-        edges.resize(total, 0);
-        let this = &*self;
-        sorted
-            .par_iter_mut()
-            .zip(spheres.par_iter_mut())
-            .zip(edges.par_iter_mut())
-            .zip(this.grid.sorted_items().par_iter())
-            .for_each(|(((piece, sphere), edge), &k)| {
-                let of = this.piece_of[k as usize];
-                let j = of.edge as usize;
-                let (a, b) = (points[j], points[j + 1]);
-                let (index, count) = (of.index as u32, of.count as u32);
-                // A closest point rounded just past the piece's end still counts as in it.
-                let radius = 0.5 * (radii[j] + radii[j + 1]);
-                let reach = radius + a.distance(b) / count as f32 * 0.505 + 1e-6;
-                *sphere = Self::piece_mid(a, b, index, count).extend(reach);
-                *edge = of.edge;
-                *piece = Piece { a, b, radius, index: of.index, count: of.count };
-            });
-        (self.sorted_pieces, self.sorted_spheres, self.sorted_edges) = (sorted, spheres, edges);
+        let (first_piece, edges) = (&self.first_piece, &self.edges);
+        let mut e = 0;
+        self.grid.rebuild_placing(&mids, |k, slot| {
+            while first_piece[e + 1] as usize <= k {
+                e += 1;
+            }
+            let j = edges[e] as usize;
+            let (a, b) = (points[j], points[j + 1]);
+            let (index, count) = (k as u32 - first_piece[e], first_piece[e + 1] - first_piece[e]);
+            let first = if index == 0 { Piece::FIRST } else { 0 };
+            let last = if index + 1 == count { Piece::LAST } else { 0 };
+            sorted[slot] = Piece {
+                mid: mids[k],
+                radius: 0.5 * (radii[j] + radii[j + 1]),
+                half: (b - a) * (0.5 / count as f32),
+                edge: j as u32 | first | last,
+            };
+        });
+        (self.piece_mids, self.sorted_pieces) = (mids, sorted);
     }
 
     /// Builds the lists of every movable vertex, or (`partial`) only of those whose pairs may
@@ -440,6 +425,7 @@ impl HairContacts {
                     // By edge, not grid order: contact forces are summed in list order, and
                     // the result must not depend on how the grid lays out its buckets.
                     edges[before..].sort_unstable();
+                    dedup_tail(&mut edges, before);
                     counts.push((edges.len() - before) as u32);
                 }
                 (counts, edges)
@@ -512,28 +498,45 @@ impl HairContacts {
         let own = self.strand_offsets[strand]..self.strand_offsets[strand + 1];
         let near = radii[i] + self.skin;
         self.grid.for_each_near_run(p, |run| {
-            let spheres = self.sorted_spheres[run.clone()].iter();
-            for ((sphere, &edge), k) in spheres.zip(&self.sorted_edges[run.clone()]).zip(run) {
-                // Most pieces in the cells around are beyond reach of their middle, or of the
-                // query's strand: cheap tests before the closest point.
-                let reach = near + sphere.w;
-                if p.distance_squared(sphere.truncate()) >= reach * reach || own.contains(&edge) {
+            for piece in &self.sorted_pieces[run] {
+                let edge = piece.edge & Piece::EDGE;
+                if own.contains(&edge) {
                     continue;
                 }
-                let piece = &self.sorted_pieces[k];
-                let ab = piece.b - piece.a;
-                let t = ((p - piece.a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-                let reach = radii[i] + piece.radius + self.skin;
-                let (index, count) = (piece.index as u32, piece.count as u32);
-                // List the pair once: through the piece that holds the closest point.
-                if p.distance_squared(piece.a + ab * t) < reach * reach
-                    && index == ((t * count as f32) as u32).min(count - 1)
-                {
+                // Most pieces around are beyond reach of their middle: |d| ≥ reach + |half|, tested
+                // without a root as d² − reach² − half² ≥ 2 reach |half|.
+                let d = p - piece.mid;
+                let reach = near + piece.radius;
+                let half_squared = piece.half.length_squared();
+                let beyond = d.length_squared() - reach * reach - half_squared;
+                if beyond >= 0.0 && beyond * beyond >= 4.0 * reach * reach * half_squared {
+                    continue;
+                }
+                // The closest point of the piece, `u` half-lengths from its middle.
+                let u = d.dot(piece.half) / half_squared.max(f32::MIN_POSITIVE);
+                // List the pair through the piece that holds the edge's closest point: its `u` is
+                // within [-1, 1], or beyond at the edge's ends. Neighbouring pieces may both
+                // claim a point at their joint (rounding), never neither; lists drop repeats.
+                let inside = (u >= -1.0 - PIECE_JOINT || piece.edge & Piece::FIRST != 0)
+                    && (u <= 1.0 + PIECE_JOINT || piece.edge & Piece::LAST != 0);
+                if inside && (d - piece.half * u.clamp(-1.0, 1.0)).length_squared() < reach * reach {
                     out.push(edge);
                 }
             }
         });
     }
+}
+
+/// Drops repeats from the sorted `list[from..]`.
+fn dedup_tail(list: &mut Vec<u32>, from: usize) {
+    let mut kept = from;
+    for k in from..list.len() {
+        if kept == from || list[k] != list[kept - 1] {
+            list[kept] = list[k];
+            kept += 1;
+        }
+    }
+    list.truncate(kept);
 }
 
 #[cfg(test)]
@@ -578,10 +581,10 @@ mod tests {
     }
 
     #[test]
-    fn edges_of_more_pieces_than_a_piece_index_holds_keep_their_contacts() {
-        // A 20 m edge cut at the 0.2 mm spacing asked for would need 100,000 pieces, more than a
-        // piece's 16-bit index holds: its pieces grow (and the grid's cells with them), and
-        // strands crossing it anywhere still touch it exactly once.
+    fn edges_of_more_pieces_than_an_edge_may_have_keep_their_contacts() {
+        // A 20 m edge cut at the 0.2 mm spacing asked for would need 100,000 pieces, more than
+        // `MAX_PIECES`: its pieces grow (and the grid's cells with them), and strands crossing it
+        // anywhere still touch it exactly once.
         let r = 1e-4;
         let mut points = vec![Vec3::new(-10.0, 0.0, 0.0), Vec3::new(10.0, 0.0, 0.0)];
         let mut offsets = vec![0, 2];
@@ -601,6 +604,32 @@ mod tests {
         let touching = matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, 0);
         // Each crossing vertex; the long edge's ends are 10 m away.
         assert_eq!(touching, 200);
+    }
+
+    #[test]
+    fn strands_crossing_at_the_joints_of_pieces_touch_the_edge_once() {
+        // A 16 mm edge along X cut into 8 pieces of 2 mm; strands cross it at every joint (where
+        // two pieces both hold the closest point up to rounding), at its ends and just beyond
+        // them, each pushed once, as an all-pairs search finds.
+        let r = 1e-4;
+        let mut points = vec![Vec3::new(-0.008, 0.0, 0.0), Vec3::new(0.008, 0.0, 0.0)];
+        let mut offsets = vec![0, 2];
+        let crossings: Vec<f32> =
+            (0..=8).map(|k| -0.008 + 0.002 * k as f32).chain([-0.00805, 0.00805]).collect();
+        for &x in &crossings {
+            points.extend([
+                Vec3::new(x, -0.01, 0.5 * r),
+                Vec3::new(x, 0.0, 0.5 * r),
+                Vec3::new(x, 0.01, 0.5 * r),
+            ]);
+            offsets.push(points.len() as u32);
+        }
+        let radii = vec![r; points.len()];
+        let fixed = vec![false; points.len()];
+        let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 100.0);
+        let touching = matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, 0);
+        // Not vacuous: every crossing's middle vertex touches the edge.
+        assert!(touching >= crossings.len(), "{touching} vertices touch");
     }
 
     /// The penalty every vertex feels, by testing it against every edge of every other strand,
