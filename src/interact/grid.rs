@@ -150,8 +150,10 @@ impl NeighbourGrid {
     }
 
     /// Calls `visit(i)` for every item in the cells around `p` that come within `cell_size` of it
-    /// (see [`for_each_near_run`](Self::for_each_near_run)), each item at most once.
+    /// (see [`for_each_near_run`](Self::for_each_near_run)), each item at most once. Needs the
+    /// item order that [`rebuild`](Self::rebuild) keeps and `rebuild_placing` does not.
     pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        assert_eq!(self.items.len(), self.len, "for_each_near after rebuild_placing: no item order kept");
         self.for_each_near_run(p, |run| self.items[run].iter().for_each(|&i| visit(i)));
     }
 
