@@ -9,6 +9,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 use glam::{Quat, Vec3};
 
 use super::constraints::{BendTwistCoefficients, StretchShearCoefficients};
+use super::solver::{sweep_order, Projection};
 use super::Hooks;
 
 pub const LANES: usize = 8;
@@ -427,21 +428,10 @@ fn finish_step_impl(
     }
     for iteration in 0..iterations {
         solve_stretch_shear(s, edges);
-        if iteration % 2 == 0 {
-            for e in 0..edges {
-                project_edge(s, e);
-                if e >= 1 {
-                    project_pair(s, e);
-                }
-            }
-        } else {
-            for e in (0..edges).rev() {
-                project_edge(s, e);
-                if e + 1 < edges {
-                    project_pair(s, e + 1);
-                }
-            }
-        }
+        sweep_order(edges, iteration, |projection| match projection {
+            Projection::Edge(e) => project_edge(s, e),
+            Projection::Pair(e) => project_pair(s, e),
+        });
         if hooks.projects() {
             project_lanes(strands, s, hooks);
         }

@@ -390,18 +390,34 @@ fn direct_state<'s>(s: &'s mut Strand<'_>) -> super::strand_solve::StrandState<'
 /// hanging strand needs tension carried from the tip up as much as positions carried from the root
 /// down. With the direct strand solve, Gauss–Seidel only keeps the held span before the free tail.
 fn sweep(s: &mut Strand<'_>, edges: usize, iteration: u32) {
+    sweep_order(edges, iteration, |projection| match projection {
+        Projection::Edge(e) => project_edge(s, e),
+        Projection::Pair(e) => project_pair(s, e),
+    });
+}
+
+/// One constraint projection of a Gauss–Seidel sweep: an edge's stretch–shear, or the bend–twist
+/// of the pair centred between edges `e − 1` and `e`.
+pub(super) enum Projection {
+    Edge(usize),
+    Pair(usize),
+}
+
+/// The order of [`sweep`]'s projections, shared by the one-strand and the SIMD-lane solvers.
+#[inline(always)]
+pub(super) fn sweep_order(edges: usize, iteration: u32, mut project: impl FnMut(Projection)) {
     if iteration % 2 == 0 {
         for e in 0..edges {
-            project_edge(s, e);
+            project(Projection::Edge(e));
             if e >= 1 {
-                project_pair(s, e);
+                project(Projection::Pair(e));
             }
         }
     } else {
         for e in (0..edges).rev() {
-            project_edge(s, e);
+            project(Projection::Edge(e));
             if e + 1 < edges {
-                project_pair(s, e + 1);
+                project(Projection::Pair(e + 1));
             }
         }
     }
