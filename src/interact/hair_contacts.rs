@@ -586,18 +586,9 @@ mod tests {
         // `MAX_PIECES`: its pieces grow (and the grid's cells with them), and strands crossing it
         // anywhere still touch it exactly once.
         let r = 1e-4;
-        let mut points = vec![Vec3::new(-10.0, 0.0, 0.0), Vec3::new(10.0, 0.0, 0.0)];
-        let mut offsets = vec![0, 2];
         // Crossings every 1.37 mm over 27 cm: at every position along a piece.
-        for k in 0..200 {
-            let x = -0.1 + 0.001_37 * k as f32;
-            points.extend([
-                Vec3::new(x, -0.01, 0.5 * r),
-                Vec3::new(x, 0.0, 0.5 * r),
-                Vec3::new(x, 0.01, 0.5 * r),
-            ]);
-            offsets.push(points.len() as u32);
-        }
+        let crossings: Vec<f32> = (0..200).map(|k| -0.1 + 0.001_37 * k as f32).collect();
+        let (points, offsets) = edge_crossed_at(10.0, &crossings, r);
         let radii = vec![r; points.len()];
         let fixed = vec![false; points.len()];
         let mut contacts = HairContacts::new(&offsets, &radii, 2.0 * r, 100.0);
@@ -606,17 +597,12 @@ mod tests {
         assert_eq!(touching, 200);
     }
 
-    #[test]
-    fn strands_crossing_at_the_joints_of_pieces_touch_the_edge_once() {
-        // A 16 mm edge along X cut into 8 pieces of 2 mm; strands cross it at every joint (where
-        // two pieces both hold the closest point up to rounding), at its ends and just beyond
-        // them, each pushed once, as an all-pairs search finds.
-        let r = 1e-4;
-        let mut points = vec![Vec3::new(-0.008, 0.0, 0.0), Vec3::new(0.008, 0.0, 0.0)];
+    /// A one-edge strand along X from `−half_length` to `half_length`, and a 3-vertex strand along Y
+    /// crossing it at each `x` of `crossings`, its middle vertex `r/2` above the edge.
+    fn edge_crossed_at(half_length: f32, crossings: &[f32], r: f32) -> (Vec<Vec3>, Vec<u32>) {
+        let mut points = vec![Vec3::new(-half_length, 0.0, 0.0), Vec3::new(half_length, 0.0, 0.0)];
         let mut offsets = vec![0, 2];
-        let crossings: Vec<f32> =
-            (0..=8).map(|k| -0.008 + 0.002 * k as f32).chain([-0.00805, 0.00805]).collect();
-        for &x in &crossings {
+        for &x in crossings {
             points.extend([
                 Vec3::new(x, -0.01, 0.5 * r),
                 Vec3::new(x, 0.0, 0.5 * r),
@@ -624,6 +610,18 @@ mod tests {
             ]);
             offsets.push(points.len() as u32);
         }
+        (points, offsets)
+    }
+
+    #[test]
+    fn strands_crossing_at_the_joints_of_pieces_touch_the_edge_once() {
+        // A 16 mm edge along X cut into 8 pieces of 2 mm; strands cross it at every joint (where
+        // two pieces both hold the closest point up to rounding), at its ends and just beyond
+        // them, each pushed once, as an all-pairs search finds.
+        let r = 1e-4;
+        let crossings: Vec<f32> =
+            (0..=8).map(|k| -0.008 + 0.002 * k as f32).chain([-0.00805, 0.00805]).collect();
+        let (points, offsets) = edge_crossed_at(0.008, &crossings, r);
         let radii = vec![r; points.len()];
         let fixed = vec![false; points.len()];
         let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 100.0);
