@@ -8,7 +8,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use glam::{Quat, Vec3};
 
-use super::constraints::{BendTwistCoefficients, StretchShearCoefficients};
+use super::constraints::{BendTwistCoefficients, StretchShearCoefficients, FAR_ALIGNMENT};
 use super::solver::{sweep_order, Projection};
 use super::Hooks;
 
@@ -578,15 +578,27 @@ fn project_pair(s: &mut Scratch, e: usize) {
     // vector parts alone accepts (w > 0, −Ω0), the mirrored bend, as a second rest state.
     let slack = F::splat(1.0) - rest.dot(rest);
     let w0 = slack.positive_select(slack, F::splat(0.0)).sqrt();
-    let flip = relative.w * w0 + omega.dot(rest);
-    let rest = V3::select(-flip, V3::default() - rest, rest);
+    let alignment = relative.w * w0 + omega.dot(rest);
+    let rest = V3::select(-alignment, V3::default() - rest, rest);
     let c = omega - rest;
     let lambda = s.lambda[e];
     let dl = (V3::default() - c - k.compliance_dt2.mul(lambda)).mul(k.inv_denominator);
     s.lambda[e] = lambda + dl;
-    let correction = Q::pure(dl);
-    let new_q1 = q1.add_scaled(q2.mul(correction), -s.wq[e - 1]).normalize();
-    let new_q2 = q2.add_scaled(q1.mul(correction), s.wq[e]).normalize();
+    // The scalar solver's `far_scalar_correction`, lane by lane.
+    let w0 = (-alignment).positive_select(-w0, w0);
+    let d = k.inv_denominator;
+    let dw = F(from_fn(|l| {
+        let weight = (FAR_ALIGNMENT - alignment.0[l].abs()) / FAR_ALIGNMENT;
+        if weight > 0.0 {
+            weight * (w0.0[l] - relative.w.0[l]) * d.x.0[l].min(d.y.0[l].min(d.z.0[l]))
+        } else {
+            0.0
+        }
+    }));
+    let to_q1 = Q { x: dl.x, y: dl.y, z: dl.z, w: F::splat(0.0) - dw };
+    let to_q2 = Q { x: dl.x, y: dl.y, z: dl.z, w: dw };
+    let new_q1 = q1.add_scaled(q2.mul(to_q1), -s.wq[e - 1]).normalize();
+    let new_q2 = q2.add_scaled(q1.mul(to_q2), s.wq[e]).normalize();
     s.q[e - 1] = Q::select(k.wsum, new_q1, q1);
     s.q[e] = Q::select(k.wsum, new_q2, q2);
 }

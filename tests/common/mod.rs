@@ -35,7 +35,12 @@ pub fn dir_listing(dir: &Path) -> Vec<String> {
 /// Every `step`-th strand of a groom, with its widths and attributes: a preset's recipe on a few
 /// strands, so a test stays fast while still going through every stage.
 pub fn thin(groom: &coif::Groom, step: usize) -> coif::Groom {
-    let strands: Vec<usize> = (0..groom.strand_count()).step_by(step).collect();
+    thin_from(groom, 0, step)
+}
+
+/// Every `step`-th strand from strand `first` on (see [`thin`]).
+pub fn thin_from(groom: &coif::Groom, first: usize, step: usize) -> coif::Groom {
+    let strands: Vec<usize> = (first..groom.strand_count()).step_by(step).collect();
     coif::groups::assemble(&[(groom, &strands)]).expect("a selection of a valid groom is valid")
 }
 
