@@ -32,7 +32,7 @@ fn resimulate(groom: &Groom, params: SimParams, colliders: Vec<Shape>, sag_free:
 }
 
 /// The bed-head and the water set: settled with gravity on the seed head, their outputs hold
-/// still (0.17 and 0.22 mm in 2 s; 0.43 and 0.45 mm before the material frames were written, 0.87 and
+/// still (0.16 and 0.21 mm in 2 s; 0.43 and 0.45 mm before the material frames were written, 0.87 and
 /// 0.85 mm before the settle extrapolated its creep, 2.5 and 2.4 mm before the rest state was
 /// exported in the frames a reader rebuilds).
 #[test]
@@ -43,15 +43,15 @@ fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
     ]);
 }
 
-/// The perm's 48 cm curls, settled without gravity to its tolerance 1e-4, hold still (0.51 mm in
-/// 2 s; 0.82 mm, with or without the material frames, when the settle stopped at 30 s short of
+/// The perm's 48 cm curls, settled without gravity to its tolerance 1e-4, hold still (0.21 mm in
+/// 2 s with the force residual taken per strand, 0.51 mm over the groom; 0.82 mm, with or without the material frames, when the settle stopped at 30 s short of
 /// its tolerance, force residual 1.7e-4; 3.9 mm when its settle stopped at 1e-3).
 #[test]
 fn styled_perm_holds_still_when_simulated_again() {
     presets_hold_still(&[("perm_scene3", "seed_100x48cm.hair", 10, "usdc")]);
 }
 
-/// The blow-dry's output holds still (0.17 mm in 2 s). Before the material frames were written it
+/// The blow-dry's output holds still (0.33 mm in 2 s). Before the material frames were written it
 /// moved 1.11 mm: two crown strands whose frames carried 6–10° of twist near the root against
 /// the frames a reader rebuilds.
 #[test]

@@ -362,7 +362,8 @@ pub(crate) struct SimulateArgs {
     /// residual reached and whether it converged.
     #[arg(long)]
     pub(crate) settle: bool,
-    /// Largest accepted net force and torque, relative to gravity's (1e-5 to 0.5).
+    /// Largest accepted net force on a strand (relative to its weight) and net torque over the
+    /// groom (relative to gravity's moments), 1e-5 to 0.5.
     #[arg(long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
     pub(crate) settle_tolerance: f32,
     #[arg(long, default_value_t = 30.0)]

@@ -448,7 +448,7 @@ pub enum Stage {
     Settle {
         #[serde(default = "default_settle_seconds")]
         max_seconds: f32,
-        /// Largest accepted net force and torque relative to gravity's (`sim::settle`).
+        /// Largest accepted net force (per strand) and torque residual (`sim::settle`).
         #[serde(default = "default_settle_tolerance")]
         tolerance: f32,
         /// Settle without gravity (to measure the free curl).
