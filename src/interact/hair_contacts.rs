@@ -518,15 +518,24 @@ impl HairContacts {
     fn candidates_of(&self, query: &Query, out: &mut Vec<u32>) {
         let (p, near) = (query.point, query.near);
         let own = query.own[0]..query.own[1];
+        // No piece reaches farther from its middle than the widest radius and half the spacing
+        // (as the grid's cells assume): a middle beyond that, with a margin for rounding, is
+        // rejected by one comparison, before the piece's own bound below is worked out. So the
+        // lists are those of that bound alone.
+        let farthest = (near + self.max_radius + 0.5 * self.spacing) * (1.0 + 1e-3);
+        let farthest_squared = farthest * farthest;
         self.grid.for_each_near_run(p, |run| {
             for piece in &self.sorted_pieces[run] {
+                let d = p - piece.mid;
+                if d.length_squared() >= farthest_squared {
+                    continue;
+                }
                 let edge = piece.edge & Piece::EDGE;
                 if own.contains(&edge) {
                     continue;
                 }
-                // Most pieces around are beyond reach of their middle: |d| ≥ reach + |half|, tested
+                // Most pieces left are beyond reach of their middle: |d| ≥ reach + |half|, tested
                 // without a root as d² − reach² − half² ≥ 2 reach |half|.
-                let d = p - piece.mid;
                 let reach = near + piece.radius;
                 let half_squared = piece.half.length_squared();
                 let beyond = d.length_squared() - reach * reach - half_squared;
