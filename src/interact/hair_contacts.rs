@@ -524,8 +524,17 @@ impl HairContacts {
         // lists are those of that bound alone.
         let farthest = (near + self.max_radius + 0.5 * self.spacing) * (1.0 + 1e-3);
         let farthest_squared = farthest * farthest;
+        // The runs of pieces to read, each one's first line asked for at once, so that their
+        // cache misses overlap instead of each waiting for the one before.
+        let mut runs = [(0, 0); 27];
+        let mut count = 0;
         self.grid.for_each_near_run(p, |run| {
-            for piece in &self.sorted_pieces[run] {
+            prefetch(&self.sorted_pieces[run.start]);
+            runs[count] = (run.start, run.end);
+            count += 1;
+        });
+        for &(start, end) in &runs[..count] {
+            for piece in &self.sorted_pieces[start..end] {
                 let d = p - piece.mid;
                 if d.length_squared() >= farthest_squared {
                     continue;
@@ -553,7 +562,18 @@ impl HairContacts {
                     out.push(edge);
                 }
             }
-        });
+        }
+    }
+}
+
+/// Asks for the cache line holding `item` ahead of its use.
+#[inline(always)]
+fn prefetch<T>(item: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is a hint that never faults, and SSE is part of x86_64.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>(item as *const T as *const i8);
     }
 }
 
