@@ -184,18 +184,23 @@ impl NeighbourGrid {
         };
         // Rounding may only keep a cell, never drop one a query needs.
         const REACH: f32 = 1.0 + 1e-4;
-        for dz in -1..=1 {
+        // A Morton code is the OR of its axes' spread bits: spread the 9 coordinates of the
+        // 27 cells once, not 3 per cell.
+        let spread = |c: i32, shift: u32| [c - 1, c, c + 1].map(|c| spread_bits(c as u32) << shift);
+        let (sx, sy, sz) = (spread(cx, 0), spread(cy, 1), spread(cz, 2));
+        let mask = (1u32 << self.bits) - 1;
+        for (dz, &bz) in (-1..=1).zip(&sz) {
             let gz = gap(dz, within.z);
-            for dy in -1..=1 {
+            for (dy, &by) in (-1..=1).zip(&sy) {
                 let gyz = gz + gap(dy, within.y);
                 if gyz > REACH {
                     continue;
                 }
-                for dx in -1..=1 {
+                for (dx, &bx) in (-1..=1).zip(&sx) {
                     if gyz + gap(dx, within.x) > REACH {
                         continue;
                     }
-                    let b = self.bucket([cx + dx, cy + dy, cz + dz]) as usize;
+                    let b = ((bx | by | bz) & mask) as usize;
                     if self.occupied[b / 64] >> (b % 64) & 1 != 0 {
                         visit(self.starts[b] as usize..self.starts[b + 1] as usize);
                     }
