@@ -224,12 +224,13 @@ impl BendTwistCoefficients {
 pub const FAR_ALIGNMENT: f32 = std::f32::consts::FRAC_1_SQRT_2;
 
 /// The scalar part of the bend–twist correction of a joint with `alignment` (see
-/// [`FAR_ALIGNMENT`]), relative scalar part `w` and rest `w0` on the chosen side of the cover.
+/// [`FAR_ALIGNMENT`]), relative scalar part `w` and rest `w0` on the chosen side of the cover;
+/// `stiffest` is the smallest component of the joint's `1/(wq1 + wq2 + α̃)`.
 #[inline(always)]
-pub fn far_scalar_correction(alignment: f32, w: f32, w0: f32, k: &BendTwistCoefficients) -> f32 {
+pub fn far_scalar_correction(alignment: f32, w: f32, w0: f32, stiffest: f32) -> f32 {
     let weight = (FAR_ALIGNMENT - alignment.abs()) / FAR_ALIGNMENT;
     if weight > 0.0 {
-        weight * (w0 - w) * k.inv_denominator.min_element()
+        weight * (w0 - w) * stiffest
     } else {
         0.0
     }
@@ -278,7 +279,7 @@ pub fn project_bend_twist_with(
     let dl = (-c - k.compliance_dt2 * *lambda) * k.inv_denominator;
     *lambda += dl;
     // `r` changes by the correction times each frame's inverse inertia: `q1` takes its conjugate.
-    let dw = far_scalar_correction(alignment, relative.w, w0, k);
+    let dw = far_scalar_correction(alignment, relative.w, w0, k.inv_denominator.min_element());
     let new_q1 = *q1 - (*q2 * Quat::from_xyzw(dl.x, dl.y, dl.z, 0.0 - dw)) * wq1;
     let new_q2 = *q2 + (*q1 * Quat::from_xyzw(dl.x, dl.y, dl.z, dw)) * wq2;
     *q1 = new_q1.normalize();

@@ -8,7 +8,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use glam::{Quat, Vec3};
 
-use super::constraints::{BendTwistCoefficients, StretchShearCoefficients, FAR_ALIGNMENT};
+use super::constraints::{far_scalar_correction, BendTwistCoefficients, StretchShearCoefficients};
 use super::solver::{sweep_order, Projection};
 use super::Hooks;
 
@@ -584,16 +584,11 @@ fn project_pair(s: &mut Scratch, e: usize) {
     let lambda = s.lambda[e];
     let dl = (V3::default() - c - k.compliance_dt2.mul(lambda)).mul(k.inv_denominator);
     s.lambda[e] = lambda + dl;
-    // The scalar solver's `far_scalar_correction`, lane by lane.
     let w0 = (-alignment).positive_select(-w0, w0);
     let d = k.inv_denominator;
     let dw = F(from_fn(|l| {
-        let weight = (FAR_ALIGNMENT - alignment.0[l].abs()) / FAR_ALIGNMENT;
-        if weight > 0.0 {
-            weight * (w0.0[l] - relative.w.0[l]) * d.x.0[l].min(d.y.0[l].min(d.z.0[l]))
-        } else {
-            0.0
-        }
+        let stiffest = d.x.0[l].min(d.y.0[l].min(d.z.0[l]));
+        far_scalar_correction(alignment.0[l], relative.w.0[l], w0.0[l], stiffest)
     }));
     let to_q1 = Q { x: dl.x, y: dl.y, z: dl.z, w: F::splat(0.0) - dw };
     let to_q2 = Q { x: dl.x, y: dl.y, z: dl.z, w: dw };
