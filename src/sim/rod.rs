@@ -472,6 +472,12 @@ impl Rods {
         }
     }
 
+    /// Every edge pair's centre vertex (each strand's vertices but its root and tip), in order,
+    /// without looking up any vertex's strand.
+    pub fn pair_centres(&self) -> impl Iterator<Item = usize> + '_ {
+        self.strand_offsets.windows(2).flat_map(|w| w[0] as usize + 1..(w[1] as usize).saturating_sub(1))
+    }
+
     /// Whether `vertex` is the centre of an edge pair (neither a root nor a tip).
     pub fn is_pair_centre(&self, vertex: usize) -> bool {
         let strand = self.strand_of(vertex);
@@ -494,6 +500,17 @@ impl Rods {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pair_centres_are_the_vertices_that_are_pair_centres() {
+        let strand =
+            |n: usize, x: f32| (0..n).map(|i| Vec3::new(x, 0.0, 0.01 * i as f32)).collect::<Vec<_>>();
+        let groom = Groom::from_strands(&[strand(2, 0.0), strand(5, 0.1), strand(3, 0.2)], 80e-6);
+        let rods = Rods::from_groom(&groom, &Material::default(), 1.0).unwrap();
+        let expected: Vec<usize> = (0..rods.vertex_count()).filter(|&v| rods.is_pair_centre(v)).collect();
+        assert_eq!(rods.pair_centres().collect::<Vec<_>>(), expected);
+        assert_eq!(expected, vec![3, 4, 5, 8]);
+    }
 
     #[test]
     fn rods_refuse_a_layout_the_solver_could_not_slice() {

@@ -533,10 +533,15 @@ impl Session {
                 let mut deepest = 0.0f32;
                 for i in self.groom.strand_range(strand) {
                     let (p, radius) = (positions[i], self.radii[i]);
+                    // The culling mask, looked up once and only if a shape's clearance test leaves it.
+                    let mut mask = None;
                     for (k, shape) in self.active.iter().enumerate() {
                         // Clear of the shape: its distance is at least the radius.
                         if !self.culling.clear_of(k, p, radius)
-                            && ObstacleCulling::tests(self.culling.mask(strand, p), k)
+                            && ObstacleCulling::tests(
+                                *mask.get_or_insert_with(|| self.culling.mask(strand, p)),
+                                k,
+                            )
                         {
                             deepest = deepest.max(radius - shape.signed_distance(p));
                         }
@@ -963,19 +968,7 @@ impl Session {
         radii.sort_by(f32::total_cmp);
         let mean = |kind: BondKind| {
             let rates = self.sim.bonds.rates(kind);
-            // Each strand's interior vertices in order (the pair centres, without looking up
-            // every vertex's strand).
-            let centres: Vec<f32> = self
-                .sim
-                .rods()
-                .strand_offsets()
-                .windows(2)
-                .flat_map(|w| {
-                    rates[w[0] as usize + 1..(w[1] as usize).saturating_sub(1).max(w[0] as usize + 1)]
-                        .iter()
-                        .copied()
-                })
-                .collect();
+            let centres: Vec<f32> = self.sim.rods().pair_centres().map(|v| rates[v]).collect();
             centres.iter().sum::<f32>() / centres.len().max(1) as f32
         };
         StageReport {
