@@ -93,6 +93,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
         &export,
     )?;
     let meshes_output = io::meshes_output(&args.output, groom, &export);
+    let warnings: Vec<String> = report.warnings.iter().cloned().chain(warnings).collect();
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }

@@ -49,6 +49,21 @@ pub enum Shape {
     Mesh(Arc<MeshSdf>),
 }
 
+/// Shortest distance between the segments `a0`–`a1` and `b0`–`b1`: the closest points are
+/// found on the infinite lines, clamped to the segments, and the clamp of one carried over to
+/// the other (exact for segments; degenerate segments are points).
+pub fn segment_distance(a0: Vec3, a1: Vec3, b0: Vec3, b1: Vec3) -> f32 {
+    let (u, v, w) = (a1 - a0, b1 - b0, a0 - b0);
+    let (uu, vv, uv, uw, vw) = (u.dot(u), v.dot(v), u.dot(v), u.dot(w), v.dot(w));
+    let along = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+    // Parallel (or point) segments: any s works; 0 then the clamps below give the right pair.
+    let det = uu * vv - uv * uv;
+    let mut s = if det > f32::EPSILON * uu * vv { along((uv * vw - vv * uw) / det) } else { 0.0 };
+    let t = along((uv * s + vw) / vv);
+    s = along((uv * t - uw) / uu);
+    (a0 + u * s).distance(b0 + v * t)
+}
+
 impl Shape {
     /// Signed distance from `p` to the surface and the outward unit normal there.
     pub fn distance(&self, p: Vec3) -> (f32, Vec3) {
@@ -446,6 +461,47 @@ mod tests {
         }
         // Neither test is vacuous: most points are cleared, and some touch.
         assert!(cleared > points.len() && contacts > 0, "{cleared} {contacts}");
+    }
+
+    #[test]
+    fn segment_distance_matches_a_dense_search() {
+        // Crossing, skew, parallel (overlapping and apart), end-to-end and degenerate pairs,
+        // then pseudo-random ones; the reference scans both segments finely.
+        let mut pairs = vec![
+            [Vec3::ZERO, Vec3::X, Vec3::new(0.5, -1.0, 0.3), Vec3::new(0.5, 1.0, 0.3)],
+            [Vec3::ZERO, Vec3::X, Vec3::new(0.2, 0.5, 0.0), Vec3::new(0.8, 0.5, 0.0)],
+            [Vec3::ZERO, Vec3::X, Vec3::new(1.5, 0.5, 0.0), Vec3::new(2.5, 0.5, 0.0)],
+            [Vec3::ZERO, Vec3::X, Vec3::new(1.2, 0.1, 0.0), Vec3::new(2.0, 1.0, 0.0)],
+            [Vec3::ZERO, Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(1.0, -1.0, 0.0)],
+            [Vec3::Y, Vec3::Y, Vec3::X, Vec3::X],
+        ];
+        let mut seed = 7u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1 << 24) as f32 * 2.0 - 1.0
+        };
+        for _ in 0..200 {
+            pairs.push([(); 4].map(|_| Vec3::new(next(), next(), next())));
+        }
+        for [a0, a1, b0, b1] in pairs {
+            let n = 400;
+            let mut reference = f32::INFINITY;
+            for i in 0..=n {
+                let p = a0.lerp(a1, i as f32 / n as f32);
+                let v = b1 - b0;
+                let t =
+                    if v.length_squared() > 0.0 { ((p - b0).dot(v) / v.dot(v)).clamp(0.0, 1.0) } else { 0.0 };
+                reference = reference.min(p.distance(b0 + v * t));
+            }
+            let d = segment_distance(a0, a1, b0, b1);
+            // The scan's step along `a` bounds how far above the true distance it can be.
+            let slack = a0.distance(a1) / n as f32 + 1e-5;
+            assert!(
+                d <= reference + 1e-5 && d >= reference - slack,
+                "{a0} {a1} {b0} {b1}: {d} vs {reference}"
+            );
+            assert!((segment_distance(b0, b1, a0, a1) - d).abs() < 1e-5, "not symmetric");
+        }
     }
 
     #[test]

@@ -21,7 +21,7 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::mesh_sdf::TriangleMesh;
-use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
+use crate::interact::obstacles::{segment_distance, ContactHooks, Friction, ObstacleCulling, Shape};
 use crate::interact::water::{Droplets, WaterParams};
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
@@ -84,6 +84,8 @@ pub struct StyleReport {
     /// The head frame the recipe was placed in, when it needed one.
     pub head_frame: Option<HeadFrameReport>,
     pub stages: Vec<StageReport>,
+    /// What in the recipe, as placed on this groom, is likely not what its author meant.
+    pub warnings: Vec<String>,
 }
 
 /// A fitted head frame as the report shows it (world coordinates, metres).
@@ -208,6 +210,7 @@ pub(crate) fn style_strands(
             size: f.size(),
         }),
         stages,
+        warnings: std::mem::take(&mut session.warnings),
     };
     if session.frame_interval.is_some()
         && session.frames.last().map(Vec::as_slice) != Some(session.sim.rods().positions())
@@ -258,6 +261,8 @@ impl Helix {
 
 /// A strand wound on a rod, from its vertex `first` to the tip.
 struct Winding {
+    /// The rod (index into the session's rods) it is wound on.
+    rod: usize,
     first: usize,
     end: usize,
     /// Positions when the stage began.
@@ -334,6 +339,8 @@ struct Session {
     frame_interval: Option<u64>,
     /// Deepest penetration of the current stage so far (metres).
     penetration: f32,
+    /// What the report warns of (rods that trap wound hair).
+    warnings: Vec<String>,
     head_frame: Option<HeadFrame>,
 }
 
@@ -423,6 +430,7 @@ impl Session {
             frame_interval,
             penetration: 0.0,
             head_frame: placed.frame,
+            warnings: Vec::new(),
             radii,
             groom,
         };
@@ -679,6 +687,7 @@ impl Session {
                         .collect()
                 };
                 let windings = self.windings(&strands, &chosen)?;
+                self.warn_of_overlapping_rods(index, &windings, &chosen);
                 self.rods_active = true;
                 self.refresh_obstacles();
                 let total = steps.max(1) as f32;
@@ -896,9 +905,50 @@ impl Session {
             let start = positions[first..range.end].to_vec();
             self.held.extend(first..range.end);
             self.wound[s] = Some(first);
-            windings.push(Winding { first, end: range.end, start, arc, phi, helix });
+            windings.push(Winding { rod: r, first, end: range.end, start, arc, phi, helix });
         }
         Ok(windings)
+    }
+
+    /// Curlers are solid, but a recipe may let two rods overlap (a ring of rods closed at its
+    /// ends). A strand whose finished helix runs into another rod is held inside one of the two
+    /// (the full-head perm's rods once overlapped by up to 9 mm and held strands 6.7 mm inside):
+    /// each such pair of rods is a warning with the overlap and the strands it traps.
+    fn warn_of_overlapping_rods(&mut self, stage: usize, windings: &[Winding], rods: &[usize]) {
+        // Deeper than contact round-off: the push out of the other rod moves the pose.
+        const SLOP: f32 = 1e-4;
+        let mut trapped = std::collections::BTreeMap::<(usize, usize), usize>::new();
+        for w in windings {
+            let others = rods.iter().filter(|&&o| o != w.rod);
+            let into = others.filter(|&&o| {
+                (0..w.end - w.first)
+                    .any(|k| self.rods[o].distance(w.pose(k, 1.0)).0 < self.radii[w.first + k] - SLOP)
+            });
+            for &o in into {
+                *trapped.entry((w.rod, o)).or_default() += 1;
+            }
+        }
+        for ((rod, other), strands) in trapped {
+            let (Shape::Capsule { a, b, radius }, Shape::Capsule { a: c, b: d, radius: r }) =
+                (&self.rods[rod], &self.rods[other])
+            else {
+                unreachable!("rods are capsules")
+            };
+            let gap = segment_distance(*a, *b, *c, *d) - radius - r;
+            let between = if gap < 0.0 {
+                format!("overlapping it by {:.1} mm", -gap * 1e3)
+            } else {
+                format!("{:.1} mm from it", gap * 1e3)
+            };
+            let name = |k: usize| &self.recipe.rods[k].get_ref().name;
+            self.warnings.push(format!(
+                "stage {} (wrap): strands wound on rod '{}' that run into rod '{}' ({between}): \
+                 {strands}; they are held inside one of the two; shorten or move a rod",
+                stage + 1,
+                name(rod),
+                name(other),
+            ));
+        }
     }
 
     /// Keeps the droplets and the hair they hold, for children to clump by (`crate::guides`).
