@@ -20,11 +20,14 @@ use crate::analysis::resample_groom;
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::sim::driver::carry_groom_water;
 use crate::sim::rod::transport_frames;
-use crate::sim::sag_free::MATERIAL_FRAME;
+use crate::sim::sag_free::{MATERIAL_FRAME, REST_DARBOUX};
+use crate::sim::Simulation;
 use crate::style::head_frame::HeadFrame;
-use crate::style::recipe::Recipe;
-use crate::style::run::{obstacle_shapes, style_strands, StyleOptions, Styled, WaterSnapshots};
+use crate::style::placement::place;
+use crate::style::recipe::{Recipe, Stage};
+use crate::style::run::{sim_params, style_strands, StyleOptions, Styled, WaterSnapshots};
 use binding::{Binding, GUIDES_PER_CHILD};
 use deform::{Children, Curves};
 
@@ -173,7 +176,8 @@ pub fn style(
     };
     let bound = bind(&children.points);
     let after = posed(styled.groom.points.clone());
-    let shapes = obstacle_shapes(recipe, &guides, options.scalp.as_deref(), frame)?;
+    let placed = place(recipe, &guides, options.scalp.as_deref(), frame)?;
+    let shapes = placed.shapes;
     let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
     let (last, last_pose) = start(usize::MAX);
     let mut child_points = deform::deform(&last, last_pose, &after);
@@ -214,6 +218,7 @@ pub fn style(
     for attribute in carried(&last, last_pose, &after, &child_points, &styled.groom.attributes) {
         out.set_attribute(attribute);
     }
+    hold_children_up(&mut out, &guide_ids, &child_ids, &placed.recipe)?;
     let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
     out.set_attribute(closest);
     out.set_attribute(weights);
@@ -351,6 +356,37 @@ fn binding_attributes(
         Attribute::new(CLOSEST_GUIDES, AttributeRate::Strand, GUIDES_PER_CHILD, closest),
         Attribute::new(GUIDE_WEIGHTS, AttributeRate::Strand, GUIDES_PER_CHILD, weights),
     ))
+}
+
+/// Children are never simulated: their interpolated shape is not a rest state of their blended
+/// bonds, and simulated again they sagged (the demo's permed children: 34 mm in 2 s at the
+/// median, 178 mm at worst). Their rest state is solved to hold the shape they were given under
+/// the recipe's gravity and the water they carry (`sim::sag_free`), with their bond rates kept.
+fn hold_children_up(
+    out: &mut Groom,
+    guide_ids: &[usize],
+    child_ids: &[usize],
+    placed: &Recipe,
+) -> Result<()> {
+    if child_ids.is_empty() {
+        return Ok(());
+    }
+    let children = subset(out, child_ids);
+    let mut params = sim_params(placed);
+    if let Some(Stage::Settle { gravity: Some(false), .. }) = placed.stages.last().map(|s| s.get_ref()) {
+        params.gravity = Vec3::ZERO;
+    }
+    let mut sim = Simulation::new(&children, params)?;
+    carry_groom_water(&mut sim, &children);
+    sim.make_sag_free();
+    let guides = subset(out, guide_ids);
+    for attribute in sim.state_attributes().into_iter().filter(|a| a.name == "rest" || a.name == REST_DARBOUX)
+    {
+        let guide_part = guides.attribute(&attribute.name).expect("styled guides carry their rest state");
+        let merged = merge_vertex_attribute(out, guide_ids, guide_part, child_ids, &attribute);
+        out.set_attribute(merged);
+    }
+    Ok(())
 }
 
 /// The strands `which` of a groom (points, widths, ids, UVs and attributes), in that order.

@@ -69,7 +69,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
         settle.check("--settle-tolerance", "--settle-seconds")?;
     }
     let mut sim = Simulation::new(groom, options.params.clone())?;
-    water_weight(&mut sim, groom);
+    carry_groom_water(&mut sim, groom);
     let rest = if options.sag_free {
         sim.make_sag_free();
         "sag_free"
@@ -102,7 +102,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
 /// Wet hair is heavier: a groom that carries `wetness` (a styled output still damp, or a wet
 /// groom) is simulated with the water's weight, as styling simulated it, so its exported rest
 /// state holds it still. Readers refuse non-finite values; `mass_scale` clamps to [0, 1].
-fn water_weight(sim: &mut Simulation, groom: &Groom) {
+pub(crate) fn carry_groom_water(sim: &mut Simulation, groom: &Groom) {
     if let Some(wetness) = groom.attribute(WETNESS) {
         if wetness.rate == AttributeRate::Vertex && wetness.components == 1 {
             carry_water(sim, &wetness.data, &WetnessParams::default());
