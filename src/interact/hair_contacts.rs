@@ -382,22 +382,22 @@ impl HairContacts {
         let mut sorted = std::mem::take(&mut self.sorted_pieces);
         sorted.resize(total, Piece::default());
         let (first_piece, edges) = (&self.first_piece, &self.edges);
-        let mut e = 0;
-        self.grid.rebuild_placing(&mids, |k, slot| {
-            while first_piece[e + 1] as usize <= k {
-                e += 1;
+        // Each thread's state is the edge of the last piece it wrote (pieces come in edge order).
+        self.grid.rebuild_into(&mids, &mut sorted, |e: &mut usize, k| {
+            while first_piece[*e + 1] as usize <= k {
+                *e += 1;
             }
-            let j = edges[e] as usize;
+            let j = edges[*e] as usize;
             let (a, b) = (points[j], points[j + 1]);
-            let (index, count) = (k as u32 - first_piece[e], first_piece[e + 1] - first_piece[e]);
+            let (index, count) = (k as u32 - first_piece[*e], first_piece[*e + 1] - first_piece[*e]);
             let first = if index == 0 { Piece::FIRST } else { 0 };
             let last = if index + 1 == count { Piece::LAST } else { 0 };
-            sorted[slot] = Piece {
+            Piece {
                 mid: mids[k],
                 radius: 0.5 * (radii[j] + radii[j + 1]),
                 half: (b - a) * (0.5 / count as f32),
                 edge: j as u32 | first | last,
-            };
+            }
         });
         (self.piece_mids, self.sorted_pieces) = (mids, sorted);
     }
