@@ -417,13 +417,16 @@ impl HairContacts {
         // Query in the grid's spatial order, so consecutive queries read the same buckets.
         let grid = &self.grid;
         let queried = &self.queried;
+        // A key per vertex (those not queried marked above any bucket), then the marked ones
+        // dropped: a parallel filter would gather its output in pieces of unknown length,
+        // which cost more than the sort.
+        const UNQUERIED: u64 = u64::MAX;
         self.queries.clear();
-        self.queries.par_extend(
-            (0..n as u32)
-                .into_par_iter()
-                .filter(|&i| queried[i as usize])
-                .map(|i| (grid.bucket_of(points[i as usize]) as u64) << 32 | i as u64),
-        );
+        self.queries.par_extend((0..n as u32).into_par_iter().map(|i| match queried[i as usize] {
+            true => (grid.bucket_of(points[i as usize]) as u64) << 32 | i as u64,
+            false => UNQUERIED,
+        }));
+        self.queries.retain(|&key| key != UNQUERIED);
         self.queries.par_sort_unstable();
         let (strand_of, strand_offsets, skin) = (&self.strand_of, &self.strand_offsets, self.skin);
         self.packed.clear();
