@@ -99,24 +99,40 @@ impl NeighbourGrid {
     pub fn rebuild(&mut self, points: &[Vec3]) {
         let mut items = std::mem::take(&mut self.items);
         items.resize(points.len(), 0);
-        self.sort(points, |i, slot| items[slot] = i as u32);
+        self.sort(points, &mut items, |_: &mut (), i| i as u32);
         self.items = items;
     }
 
-    /// Rebuilds the grid over `points` like [`rebuild`](Self::rebuild), but hands each item's
-    /// place in the sorted order to `place(i, slot)`, in increasing `i`, and keeps no
-    /// [`sorted_items`](Self::sorted_items) (left empty): callers lay out their own per-item
-    /// data in that order as they read it in theirs.
-    pub fn rebuild_placing(&mut self, points: &[Vec3], place: impl FnMut(usize, usize)) {
+    /// Rebuilds the grid over `points` like [`rebuild`](Self::rebuild), but writes
+    /// `make(state, i)` for each item `i` to its place in the sorted order in `out` (as long as
+    /// `points`) and keeps no [`sorted_items`](Self::sorted_items) (left empty): callers lay out
+    /// their own per-item data in that order. Each `state` starts as its default and sees items
+    /// in increasing `i` (callers step through their own data alongside), some skipped: the
+    /// buckets are split between threads, each reading every item and writing those of its own
+    /// buckets. The output is the same at any thread count.
+    pub fn rebuild_into<T: Send, S: Default>(
+        &mut self,
+        points: &[Vec3],
+        out: &mut [T],
+        make: impl Fn(&mut S, usize) -> T + Sync,
+    ) {
         self.items.clear();
-        self.sort(points, place);
+        self.sort(points, out, make);
     }
 
-    /// The counting sort behind both rebuilds.
-    fn sort(&mut self, points: &[Vec3], mut place: impl FnMut(usize, usize)) {
+    /// The counting sort behind both rebuilds, in parallel over ranges of buckets (whole words
+    /// of `occupied`): each range counts, sums and scatters its own items, so the slots are
+    /// those of a serial sort by bucket and then by index.
+    fn sort<T: Send, S: Default>(
+        &mut self,
+        points: &[Vec3],
+        out: &mut [T],
+        make: impl Fn(&mut S, usize) -> T + Sync,
+    ) {
+        assert_eq!(out.len(), points.len(), "one output slot per item");
         // One to two buckets per item (2^k ≥ items), at most 2^30; at least 2^6, so every axis
         // wraps every 4 cells or more and a query's 27 cells never share a bucket. (A table of
-        // 8^k buckets, up to 8 times the items, made this serial rebuild half the cost of
+        // 8^k buckets, up to 8 times the items, made the then serial rebuild half the cost of
         // cutting contact pieces at 20k × 32.)
         self.bits = ((points.len().max(64) as f64).log2().ceil() as u32).min(30);
         self.len = points.len();
@@ -132,28 +148,69 @@ impl NeighbourGrid {
         self.starts.resize(table + 1, 0);
         self.occupied.clear();
         self.occupied.resize(table.div_ceil(64), 0);
-        for &b in &self.buckets {
-            self.starts[b as usize + 1] += 1;
-            self.occupied[b as usize / 64] |= 1 << (b % 64);
-        }
-        for b in 0..table {
-            self.starts[b + 1] += self.starts[b];
-        }
-        // Scatter in index order: each bucket's cursor walks its next free slot.
         self.cursor.clear();
-        self.cursor.extend_from_slice(&self.starts[..table]);
-        for (i, &b) in self.buckets.iter().enumerate() {
-            let slot = &mut self.cursor[b as usize];
-            place(i, *slot as usize);
-            *slot += 1;
-        }
+        self.cursor.resize(table, 0);
+        // Every range reads all items, so more ranges than threads only add reads; below ~64k
+        // items one range is cheaper than handing out work.
+        let words = table / 64;
+        let parts = if points.len() < 1 << 16 { 1 } else { rayon::current_num_threads().clamp(1, words) };
+        let bounds: Vec<usize> = (0..=parts).map(|t| t * words / parts * 64).collect();
+        let buckets = &self.buckets;
+        // Per range: its buckets' counts (in `starts[b + 1]`), then their running sums.
+        let mut counts = split_at_bounds(&mut self.starts[1..], &bounds);
+        let occupied =
+            split_at_bounds(&mut self.occupied, &bounds.iter().map(|b| b / 64).collect::<Vec<_>>());
+        let totals: Vec<u32> = counts
+            .par_iter_mut()
+            .zip(occupied)
+            .zip(bounds.par_windows(2))
+            .map(|((counts, occupied), range)| {
+                let lo = range[0];
+                for &b in buckets {
+                    let k = (b as usize).wrapping_sub(lo);
+                    if k < counts.len() {
+                        counts[k] += 1;
+                        occupied[k / 64] |= 1 << (k % 64);
+                    }
+                }
+                for k in 1..counts.len() {
+                    counts[k] += counts[k - 1];
+                }
+                counts.last().copied().unwrap_or(0)
+            })
+            .collect();
+        // Each range's first slot, added to its running sums.
+        let firsts: Vec<u32> =
+            totals.iter().scan(0, |sum, &t| Some(std::mem::replace(sum, *sum + t))).collect();
+        counts
+            .par_iter_mut()
+            .zip(&firsts)
+            .for_each(|(counts, &first)| counts.iter_mut().for_each(|c| *c += first));
+        // Scatter in index order: each bucket's cursor walks its next free slot, within its
+        // range's part of `out`.
+        let starts = &self.starts;
+        let slot_bounds: Vec<usize> = bounds.iter().map(|&b| starts[b] as usize).collect();
+        let outs = split_at_bounds(out, &slot_bounds);
+        let cursors = split_at_bounds(&mut self.cursor, &bounds);
+        outs.into_par_iter().zip(cursors).zip(bounds.par_windows(2)).for_each(|((out, cursor), range)| {
+            let (lo, base) = (range[0], starts[range[0]] as usize);
+            cursor.copy_from_slice(&starts[lo..range[1]]);
+            let mut state = S::default();
+            for (i, &b) in buckets.iter().enumerate() {
+                let k = (b as usize).wrapping_sub(lo);
+                if k < cursor.len() {
+                    out[cursor[k] as usize - base] = make(&mut state, i);
+                    cursor[k] += 1;
+                }
+            }
+        });
     }
 
     /// Calls `visit(i)` for every item in the cells around `p` that come within `cell_size` of it
     /// (see [`for_each_near_run`](Self::for_each_near_run)), each item at most once. Needs the
-    /// item order that [`rebuild`](Self::rebuild) keeps and `rebuild_placing` does not.
+    /// item order that [`rebuild`](Self::rebuild) keeps and `rebuild_into` does not.
     pub fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        assert_eq!(self.items.len(), self.len, "for_each_near after rebuild_placing: no item order kept");
+        assert_eq!(self.items.len(), self.len, "for_each_near after rebuild_into: no item order kept");
         self.for_each_near_run(p, |run| self.items[run].iter().for_each(|&i| visit(i)));
     }
 
@@ -208,6 +265,18 @@ impl NeighbourGrid {
             }
         }
     }
+}
+
+/// `slice` cut at `bounds` (increasing, from 0 to its length or less): the parts between
+/// consecutive bounds.
+fn split_at_bounds<'a, T>(mut slice: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
+    let mut parts = Vec::with_capacity(bounds.len().saturating_sub(1));
+    for w in bounds.windows(2) {
+        let (part, rest) = std::mem::take(&mut slice).split_at_mut(w[1] - w[0]);
+        parts.push(part);
+        slice = rest;
+    }
+    parts
 }
 
 /// A coarse, conservative record of where points are: the cells holding chosen points and every
@@ -450,29 +519,37 @@ mod tests {
     }
 
     #[test]
-    fn placing_hands_out_the_slots_rebuild_sorts_items_into() {
+    fn rebuilds_sort_items_by_bucket_then_index_at_any_thread_count() {
+        // Enough items (over 2^16) that the buckets are split between threads.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
         let points: Vec<Vec3> =
-            (0..3000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 0.2).collect();
+            (0..140_000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 0.5).collect();
         let mut sorted = NeighbourGrid::new(0.01);
         sorted.rebuild(&points);
-        let mut placed = NeighbourGrid::new(0.01);
-        let mut order = Vec::new();
-        let mut slots = vec![usize::MAX; points.len()];
-        placed.rebuild_placing(&points, |i, slot| {
-            order.push(i);
-            slots[i] = slot;
-        });
-        assert!(order.iter().enumerate().all(|(k, &i)| k == i), "items are placed in index order");
-        assert!(sorted.sorted_items().iter().enumerate().all(|(slot, &i)| slots[i as usize] == slot));
-        assert!(placed.sorted_items().is_empty());
-        // Both hand out the same runs.
-        for q in points.iter().step_by(101) {
-            let (mut a, mut b) = (Vec::new(), Vec::new());
-            sorted.for_each_near_run(*q, |run| a.push(run));
-            placed.for_each_near_run(*q, |run| b.push(run));
-            assert!(!a.is_empty());
-            assert_eq!(a, b);
+        let mut expected: Vec<u32> = (0..points.len() as u32).collect();
+        expected.sort_by_key(|&i| (sorted.bucket_of(points[i as usize]), i));
+        assert_eq!(sorted.sorted_items(), expected.as_slice());
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut placed = NeighbourGrid::new(0.01);
+            let mut out = vec![u32::MAX; points.len()];
+            pool.install(|| {
+                placed.rebuild_into(&points, &mut out, |last: &mut Option<usize>, i| {
+                    assert!(last.is_none_or(|last| last < i), "items come in index order");
+                    *last = Some(i);
+                    i as u32
+                })
+            });
+            assert_eq!(out, expected, "{threads} threads");
+            assert!(placed.sorted_items().is_empty());
+            // Both hand out the same runs.
+            for q in points.iter().step_by(1001) {
+                let (mut a, mut b) = (Vec::new(), Vec::new());
+                sorted.for_each_near_run(*q, |run| a.push(run));
+                placed.for_each_near_run(*q, |run| b.push(run));
+                assert!(!a.is_empty());
+                assert_eq!(a, b);
+            }
         }
     }
 
