@@ -218,7 +218,7 @@ pub fn style(
     for attribute in carried(&last, last_pose, &after, &child_points, &styled.groom.attributes) {
         out.set_attribute(attribute);
     }
-    hold_children_up(&mut out, &guide_ids, &child_ids, &placed.recipe)?;
+    hold_children_up(&mut out, &styled.groom, &guide_ids, &child_ids, &placed.recipe)?;
     let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
     out.set_attribute(closest);
     out.set_attribute(weights);
@@ -361,9 +361,11 @@ fn binding_attributes(
 /// Children are never simulated: their interpolated shape is not a rest state of their blended
 /// bonds, and simulated again they sagged (the demo's permed children: 34 mm in 2 s at the
 /// median, 178 mm at worst). Their rest state is solved to hold the shape they were given under
-/// the recipe's gravity and the water they carry (`sim::sag_free`), with their bond rates kept.
+/// the recipe's gravity and the water they carry (`sim::sag_free`), with their bond rates kept;
+/// the guides keep the rest state of `styled_guides` (in `guide_ids` order).
 fn hold_children_up(
     out: &mut Groom,
+    styled_guides: &Groom,
     guide_ids: &[usize],
     child_ids: &[usize],
     placed: &Recipe,
@@ -379,10 +381,10 @@ fn hold_children_up(
     let mut sim = Simulation::new(&children, params)?;
     carry_groom_water(&mut sim, &children);
     sim.make_sag_free();
-    let guides = subset(out, guide_ids);
     for attribute in sim.state_attributes().into_iter().filter(|a| a.name == "rest" || a.name == REST_DARBOUX)
     {
-        let guide_part = guides.attribute(&attribute.name).expect("styled guides carry their rest state");
+        let guide_part =
+            styled_guides.attribute(&attribute.name).expect("styled guides carry their rest state");
         let merged = merge_vertex_attribute(out, guide_ids, guide_part, child_ids, &attribute);
         out.set_attribute(merged);
     }

@@ -422,9 +422,12 @@ impl HairContacts {
         // which cost more than the sort.
         const UNQUERIED: u64 = u64::MAX;
         self.queries.clear();
-        self.queries.par_extend((0..n as u32).into_par_iter().map(|i| match queried[i as usize] {
-            true => (grid.bucket_of(points[i as usize]) as u64) << 32 | i as u64,
-            false => UNQUERIED,
+        self.queries.par_extend((0..n as u32).into_par_iter().map(|i| {
+            if queried[i as usize] {
+                (grid.bucket_of(points[i as usize]) as u64) << 32 | i as u64
+            } else {
+                UNQUERIED
+            }
         }));
         self.queries.retain(|&key| key != UNQUERIED);
         self.queries.par_sort_unstable();

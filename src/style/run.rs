@@ -919,11 +919,11 @@ impl Session {
         const SLOP: f32 = 1e-4;
         let mut trapped = std::collections::BTreeMap::<(usize, usize), usize>::new();
         for w in windings {
+            let finished: Vec<(Vec3, f32)> =
+                (0..w.end - w.first).map(|k| (w.pose(k, 1.0), self.radii[w.first + k])).collect();
             let others = rods.iter().filter(|&&o| o != w.rod);
-            let into = others.filter(|&&o| {
-                (0..w.end - w.first)
-                    .any(|k| self.rods[o].distance(w.pose(k, 1.0)).0 < self.radii[w.first + k] - SLOP)
-            });
+            let into = others
+                .filter(|&&o| finished.iter().any(|&(p, radius)| self.rods[o].distance(p).0 < radius - SLOP));
             for &o in into {
                 *trapped.entry((w.rod, o)).or_default() += 1;
             }
