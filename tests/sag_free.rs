@@ -1,5 +1,5 @@
 //! Grooms that hold still when a simulation starts: a preset's styled output, simulated again for
-//! 2 s under gravity with the recipe's colliders, moves less than 1 mm (its exported
+//! 2 s under the world's gravity with the recipe's colliders, moves less than 1 mm (its exported
 //! `rest_darboux` and bond rates are the rest state); a groom fresh from a DCC tool moves less than
 //! 1 mm with the sag-free option, while without it, it falls.
 mod common;
@@ -78,11 +78,12 @@ fn presets_hold_still(presets: &[(&str, &str, usize, &str)]) {
         // gravity and colliders into world coordinates (as in `tests/style_settle.rs`).
         let frame = placement::head_frame(&recipe, &input, None).unwrap();
         let placed = placement::place(&recipe, &input, None, frame).unwrap();
-        let mut params = sim_params(&placed.recipe);
-        // Simulated again under the gravity it was settled with (the perm settles without, to
-        // show its free curl).
+        // Simulated again under the world's gravity, as a shot simulates it (the seed grooms are
+        // Y-up), not the recipe's placed one; the perm settles without gravity, to show its free
+        // curl, and is simulated again without.
+        let mut params = SimParams { gravity: Vec3::new(0.0, -9.8, 0.0), ..sim_params(&placed.recipe) };
         if let recipe::Stage::Settle { gravity: Some(false), .. } = recipe.stages.last().unwrap().get_ref() {
-            params.gravity = glam::Vec3::ZERO;
+            params.gravity = Vec3::ZERO;
         }
         let file = dir.path().join(format!("{preset}.{format}"));
         coif::io::write_groom(&file, &styled.groom).unwrap();
