@@ -430,7 +430,14 @@ fn children_hold_their_shape_when_simulated_again() {
     let moved_in_half_a_second = |groom: &Groom, solver| {
         let params = SimParams { gravity: WORLD_GRAVITY, ..SimParams::for_solver(solver) };
         let colliders = placed.shapes.clone();
-        let options = SimulateOptions { params, seconds: 0.5, settle: None, sag_free: false, colliders };
+        let options = SimulateOptions {
+            params,
+            seconds: 0.5,
+            settle: None,
+            sag_free: false,
+            colliders,
+            hair_contacts: None,
+        };
         let (after, _) = simulate(groom, &options).unwrap();
         let mut moved: Vec<f32> = (0..groom.strand_count())
             .map(|s| {

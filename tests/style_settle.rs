@@ -54,6 +54,7 @@ fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
         settle: None,
         sag_free: false,
         colliders: placed.shapes,
+        hair_contacts: None,
     };
     let (again, summary) = coif::sim::driver::simulate(&settled, &options).unwrap();
     assert_eq!(summary.rest, "rest_darboux");
@@ -182,6 +183,7 @@ fn a_blow_dry_that_folds_a_strand_at_its_root_settles() {
             settle: None,
             sag_free: false,
             colliders: placed.shapes,
+            hair_contacts: None,
         };
         let (again, _) = coif::sim::driver::simulate(b, &options).unwrap();
         let worst = b.points.iter().zip(&again.points).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);

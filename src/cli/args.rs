@@ -376,6 +376,10 @@ pub(crate) struct SimulateArgs {
     /// Collide with coif's default head (the ellipsoid `coif generate` grows hair on).
     #[arg(long)]
     pub(crate) head: bool,
+    /// Strands push each other apart (hair–hair contacts with a recipe's default `[contacts]`),
+    /// as a style with `hair_hair = true` simulated them: its strands rest on each other.
+    #[arg(long)]
+    pub(crate) hair_contacts: bool,
     /// Exit 1 when the settle does not reach its tolerance (the output is still written).
     #[arg(long, requires = "settle")]
     pub(crate) require_converged: bool,

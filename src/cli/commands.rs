@@ -205,8 +205,16 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     } else {
         Vec::new()
     };
-    let options =
-        SimulateOptions { params, seconds: args.seconds, settle, sag_free: args.sag_free, colliders };
+    let hair_contacts =
+        args.hair_contacts.then(|| coif::style::recipe::Contacts::default().hair_contact_settings());
+    let options = SimulateOptions {
+        params,
+        seconds: args.seconds,
+        settle,
+        sag_free: args.sag_free,
+        colliders,
+        hair_contacts,
+    };
     let (groom, summary) = simulate(&loaded.groom, &options).map_err(|e| e.in_file(&args.input))?;
     let unsettled = summary.settle.filter(|r| !r.converged);
     if let Some(report) = unsettled {

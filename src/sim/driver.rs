@@ -2,12 +2,14 @@
 //! the rest-shape attributes. The library entry the CLI calls; recipes will drive
 //! [`Simulation`] directly.
 use glam::Vec3;
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::settle::settle_with;
 use super::{Energy, SettleOptions, SettleReport, SimParams, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::{AttributeRate, Groom};
+use crate::interact::hair_contacts::HairContacts;
 use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
 use crate::interact::wetness::{carry_water, WetnessParams, WETNESS};
 
@@ -23,6 +25,18 @@ pub struct SimulateOptions {
     pub sag_free: bool,
     /// Solid colliders the hair cannot enter (e.g. coif's default head).
     pub colliders: Vec<Shape>,
+    /// Hair–hair contacts (S1-18), as styling applies them: a styled groom whose strands rest on
+    /// each other is at rest only with them.
+    pub hair_contacts: Option<HairContactSettings>,
+}
+
+/// How strands push each other apart: `stiffness` is α of S1-18 (m/s²); edges are cut into
+/// pieces `spacing` metres long to find candidates (speed only). Recipes' `[contacts]` hold the
+/// defaults.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HairContactSettings {
+    pub stiffness: f32,
+    pub spacing: f32,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -78,7 +92,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
     } else {
         "shape"
     };
-    let mut stepper = Stepper::new(sim, groom, &options.colliders);
+    let mut stepper = Stepper::new(sim, groom, &options.colliders, options.hair_contacts);
     let steps = (options.seconds / options.params.dt).round().max(0.0) as u64;
     (0..steps).for_each(|_| stepper.step());
     let settle = options
@@ -110,10 +124,12 @@ pub(crate) fn carry_groom_water(sim: &mut Simulation, groom: &Groom) {
     }
 }
 
-/// The rod solver with contacts against fixed colliders.
+/// The rod solver with contacts against fixed colliders and, if asked, between strands.
 struct Stepper {
     sim: Simulation,
     colliders: Vec<Shape>,
+    /// Hair–hair contacts and their velocity changes.
+    hair_contacts: Option<(HairContacts, Vec<Vec3>)>,
     offsets: Vec<u32>,
     radii: Vec<f32>,
     max_radius: f32,
@@ -122,10 +138,20 @@ struct Stepper {
 }
 
 impl Stepper {
-    fn new(sim: Simulation, groom: &Groom, colliders: &[Shape]) -> Stepper {
+    fn new(
+        sim: Simulation,
+        groom: &Groom,
+        colliders: &[Shape],
+        hair_contacts: Option<HairContactSettings>,
+    ) -> Stepper {
         let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+        let hair_contacts = hair_contacts.map(|c| {
+            let contacts = HairContacts::new(&groom.strand_offsets, &radii, c.spacing, c.stiffness);
+            (contacts, vec![Vec3::ZERO; groom.vertex_count()])
+        });
         Stepper {
             colliders: colliders.to_vec(),
+            hair_contacts,
             offsets: groom.strand_offsets.clone(),
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             radii,
@@ -136,6 +162,13 @@ impl Stepper {
     }
 
     fn step(&mut self) {
+        if let Some((contacts, dv)) = &mut self.hair_contacts {
+            let dt = self.sim.params().dt;
+            dv.par_iter_mut().for_each(|v| *v = Vec3::ZERO);
+            contacts.apply(self.sim.rods.positions(), &self.radii, self.sim.rods.kinematic(), dv, dt);
+            let accel = self.sim.external_acceleration_mut();
+            accel.par_iter_mut().zip(dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
+        }
         self.previous.copy_from_slice(self.sim.rods.positions());
         self.culling.update(&self.colliders, &self.offsets, &self.previous, self.max_radius);
         let hooks = ContactHooks {

@@ -154,6 +154,17 @@ pub struct Contacts {
     pub dynamic_friction: f32,
 }
 
+impl Contacts {
+    /// The hair–hair contact settings, for a simulation of the styled groom that goes on from
+    /// where the style left it.
+    pub fn hair_contact_settings(&self) -> crate::sim::driver::HairContactSettings {
+        crate::sim::driver::HairContactSettings {
+            stiffness: self.hair_stiffness,
+            spacing: self.sample_spacing,
+        }
+    }
+}
+
 impl Default for Contacts {
     fn default() -> Self {
         Contacts {
