@@ -43,10 +43,8 @@ fn resimulate(
 /// exported in the frames a reader rebuilds).
 #[test]
 fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
-    presets_hold_still(&[
-        ("bedhead_scene1", "seed_200x24cm.hair", 10, "usda"),
-        ("water_set", "seed_200x24cm.hair", 10, "abc"),
-    ]);
+    let groom = every_tenth("seed_200x24cm.hair");
+    presets_hold_still(&[("bedhead_scene1", &groom, "usda"), ("water_set", &groom, "abc")]);
 }
 
 /// The perm's 48 cm curls, settled without gravity to its tolerance 1e-4, hold still (0.21 mm in
@@ -54,7 +52,7 @@ fn styled_bed_head_and_water_set_hold_still_when_simulated_again() {
 /// its tolerance, force residual 1.7e-4; 3.9 mm when its settle stopped at 1e-3).
 #[test]
 fn styled_perm_holds_still_when_simulated_again() {
-    presets_hold_still(&[("perm_scene3", "seed_100x48cm.hair", 10, "usdc")]);
+    presets_hold_still(&[("perm_scene3", &every_tenth("seed_100x48cm.hair"), "usdc")]);
 }
 
 /// The blow-dry's output holds still (0.33 mm in 2 s). Before the material frames were written it
@@ -62,7 +60,7 @@ fn styled_perm_holds_still_when_simulated_again() {
 /// the frames a reader rebuilds.
 #[test]
 fn styled_blow_dry_holds_still_when_simulated_again() {
-    presets_hold_still(&[("blowdry_scene2", "seed_200x24cm.hair", 10, "abc")]);
+    presets_hold_still(&[("blowdry_scene2", &every_tenth("seed_200x24cm.hair"), "abc")]);
 }
 
 /// The production perm on a generated head, every strand simulated, with its hair–hair contacts:
@@ -72,40 +70,33 @@ fn styled_blow_dry_holds_still_when_simulated_again() {
 /// (0.74 mm) the settle does not converge within the preset's 60 s.
 #[test]
 fn styled_full_head_perm_holds_still_when_simulated_again() {
-    presets_hold_still(&[("perm_full_head", "generated", 0, "usda")]);
+    let params =
+        GenerateParams { strands: 200, vertices_per_strand: 32, length: 0.24, seed: 7, ..Default::default() };
+    presets_hold_still(&[("perm_full_head", &generate(&params).unwrap(), "usda")]);
 }
 
-/// Each preset styles every `step`-th strand of its groom (`generated`: 200 strands of a
-/// generated 24 cm head) and writes it to a file of the given format; the groom read back,
+/// Every tenth strand of a bundled groom: a preset on a few strands still goes through every stage.
+fn every_tenth(name: &str) -> Groom {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms").join(name);
+    thin(&coif::io::read_groom(&path, &Default::default()).unwrap().groom, 10)
+}
+
+/// Each preset styles its groom and writes it to a file of the given format; the groom read back,
 /// simulated again for 2 s with the recipe's colliders and the world's gravity, moves less than
 /// 1 mm.
-fn presets_hold_still(presets: &[(&str, &str, usize, &str)]) {
+fn presets_hold_still(presets: &[(&str, &Groom, &str)]) {
     let mut failures = Vec::new();
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = tempfile::tempdir().unwrap();
-    for &(preset, groom, step, format) in presets {
+    for &(preset, input, format) in presets {
         let path = root.join(format!("grooms/recipes/{preset}.toml"));
         let recipe = recipe::load(&path).unwrap();
-        let input = if groom == "generated" {
-            let params = GenerateParams {
-                strands: 200,
-                vertices_per_strand: 32,
-                length: 0.24,
-                seed: 7,
-                ..Default::default()
-            };
-            generate(&params).unwrap()
-        } else {
-            let file =
-                coif::io::read_groom(&root.join("grooms").join(groom), &Default::default()).unwrap().groom;
-            thin(&file, step)
-        };
-        let styled = style(&input, &recipe, &StyleOptions::default()).unwrap();
+        let styled = style(input, &recipe, &StyleOptions::default()).unwrap();
         let settle = styled.report.stages.last().unwrap().settle.unwrap();
         // The recipe as the run placed it on the input groom: its head frame turns the preset's
         // gravity and colliders into world coordinates (as in `tests/style_settle.rs`).
-        let frame = placement::head_frame(&recipe, &input, None).unwrap();
-        let placed = placement::place(&recipe, &input, None, frame).unwrap();
+        let frame = placement::head_frame(&recipe, input, None).unwrap();
+        let placed = placement::place(&recipe, input, None, frame).unwrap();
         // Simulated again under the world's gravity, as a shot simulates it (the seed grooms are
         // Y-up), not the recipe's placed one; the perm settles without gravity, to show its free
         // curl, and is simulated again without.

@@ -53,15 +53,10 @@ pub fn needs_frame(recipe: &Recipe) -> bool {
 
 /// The signed world axis closest to the unit vector `v`.
 fn nearest_axis(v: Vec3) -> Vec3 {
-    let a = v.abs();
-    let axis = if a.x >= a.y && a.x >= a.z {
-        Vec3::X
-    } else if a.y >= a.z {
-        Vec3::Y
-    } else {
-        Vec3::Z
-    };
-    axis * v.dot(axis).signum()
+    let i = v.abs().max_position();
+    let mut axis = Vec3::ZERO;
+    axis[i] = v[i].signum();
+    axis
 }
 
 /// The head frame `recipe` is placed in on `groom` (the whole groom, whose scalp or head mesh
