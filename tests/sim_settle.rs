@@ -124,3 +124,39 @@ fn shortest_strands_work_in_both_paths() {
         assert!((b - a).normalize().dot(glam::Vec3::X) > 0.999, "strand {s} edge turned: {}", b - a);
     }
 }
+
+/// Strands already at rest sleep (the stepper skips them) while the rest of the groom settles,
+/// and the settle still ends with every strand at rest: eight strands hang straight down, eight
+/// start horizontal and must swing down. The sleepers save steps; the swinging strands settle to
+/// the shape they settle to alone; simulated on, no strand moves.
+#[test]
+fn strands_at_rest_sleep_while_the_others_settle() {
+    let strand = |direction: glam::Vec3, x: f32| -> Vec<glam::Vec3> {
+        (0..16).map(|i| glam::Vec3::new(x, 0.0, 0.0) + direction * (0.015 * i as f32)).collect()
+    };
+    let hanging: Vec<_> = (0..8).map(|k| strand(-glam::Vec3::Y, 0.05 * k as f32)).collect();
+    let horizontal: Vec<_> = (0..8).map(|k| strand(glam::Vec3::Z, 0.05 * k as f32)).collect();
+    let settle = |strands: &[Vec<glam::Vec3>]| {
+        let groom = coif::Groom::from_strands(strands, 80e-6);
+        let mut sim = Simulation::new(&groom, SimParams::default()).unwrap();
+        let report = sim.settle(&SettleOptions { max_seconds: 60.0, ..SettleOptions::default() }, &NoHooks);
+        eprintln!("{} strands: {report:?}", strands.len());
+        assert!(report.converged, "{report:?}");
+        (sim, report)
+    };
+    let mixed: Vec<_> = hanging.iter().chain(&horizontal).cloned().collect();
+    let (mut sim, report) = settle(&mixed);
+    // The hanging strands sleep from the first probes on.
+    assert!(report.strand_steps_asleep > 8 * report.steps / 2, "{report:?}");
+    let (alone, alone_report) = settle(&horizontal);
+    assert_eq!(alone_report.strand_steps_asleep % 8, 0, "whole lane groups sleep");
+    let n = 16 * 8;
+    let p = sim.rods().positions();
+    for (strand, (a, b)) in p[n..].chunks(16).zip(alone.rods().positions().chunks(16)).enumerate() {
+        assert!(a[15].y < -0.2, "strand {strand} did not swing down: tip at {}", a[15]);
+        let apart = a.iter().zip(b).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+        assert!(apart < 1e-3, "strand {strand} settles {apart} m from where it settles alone");
+    }
+    let drift = drift_after(&mut sim, 0.5);
+    assert!(drift < 5e-4, "the settled groom drifts {drift} m in 0.5 s");
+}

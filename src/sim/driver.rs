@@ -130,6 +130,8 @@ struct Stepper {
     colliders: Vec<Shape>,
     /// Hair–hair contacts and their velocity changes.
     hair_contacts: Option<(HairContacts, Vec<Vec3>)>,
+    /// Scratch: the vertices the next step leaves where they are (no contact forces needed).
+    idle: Vec<bool>,
     offsets: Vec<u32>,
     radii: Vec<f32>,
     max_radius: f32,
@@ -152,6 +154,7 @@ impl Stepper {
         Stepper {
             colliders: colliders.to_vec(),
             hair_contacts,
+            idle: Vec::new(),
             offsets: groom.strand_offsets.clone(),
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             radii,
@@ -165,7 +168,8 @@ impl Stepper {
         if let Some((contacts, dv)) = &mut self.hair_contacts {
             let dt = self.sim.params().dt;
             dv.par_iter_mut().for_each(|v| *v = Vec3::ZERO);
-            contacts.apply(self.sim.rods.positions(), &self.radii, self.sim.rods.kinematic(), dv, dt);
+            self.sim.idle_vertices(&mut self.idle);
+            contacts.apply(self.sim.rods.positions(), &self.radii, &self.idle, dv, dt);
             let accel = self.sim.external_acceleration_mut();
             accel.par_iter_mut().zip(dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
         }

@@ -298,6 +298,10 @@ pub struct Simulation {
     /// Δt the cached projection constants were computed for.
     coefficients_dt: f32,
     steps: u64,
+    /// Per strand, whether the settle has found it at rest and lets it sleep: a step leaves the
+    /// strands of a work unit (a SIMD lane group or a lone strand) as they are when all of them
+    /// sleep. Empty whenever no strand sleeps (always outside a settle).
+    asleep: Vec<bool>,
 }
 
 impl Simulation {
@@ -308,7 +312,15 @@ impl Simulation {
         groom.validate()?;
         let rods = Rods::from_groom(groom, &params.material, params.frame_inertia_factor)?;
         let bonds = Bonds::new(params.influences, rods.rest_darboux());
-        let mut sim = Simulation { params, rods, bonds, masses_dirty: true, coefficients_dt: 0.0, steps: 0 };
+        let mut sim = Simulation {
+            params,
+            rods,
+            bonds,
+            masses_dirty: true,
+            coefficients_dt: 0.0,
+            steps: 0,
+            asleep: Vec::new(),
+        };
         for kind in BondKind::ALL {
             if let Some(attribute) = groom.attribute(kind.attribute_name()) {
                 if attribute.rate != AttributeRate::Vertex || attribute.components != 1 {
@@ -351,6 +363,16 @@ impl Simulation {
         Ok(())
     }
 
+    /// Writes to `idle` whether the next step leaves each vertex where it is: kinematic vertices
+    /// and the strands a settle lets sleep (forces on them are not needed).
+    pub fn idle_vertices(&self, idle: &mut Vec<bool>) {
+        idle.clear();
+        idle.extend_from_slice(self.rods.kinematic());
+        for (strand, _) in self.asleep.iter().enumerate().filter(|(_, &asleep)| asleep) {
+            idle[self.rods.strand_range(strand)].fill(true);
+        }
+    }
+
     pub fn steps_taken(&self) -> u64 {
         self.steps
     }
@@ -376,7 +398,7 @@ impl Simulation {
             direct: self.params.solver == StrandSolver::Direct,
         };
         let (bonded, broken) = self.bonds.affine();
-        solver::step_all(&mut self.rods, bonded, broken, &constants, hooks);
+        solver::step_all(&mut self.rods, bonded, broken, &self.asleep, &constants, hooks);
         self.steps += 1;
     }
 

@@ -338,6 +338,12 @@ impl Rods {
         &mut self.mass_scale
     }
 
+    /// Units of the solver's work, `(first strand, strand count, solved in SIMD lanes)`: the
+    /// strands of a unit are stepped together.
+    pub(super) fn work_units(&self) -> &[(usize, usize, bool)] {
+        &self.work_units
+    }
+
     /// Kinematic vertices follow their targets and are not moved by constraints.
     pub fn kinematic(&self) -> &[bool] {
         &self.kinematic

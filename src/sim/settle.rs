@@ -25,7 +25,12 @@
 //! `PROBE_INTERVAL` gives the creep's rate and decay time, and the rest of it is added at once
 //! (`Creep`): a jump changes where the solve starts, not the equilibrium it converges to. A state
 //! that cannot get there (a solver limit cycle, contacts that fight each other) is reported with
-//! the residual it reached. The velocities are zero when the solve ends. The solve runs twice:
+//! the residual it reached. Strands a probe finds well within the tolerance sleep: the stepper
+//! skips their work units (a lane group sleeps only whole) and the callers' hair–hair contacts
+//! treat them as held ([`Simulation::idle_vertices`]); the residual is then the awake strands',
+//! and when it reaches the tolerance every strand wakes for one more probe that measures them
+//! all, so "converged" always speaks for the whole groom. The velocities are zero when the solve
+//! ends. The solve runs twice:
 //! with light frames, then with the simulation's own frames, so that the result is also at rest
 //! for the stepper that simulates it next.
 use glam::{Quat, Vec3};
@@ -108,6 +113,9 @@ pub struct SettleReport {
     pub seconds: f32,
     /// Velocity resets (kinetic-energy peaks).
     pub resets: u64,
+    /// Strand steps skipped: strands found at rest sleep until the rest of the groom is (see
+    /// [`SLEEP_FRACTION`]).
+    pub strand_steps_asleep: u64,
     /// Largest vertex speed at the end, m/s (zero once converged).
     pub max_speed: f32,
 }
@@ -159,6 +167,7 @@ pub fn settle_with<C>(
         steps: 0,
         seconds: 0.0,
         resets: 0,
+        strand_steps_asleep: 0,
         max_speed: 0.0,
     };
     let max_steps = (options.max_seconds / dt).ceil().max(1.0) as u64;
@@ -174,6 +183,7 @@ pub fn settle_with<C>(
         }
     }
     let s = sim(context);
+    s.wake_all();
     if report.converged {
         s.rods.velocities_mut().iter_mut().for_each(|v| *v = Vec3::ZERO);
     }
@@ -194,6 +204,7 @@ fn relax<C>(
     max_steps: u64,
     report: &mut SettleReport,
 ) {
+    sim(context).wake_all();
     let dt = sim(context).params().dt;
     let probe_every = (PROBE_INTERVAL / dt).ceil().max(2.0) as u64;
     let probe_steps = (PROBE_TIME / dt).round().max(1.0) as u64;
@@ -204,6 +215,8 @@ fn relax<C>(
     // Start from rest: the first steps are a probe.
     let mut reset = true;
     let mut creep = Creep::default();
+    let mut per_strand = Vec::new();
+    let mut asleep = 0;
     while report.steps < max_steps {
         if reset {
             let s = sim(context);
@@ -217,23 +230,40 @@ fn relax<C>(
         step(context);
         tick();
         report.steps += 1;
+        report.strand_steps_asleep += asleep as u64;
         since_reset += 1;
         let s = sim(context);
+        let mut verify = false;
         if since_reset == probe_steps {
             if let Some((positions, frames)) = probe.take() {
                 (report.force_residual, report.torque_residual) =
-                    s.residuals(&positions, &frames, probe_steps);
+                    s.residuals(&positions, &frames, probe_steps, &mut per_strand);
                 if report.force_residual <= tolerance && report.torque_residual <= tolerance {
-                    report.converged = true;
-                    return;
+                    if !s.any_asleep() {
+                        report.converged = true;
+                        return;
+                    }
+                    // Sleeping strands read zero; the next probe measures every strand.
+                    s.wake_all();
+                    verify = true;
+                } else {
+                    s.put_to_sleep(|strand| per_strand[strand] <= tolerance * SLEEP_FRACTION);
                 }
+                asleep = s.asleep.iter().filter(|&&a| a).count();
             }
         }
         let now = s.kinetic_energy();
-        reset = since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
+        reset = verify || since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
         kinetic = now;
     }
 }
+
+/// A strand whose residuals are both at most this fraction of the tolerance at a probe sleeps
+/// (the stepper skips it) until the rest of the groom reaches the tolerance; then every strand
+/// wakes and one more probe measures them all. Most of a settle's steps wait for a few slow
+/// strands: on the demo's 500 guides, from a quarter of the way in, at most 10 strands were
+/// above the tolerance and the median strand at 1/70 of it.
+pub const SLEEP_FRACTION: f32 = 0.1;
 
 /// Largest jump along a creep, in steps' worth of its last displacement rate.
 const MAX_CREEP_STEPS: f64 = 5000.0;
@@ -348,6 +378,33 @@ impl Simulation {
         settle_with(self, |s| s, |s| s.step_with(hooks), options, || {})
     }
 
+    /// Lets the strands `rest` picks sleep (the stepper skips them), with zero velocities, where
+    /// every strand of their work unit sleeps then: the stepper runs a unit whole or not at all.
+    fn put_to_sleep(&mut self, rest: impl Fn(usize) -> bool) {
+        self.asleep.resize(self.rods.strand_count(), false);
+        for unit in 0..self.rods.work_units().len() {
+            let (first, count, _) = self.rods.work_units()[unit];
+            let strands = first..first + count;
+            if !strands.clone().all(|strand| self.asleep[strand] || rest(strand)) {
+                continue;
+            }
+            for strand in strands {
+                self.asleep[strand] = true;
+                let range = self.rods.strand_range(strand);
+                self.rods.velocities_mut()[range].iter_mut().for_each(|v| *v = Vec3::ZERO);
+            }
+        }
+    }
+
+    /// Whether any strand sleeps.
+    fn any_asleep(&self) -> bool {
+        self.asleep.contains(&true)
+    }
+
+    fn wake_all(&mut self) {
+        self.asleep.clear();
+    }
+
     fn kinetic_energy(&self) -> f64 {
         let r = &self.rods;
         (0..r.vertex_count())
@@ -359,7 +416,15 @@ impl Simulation {
     /// Force and torque residuals of the `steps` steps just taken from rest at `positions`,
     /// `frames`. Under a constant net acceleration `a`, `k` steps from rest move a vertex by
     /// `a·Δt²·k(k+1)/2`; quasi-static frames turn by `τ·w_q·Δt²` per step.
-    fn residuals(&self, positions: &[Vec3], frames: &[Quat], steps: u64) -> (f32, f32) {
+    /// `per_strand` receives each strand's larger residual, its force and its torque each
+    /// relative to its own gravity (a strand that sleeps reads zero: it did not move).
+    fn residuals(
+        &self,
+        positions: &[Vec3],
+        frames: &[Quat],
+        steps: u64,
+        per_strand: &mut Vec<f32>,
+    ) -> (f32, f32) {
         let r = &self.rods;
         let dt2 = (self.params.dt * self.params.dt) as f64;
         let k = steps as f64;
@@ -370,7 +435,9 @@ impl Simulation {
         } as f64;
         let ratio = |a: f64, b: f64| if b > 0.0 { (a / b).sqrt() as f32 } else { 0.0 };
         let (mut worst_force, mut torque, mut moment) = (0.0f32, 0.0f64, 0.0f64);
+        per_strand.clear();
         for strand in 0..r.strand_count() {
+            let (torque_before, moment_before) = (torque, moment);
             let range = r.strand_range(strand);
             let mass = |i: usize| (r.mass()[i] * r.mass_scale()[i]) as f64;
             let (mut force, mut weight) = (0.0f64, 0.0f64);
@@ -399,6 +466,8 @@ impl Simulation {
                     .sum();
                 moment += (g * lever).powi(2);
             }
+            let strand_torque = ratio(torque - torque_before, moment - moment_before);
+            per_strand.push(ratio(force, weight).max(strand_torque));
         }
         (worst_force, ratio(torque, moment))
     }

@@ -147,11 +147,13 @@ thread_local! {
     static LANE_SCRATCH: RefCell<lanes::Scratch> = RefCell::new(lanes::Scratch::default());
 }
 
-/// Advances every strand by one step.
+/// Advances every strand by one step, except work units whose strands are all `asleep` (per
+/// strand; empty: none is), which are left as they are.
 pub(crate) fn step_all(
     rods: &mut Rods,
     bonded: &[Vec3],
     broken: &[f32],
+    asleep: &[bool],
     k: &StepConstants,
     hooks: &dyn Hooks,
 ) {
@@ -180,6 +182,9 @@ pub(crate) fn step_all(
         broken,
     };
     units.par_iter().with_min_len(16).for_each(|&(first_strand, count, in_lanes)| {
+        if !asleep.is_empty() && asleep[first_strand..first_strand + count].iter().all(|&a| a) {
+            return;
+        }
         // SAFETY: work units cover each strand once (checked in `Rods::from_groom`), and strand
         // ranges are disjoint because the offsets ascend (same check); bounds are checked in
         // `SharedMut::slice`.

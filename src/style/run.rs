@@ -333,6 +333,8 @@ struct Session {
     culling: ObstacleCulling,
     previous: Vec<Vec3>,
     dv: Vec<Vec3>,
+    /// Scratch: the vertices the next step leaves where they are (no contact forces needed).
+    idle: Vec<bool>,
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_attributes: Vec<Vec<Attribute>>,
@@ -424,6 +426,7 @@ impl Session {
             culling: ObstacleCulling::default(),
             previous: vec![Vec3::ZERO; n],
             dv: vec![Vec3::ZERO; n],
+            idle: Vec::new(),
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
             frame_attributes: Vec::new(),
@@ -585,7 +588,8 @@ impl Session {
             );
         }
         if let Some(contacts) = &mut self.contacts {
-            contacts.apply(positions, &self.radii, self.sim.rods().kinematic(), &mut self.dv, dt);
+            self.sim.idle_vertices(&mut self.idle);
+            contacts.apply(positions, &self.radii, &self.idle, &mut self.dv, dt);
         }
         if let Some(water) = &self.recipe.water {
             let gravity = self.sim.params().gravity;
