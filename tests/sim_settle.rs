@@ -150,9 +150,11 @@ fn strands_at_rest_sleep_while_the_others_settle() {
     assert!(report.strand_steps_asleep > 8 * report.steps / 2, "{report:?}");
     let (alone, alone_report) = settle(&horizontal);
     assert_eq!(alone_report.strand_steps_asleep % 8, 0, "whole lane groups sleep");
-    let n = 16 * 8;
+    let first_swinging = 16 * 8;
     let p = sim.rods().positions();
-    for (strand, (a, b)) in p[n..].chunks(16).zip(alone.rods().positions().chunks(16)).enumerate() {
+    for (strand, (a, b)) in
+        p[first_swinging..].chunks(16).zip(alone.rods().positions().chunks(16)).enumerate()
+    {
         assert!(a[15].y < -0.2, "strand {strand} did not swing down: tip at {}", a[15]);
         let apart = a.iter().zip(b).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
         assert!(apart < 1e-3, "strand {strand} settles {apart} m from where it settles alone");

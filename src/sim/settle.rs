@@ -204,7 +204,6 @@ fn relax<C>(
     max_steps: u64,
     report: &mut SettleReport,
 ) {
-    sim(context).wake_all();
     let dt = sim(context).params().dt;
     let probe_every = (PROBE_INTERVAL / dt).ceil().max(2.0) as u64;
     let probe_steps = (PROBE_TIME / dt).round().max(1.0) as u64;
@@ -239,17 +238,17 @@ fn relax<C>(
                 (report.force_residual, report.torque_residual) =
                     s.residuals(&positions, &frames, probe_steps, &mut per_strand);
                 if report.force_residual <= tolerance && report.torque_residual <= tolerance {
-                    if !s.any_asleep() {
+                    if asleep == 0 {
                         report.converged = true;
                         return;
                     }
                     // Sleeping strands read zero; the next probe measures every strand.
                     s.wake_all();
                     verify = true;
+                    asleep = 0;
                 } else {
-                    s.put_to_sleep(|strand| per_strand[strand] <= tolerance * SLEEP_FRACTION);
+                    asleep = s.put_to_sleep(|strand| per_strand[strand] <= tolerance * SLEEP_FRACTION);
                 }
-                asleep = s.asleep.iter().filter(|&&a| a).count();
             }
         }
         let now = s.kinetic_energy();
@@ -380,7 +379,8 @@ impl Simulation {
 
     /// Lets the strands `rest` picks sleep (the stepper skips them), with zero velocities, where
     /// every strand of their work unit sleeps then: the stepper runs a unit whole or not at all.
-    fn put_to_sleep(&mut self, rest: impl Fn(usize) -> bool) {
+    /// Returns how many strands sleep.
+    fn put_to_sleep(&mut self, rest: impl Fn(usize) -> bool) -> usize {
         self.asleep.resize(self.rods.strand_count(), false);
         for unit in 0..self.rods.work_units().len() {
             let (first, count, _) = self.rods.work_units()[unit];
@@ -394,11 +394,7 @@ impl Simulation {
                 self.rods.velocities_mut()[range].iter_mut().for_each(|v| *v = Vec3::ZERO);
             }
         }
-    }
-
-    /// Whether any strand sleeps.
-    fn any_asleep(&self) -> bool {
-        self.asleep.contains(&true)
+        self.asleep.iter().filter(|&&asleep| asleep).count()
     }
 
     fn wake_all(&mut self) {
