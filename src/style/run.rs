@@ -817,17 +817,40 @@ impl Session {
     /// the rod may cross the head or other rods: poses are pushed out of every active obstacle
     /// and rod (the finished helix lies on its own rod's surface, where the push is zero).
     fn drive(&mut self, windings: &[Winding], t: f32) {
-        let solids = &self.active;
-        for w in windings {
-            for (k, vertex) in (w.first..w.end).enumerate() {
-                let mut target = w.pose(k, t);
-                for shape in solids {
-                    let (distance, normal) = shape.distance(target);
-                    let depth = self.radii[vertex] - distance;
-                    if depth > 0.0 {
-                        target += normal * depth;
-                    }
-                }
+        // A pose outside a shape's box grown by the radius and a margin far above the rounding
+        // of `distance` is clear of it: skipping it changes no target. (Every vertex against
+        // every rod was most of a full-head wrap's step.)
+        const CLEAR: f32 = 1e-4;
+        let solids: Vec<(&Shape, Option<(Vec3, Vec3)>)> =
+            self.active.iter().map(|shape| (shape, shape.bounds())).collect();
+        let radii = &self.radii;
+        let targets: Vec<Vec<Vec3>> = windings
+            .par_iter()
+            .map(|w| {
+                (w.first..w.end)
+                    .enumerate()
+                    .map(|(k, vertex)| {
+                        let mut target = w.pose(k, t);
+                        let reach = radii[vertex] + CLEAR;
+                        for (shape, bounds) in &solids {
+                            if bounds.is_some_and(|(lo, hi)| {
+                                target.cmplt(lo - reach).any() || target.cmpgt(hi + reach).any()
+                            }) {
+                                continue;
+                            }
+                            let (distance, normal) = shape.distance(target);
+                            let depth = radii[vertex] - distance;
+                            if depth > 0.0 {
+                                target += normal * depth;
+                            }
+                        }
+                        target
+                    })
+                    .collect()
+            })
+            .collect();
+        for (w, targets) in windings.iter().zip(targets) {
+            for (vertex, target) in (w.first..w.end).zip(targets) {
                 self.sim.attach(vertex, target);
             }
         }
