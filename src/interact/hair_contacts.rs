@@ -263,26 +263,64 @@ impl HairContacts {
         self.lifetime += 1;
         let this = &*self;
         velocities.par_iter_mut().enumerate().with_min_len(1024).for_each(|(i, v)| {
-            let p = points[i];
             let listed = this.list_starts[i] as usize..this.list_starts[i + 1] as usize;
             for &j in &this.list_edges[listed] {
-                let j = j as usize;
-                let (a, b) = (points[j], points[j + 1]);
-                let ab = b - a;
-                let t = (p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE);
-                // Beyond the end of an edge the closest point is the joint with the next edge,
-                // which that edge (also listed) counts.
-                if t > 1.0 && this.edge_continues[j] {
+                let Some((offset, contact)) = this.offset_from_edge(points, radii, i, j as usize) else {
                     continue;
-                }
-                let offset = p - (a + ab * t.clamp(0.0, 1.0));
-                let contact = radii[i] + 0.5 * (radii[j] + radii[j + 1]);
+                };
                 let d = offset.length();
                 if d < contact && d > 0.0 {
                     *v += offset / d * (this.stiffness * (contact - d) / contact * dt);
                 }
             }
         });
+    }
+
+    /// Vertex `i`'s offset from the closest point of edge `j`, and their contact distance; `None`
+    /// beyond the edge's end where the closest point is the joint with the next edge, which that
+    /// edge (also listed) counts.
+    #[inline(always)]
+    fn offset_from_edge(&self, points: &[Vec3], radii: &[f32], i: usize, j: usize) -> Option<(Vec3, f32)> {
+        let (p, a, b) = (points[i], points[j], points[j + 1]);
+        let ab = b - a;
+        let t = (p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE);
+        if t > 1.0 && self.edge_continues[j] {
+            return None;
+        }
+        Some((p - (a + ab * t.clamp(0.0, 1.0)), radii[i] + 0.5 * (radii[j] + radii[j + 1])))
+    }
+
+    /// Marks in `touched` (one flag per strand) the strands that a vertex of a strand `from`
+    /// touches now: an edge within the contact distance of it. Only vertices that were movable at
+    /// the last build have lists, so held vertices touch nothing here (their strands may still be
+    /// touched). Reads the lists as [`apply`](Self::apply) left them; before any, marks none.
+    pub fn strands_touched(
+        &self,
+        points: &[Vec3],
+        radii: &[f32],
+        from: impl Fn(usize) -> bool + Sync,
+        touched: &mut Vec<bool>,
+    ) {
+        touched.clear();
+        touched.resize(self.strand_offsets.len().saturating_sub(1), false);
+        if !self.built {
+            return;
+        }
+        let hits: Vec<u32> = (0..points.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .filter(|&i| from(self.strand_of[i] as usize))
+            .flat_map_iter(|i| {
+                let listed = self.list_starts[i] as usize..self.list_starts[i + 1] as usize;
+                self.list_edges[listed].iter().copied().filter(move |&j| {
+                    self.offset_from_edge(points, radii, i, j as usize)
+                        .is_some_and(|(offset, contact)| offset.length_squared() < contact * contact)
+                })
+            })
+            .collect();
+        for j in hits {
+            touched[self.strand_of[j as usize] as usize] = true;
+        }
     }
 
     /// Bounds, per vertex, how much it has closed since the last build on any edge now within
@@ -647,6 +685,48 @@ mod tests {
         let mut v = vec![Vec3::ZERO; points.len()];
         contacts.apply(&points, &radii, &held, &mut v, dt);
         assert_eq!(v[3], Vec3::ZERO);
+    }
+
+    #[test]
+    fn strands_touched_names_the_strands_a_chosen_strand_touches() {
+        // Strand 1 crosses strand 0 at 0.5 r, vertex on vertex (touching both ways), strand 2
+        // lies 1 mm above strand 0 (within a thick skin: listed, not touching), strand 3 is far.
+        let r = 1e-4;
+        let points = vec![
+            Vec3::new(-0.01, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.01, 0.0, 0.0),
+            Vec3::new(0.0, -0.01, 0.5 * r),
+            Vec3::new(0.0, 0.0, 0.5 * r),
+            Vec3::new(0.0, 0.01, 0.5 * r),
+            Vec3::new(-0.01, 0.0, 0.001),
+            Vec3::new(0.01, 0.0, 0.001),
+            Vec3::new(0.0, 0.0, 0.1),
+            Vec3::new(0.0, 0.01, 0.1),
+        ];
+        let offsets = [0, 3, 6, 8, 10];
+        let radii = vec![r; points.len()];
+        let mut contacts = HairContacts::new(&offsets, &radii, 0.02, 100.0).with_skin(0.002);
+        let mut touched = vec![true; 7];
+        // No lists yet: nothing is known to touch.
+        contacts.strands_touched(&points, &radii, |_| true, &mut touched);
+        assert_eq!(touched, [false; 4]);
+        let mut v = vec![Vec3::ZERO; points.len()];
+        contacts.apply(&points, &radii, &vec![false; points.len()], &mut v, 1.0 / 360.0);
+        contacts.strands_touched(&points, &radii, |strand| strand == 1, &mut touched);
+        assert_eq!(touched, [true, false, false, false], "strand 1 touches strand 0 only");
+        contacts.strands_touched(&points, &radii, |strand| strand == 0, &mut touched);
+        assert_eq!(touched, [false, true, false, false], "strand 0 touches strand 1, not 2 a skin away");
+        contacts.strands_touched(&points, &radii, |strand| strand >= 2, &mut touched);
+        assert_eq!(touched, [false; 4]);
+        // Held vertices have no lists: a held strand 1 touches nothing, and is still touched.
+        let mut held = vec![false; points.len()];
+        held[3..6].fill(true);
+        contacts.apply(&points, &radii, &held, &mut v, 1.0 / 360.0);
+        contacts.strands_touched(&points, &radii, |strand| strand == 1, &mut touched);
+        assert_eq!(touched, [false; 4]);
+        contacts.strands_touched(&points, &radii, |strand| strand == 0, &mut touched);
+        assert_eq!(touched, [false, true, false, false]);
     }
 
     #[test]

@@ -95,10 +95,9 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
     let mut stepper = Stepper::new(sim, groom, &options.colliders, options.hair_contacts);
     let steps = (options.seconds / options.params.dt).round().max(0.0) as u64;
     (0..steps).for_each(|_| stepper.step());
-    let settle = options
-        .settle
-        .as_ref()
-        .map(|settle| settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, settle, || {}));
+    let settle = options.settle.as_ref().map(|settle| {
+        settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, Stepper::touched, settle, || {})
+    });
     let sim = stepper.sim;
     let mut out = groom.clone();
     sim.write_to_groom(&mut out);
@@ -183,6 +182,16 @@ impl Stepper {
             friction: Friction::default(),
         };
         self.sim.step_with(&hooks);
+    }
+
+    /// The strands that vertices of `from` strands touch now (none without hair–hair contacts).
+    fn touched(&mut self, from: &(dyn Fn(usize) -> bool + Sync), touched: &mut Vec<bool>) {
+        match &self.hair_contacts {
+            Some((contacts, _)) => {
+                contacts.strands_touched(self.sim.rods.positions(), &self.radii, from, touched)
+            }
+            None => touched.clear(),
+        }
     }
 }
 

@@ -363,6 +363,11 @@ impl Simulation {
         Ok(())
     }
 
+    /// Whether a settle lets `strand` sleep: steps leave it where it is.
+    pub fn asleep(&self, strand: usize) -> bool {
+        self.asleep.get(strand).copied().unwrap_or(false)
+    }
+
     /// Writes to `idle` whether the next step leaves each vertex where it is: kinematic vertices
     /// and the strands a settle lets sleep (forces on them are not needed).
     pub fn idle_vertices(&self, idle: &mut Vec<bool>) {

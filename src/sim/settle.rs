@@ -27,7 +27,9 @@
 //! that cannot get there (a solver limit cycle, contacts that fight each other) is reported with
 //! the residual it reached. Strands a probe finds well within the tolerance sleep: the stepper
 //! skips their work units (a lane group sleeps only whole) and the callers' hair–hair contacts
-//! treat them as held ([`Simulation::idle_vertices`]); the residual is then the awake strands',
+//! treat them as held ([`Simulation::idle_vertices`]), so a sleeper that a still-moving strand
+//! touches wakes at the next probe (the push it would feel is changing); the residual is then
+//! the awake strands',
 //! and when it reaches the tolerance every strand wakes for one more probe that measures them
 //! all, so "converged" always speaks for the whole groom. The velocities are zero when the solve
 //! ends. The solve runs twice:
@@ -144,11 +146,14 @@ const STANDARD_GRAVITY: f32 = 9.80665;
 
 /// The static solve over any stepper: `sim` reaches the simulation inside `context`, and `step`
 /// advances the context by one step (the rod solver plus whatever forces and contacts the caller
-/// applies). Calls `tick` after every step (progress bars).
+/// applies). `touched` marks, one flag per strand, the strands that vertices of the strands its
+/// predicate picks touch now (the caller's hair–hair contacts; a caller without them leaves the
+/// flags empty). Calls `tick` after every step (progress bars).
 pub fn settle_with<C>(
     context: &mut C,
     sim: impl Fn(&mut C) -> &mut Simulation,
     mut step: impl FnMut(&mut C),
+    mut touched: impl FnMut(&mut C, &(dyn Fn(usize) -> bool + Sync), &mut Vec<bool>),
     options: &SettleOptions,
     mut tick: impl FnMut(),
 ) -> SettleReport {
@@ -177,7 +182,7 @@ pub fn settle_with<C>(
     // 31 mm at the median (62 mm at worst) in this second phase, which takes most of the steps.
     for factor in [SETTLE_FRAME_INERTIA_FACTOR, own_frame_factor] {
         sim(context).set_frame_inertia_factor(factor).expect("a positive, finite factor");
-        relax(context, &sim, &mut step, &mut tick, options.tolerance, max_steps, &mut report);
+        relax(context, &sim, &mut step, &mut touched, &mut tick, options.tolerance, max_steps, &mut report);
         if !report.converged {
             break;
         }
@@ -195,10 +200,12 @@ pub fn settle_with<C>(
 }
 
 /// Kinetic damping until a probe reaches `tolerance` or the report counts `max_steps`.
+#[allow(clippy::too_many_arguments)]
 fn relax<C>(
     context: &mut C,
     sim: &impl Fn(&mut C) -> &mut Simulation,
     step: &mut impl FnMut(&mut C),
+    touched: &mut impl FnMut(&mut C, &(dyn Fn(usize) -> bool + Sync), &mut Vec<bool>),
     tick: &mut impl FnMut(),
     tolerance: f32,
     max_steps: u64,
@@ -215,6 +222,7 @@ fn relax<C>(
     let mut reset = true;
     let mut creep = Creep::default();
     let mut per_strand = Vec::new();
+    let mut disturbed = Vec::new();
     let mut asleep = 0;
     while report.steps < max_steps {
         if reset {
@@ -247,10 +255,16 @@ fn relax<C>(
                     verify = true;
                     asleep = 0;
                 } else {
-                    asleep = s.put_to_sleep(|strand| per_strand[strand] <= tolerance * SLEEP_FRACTION);
+                    // A sleeper that a restless strand touches would feel its push change: it
+                    // wakes (else the check at the end finds it pushed out of its rest).
+                    let at_rest = |strand: usize| per_strand[strand] <= tolerance * SLEEP_FRACTION;
+                    touched(context, &|strand| !at_rest(strand), &mut disturbed);
+                    let disturbed = |strand: usize| disturbed.get(strand).copied().unwrap_or(false);
+                    asleep = sim(context).put_to_sleep(at_rest, disturbed);
                 }
             }
         }
+        let s = sim(context);
         let now = s.kinetic_energy();
         reset = verify || since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
         kinetic = now;
@@ -374,17 +388,22 @@ impl Creep {
 impl Simulation {
     /// The static solve with the rod solver and `hooks` as the stepper ([`settle_with`]).
     pub fn settle(&mut self, options: &SettleOptions, hooks: &dyn Hooks) -> SettleReport {
-        settle_with(self, |s| s, |s| s.step_with(hooks), options, || {})
+        settle_with(self, |s| s, |s| s.step_with(hooks), |_, _, touched| touched.clear(), options, || {})
     }
 
     /// Lets the strands `rest` picks sleep (the stepper skips them), with zero velocities, where
     /// every strand of their work unit sleeps then: the stepper runs a unit whole or not at all.
-    /// Returns how many strands sleep.
-    fn put_to_sleep(&mut self, rest: impl Fn(usize) -> bool) -> usize {
+    /// Wakes every unit with a `disturbed` strand, and keeps such units awake. Returns how many
+    /// strands sleep.
+    fn put_to_sleep(&mut self, rest: impl Fn(usize) -> bool, disturbed: impl Fn(usize) -> bool) -> usize {
         self.asleep.resize(self.rods.strand_count(), false);
         for unit in 0..self.rods.work_units().len() {
             let (first, count, _) = self.rods.work_units()[unit];
             let strands = first..first + count;
+            if strands.clone().any(&disturbed) {
+                self.asleep[strands].fill(false);
+                continue;
+            }
             if !strands.clone().all(|strand| self.asleep[strand] || rest(strand)) {
                 continue;
             }
@@ -403,7 +422,10 @@ impl Simulation {
 
     fn kinetic_energy(&self) -> f64 {
         let r = &self.rods;
-        (0..r.vertex_count())
+        // Sleepers are still: leaving out their zero terms leaves the sum as it is, bit for bit.
+        (0..r.strand_count())
+            .filter(|&strand| !self.asleep(strand))
+            .flat_map(|strand| r.strand_range(strand))
             .filter(|&i| !r.kinematic()[i])
             .map(|i| (r.mass()[i] * r.mass_scale()[i]) as f64 * r.velocities()[i].as_dvec3().length_squared())
             .sum()
@@ -538,5 +560,29 @@ impl Simulation {
             ));
         }
         attributes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::SimParams;
+
+    #[test]
+    fn a_disturbed_strand_wakes_its_work_unit_and_keeps_it_awake() {
+        let strands: Vec<Vec<Vec3>> = (0..16)
+            .map(|k| (0..8).map(|i| Vec3::new(0.05 * k as f32, -0.01 * i as f32, 0.0)).collect())
+            .collect();
+        let groom = Groom::from_strands(&strands, 80e-6);
+        let mut sim = Simulation::new(&groom, SimParams::default()).unwrap();
+        let units: Vec<_> = sim.rods.work_units().iter().map(|&(first, count, _)| (first, count)).collect();
+        assert_eq!(units, [(0, 8), (8, 8)], "two lane groups");
+        assert_eq!(sim.put_to_sleep(|_| true, |_| false), 16);
+        // A moving strand touches strand 3: its unit wakes, the other sleeps on.
+        assert_eq!(sim.put_to_sleep(|_| true, |strand| strand == 3), 8);
+        assert!((0..8).all(|s| !sim.asleep(s)) && (8..16).all(|s| sim.asleep(s)));
+        // While disturbed, a unit stays awake however still it is; then it may sleep again.
+        assert_eq!(sim.put_to_sleep(|_| true, |strand| strand == 3), 8);
+        assert_eq!(sim.put_to_sleep(|_| true, |_| false), 16);
     }
 }

@@ -535,11 +535,13 @@ impl Session {
         self.penetration = self.penetration.max(self.deepest_penetration());
     }
 
-    /// How deep the deepest vertex is inside an active obstacle now.
+    /// How deep the deepest vertex is inside an active obstacle now. Strands a settle lets sleep
+    /// are left out: they have not moved since a step measured them.
     fn deepest_penetration(&self) -> f32 {
         let positions = &self.sim.rods().positions();
         (0..self.groom.strand_count())
             .into_par_iter()
+            .filter(|&strand| !self.sim.asleep(strand))
             .map(|strand| {
                 let mut deepest = 0.0f32;
                 for i in self.groom.strand_range(strand) {
@@ -808,9 +810,20 @@ impl Session {
     /// held ([`Self::settle_step`]).
     fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> SettleReport {
         let budget = self.steps_for(options.max_seconds).max(1);
-        let report = settle_with(self, |s| &mut s.sim, Self::settle_step, options, || progress.inc(1));
+        let report =
+            settle_with(self, |s| &mut s.sim, Self::settle_step, Self::touched, options, || progress.inc(1));
         progress.inc(budget.saturating_sub(report.steps));
         report
+    }
+
+    /// The strands that vertices of `from` strands touch now (none without hair–hair contacts).
+    fn touched(&mut self, from: &(dyn Fn(usize) -> bool + Sync), touched: &mut Vec<bool>) {
+        match &self.contacts {
+            Some(contacts) => {
+                contacts.strands_touched(self.sim.rods().positions(), &self.radii, from, touched)
+            }
+            None => touched.clear(),
+        }
     }
 
     /// Poses every wound strand at stage time `t ∈ [0, 1]`. The path from the strand's shape to
