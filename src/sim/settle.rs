@@ -27,14 +27,13 @@
 //! that cannot get there (a solver limit cycle, contacts that fight each other) is reported with
 //! the residual it reached. Strands a probe finds well within the tolerance sleep: the stepper
 //! skips their work units (a lane group sleeps only whole) and the callers' hair–hair contacts
-//! treat them as held ([`Simulation::idle_vertices`]), so a sleeper that a still-moving strand
-//! touches wakes at the next probe (the push it would feel is changing); the residual is then
-//! the awake strands',
-//! and when it reaches the tolerance every strand wakes for one more probe that measures them
-//! all, so "converged" always speaks for the whole groom. The velocities are zero when the solve
-//! ends. The solve runs twice:
-//! with light frames, then with the simulation's own frames, so that the result is also at rest
-//! for the stepper that simulates it next.
+//! treat them as held ([`Simulation::idle_vertices`]). A held sleeper does not feel a moving
+//! strand pressing on it, so one that a still-moving strand touches wakes at the next probe. The
+//! residual is then the awake strands', and when it reaches the tolerance every strand wakes for
+//! one more probe that measures them all, so "converged" always speaks for the whole groom. The
+//! velocities are zero when the solve ends. The solve runs twice: with light frames, then with
+//! the simulation's own frames, so that the result is also at rest for the stepper that
+//! simulates it next.
 use glam::{Quat, Vec3};
 use serde::Serialize;
 
