@@ -837,35 +837,32 @@ impl Session {
         let solids: Vec<(&Shape, Option<(Vec3, Vec3)>)> =
             self.active.iter().map(|shape| (shape, shape.bounds())).collect();
         let radii = &self.radii;
-        let targets: Vec<Vec<Vec3>> = windings
+        // Every winding's targets in winding order, in one buffer.
+        let targets: Vec<Vec3> = windings
             .par_iter()
-            .map(|w| {
-                (w.first..w.end)
-                    .enumerate()
-                    .map(|(k, vertex)| {
-                        let mut target = w.pose(k, t);
-                        let reach = radii[vertex] + CLEAR;
-                        for (shape, bounds) in &solids {
-                            if bounds.is_some_and(|(lo, hi)| {
-                                target.cmplt(lo - reach).any() || target.cmpgt(hi + reach).any()
-                            }) {
-                                continue;
-                            }
-                            let (distance, normal) = shape.distance(target);
-                            let depth = radii[vertex] - distance;
-                            if depth > 0.0 {
-                                target += normal * depth;
-                            }
+            .flat_map_iter(|w| {
+                (w.first..w.end).enumerate().map(|(k, vertex)| {
+                    let mut target = w.pose(k, t);
+                    let reach = radii[vertex] + CLEAR;
+                    for (shape, bounds) in &solids {
+                        if bounds.is_some_and(|(lo, hi)| {
+                            target.cmplt(lo - reach).any() || target.cmpgt(hi + reach).any()
+                        }) {
+                            continue;
                         }
-                        target
-                    })
-                    .collect()
+                        let (distance, normal) = shape.distance(target);
+                        let depth = radii[vertex] - distance;
+                        if depth > 0.0 {
+                            target += normal * depth;
+                        }
+                    }
+                    target
+                })
             })
             .collect();
-        for (w, targets) in windings.iter().zip(targets) {
-            for (vertex, target) in (w.first..w.end).zip(targets) {
-                self.sim.attach(vertex, target);
-            }
+        let vertices = windings.iter().flat_map(|w| w.first..w.end);
+        for (vertex, target) in vertices.zip(targets) {
+            self.sim.attach(vertex, target);
         }
     }
 
