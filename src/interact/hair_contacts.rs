@@ -256,8 +256,13 @@ impl HairContacts {
                 self.adapt_skin(closing);
                 // Every build cuts the pieces near the vertices it queries: where much of the
                 // hair moves, a whole build costs little more and gives every list a whole skin.
+                // Where little of it may move (most strands asleep), a build costs about the same
+                // whatever it queries (cutting and gathering go over every edge and vertex), so
+                // it queries every movable vertex: lists renewed one at a time would each run out
+                // on their own step.
                 let movable = fixed.iter().filter(|&&f| !f).count();
-                self.build(points, radii, fixed, stale * 8 < movable);
+                let few_movable = movable * 8 < points.len();
+                self.build(points, radii, fixed, stale * 8 < movable && !few_movable);
             }
         }
         self.lifetime += 1;
@@ -946,6 +951,37 @@ mod tests {
                 "{threads} threads differ"
             );
         }
+    }
+
+    #[test]
+    fn with_most_strands_held_every_build_renews_every_movable_list() {
+        // 200 random-walk strands in a 40 × 1 × 1 cm box, all held but 12 (as in a settle's
+        // tail, most asleep). One of the 12 jitters fast, the others slowly: each build must
+        // query all their vertices, so that the lists run out together rather than one strand's
+        // at a step, and every step still finds exactly the contacts of a full search.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
+        let per_strand = 8;
+        let (mut points, offsets) =
+            random_walks(&mut rng, 200, per_strand, Vec3::new(0.4, 0.01, 0.01), 0.002);
+        let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
+        let fixed: Vec<bool> =
+            (0..points.len()).map(|i| i / per_strand >= 12 || i % per_strand == 0).collect();
+        let movable = fixed.iter().filter(|&&f| !f).count() as u64;
+        let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
+        let mut touching = 0;
+        let steps = 40;
+        for step in 0..steps {
+            touching += matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, step);
+            for (i, p) in points.iter_mut().enumerate().filter(|&(i, _)| !fixed[i]) {
+                let pace = if i < per_strand { 0.5 } else { 0.02 };
+                *p += jitter(&mut rng) * (pace * HairContacts::DEFAULT_SKIN);
+            }
+        }
+        let (builds, queries) = (contacts.builds(), contacts.queries_made());
+        eprintln!("{touching} contacts; {builds} builds queried {queries} of {movable} vertices");
+        assert!(touching > 20, "too few contacts to test: {touching}");
+        assert!((2..steps as u64).contains(&builds), "{builds} builds in {steps} steps");
+        assert_eq!(queries, builds * movable, "a build left some movable vertices' lists as they were");
     }
 
     #[test]
