@@ -364,6 +364,31 @@ impl NeighbourSpread {
     /// item in the same or a neighbouring cell (`cell_size` wide), item `i` sitting at
     /// `positions[i]` with value `values[i]`; returns the largest bound.
     pub fn bound(&mut self, cell_size: f32, positions: &[Vec3], values: &[Vec3], bounds: &mut [f32]) -> f32 {
+        self.bound_items(cell_size, positions, values, None, bounds)
+    }
+
+    /// As [`Self::bound`] where every item not listed in `nonzero` (ascending) has the value
+    /// zero: only the listed items are binned (every cell is taken to hold a zero too), and
+    /// only their bounds are set. Where few items have moved, this costs as many as have.
+    pub fn bound_nonzero(
+        &mut self,
+        cell_size: f32,
+        positions: &[Vec3],
+        values: &[Vec3],
+        nonzero: &[u32],
+        bounds: &mut [f32],
+    ) -> f32 {
+        self.bound_items(cell_size, positions, values, Some(nonzero), bounds)
+    }
+
+    fn bound_items(
+        &mut self,
+        cell_size: f32,
+        positions: &[Vec3],
+        values: &[Vec3],
+        listed: Option<&[u32]>,
+        bounds: &mut [f32],
+    ) -> f32 {
         let inv = 1.0 / cell_size;
         let table = 1 << (3 * Self::BITS);
         if self.stamp.len() != table || self.generation == u32::MAX {
@@ -372,21 +397,27 @@ impl NeighbourSpread {
         }
         self.generation += 1;
         let generation = self.generation;
-        self.buckets.resize(positions.len(), 0);
+        let item = |k: usize| listed.map_or(k, |l| l[k] as usize);
+        let count = listed.map_or(positions.len(), <[u32]>::len);
+        self.buckets.resize(count, 0);
         self.buckets
             .par_iter_mut()
-            .zip(positions.par_iter())
-            .for_each(|(b, &p)| *b = bucket_of_cell(cell_of(p, inv), Self::BITS));
+            .enumerate()
+            .for_each(|(k, b)| *b = bucket_of_cell(cell_of(positions[item(k)], inv), Self::BITS));
         // Boxes are order-independent (min and max are exact), so this serial pass is too.
+        // Where unlisted items are zero, every box holds zero.
+        let zero = listed.is_some();
         self.occupied.clear();
-        for ((&b, &p), &v) in self.buckets.iter().zip(positions).zip(values) {
-            let b = b as usize;
+        for (k, &b) in self.buckets.iter().enumerate() {
+            let (b, i) = (b as usize, item(k));
+            let v = values[i];
             if self.stamp[b] == generation {
                 self.low[b] = self.low[b].min(v);
                 self.high[b] = self.high[b].max(v);
             } else {
-                (self.stamp[b], self.low[b], self.high[b]) = (generation, v, v);
-                self.occupied.push(cell_of(p, inv));
+                let (low, high) = if zero { (v.min(Vec3::ZERO), v.max(Vec3::ZERO)) } else { (v, v) };
+                (self.stamp[b], self.low[b], self.high[b]) = (generation, low, high);
+                self.occupied.push(cell_of(positions[i], inv));
             }
         }
         let this = &*self;
@@ -416,10 +447,17 @@ impl NeighbourSpread {
             self.spread[b] = spread;
         }
         let this = &*self;
-        bounds
-            .par_iter_mut()
-            .zip(this.buckets.par_iter())
-            .for_each(|(bound, &b)| *bound = this.spread[b as usize]);
+        match listed {
+            None => bounds
+                .par_iter_mut()
+                .zip(this.buckets.par_iter())
+                .for_each(|(bound, &b)| *bound = this.spread[b as usize]),
+            Some(listed) => {
+                for (&i, &b) in listed.iter().zip(&this.buckets) {
+                    bounds[i as usize] = this.spread[b as usize];
+                }
+            }
+        }
         spreads.iter().map(|&(_, s)| s).fold(0.0, f32::max)
     }
 }
@@ -559,6 +597,37 @@ mod tests {
             assert_eq!(floor_to_i32(x), x.floor() as i32, "{x}");
         }
         assert_eq!((floor_to_i32(3e9), floor_to_i32(-3e9), floor_to_i32(f32::NAN)), (i32::MAX, i32::MIN, 0));
+    }
+
+    #[test]
+    fn spread_over_the_nonzero_values_bounds_them_against_the_zeros_too() {
+        // Most items still (value zero, as asleep strands), a tenth moving: the bounds of the
+        // moving ones, from them alone, must cover every item within a cell width, still or not.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(4);
+        let positions: Vec<Vec3> =
+            (0..3000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 0.1).collect();
+        let nonzero: Vec<u32> = (0..3000).filter(|i| i % 10 == 3).collect();
+        let mut values = vec![Vec3::ZERO; positions.len()];
+        for &i in &nonzero {
+            values[i as usize] = Vec3::new(0.001, -0.0005, 0.0) + Vec3::splat(rng.random::<f32>() * 2e-4);
+        }
+        let cell = 0.01;
+        let mut spread = NeighbourSpread::default();
+        let mut bounds = vec![-1.0; positions.len()];
+        let largest = spread.bound_nonzero(cell, &positions, &values, &nonzero, &mut bounds);
+        for &i in &nonzero {
+            let i = i as usize;
+            for j in 0..positions.len() {
+                if positions[i].distance(positions[j]) < cell {
+                    let apart = values[i].distance(values[j]);
+                    assert!(apart <= bounds[i] * (1.0 + 1e-6), "items {i}, {j}: {apart} > {}", bounds[i]);
+                }
+            }
+            // Not loose: no farther than the largest value from zero plus the values' spread.
+            assert!(bounds[i] <= largest && largest < 0.0015, "{} of {largest}", bounds[i]);
+        }
+        // The others are not written.
+        assert!((0..positions.len()).filter(|i| i % 10 != 3).all(|i| bounds[i] == -1.0));
     }
 
     #[test]

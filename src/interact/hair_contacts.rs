@@ -103,6 +103,8 @@ pub struct HairContacts {
     displacements: Vec<Vec3>,
     closing: Vec<f32>,
     spread: NeighbourSpread,
+    /// Scratch: the movable vertices and the held ones that have moved since the last build.
+    moved: Vec<u32>,
     queried: Vec<bool>,
     /// Scratch: the lists before this build, kept for the vertices it does not query.
     kept_starts: Vec<u32>,
@@ -164,6 +166,7 @@ impl HairContacts {
             displacements: Vec::new(),
             closing: Vec::new(),
             spread: NeighbourSpread::default(),
+            moved: Vec::new(),
             queried: Vec::new(),
             kept_starts: Vec::new(),
             kept_edges: Vec::new(),
@@ -245,7 +248,7 @@ impl HairContacts {
         if !self.built || fixed != self.built_fixed.as_slice() {
             self.build(points, radii, fixed, false);
         } else {
-            let closing = self.closing_since_build(points);
+            let closing = self.closing_since_build(points, fixed);
             let this = &*self;
             let stale = (0..points.len())
                 .into_par_iter()
@@ -334,7 +337,10 @@ impl HairContacts {
     /// relative to the segment's ends, and such an edge's ends lie within the contact distance,
     /// the skin and the edge's length of the vertex: cells that wide bound the relative
     /// displacements that matter.
-    fn closing_since_build(&mut self, points: &[Vec3]) -> f32 {
+    ///
+    /// Only movable vertices' bounds are set. Where few vertices have moved (most strands
+    /// asleep), only those are binned, every other vertex's displacement being zero.
+    fn closing_since_build(&mut self, points: &[Vec3], fixed: &[bool]) -> f32 {
         let longest_edge = self.longest_edge(points);
         // Slightly wider than needed, so rounding never splits a touching pair across cells
         // that are not neighbours.
@@ -345,7 +351,17 @@ impl HairContacts {
             .zip(points.par_iter().zip(self.built_positions.par_iter()))
             .for_each(|(d, (p, q))| *d = *p - *q);
         self.closing.resize(points.len(), 0.0);
-        self.spread.bound(cell, points, &self.displacements, &mut self.closing)
+        let displacements = &self.displacements;
+        self.moved.clear();
+        self.moved.extend(
+            (0..points.len() as u32)
+                .filter(|&i| !fixed[i as usize] || displacements[i as usize] != Vec3::ZERO),
+        );
+        if self.moved.len() * 8 < points.len() {
+            self.spread.bound_nonzero(cell, points, &self.displacements, &self.moved, &mut self.closing)
+        } else {
+            self.spread.bound(cell, points, &self.displacements, &mut self.closing)
+        }
     }
 
     fn longest_edge(&self, points: &[Vec3]) -> f32 {
