@@ -353,11 +353,14 @@ impl HairContacts {
         self.closing.resize(points.len(), 0.0);
         let displacements = &self.displacements;
         self.moved.clear();
+        // Where many have moved, the list stops short: all vertices are binned then.
+        let few = points.len() / 8;
         self.moved.extend(
             (0..points.len() as u32)
-                .filter(|&i| !fixed[i as usize] || displacements[i as usize] != Vec3::ZERO),
+                .filter(|&i| !fixed[i as usize] || displacements[i as usize] != Vec3::ZERO)
+                .take(few + 1),
         );
-        if self.moved.len() * 8 < points.len() {
+        if self.moved.len() <= few {
             self.spread.bound_nonzero(cell, points, &self.displacements, &self.moved, &mut self.closing)
         } else {
             self.spread.bound(cell, points, &self.displacements, &mut self.closing)
