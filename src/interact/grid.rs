@@ -78,6 +78,17 @@ impl NeighbourGrid {
         NeighbourGrid { cell_size, inv_cell_size: 1.0 / cell_size, ..Default::default() }
     }
 
+    /// Empties the grid and gives it cells `cell_size` wide, keeping its buffers' memory (a
+    /// fresh grid would fault in its tables' pages again at the next rebuild).
+    pub fn reset(&mut self, cell_size: f32) {
+        assert!(cell_size > 0.0 && cell_size.is_finite(), "grid cell size must be positive");
+        (self.cell_size, self.inv_cell_size, self.bits, self.len) = (cell_size, 1.0 / cell_size, 0, 0);
+        for buffer in [&mut self.starts, &mut self.items, &mut self.buckets, &mut self.cursor] {
+            buffer.clear();
+        }
+        self.occupied.clear();
+    }
+
     pub fn cell_size(&self) -> f32 {
         self.cell_size
     }

@@ -195,7 +195,7 @@ impl HairContacts {
 
     fn set_skin(&mut self, skin: f32) {
         self.skin = skin.clamp(0.0, Self::MAX_SKIN);
-        self.grid = NeighbourGrid::new(Self::cell_size(self.max_radius, self.skin, self.spacing));
+        self.grid.reset(Self::cell_size(self.max_radius, self.skin, self.spacing));
     }
 
     /// Sets the skin for the next lists from the motion the last ones saw (pairs closing by
