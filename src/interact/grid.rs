@@ -378,7 +378,7 @@ impl NeighbourSpread {
         self.bound_items(cell_size, positions, values, None, bounds)
     }
 
-    /// As [`Self::bound`] where every item not listed in `nonzero` (ascending) has the value
+    /// As [`Self::bound`] where every item not listed in `nonzero` has the value
     /// zero: only the listed items are binned (every cell is taken to hold a zero too), and
     /// only their bounds are set. Where few items have moved, this costs as many as have.
     pub fn bound_nonzero(
