@@ -264,8 +264,7 @@ impl HairContacts {
                 // it queries every movable vertex: lists renewed one at a time would each run out
                 // on their own step.
                 let movable = fixed.iter().filter(|&&f| !f).count();
-                let few_movable = movable * 8 < points.len();
-                self.build(points, radii, fixed, stale * 8 < movable && !few_movable);
+                self.build(points, radii, fixed, stale * 8 < movable && !Self::few(movable, points.len()));
             }
         }
         self.lifetime += 1;
@@ -353,18 +352,25 @@ impl HairContacts {
         self.closing.resize(points.len(), 0.0);
         let displacements = &self.displacements;
         self.moved.clear();
-        // Where many have moved, the list stops short: all vertices are binned then.
-        let few = points.len() / 8;
+        // Where many have moved, the list stops short (past the last count that is few): all
+        // vertices are binned then. A few moved implies a few movable, so builds are whole then
+        // and no list keeps a skin worked out from a bound left unset.
         self.moved.extend(
             (0..points.len() as u32)
                 .filter(|&i| !fixed[i as usize] || displacements[i as usize] != Vec3::ZERO)
-                .take(few + 1),
+                .take(points.len() / 8 + 1),
         );
-        if self.moved.len() <= few {
+        if Self::few(self.moved.len(), points.len()) {
             self.spread.bound_nonzero(cell, points, &self.displacements, &self.moved, &mut self.closing)
         } else {
             self.spread.bound(cell, points, &self.displacements, &mut self.closing)
         }
+    }
+
+    /// Whether `count` of `vertices` are few enough that work over all vertices, not over
+    /// them, sets the cost of a step's contacts (most strands asleep).
+    fn few(count: usize, vertices: usize) -> bool {
+        count * 8 < vertices
     }
 
     fn longest_edge(&self, points: &[Vec3]) -> f32 {
@@ -864,6 +870,12 @@ mod tests {
 
     /// `strands` random walks of `per_strand` vertices, each starting anywhere in the box from
     /// the origin to `extent` and stepping by `step` times a [`jitter`]; and their offsets.
+    /// 200 random-walk strands of 2 mm steps along a 40 × 1 × 1 cm bar, with random radii.
+    fn walks_along_a_bar(rng: &mut rand_pcg::Pcg64Mcg, per_strand: usize) -> (Vec<Vec3>, Vec<u32>, Vec<f32>) {
+        let (points, offsets) = random_walks(rng, 200, per_strand, Vec3::new(0.4, 0.01, 0.01), 0.002);
+        let radii = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
+        (points, offsets, radii)
+    }
     fn random_walks(
         rng: &mut rand_pcg::Pcg64Mcg,
         strands: usize,
@@ -980,9 +992,7 @@ mod tests {
         // at a step, and every step still finds exactly the contacts of a full search.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(11);
         let per_strand = 8;
-        let (mut points, offsets) =
-            random_walks(&mut rng, 200, per_strand, Vec3::new(0.4, 0.01, 0.01), 0.002);
-        let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
+        let (mut points, offsets, radii) = walks_along_a_bar(&mut rng, per_strand);
         let fixed: Vec<bool> =
             (0..points.len()).map(|i| i / per_strand >= 12 || i % per_strand == 0).collect();
         let movable = fixed.iter().filter(|&&f| !f).count() as u64;
@@ -1011,9 +1021,7 @@ mod tests {
         // be queried again, while every step still finds exactly the contacts of a full search.
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
         let per_strand = 8;
-        let (mut points, offsets) =
-            random_walks(&mut rng, 200, per_strand, Vec3::new(0.4, 0.01, 0.01), 0.002);
-        let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..4e-4)).collect();
+        let (mut points, offsets, radii) = walks_along_a_bar(&mut rng, per_strand);
         let fixed: Vec<bool> = (0..points.len()).map(|i| i % 13 == 0).collect();
         let movable = fixed.iter().filter(|&&f| !f).count() as u64;
         let jittering: Vec<bool> =
