@@ -151,8 +151,8 @@ fn dcc_groom_holds_still(style_kind: Style, solver: StrandSolver, rates: &[u32])
         ..GenerateParams::default()
     })
     .unwrap();
-    // Hair standing up from the crown is a column far longer than hair's self-buckling
-    // length (~1 cm: (7.84·E·I/(ρ·A·g))^(1/3)): no rest shape holds it without support from
+    // Hair standing up from the crown is a column longer than hair's self-buckling length
+    // (~10 cm for 80 µm hair: (7.84·E·I/(ρ·A·g))^(1/3)): no rest shape holds it without support from
     // neighbouring hair, so only strands that leave the scalp less than 45° from horizontal
     // or downwards count. So do only strands wholly outside the head: the generator winds some
     // crown curls through the scalp, and the head pushes those out, as it should.
