@@ -337,6 +337,18 @@ fn impossible_guide_counts_and_reach_exit_2_with_the_numbers() {
         .unwrap();
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("beyond the reach of 0.0010 m (10 guides for 2990 children)"), "{err}");
+    // A reach that is no distance is refused as the recipe is read, naming its line, key and range
+    // (a negative one read as an unreachable guide for every child, NaN as no limit at all).
+    for reach in ["-1.0", "0.0", "nan", "inf", "1e4"] {
+        let text = format!(
+            "[guides]\ncount = 10\nreach = {reach}\n[[stages]]\nkind = \"process\"\nduration = 0.01\n"
+        );
+        let err =
+            recipe::parse(&text, Path::new("r.toml")).err().unwrap_or_else(|| panic!("reach = {reach} read"));
+        assert_eq!(err.exit_code(), 2);
+        let message = err.to_string();
+        assert!(message.contains("line 3: [guides] reach") && message.contains("(0, 1000]"), "{message}");
+    }
 }
 
 /// Mean distance from the mid-length vertex of each strand `which` selects to the nearest

@@ -29,6 +29,7 @@
 //! | `amount`, mask `fraction`, bond amounts | [0, 1] |
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
+//! | `[guides]` `reach` | (0, 1000] m |
 //! | stages | at most 10,000 |
 use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, MODULUS, SECONDS};
 
@@ -122,6 +123,10 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         table("water", "droplet_pull", p.droplet_pull.into(), Range::closed(0.0, 1e6))?;
         table("water", "droplet_damping", p.droplet_damping.into(), Range::closed(0.0, 1e4))?;
         table("water", "uptake", p.uptake.into(), Range::closed(0.0, 1e3))?;
+    }
+
+    if let Some(reach) = recipe.guides.and_then(|g| g.reach) {
+        table("guides", "reach", reach.into(), SIZE)?;
     }
 
     for obstacle in &recipe.obstacles {
