@@ -52,6 +52,37 @@ fn bad_simulate_options_exit_2_without_output() {
     assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
 }
 
+/// A mistyped output directory is refused before the input is even read: found only at the
+/// write, it cost the whole run (`simulate` printed its steps, then failed).
+#[test]
+fn an_output_in_a_missing_directory_exits_2_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    assert!(coif(&["generate", "-o", path_str(&input), "--strands", "5"]).status.success());
+    let recipe = concat!(env!("CARGO_MANIFEST_DIR"), "/grooms/recipes/perm_full_head.toml");
+    for (parent, problem) in
+        [(dir.path().join("missing"), "does not exist"), (input.clone(), "is not a directory")]
+    {
+        let out = |name: &str| parent.join(name).to_str().unwrap().to_owned();
+        let (usda, abc, png, hair) = (out("x.usda"), out("x.abc"), out("x.png"), out("x.hair"));
+        for args in [
+            vec!["simulate", path_str(&input), &usda],
+            vec!["style", recipe, "--groom", path_str(&input), "-o", &usda],
+            vec!["convert", path_str(&input), &abc],
+            vec!["render", path_str(&input), "-o", &png, "--res", "8x8", "--spp", "1"],
+            vec!["generate", "-o", &hair, "--strands", "5"],
+        ] {
+            let result = coif(&args);
+            let message = stderr(&result);
+            assert_eq!(result.status.code(), Some(2), "{args:?}: {message}");
+            let named = format!("the directory {} {problem}", parent.display());
+            assert!(message.contains(&named), "{args:?}: {message}");
+            assert!(!message.contains("simulated") && !message.contains("wrote"), "{args:?}: {message}");
+        }
+    }
+    assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
+}
+
 #[test]
 fn the_readme_influences_comma_form_parses() {
     let dir = tempfile::tempdir().unwrap();

@@ -166,7 +166,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     use coif::sim::driver::{parse_time_step, simulate, SimulateOptions};
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
     super::checks::simulate(&args)?;
-    io::Format::from_extension(&args.output)?;
+    io::check_output(&args.output, &io::ExportOptions::default())?;
     let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
     let defaults = SimParams::for_solver(args.solver.into());
     let params = SimParams {
@@ -256,6 +256,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
     super::checks::render(&args)?;
     // Fail on a bad output name before reading or rendering anything.
     render::image::ImageFormat::from_path(&args.output)?;
+    io::check_output_directory(&args.output)?;
     let (width, height) = render::parse_resolution(&args.res)?;
     let mode = match (args.mode, &args.attribute) {
         (RenderMode::Beauty | RenderMode::Attribute, Some(name)) => {
@@ -494,8 +495,8 @@ fn run_generate(args: GenerateArgs) -> Result<()> {
         seed: args.seed,
         ..Default::default()
     };
-    // Fail on an unwritable extension before spending time generating.
-    io::Format::from_extension(&args.output)?;
+    // Fail on an unwritable extension or directory before spending time generating.
+    io::check_output(&args.output, &io::ExportOptions::default())?;
     let groom = generate(&params)?;
     write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
 }

@@ -339,9 +339,11 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
 }
 
 /// The format `path` is written in with `options`, or the usage error: `--unreal` writes only
-/// the formats Unreal's groom importers read. Commands check it before any work.
+/// the formats Unreal's groom importers read, and the output's directory must exist. Commands
+/// check it before any work.
 pub fn check_output(path: &Path, options: &ExportOptions) -> Result<Format> {
     let format = Format::from_extension(path)?;
+    check_output_directory(path)?;
     if options.unreal && matches!(format, Format::Hair | Format::Usdz) {
         return Err(Error::Usage(format!(
             "{}: --unreal writes .abc, .usda or .usdc (Unreal's groom importers), not .{}",
@@ -350,6 +352,18 @@ pub fn check_output(path: &Path, options: &ExportOptions) -> Result<Format> {
         )));
     }
     Ok(format)
+}
+
+/// The usage error for an output whose directory does not exist, checked before any work: a
+/// mistyped directory would otherwise be found only when a long run writes its result.
+pub fn check_output_directory(path: &Path) -> Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => {
+            let problem = if dir.exists() { "is not a directory" } else { "does not exist" };
+            Err(Error::Usage(format!("{}: the directory {} {problem}", path.display(), dir.display())))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The file a write of `groom` to `path` puts the meshes in when that is not `path` itself: the
