@@ -39,8 +39,12 @@ impl Range {
     }
 
     pub fn contains(&self, value: f64) -> bool {
-        let low = if self.min_open { value > self.min } else { value >= self.min };
-        let high = if self.max_open { value < self.max } else { value <= self.max };
+        // Most values were f32 (recipes, flags), and a closed end such as 0.1 or 1e-6 has no exact
+        // f32: the f32 nearest to it is that end too.
+        let nearest_f32 = |end: f64| end as f32 as f64;
+        let low = if self.min_open { value > self.min } else { value >= self.min.min(nearest_f32(self.min)) };
+        let high =
+            if self.max_open { value < self.max } else { value <= self.max.max(nearest_f32(self.max)) };
         value.is_finite() && low && high
     }
 }
@@ -56,6 +60,11 @@ pub const MODULUS: Range = Range::closed(1e5, 1e12);
 pub const DENSITY: Range = Range::closed(1.0, 1e5);
 /// Simulated seconds a stage or a run may last (the step budget bounds the total work).
 pub const SECONDS: Range = Range::closed(0.0, 1e5);
+/// Time step, seconds: a microsecond to a tenth of a second (hair styling runs at 1/240–1/1440;
+/// beyond 0.1 s a step outruns a strand's fall through its own segment length).
+pub const TIME_STEP: Range = Range::closed(1e-6, 0.1);
+/// Solver iterations per step.
+pub const ITERATIONS: Range = Range::closed(1.0, 1000.0);
 
 impl fmt::Display for Range {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -135,6 +144,13 @@ mod tests {
         assert!(!positive.contains(0.0) && positive.contains(1.0) && !positive.contains(f64::NAN));
         assert!(!Range::below(0.0, 1.0).contains(1.0) && Range::below(0.0, 1.0).contains(0.0));
         assert!(!FRACTION.contains(f64::INFINITY) && !FRACTION.contains(-1e-9));
+        // The ends as f32 values reach them (0.1f32 is above 0.1, 1e-6f32 below 1e-6); the next
+        // f32 beyond does not.
+        for end in [0.1f32, 1e-6] {
+            assert!(TIME_STEP.contains(end.into()), "{end}");
+        }
+        assert!(!TIME_STEP.contains(f32::from_bits(0.1f32.to_bits() + 1).into()));
+        assert!(!TIME_STEP.contains(f32::from_bits(1e-6f32.to_bits() - 1).into()));
     }
 
     #[test]

@@ -273,7 +273,8 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
     let simulate: &[(&[&str], &str)] = &[
         (&["--seconds", "1e9"], "--seconds"),
         (&["--seconds", "nan"], "--seconds"),
-        (&["--dt", "1e-30"], "simulation steps"),
+        (&["--dt", "1e-30"], "--dt"),
+        (&["--dt", "1e-6", "--seconds", "1e5"], "simulation steps"),
         (&["--dt", "nan"], "time step"),
         (&["--settle", "--settle-seconds", "1e30"], "--settle-seconds"),
         (&["--settle", "--settle-tolerance", "nan"], "--settle-tolerance"),

@@ -64,7 +64,7 @@ fn settle_options_out_of_range_exit_2_naming_key_and_range() {
         (["--settle-seconds", "0"], "--settle-seconds", "(0, 3600]"),
         (["--settle-seconds", "1e9"], "--settle-seconds", "(0, 3600]"),
         (["--settle-iterations", "0"], "--settle-iterations", "[1, 1000]"),
-        (["--dt", "2"], "time step", "(0, 1]"),
+        (["--dt", "2"], "--dt", "[0.000001, 0.1]"),
         (["--iterations", "5000"], "--iterations", "[1, 1000]"),
     ] {
         let mut args = vec!["simulate", path_str(&input), path_str(&output), "--settle"];

@@ -1,6 +1,8 @@
 //! Every number a flag carries, checked (through `coif::validate`) before a command reads or
 //! computes anything: a refusal names the flag, the value and the accepted range (exit code 2).
-use coif::validate::{flag, flag_direction, flag_vector, Range, COORDINATE, FRACTION, SECONDS};
+use coif::validate::{
+    flag, flag_direction, flag_vector, Range, COORDINATE, FRACTION, ITERATIONS, SECONDS, TIME_STEP,
+};
 use coif::Result;
 
 use super::args::{GenerateArgs, ImportArgs, RenderArgs, SimulateArgs, StyleArgs};
@@ -33,7 +35,8 @@ pub(crate) fn style(args: &StyleArgs) -> Result<()> {
 pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
     flag("--seconds", args.seconds, SECONDS)?;
     flag("--gravity", args.gravity, COORDINATE)?;
-    flag("--iterations", args.iterations, Range::closed(1.0, 1000.0))?;
+    flag("--dt", coif::sim::driver::parse_time_step(&args.dt)?, TIME_STEP)?;
+    flag("--iterations", args.iterations, ITERATIONS)?;
     flag("--damping", args.damping, RATE)?;
     if args.influences.len() != 4 {
         return Err(coif::Error::Usage(format!(
@@ -49,7 +52,7 @@ pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
     let (_, max_settle) = coif::sim::settle::MAX_SECONDS_RANGE;
     flag("--settle-seconds", args.settle_seconds, Range::above(0.0, max_settle as f64))?;
     if let Some(iterations) = args.settle_iterations {
-        flag("--settle-iterations", iterations, Range::closed(1.0, 1000.0))?;
+        flag("--settle-iterations", iterations, ITERATIONS)?;
     }
     Ok(())
 }

@@ -180,27 +180,22 @@ impl SimParams {
 
     pub fn check(&self) -> Result<()> {
         let bad = |what: String| Err(Error::Usage(format!("simulate: {what}")));
-        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 1.0) {
-            return bad(format!("time step {} must be in (0, 1] seconds", self.dt));
-        }
-        if !(1..=1000).contains(&self.iterations) {
-            return bad(format!("iterations {} must be between 1 and 1000", self.iterations));
+        let m = &self.material;
+        // The same ranges recipes and flags are held to (`crate::validate`).
+        for (key, value, range) in [
+            ("time step", f64::from(self.dt), crate::validate::TIME_STEP),
+            ("iterations", f64::from(self.iterations), crate::validate::ITERATIONS),
+            ("density", m.density.into(), crate::validate::DENSITY),
+            ("Young's modulus", m.youngs_modulus.into(), crate::validate::MODULUS),
+            ("shear modulus", m.shear_modulus.into(), crate::validate::MODULUS),
+        ] {
+            crate::validate::number(key, value, range).or_else(bad)?;
         }
         if !self.gravity.is_finite() {
             return bad("gravity must be finite".into());
         }
         if !(self.damping.is_finite() && self.damping >= 0.0) {
             return bad(format!("damping {} must be a non-negative rate", self.damping));
-        }
-        let m = &self.material;
-        // The same ranges recipes and flags are held to (`crate::validate`).
-        for (key, value, range) in [
-            ("density", m.density, crate::validate::DENSITY),
-            ("Young's modulus", m.youngs_modulus, crate::validate::MODULUS),
-            ("shear modulus", m.shear_modulus, crate::validate::MODULUS),
-        ] {
-            crate::validate::number(key, value, range)
-                .map_err(|message| Error::Usage(format!("simulate: {message}")))?;
         }
         if [m.fallback_width, self.frame_inertia_factor].iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return bad("fallback width and frame inertia factor must be positive".into());

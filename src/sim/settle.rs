@@ -90,11 +90,8 @@ impl SettleOptions {
                 self.max_seconds
             )));
         }
-        if self.iterations.is_some_and(|n| !(1..=1000).contains(&n)) {
-            return Err(Error::Usage(format!(
-                "settle iterations {} must be between 1 and 1000",
-                self.iterations.unwrap_or(0)
-            )));
+        if let Some(iterations) = self.iterations {
+            crate::validate::flag("settle iterations", iterations, crate::validate::ITERATIONS)?;
         }
         Ok(())
     }

@@ -31,7 +31,7 @@
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | `[guides]` `reach` | (0, 1000] m |
 //! | stages | at most 10,000 |
-use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, MODULUS, SECONDS};
+use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, ITERATIONS, MODULUS, SECONDS, TIME_STEP};
 
 use super::recipe::{Obstacle, Recipe, Stage};
 
@@ -88,8 +88,8 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         })
     };
     let s = &recipe.settings;
-    table("settings", "dt", s.dt.into(), Range::closed(1e-6, 0.1))?;
-    table("settings", "iterations", s.iterations.into(), Range::closed(1.0, 1000.0))?;
+    table("settings", "dt", s.dt.into(), TIME_STEP)?;
+    table("settings", "iterations", s.iterations.into(), ITERATIONS)?;
     validate::vector("[settings] gravity", s.gravity, COORDINATE)?;
     table("settings", "youngs_modulus", s.youngs_modulus.into(), MODULUS)?;
     table("settings", "shear_modulus", s.shear_modulus.into(), MODULUS)?;
