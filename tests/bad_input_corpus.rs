@@ -297,6 +297,10 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
     }
     let render: &[(&[&str], &str)] = &[
         (&["--exposure", "nan"], "--exposure"),
+        (&["--time-budget", "1e30"], "--time-budget"),
+        (&["--time-budget", "0"], "--time-budget"),
+        (&["--threads", "0"], "--threads"),
+        (&["--threads", "100000"], "--threads"),
         (&["--light-intensity=-1"], "--light-intensity"),
         (&["--environment", "nan"], "--environment"),
         (&["--environment=-1"], "--environment"),

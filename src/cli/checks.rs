@@ -65,6 +65,14 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     flag("--max-depth", args.max_depth, Range::closed(0.0, 1e3))?;
     flag("--exposure", args.exposure, Range::closed(-40.0, 40.0))?;
     flag("--light-intensity", args.light_intensity, Range::closed(0.0, 1e6))?;
+    if let Some(threads) = args.threads {
+        // Beyond a thousand worker threads is a typo: each one takes its stack and scratch.
+        flag("--threads", threads as f64, Range::closed(1.0, 1024.0))?;
+    }
+    if let Some(seconds) = args.time_budget {
+        // Up to a fortnight: beyond, a budget is a typo (and past ~1e19 s no Duration holds it).
+        flag("--time-budget", seconds, Range::above(0.0, 1.2e6))?;
+    }
     if let Some(radiance) = args.environment {
         flag("--environment", radiance, Range::closed(0.0, 1e6))?;
     }

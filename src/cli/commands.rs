@@ -270,12 +270,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         (RenderMode::Tangent, _) => Mode::Tangent,
         (RenderMode::Depth, _) => Mode::Depth,
     };
-    let time_budget = match args.time_budget {
-        Some(s) if !(s.is_finite() && s > 0.0) => {
-            return Err(Error::Usage("--time-budget must be positive seconds".into()))
-        }
-        s => s.map(std::time::Duration::from_secs_f64),
-    };
+    // In range: checked with the other flags.
+    let time_budget = args.time_budget.map(std::time::Duration::from_secs_f64);
     let mut settings = render::RenderSettings {
         width,
         height,
