@@ -616,3 +616,67 @@ def Xform "Groom"
     assert!((x_of("/Groom/P", 353.0) - 2.0).abs() < 1e-6);
     assert!(x_of("/Groom/P", 352.0) < 2.0);
 }
+
+/// `--variant` picks what every command reads, not only `info` and `convert`: `simulate`, `style`
+/// and `render` once read the stage's default variant whatever was asked.
+#[test]
+fn every_command_that_reads_a_groom_takes_the_variant_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let strands = |height: f32| {
+        let points: Vec<String> = [0.0, 0.01]
+            .iter()
+            .flat_map(|x| [0.0, 0.5, 1.0].map(|t| format!("({x}, {}, 0)", t * height)))
+            .collect();
+        format!(
+            "def BasisCurves \"Strands\" {{\n uniform token type = \"linear\"\n int[] curveVertexCounts = [3, 3]\n \
+             point3f[] points = [{}]\n float[] widths = [1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4] (interpolation = \"vertex\")\n}}",
+            points.join(", ")
+        )
+    };
+    let stage = dir.path().join("variants.usda");
+    std::fs::write(
+        &stage,
+        format!(
+            "#usda 1.0\n(\n defaultPrim = \"Groom\"\n metersPerUnit = 1\n upAxis = \"Y\"\n)\n\
+             def Xform \"Groom\" (\n variants = {{ string length = \"short\" }}\n prepend variantSets = \"length\"\n)\n{{\n\
+             variantSet \"length\" = {{\n \"short\" {{\n{}\n }}\n \"long\" {{\n{}\n }}\n }}\n}}\n",
+            strands(0.02),
+            strands(0.1)
+        ),
+    )
+    .unwrap();
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.0\n").unwrap();
+    let tallest = |path: &Path| {
+        let groom = coif::io::read_groom(path, &Default::default()).unwrap().groom;
+        groom.points.iter().map(|p| p.y).fold(f32::MIN, f32::max)
+    };
+    for variant in [None, Some("length=long")] {
+        let height = if variant.is_some() { 0.1 } else { 0.02 };
+        let (simulated, styled) = (dir.path().join("simulated.usda"), dir.path().join("styled.usda"));
+        let runs = [
+            vec!["simulate", path_str(&stage), path_str(&simulated), "--seconds", "0"],
+            vec!["style", path_str(&recipe), "--groom", path_str(&stage), "-o", path_str(&styled), "--quiet"],
+        ];
+        for (mut args, out) in runs.into_iter().zip([&simulated, &styled]) {
+            args.extend(variant.iter().flat_map(|v| ["--variant", v]));
+            let result = coif(&args);
+            assert!(result.status.success(), "{args:?}: {}", stderr(&result));
+            assert!((tallest(out) - height).abs() < 1e-6, "{args:?}: {} m tall", tallest(out));
+        }
+    }
+    // The long variant fills more of the frame: the images differ.
+    let images: Vec<Vec<u8>> = [None, Some("length=long")]
+        .iter()
+        .map(|variant| {
+            let image = dir.path().join("image.png");
+            let mut args =
+                vec!["render", path_str(&stage), "-o", path_str(&image), "--res", "32x32", "--spp", "1"];
+            args.extend(variant.iter().flat_map(|v| ["--variant", *v]));
+            let result = coif(&args);
+            assert!(result.status.success(), "{args:?}: {}", stderr(&result));
+            std::fs::read(&image).unwrap()
+        })
+        .collect();
+    assert!(images[0] != images[1], "render read the default variant for --variant length=long");
+}

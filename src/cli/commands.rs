@@ -60,7 +60,8 @@ fn run_style(args: StyleArgs) -> Result<()> {
     }
     let export = io::ExportOptions { unreal: args.unreal };
     io::check_output(&args.output, &export)?;
-    let loaded = io::read_groom(&args.groom, &args.import.options(&args.groom)?)?;
+    let loaded =
+        io::read_groom_selected(&args.groom, &args.import.options(&args.groom)?, &args.import.selection())?;
     let progress = args.progress.mode(args.quiet, args.json);
     let frames_per_second = args.frames.unwrap_or(0.0);
     if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
@@ -167,7 +168,8 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
     super::checks::simulate(&args)?;
     io::check_output(&args.output, &io::ExportOptions::default())?;
-    let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
+    let loaded =
+        io::read_groom_selected(&args.input, &args.import.options(&args.input)?, &args.import.selection())?;
     let defaults = SimParams::for_solver(args.solver.into());
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
@@ -337,7 +339,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         settings.scene.floor_albedo = render::parse_vec3(albedo, "--floor-albedo")?;
     }
 
-    let loaded = io::read_groom(&args.input, &args.import.options(&args.input)?)?;
+    let loaded =
+        io::read_groom_selected(&args.input, &args.import.options(&args.input)?, &args.import.selection())?;
     let progress = Progress::new(args.progress.mode(false, false), "render", 1);
     let report = |done: u64, total: u64| {
         progress.set_total(total);
