@@ -317,6 +317,20 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         args.extend(flags.iter());
         cases.push(case(&format!("render {flags:?}"), g(), &args, 2, &[culprit]));
     }
+    let generate: &[(&[&str], &str)] = &[
+        (&["--width", "1e30"], "--width"),
+        (&["--width=-1e-5"], "--width"),
+        (&["--style", "curly", "--curl-radius", "1e30"], "--curl-radius"),
+        (&["--style", "curly", "--curl-pitch", "nan"], "--curl-pitch"),
+        (&["--style", "wavy", "--wave-amplitude", "1e30"], "--wave-amplitude"),
+        (&["--style", "wavy", "--wavelength", "0"], "--wavelength"),
+        (&["--droop", "1e30"], "--droop"),
+    ];
+    for (flags, culprit) in generate {
+        let mut args = vec!["generate", "-o", "out.hair", "--strands", "5"];
+        args.extend(flags.iter());
+        cases.push(case(&format!("generate {flags:?}"), vec![], &args, 2, &[culprit]));
+    }
     cases.push(case(
         "generate 5e7 x 1e4",
         vec![],

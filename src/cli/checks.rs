@@ -102,5 +102,12 @@ pub(crate) fn generate(args: &GenerateArgs) -> Result<()> {
     )?;
     flag("--length", args.length, Range::above(0.0, 100.0))?;
     flag("--length-variation", args.length_variation, Range::below(0.0, 1.0))?;
+    // Hair to cord (0: the simulation's fallback width), and curls and waves of a head's scale.
+    flag("--width", args.width, Range::closed(0.0, 0.01))?;
+    flag("--curl-radius", args.curl_radius, Range::above(0.0, 1.0))?;
+    flag("--curl-pitch", args.curl_pitch, Range::above(0.0, 10.0))?;
+    flag("--wave-amplitude", args.wave_amplitude, Range::closed(0.0, 1.0))?;
+    flag("--wavelength", args.wavelength, Range::above(0.0, 10.0))?;
+    flag("--droop", args.droop, Range::closed(0.0, 1e3))?;
     Ok(())
 }
