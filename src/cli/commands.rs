@@ -60,16 +60,14 @@ fn run_style(args: StyleArgs) -> Result<()> {
     }
     let export = io::ExportOptions { unreal: args.unreal };
     io::check_output(&args.output, &export)?;
-    let loaded =
-        io::read_groom_selected(&args.groom, &args.import.options(&args.groom)?, &args.import.selection())?;
-    let progress = args.progress.mode(args.quiet, args.json);
+    // In range: checked with the other flags.
     let frames_per_second = args.frames.unwrap_or(0.0);
-    if !(frames_per_second.is_finite() && frames_per_second >= 0.0) {
-        return Err(Error::Usage(format!("--frames {frames_per_second} must be a positive rate")));
-    }
     if frames_per_second > 0.0 {
         io::check_animated_output(&args.output)?;
     }
+    let loaded =
+        io::read_groom_selected(&args.groom, &args.import.options(&args.groom)?, &args.import.selection())?;
+    let progress = args.progress.mode(args.quiet, args.json);
     let scalp = match &args.scalp {
         Some(path) => {
             let (points, triangles) = coif::io::obj::read_triangles(path)?;
