@@ -65,6 +65,11 @@ pub const SECONDS: Range = Range::closed(0.0, 1e5);
 pub const TIME_STEP: Range = Range::closed(1e-6, 0.1);
 /// Solver iterations per step.
 pub const ITERATIONS: Range = Range::closed(1.0, 1000.0);
+/// Metres per unit of a groom file that does not say: any unit from a micrometre up.
+pub const UNITS: Range = Range::above(0.0, 1e6);
+/// A frame number to read from an animated groom: negative frames are real (a simulation's
+/// pre-roll); beyond a billion is a typo.
+pub const FRAME: Range = Range::closed(-1e9, 1e9);
 
 impl fmt::Display for Range {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

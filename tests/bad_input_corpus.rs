@@ -593,6 +593,21 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         &["m.toml", "bogus"],
     ));
     cases.push(case("manifest no tasks", files(head), &["batch", "m.toml"], 2, &["m.toml"]));
+    // How a task's groom is read: the CLI's ranges for --units and --frame, Y or Z up.
+    for (what, line, expected) in [
+        ("units zero", "units = 0.0", "units = 0 must be"),
+        ("units NaN", "units = nan", "units = NaN must be"),
+        ("frame 1e12", "frame = 1e12", "frame = 1000000000000 must be"),
+        ("up x", "up = \"x\"", "unknown variant `x`"),
+    ] {
+        cases.push(case(
+            &format!("manifest {what}"),
+            files(&format!("{head}[[tasks]]\nname = \"t\"\n{line}\n")),
+            &["farm", "status", "m.toml"],
+            2,
+            &["m.toml", expected],
+        ));
+    }
     cases
 }
 

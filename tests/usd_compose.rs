@@ -618,7 +618,8 @@ def Xform "Groom"
 }
 
 /// `--variant` picks what every command reads, not only `info` and `convert`: `simulate`, `style`
-/// and `render` once read the stage's default variant whatever was asked.
+/// and `render` once read the stage's default variant whatever was asked; a batch manifest's
+/// `variants` too (manifests once had no way to ask).
 #[test]
 fn every_command_that_reads_a_groom_takes_the_variant_asked_for() {
     let dir = tempfile::tempdir().unwrap();
@@ -664,6 +665,17 @@ fn every_command_that_reads_a_groom_takes_the_variant_asked_for() {
             assert!(result.status.success(), "{args:?}: {}", stderr(&result));
             assert!((tallest(out) - height).abs() < 1e-6, "{args:?}: {} m tall", tallest(out));
         }
+        // A farm batch: the manifest's `variants` (none: the stage's default).
+        let (manifest, batched) = (dir.path().join("m.toml"), dir.path().join("batched.usda"));
+        let variants = variant.map(|v| format!("variants = [\"{v}\"]\n")).unwrap_or_default();
+        std::fs::write(
+            &manifest,
+            format!("[[tasks]]\nname = \"t\"\ngroom = \"variants.usda\"\nrecipe = \"r.toml\"\noutputs = [\"batched.usda\"]\n{variants}"),
+        )
+        .unwrap();
+        let result = coif(&["batch", path_str(&manifest), "--jobs", "1"]);
+        assert!(result.status.success(), "batch {variant:?}: {}", stderr(&result));
+        assert!((tallest(&batched) - height).abs() < 1e-6, "batch {variant:?}: {} m tall", tallest(&batched));
     }
     // The long variant fills more of the frame: the images differ.
     let images: Vec<Vec<u8>> = [None, Some("length=long")]

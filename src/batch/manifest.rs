@@ -8,6 +8,8 @@
 //! recipe = "grooms/recipes/perm_scene3.toml"
 //! outputs = ["out/{name}/groom.usda"]
 //! preview = "out/{name}/preview.png"      # optional
+//! # optional, as the CLI's --units, --up, --frame and --variant:
+//! # units = 0.01, up = "z", frame = 1001, variants = ["length=long"]
 //!
 //! [[tasks]]
 //! name = "perm"
@@ -25,6 +27,8 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::error::{Error, Result};
+use crate::io::{ImportOptions, UpAxis};
+use crate::validate::{number, FRAME, UNITS};
 
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -49,6 +53,14 @@ struct TaskSpec {
     recipe: Option<String>,
     outputs: Option<Vec<String>>,
     preview: Option<String>,
+    /// Metres per unit of the groom file, for formats that do not say (`--units`).
+    units: Option<f32>,
+    /// Up axis of the groom file, for formats that do not say (`--up`).
+    up: Option<UpAxis>,
+    /// Animated groom: the frame to read (`--frame`).
+    frame: Option<f64>,
+    /// USD groom: variants to select, `SET=NAME` or `/Prim:SET=NAME` (`--variant`).
+    variants: Option<Vec<String>>,
     /// Recipe values replaced for this task: dotted paths into the recipe (`rods.0.radius`).
     #[serde(default)]
     overrides: BTreeMap<String, toml::Value>,
@@ -74,6 +86,9 @@ pub struct Task {
     pub overrides: Vec<(String, toml::Value)>,
     pub outputs: Vec<PathBuf>,
     pub preview: Option<PathBuf>,
+    /// How the groom file is read (units, up axis, frame) and the USD variants selected.
+    pub import: ImportOptions,
+    pub variants: Vec<String>,
     /// "key = value" for each swept parameter (labels on the contact sheet).
     pub wedge_values: Vec<String>,
 }
@@ -114,6 +129,20 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
         let recipe = pick(&spec.recipe, &file.defaults.recipe, "recipe")?;
         let outputs = spec.outputs.clone().or_else(|| file.defaults.outputs.clone()).unwrap_or_default();
         let preview = spec.preview.clone().or_else(|| file.defaults.preview.clone());
+        let defaults = &file.defaults;
+        let import = ImportOptions {
+            meters_per_unit: spec.units.or(defaults.units),
+            up_axis: spec.up.or(defaults.up),
+            frame: spec.frame.or(defaults.frame),
+        };
+        let checks =
+            [("units", import.meters_per_unit.map(f64::from), UNITS), ("frame", import.frame, FRAME)];
+        for (key, value, range) in checks {
+            if let Some(value) = value {
+                number(key, value, range).map_err(|m| bad(format!("line {line}: task '{name}': {m}")))?;
+            }
+        }
+        let variants = spec.variants.clone().or_else(|| defaults.variants.clone()).unwrap_or_default();
         if outputs.is_empty() && preview.is_none() {
             return Err(bad(format!("line {line}: task '{name}' writes nothing: give outputs or a preview")));
         }
@@ -147,6 +176,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             overrides: all_overrides,
             outputs: outputs.iter().map(|o| resolve(&fill(o))).collect(),
             preview: preview.map(|p| resolve(&fill(&p))),
+            import,
+            variants,
             wedge_values,
         });
         Ok(())

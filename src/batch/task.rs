@@ -59,7 +59,10 @@ fn effective_inputs(task: &Task) -> Result<(String, String)> {
         .flat_map(mesh_paths)
         .map(|path| std::fs::read(directory.join(path)).unwrap_or_default())
         .collect();
-    let mut parts: Vec<&[u8]> = vec![&groom, effective.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()];
+    // How the groom is read is part of the input: another variant or frame is another groom.
+    let reading = format!("{:?} {:?}", task.import, task.variants);
+    let mut parts: Vec<&[u8]> =
+        vec![&groom, effective.as_bytes(), reading.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()];
     parts.extend(meshes.iter().map(Vec::as_slice));
     let digest = digest_parts(&parts);
     Ok((effective, digest))
@@ -99,7 +102,8 @@ pub fn run(task: &Task) -> Result<Outcome> {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
     }
-    let groom = crate::io::read_groom(&task.groom, &Default::default())?.groom;
+    let selection = crate::io::usda::Selection { time: None, variants: task.variants.clone() };
+    let groom = crate::io::read_groom_selected(&task.groom, &task.import, &selection)?.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
     let styled = style(&groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
@@ -136,11 +140,23 @@ mod tests {
             overrides: Vec::new(),
             outputs: Vec::new(),
             preview: None,
+            import: Default::default(),
+            variants: Vec::new(),
             wedge_values: Vec::new(),
         };
         let before = effective_inputs(&task).unwrap().1;
         assert_eq!(before, effective_inputs(&task).unwrap().1);
         std::fs::write(&mesh, "v 0 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-        assert_ne!(before, effective_inputs(&task).unwrap().1);
+        let after = effective_inputs(&task).unwrap().1;
+        assert_ne!(before, after);
+        // Another variant or frame of the same file is another groom.
+        let other_variant = Task { variants: vec!["length=long".into()], ..task.clone() };
+        let other_frame = Task {
+            import: crate::io::ImportOptions { frame: Some(12.0), ..Default::default() },
+            ..task.clone()
+        };
+        for other in [other_variant, other_frame] {
+            assert_ne!(after, effective_inputs(&other).unwrap().1);
+        }
     }
 }

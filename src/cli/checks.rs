@@ -1,7 +1,8 @@
 //! Every number a flag carries, checked (through `coif::validate`) before a command reads or
 //! computes anything: a refusal names the flag, the value and the accepted range (exit code 2).
 use coif::validate::{
-    flag, flag_direction, flag_vector, Range, COORDINATE, FRACTION, ITERATIONS, SECONDS, TIME_STEP,
+    flag, flag_direction, flag_vector, Range, COORDINATE, FRACTION, FRAME, ITERATIONS, SECONDS, TIME_STEP,
+    UNITS,
 };
 use coif::Result;
 
@@ -12,11 +13,10 @@ const RATE: Range = Range::closed(0.0, 1e4);
 /// Also run by `ImportArgs::options`, so every command that reads a groom checks these.
 pub(crate) fn import(args: &ImportArgs) -> Result<()> {
     if let Some(units) = args.units {
-        flag("--units", units, Range::above(0.0, 1e6))?;
+        flag("--units", units, UNITS)?;
     }
     if let Some(frame) = args.frame {
-        // Negative frames are real (a simulation's pre-roll); beyond a billion is a typo.
-        flag("--frame", frame, Range::closed(-1e9, 1e9))?;
+        flag("--frame", frame, FRAME)?;
     }
     if let Some(seconds) = args.time {
         // A year either way; the frame it makes is checked against the file's timeline.
