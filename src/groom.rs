@@ -102,6 +102,11 @@ pub enum GroomError {
     ZeroLengthSegment { strand: usize, segment: usize },
     #[error("strand {strand}, vertex {vertex}: width {width} is negative or not finite")]
     BadWidth { strand: usize, vertex: usize, width: f32 },
+    #[error(
+        "strand {strand}, vertex {vertex}: width {width} m is too wide to simulate as a hair (at most \
+         {max} m); are the file's widths, or its units, another unit's?"
+    )]
+    TooWide { strand: usize, vertex: usize, width: f32, max: f32 },
     #[error("{what} has {found} entries, expected {expected}")]
     Length { what: String, expected: usize, found: usize },
     #[error("attribute '{name}' has {components} components; 1 to 4 are allowed")]

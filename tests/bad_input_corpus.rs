@@ -489,6 +489,30 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.usda", "frame 0"],
     ));
+    // Widths of metres (1e30 m once went through every stage): a file in another unit. Refused
+    // where the strands become rods, naming the file's strand even when only guides are simulated.
+    for width in ["1", "1e30"] {
+        let wide = format!(
+            "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
+             point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.02, 0, 0), (0.02, 0.1, 0)]\n  \
+             float[] widths = [1e-4, 1e-4, 1e-4, 1e-4, 1e-4, {width}] (interpolation = \"vertex\")\n}}\n"
+        );
+        let files = || vec![("in.usda", wide.clone().into_bytes()), ("r.toml", BASE.as_bytes().to_vec())];
+        let runs: [&[&str]; 3] = [
+            &["simulate", "in.usda", "out.usda", "--seconds", "0.01"],
+            &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
+            &["style", "r.toml", "--groom", "in.usda", "--guides", "2", "-o", "out.usda"],
+        ];
+        for args in runs {
+            cases.push(case(
+                &format!("width {width} m: {}", args.join(" ")),
+                files(),
+                args,
+                2,
+                &["in.usda", "strand 2, vertex 1", "too wide"],
+            ));
+        }
+    }
     cases
 }
 

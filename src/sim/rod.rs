@@ -13,6 +13,25 @@ use super::cuticle::Cuticle;
 use super::lanes::LANES;
 use crate::groom::{Groom, GroomError};
 
+/// The widest strand simulated, metres: a rope-thick dreadlock is a few centimetres; a width
+/// of metres (1e30 m read from a file went through every stage before) is a file in another
+/// unit, or widths that mean something else, and would give rods of absurd mass and stiffness.
+pub const MAX_WIDTH: f32 = 0.1;
+
+/// Refuses a groom with a strand wider than [`MAX_WIDTH`], naming the first. Styling checks the
+/// groom as it was read, so that the strand named is the file's (not a resampled vertex or the
+/// index of a guide among guides).
+pub fn check_widths(groom: &Groom) -> Result<(), GroomError> {
+    match groom.widths.iter().position(|&w| w > MAX_WIDTH) {
+        None => Ok(()),
+        Some(i) => {
+            let strand = groom.strand_offsets.partition_point(|&o| o as usize <= i) - 1;
+            let vertex = i - groom.strand_offsets[strand] as usize;
+            Err(GroomError::TooWide { strand, vertex, width: groom.widths[i], max: MAX_WIDTH })
+        }
+    }
+}
+
 /// Physical material of hair. Moduli are SI; the rod radius comes from the groom's widths.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
@@ -162,6 +181,7 @@ impl Rods {
         frame_inertia_factor: f32,
     ) -> Result<Rods, GroomError> {
         groom.validate()?;
+        check_widths(groom)?;
         let n = groom.vertex_count();
         let mut rods = Rods {
             strand_offsets: groom.strand_offsets.clone(),
