@@ -65,7 +65,7 @@ pub const SECONDS: Range = Range::closed(0.0, 1e5);
 pub const TIME_STEP: Range = Range::closed(1e-6, 0.1);
 /// Solver iterations per step.
 pub const ITERATIONS: Range = Range::closed(1.0, 1000.0);
-/// Metres per unit of a groom file that does not say: any unit from a micrometre up.
+/// Metres per unit of a groom file that does not say: above zero, up to a thousand kilometres.
 pub const UNITS: Range = Range::above(0.0, 1e6);
 /// A frame number to read from an animated groom: negative frames are real (a simulation's
 /// pre-roll); beyond a billion is a typo.

@@ -364,7 +364,7 @@ fn binding_attributes(
 /// the recipe's gravity and the water they carry (`sim::sag_free`), with their bond rates kept;
 /// the guides keep the rest state of `styled_guides` (in `guide_ids` order). The solve is per
 /// strand, so children go through it in batches of [`HOLD_BATCH`] strands: a rod state for
-/// 98,000 children at once took 1.4 GB, most of the 100,000-strand run's peak.
+/// 98,000 children at once took about 1.2 GB of the 100,000-strand run's 1.96 GB peak.
 fn hold_children_up(
     out: &mut Groom,
     styled_guides: &Groom,
