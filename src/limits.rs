@@ -115,6 +115,24 @@ pub fn check_steps(what: &str, steps: f64, vertices: f64) -> Result<()> {
     Ok(())
 }
 
+/// Camera samples (pixels × samples per pixel) one render may take without a time budget: about
+/// a week of a 2-core node (the demo's preview runs at ~1.5 M samples/s).
+pub const DEFAULT_MAX_SAMPLES: f64 = 1e12;
+
+/// Refuses a render of `width` × `height` pixels at `spp` samples each beyond
+/// [`DEFAULT_MAX_SAMPLES`], unless a time budget bounds it.
+pub fn check_render(width: u32, height: u32, spp: u32, time_budget: bool) -> Result<()> {
+    let samples = width as f64 * height as f64 * spp as f64;
+    if samples > DEFAULT_MAX_SAMPLES && !time_budget {
+        return Err(Error::Usage(format!(
+            "rendering {width}x{height} at {spp} spp takes {samples:.3e} camera samples, over the budget of \
+             {DEFAULT_MAX_SAMPLES:.0e} (about a week of a 2-core node); lower --res or --spp, or give \
+             --time-budget"
+        )));
+    }
+    Ok(())
+}
+
 /// Steps a run of `seconds` takes at time step `dt` (as a float: it may be astronomically many).
 pub fn steps_for(seconds: f64, dt: f64) -> f64 {
     (seconds / dt).ceil().max(0.0)
@@ -161,6 +179,15 @@ pub fn check_style(groom: &Groom, recipe: &crate::style::Recipe, frames_per_seco
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn renders_beyond_the_sample_budget_need_a_time_budget() {
+        assert!(check_render(3840, 2160, 4096, false).is_ok());
+        let e = check_render(16384, 16384, 1_000_000, false).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("2.684e14") && e.to_string().contains("--time-budget"), "{e}");
+        assert!(check_render(16384, 16384, 1_000_000, true).is_ok());
+    }
 
     #[test]
     fn sizes_parse() {

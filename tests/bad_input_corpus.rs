@@ -311,6 +311,8 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["--fov", "0"], "--fov"),
         (&["--width-scale", "nan"], "--width-scale"),
         (&["--spp", "0"], "--spp"),
+        // 2.7e14 camera samples, years of a node, with no time budget to stop it.
+        (&["--res", "16384x16384", "--spp", "1000000"], "--time-budget"),
     ];
     for (flags, culprit) in render {
         let mut args = vec!["render", "g.hair", "-o", "out.png"];

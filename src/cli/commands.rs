@@ -258,6 +258,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
     render::image::ImageFormat::from_path(&args.output)?;
     io::check_output_directory(&args.output)?;
     let (width, height) = render::parse_resolution(&args.res)?;
+    coif::limits::check_render(width, height, args.spp, args.time_budget.is_some())?;
     let mode = match (args.mode, &args.attribute) {
         (RenderMode::Beauty | RenderMode::Attribute, Some(name)) => {
             let range = args.range.as_deref().map(render::parse_range).transpose()?;
