@@ -241,6 +241,23 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     cases.push(style_case("unknown key", &format!("{BASE}\n[bogus]\nx = 1\n"), hair, &["r.toml", "bogus"]));
     cases.push(style_case("wrong type", "[settings]\ndt = \"fast\"\n", hair, &["r.toml", "line 2"]));
     cases.push(style_case("no stages", "[settings]\ndt = 0.001\n", hair, &["r.toml", "stages"]));
+    // Thousands of obstacles or rods: each one tested against every vertex at every iteration.
+    let spheres: String = (0..1001)
+        .map(|i| {
+            format!("[[obstacles]]\nname = \"s{i}\"\nshape = \"sphere\"\ncenter = [0, 5, 0]\nradius = 0.01\n")
+        })
+        .collect();
+    let rods: String = (0..1001)
+        .map(|i| format!("[[rods]]\nname = \"r{i}\"\na = [0, 5, 0]\nb = [0.1, 5, 0]\nradius = 0.01\n"))
+        .collect();
+    for (what, many) in [("obstacles", spheres), ("rods", rods)] {
+        cases.push(style_case(
+            &format!("1001 {what}"),
+            &format!("{many}{BASE}"),
+            hair,
+            &["r.toml", &format!("1001 {what}; a recipe may have at most 1000")],
+        ));
+    }
     cases
 }
 

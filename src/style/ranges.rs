@@ -31,12 +31,17 @@
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | `[guides]` `reach` | (0, 1000] m |
 //! | stages | at most 10,000 |
+//! | obstacles, rods | at most 1,000 each |
 use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, ITERATIONS, MODULUS, SECONDS, TIME_STEP};
 
 use super::recipe::{Obstacle, Recipe, Stage};
 
 /// Stages a recipe may have.
 pub const MAX_STAGES: usize = 10_000;
+/// Obstacles, and rods, a recipe may have (each): a perm sets a few dozen rods, and every vertex
+/// is tested against every obstacle beyond the first 128 at every iteration (`ObstacleCulling`),
+/// so tens of thousands made a step of a small groom cost seconds.
+pub const MAX_OBSTACLES: usize = 1_000;
 const SIZE: Range = Range::above(0.0, 1e3);
 
 /// Line starts of a text, for line numbers of byte offsets in O(log n).
@@ -129,6 +134,21 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         table("guides", "reach", reach.into(), SIZE)?;
     }
 
+    let beyond =
+        [("obstacles", recipe.obstacles.get(MAX_OBSTACLES).map(|o| o.span()), recipe.obstacles.len())];
+    let beyond = beyond.into_iter().chain([(
+        "rods",
+        recipe.rods.get(MAX_OBSTACLES).map(|r| r.span()),
+        recipe.rods.len(),
+    )]);
+    for (what, span, count) in beyond {
+        if let Some(span) = span {
+            return Err(format!(
+                "line {}: {count} {what}; a recipe may have at most {MAX_OBSTACLES}",
+                line_of(span)
+            ));
+        }
+    }
     for obstacle in &recipe.obstacles {
         let at = |message: String| {
             format!("line {}: obstacle '{}': {message}", line_of(obstacle.span()), obstacle.get_ref().name())
