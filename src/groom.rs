@@ -174,6 +174,11 @@ impl Groom {
         self.strand_offsets[strand] as usize..self.strand_offsets[strand + 1] as usize
     }
 
+    /// The strand vertex `vertex` belongs to.
+    pub fn strand_of(&self, vertex: usize) -> usize {
+        self.strand_offsets.partition_point(|&o| o as usize <= vertex) - 1
+    }
+
     pub fn strand_points(&self, strand: usize) -> &[Vec3] {
         &self.points[self.strand_range(strand)]
     }

@@ -208,9 +208,7 @@ fn pigment_values(
             if !(v >= range.0 && v <= range.1) {
                 let strand = match a.rate {
                     AttributeRate::Strand => element,
-                    AttributeRate::Vertex => {
-                        groom.strand_offsets.partition_point(|&o| o as usize <= element) - 1
-                    }
+                    AttributeRate::Vertex => groom.strand_of(element),
                 };
                 return Err(Error::Usage(format!(
                     "render: groom attribute '{name}' of strand {strand} is {v}, outside [{}, {}]",

@@ -25,7 +25,7 @@ pub fn check_widths(groom: &Groom) -> Result<(), GroomError> {
     match groom.widths.iter().position(|&w| w > MAX_WIDTH) {
         None => Ok(()),
         Some(i) => {
-            let strand = groom.strand_offsets.partition_point(|&o| o as usize <= i) - 1;
+            let strand = groom.strand_of(i);
             let vertex = i - groom.strand_offsets[strand] as usize;
             Err(GroomError::TooWide { strand, vertex, width: groom.widths[i], max: MAX_WIDTH })
         }

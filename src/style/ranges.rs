@@ -134,14 +134,11 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         table("guides", "reach", reach.into(), SIZE)?;
     }
 
-    let beyond =
-        [("obstacles", recipe.obstacles.get(MAX_OBSTACLES).map(|o| o.span()), recipe.obstacles.len())];
-    let beyond = beyond.into_iter().chain([(
-        "rods",
-        recipe.rods.get(MAX_OBSTACLES).map(|r| r.span()),
-        recipe.rods.len(),
-    )]);
-    for (what, span, count) in beyond {
+    let counts = [
+        ("obstacles", recipe.obstacles.get(MAX_OBSTACLES).map(|o| o.span()), recipe.obstacles.len()),
+        ("rods", recipe.rods.get(MAX_OBSTACLES).map(|r| r.span()), recipe.rods.len()),
+    ];
+    for (what, span, count) in counts {
         if let Some(span) = span {
             return Err(format!(
                 "line {}: {count} {what}; a recipe may have at most {MAX_OBSTACLES}",

@@ -573,12 +573,10 @@ impl Session {
         self.dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
         self.wind_dv.iter_mut().for_each(|w| *w = 0.0);
         if let Some(dryer) = &self.dryer {
-            let offsets = &self.groom.strand_offsets;
-            let strand_of = |i: usize| offsets.partition_point(|&o| o as usize <= i) - 1;
+            let groom = &self.groom;
             self.dv.par_iter_mut().zip(self.wind_dv.par_iter_mut()).enumerate().for_each(
                 |(i, (dv, wind))| {
-                    let s = strand_of(i);
-                    let end = offsets[s + 1] as usize;
+                    let end = groom.strand_range(groom.strand_of(i)).end;
                     let tangent = if i + 1 < end {
                         positions[i + 1] - positions[i]
                     } else {
