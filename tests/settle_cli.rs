@@ -102,3 +102,65 @@ fn recipe_settle_keys_out_of_range_exit_2_with_key_range_and_line() {
         assert!(!output.exists(), "{text}: output written");
     }
 }
+
+/// `style` reports an unconverged settle stage by its number (stderr and `--json`); with
+/// `--require-converged` it exits 1 and still writes the output, as `simulate` does. A batch task
+/// says the same in its log.
+#[test]
+fn style_names_an_unconverged_settle_and_can_require_convergence() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = groom(dir.path());
+    let recipe = |name: &str, max_seconds: f32| {
+        let path = dir.path().join(name);
+        let text = format!(
+            "[settings]\ndt = 0.0027777778\n[[stages]]\nkind = \"settle\"\nmax_seconds = {max_seconds}\n"
+        );
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let (converging, short) = (recipe("long.toml", 30.0), recipe("short.toml", 0.02));
+    let output = dir.path().join("out.usda");
+    let style = |recipe: &std::path::Path, require: bool| {
+        let _ = std::fs::remove_file(&output);
+        let mut args =
+            vec!["style", path_str(recipe), "--groom", path_str(&input), "-o", path_str(&output), "--json"];
+        if require {
+            args.push("--require-converged");
+        }
+        coif(&args)
+    };
+    let settle_of = |run: &std::process::Output| stdout_json(run)["report"]["stages"][0]["settle"].clone();
+
+    let done = style(&converging, true);
+    assert_eq!(done.status.code(), Some(0), "{}", stderr(&done));
+    assert_eq!(settle_of(&done)["converged"], true);
+
+    // 20 ms cannot bring a released groom to rest.
+    let reported = style(&short, false);
+    assert_eq!(reported.status.code(), Some(0), "{}", stderr(&reported));
+    let settle = settle_of(&reported);
+    assert_eq!(settle["converged"], false, "{settle}");
+    assert!(settle["force_residual"].as_f64().unwrap() > settle["tolerance"].as_f64().unwrap(), "{settle}");
+    let message = stderr(&reported);
+    assert!(
+        message.contains("stage 1 (settle)") && message.contains("did not reach its tolerance"),
+        "{message}"
+    );
+
+    let required = style(&short, true);
+    assert_eq!(required.status.code(), Some(1), "{}", stderr(&required));
+    assert!(stderr(&required).contains("stage 1 (settle)") && stderr(&required).contains("force residual"));
+    assert!(output.exists(), "the unconverged result is still written");
+    let json: serde_json::Value = serde_json::from_slice(&required.stdout).expect("--json still reports");
+    assert_eq!(json["report"]["stages"][0]["settle"]["converged"], false);
+
+    // A farm task's log is where its artist reads it.
+    let manifest = dir.path().join("m.toml");
+    let text = "[defaults]\ngroom = \"in.hair\"\nrecipe = \"short.toml\"\noutputs = [\"b/{name}.usda\"]\n\
+                [[tasks]]\nname = \"short\"\n";
+    std::fs::write(&manifest, text).unwrap();
+    let batch = coif(&["batch", path_str(&manifest), "--jobs", "1"]);
+    assert!(batch.status.success(), "{}", stderr(&batch));
+    let log = std::fs::read_to_string(dir.path().join("logs/short.log")).unwrap();
+    assert!(log.contains("stage 1 (settle)") && log.contains("did not reach its tolerance"), "{log}");
+}

@@ -107,6 +107,11 @@ pub fn run(task: &Task) -> Result<Outcome> {
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
     let styled = style(&groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
+    // The log says what the report would: a farm's artist reads it, not the JSON.
+    let unsettled = styled.report.unconverged_settle();
+    for warning in styled.report.warnings.iter().chain(&unsettled) {
+        eprintln!("coif: warning: {}: {warning}", task.name);
+    }
     for output in &task.outputs {
         crate::io::write_groom(output, &styled.groom)?;
     }

@@ -323,6 +323,9 @@ pub(crate) struct StyleArgs {
     /// names, the groom spec version, the meshes in a sibling file.
     #[arg(long)]
     pub(crate) unreal: bool,
+    /// Exit 1 when a settle stage does not reach its tolerance (the output is still written).
+    #[arg(long)]
+    pub(crate) require_converged: bool,
 }
 
 #[derive(Args)]

@@ -97,8 +97,9 @@ fn run_style(args: StyleArgs) -> Result<()> {
         eprintln!("coif: warning: {warning}");
     }
     report_meshes_output(meshes_output.as_deref());
-    if let Some(settle) = report.stages.iter().filter_map(|s| s.settle).find(|s| !s.converged) {
-        eprintln!("coif: warning: {}", settle_failure(&settle));
+    let unsettled = report.unconverged_settle();
+    if let Some(failure) = unsettled.as_ref().filter(|_| !args.require_converged) {
+        eprintln!("coif: warning: {failure}");
     }
     if args.json {
         print_json(json!({
@@ -127,7 +128,10 @@ fn run_style(args: StyleArgs) -> Result<()> {
         }
         eprintln!("wrote {}", args.output.display());
     }
-    Ok(())
+    match unsettled {
+        Some(failure) if args.require_converged => Err(Error::NotConverged(failure)),
+        _ => Ok(()),
+    }
 }
 
 /// Styles the groups named by `--group` and puts them back among the untouched ones (frames
@@ -216,9 +220,9 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         hair_contacts,
     };
     let (groom, summary) = simulate(&loaded.groom, &options).map_err(|e| e.in_file(&args.input))?;
-    let unsettled = summary.settle.filter(|r| !r.converged);
-    if let Some(report) = unsettled {
-        eprintln!("coif: warning: {}", settle_failure(&report));
+    let unsettled = summary.settle.and_then(|settle| settle.shortfall());
+    if let Some(shortfall) = unsettled.as_ref().filter(|_| !args.require_converged) {
+        eprintln!("coif: warning: {shortfall}");
     }
     if args.json {
         let warnings = io::write_groom(&args.output, &groom)?;
@@ -239,16 +243,9 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         write_and_report(&args.output, &groom, false, &io::ExportOptions::default())?;
     }
     match unsettled {
-        Some(report) if args.require_converged => Err(Error::NotConverged(settle_failure(&report))),
+        Some(shortfall) if args.require_converged => Err(Error::NotConverged(shortfall)),
         _ => Ok(()),
     }
-}
-
-fn settle_failure(report: &coif::sim::SettleReport) -> String {
-    format!(
-        "settling did not reach its tolerance {:.1e} within {:.2} s (force residual {:.2e}, torque residual {:.2e})",
-        report.tolerance, report.seconds, report.force_residual, report.torque_residual
-    )
 }
 
 fn run_render(args: RenderArgs) -> Result<()> {

@@ -118,6 +118,20 @@ pub struct SettleReport {
     pub max_speed: f32,
 }
 
+impl SettleReport {
+    /// What a settle that did not reach its tolerance achieved, for warnings and errors (`None`
+    /// once converged).
+    pub fn shortfall(&self) -> Option<String> {
+        (!self.converged).then(|| {
+            format!(
+                "settling did not reach its tolerance {:.1e} within {:.2} s (force residual {:.2e}, \
+                 torque residual {:.2e})",
+                self.tolerance, self.seconds, self.force_residual, self.torque_residual
+            )
+        })
+    }
+}
+
 /// Frame inertia factor while settling ([`super::SimParams::frame_inertia_factor`]): large enough
 /// that every frame's inverse inertia sits at its conditioning cap, the bending compliance
 /// `α/Δt²`. Frames are quasi-static, so their inertia acts as a drag on every bend (`I/Δt` per

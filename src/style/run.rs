@@ -88,6 +88,16 @@ pub struct StyleReport {
     pub warnings: Vec<String>,
 }
 
+impl StyleReport {
+    /// The first settle stage that did not reach its tolerance, named, with what it reached.
+    pub fn unconverged_settle(&self) -> Option<String> {
+        self.stages.iter().find_map(|stage| {
+            let shortfall = stage.settle?.shortfall()?;
+            Some(format!("stage {} ({}): {shortfall}", stage.index + 1, stage.kind))
+        })
+    }
+}
+
 /// A fitted head frame as the report shows it (world coordinates, metres).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct HeadFrameReport {
