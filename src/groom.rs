@@ -107,6 +107,11 @@ pub enum GroomError {
          {max} m); are the file's widths, or its units, another unit's?"
     )]
     TooWide { strand: usize, vertex: usize, width: f32, max: f32 },
+    #[error(
+        "strand {strand}, vertex {vertex}: a coordinate of {coordinate:e} m is beyond the {max} m from \
+         the origin a groom is simulated in; are the file's units another unit's?"
+    )]
+    TooFar { strand: usize, vertex: usize, coordinate: f32, max: f32 },
     #[error("{what} has {found} entries, expected {expected}")]
     Length { what: String, expected: usize, found: usize },
     #[error("attribute '{name}' has {components} components; 1 to 4 are allowed")]

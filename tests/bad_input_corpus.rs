@@ -532,6 +532,29 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             ));
         }
     }
+    // Coordinates a kilometre and more out (1e30 m overflowed the rods to infinity within a
+    // step, and `simulate` then refused its own result naming no file): refused like widths.
+    for far in ["2000", "-1e6", "1e30"] {
+        let distant = format!(
+            "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
+             point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.02, 0, 0), (0.02, 0.1, {far})]\n}}\n"
+        );
+        let files = || vec![("in.usda", distant.clone().into_bytes()), ("r.toml", BASE.as_bytes().to_vec())];
+        let runs: [&[&str]; 3] = [
+            &["simulate", "in.usda", "out.usda", "--seconds", "0.01"],
+            &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
+            &["style", "r.toml", "--groom", "in.usda", "--guides", "2", "-o", "out.usda"],
+        ];
+        for args in runs {
+            cases.push(case(
+                &format!("coordinate {far} m: {}", args.join(" ")),
+                files(),
+                args,
+                2,
+                &["in.usda", "strand 2, vertex 1", "1000 m from the origin"],
+            ));
+        }
+    }
     cases
 }
 

@@ -18,18 +18,31 @@ use crate::groom::{Groom, GroomError};
 /// unit, or widths that mean something else, and would give rods of absurd mass and stiffness.
 pub const MAX_WIDTH: f32 = 0.1;
 
-/// Refuses a groom with a strand wider than [`MAX_WIDTH`], naming the first. Styling checks the
-/// groom as it was read, so that the strand named is the file's (not a resampled vertex or the
-/// index of a guide among guides).
-pub fn check_widths(groom: &Groom) -> Result<(), GroomError> {
-    match groom.widths.iter().position(|&w| w > MAX_WIDTH) {
-        None => Ok(()),
-        Some(i) => {
-            let strand = groom.strand_of(i);
-            let vertex = i - groom.strand_offsets[strand] as usize;
-            Err(GroomError::TooWide { strand, vertex, width: groom.widths[i], max: MAX_WIDTH })
-        }
+/// The farthest from the origin a simulated vertex may be, metres (the range recipes place
+/// obstacles in, [`crate::validate::COORDINATE`]): f32 positions a kilometre out are 60 µm apart,
+/// coarser than a hair is wide, and a coordinate of 1e30 m read from a file made the rods
+/// overflow to infinity within a step. Such a file is in another unit, or broken.
+pub const MAX_COORDINATE: f32 = 1e3;
+
+/// Refuses a groom the rods cannot represent: a strand wider than [`MAX_WIDTH`] or a vertex
+/// farther than [`MAX_COORDINATE`] from the origin on an axis, naming the first. Styling checks
+/// the groom as it was read, so that the strand named is the file's (not a resampled vertex or
+/// the index of a guide among guides).
+pub fn check_simulable(groom: &Groom) -> Result<(), GroomError> {
+    let at = |i: usize| {
+        let strand = groom.strand_of(i);
+        (strand, i - groom.strand_offsets[strand] as usize)
+    };
+    if let Some(i) = groom.widths.iter().position(|&w| w > MAX_WIDTH) {
+        let (strand, vertex) = at(i);
+        return Err(GroomError::TooWide { strand, vertex, width: groom.widths[i], max: MAX_WIDTH });
     }
+    if let Some(i) = groom.points.iter().position(|p| p.abs().max_element() > MAX_COORDINATE) {
+        let (strand, vertex) = at(i);
+        let coordinate = groom.points[i].abs().max_element();
+        return Err(GroomError::TooFar { strand, vertex, coordinate, max: MAX_COORDINATE });
+    }
+    Ok(())
 }
 
 /// Physical material of hair. Moduli are SI; the rod radius comes from the groom's widths.
@@ -181,7 +194,7 @@ impl Rods {
         frame_inertia_factor: f32,
     ) -> Result<Rods, GroomError> {
         groom.validate()?;
-        check_widths(groom)?;
+        check_simulable(groom)?;
         let n = groom.vertex_count();
         let mut rods = Rods {
             strand_offsets: groom.strand_offsets.clone(),

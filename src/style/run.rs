@@ -140,7 +140,7 @@ pub(crate) struct DropletSnapshot {
 /// Without a scalp in `options`, the groom's own mesh under its roots is the scalp
 /// ([`crate::surface_mesh::scalp_of`]); the result keeps the groom's meshes.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
-    crate::sim::rod::check_widths(groom)?;
+    crate::sim::rod::check_simulable(groom)?;
     let own_scalp;
     let options = match options.scalp.is_none().then(|| crate::surface_mesh::scalp_of(groom)).flatten() {
         Some(mesh) => {
