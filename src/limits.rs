@@ -23,8 +23,11 @@ pub const DROPLET_BYTES: f64 = 128.0;
 pub const GROOM_BYTES_PER_VERTEX: f64 = 64.0;
 /// Simulated steps one run may take, whatever the groom's size.
 pub const DEFAULT_MAX_STEPS: u64 = 10_000_000;
-/// Vertex-steps (vertices × steps) one run may take: about a day of a 2-core node.
+/// Vertex-steps (vertices × steps) one run may take at [`WORK_ITERATIONS`] solver iterations a
+/// step; a step of more iterations counts for more (1,000 iterations are 200 such steps).
 pub const DEFAULT_MAX_WORK: f64 = 1e13;
+/// The iterations a step of the work budget is counted at (the default).
+pub const WORK_ITERATIONS: f64 = 5.0;
 
 static MAX_MEMORY: AtomicU64 = AtomicU64::new(0);
 static MAX_STEPS: AtomicU64 = AtomicU64::new(DEFAULT_MAX_STEPS);
@@ -97,19 +100,20 @@ pub fn check_memory(what: &str, bytes: f64) -> Result<()> {
     Ok(())
 }
 
-/// Refuses a run of `steps` steps over `vertices` vertices beyond the step budget.
-pub fn check_steps(what: &str, steps: f64, vertices: f64) -> Result<()> {
+/// Refuses a run of `steps` steps of `iterations` solver iterations over `vertices` vertices
+/// beyond the step budget.
+pub fn check_steps(what: &str, steps: f64, vertices: f64, iterations: f64) -> Result<()> {
     let max = max_steps() as f64;
     if steps.is_nan() || steps > max {
         return Err(Error::Usage(format!(
             "{what} takes {steps:.3e} simulation steps, over the budget of {max:.0} (--max-steps)"
         )));
     }
-    let work = steps * vertices;
+    let work = steps * vertices * (iterations / WORK_ITERATIONS).max(1.0);
     if work > DEFAULT_MAX_WORK {
         return Err(Error::Usage(format!(
-            "{what} takes {steps:.3e} steps of {vertices:.0} vertices ({work:.3e} vertex-steps), over the \
-             budget of {DEFAULT_MAX_WORK:.0e}"
+            "{what} takes {steps:.3e} steps of {vertices:.0} vertices at {iterations} iterations \
+             ({work:.3e} vertex-steps of {WORK_ITERATIONS} iterations), over the budget of {DEFAULT_MAX_WORK:.0e}"
         )));
     }
     Ok(())
@@ -154,10 +158,11 @@ pub fn vertices_after_resampling(groom: &Groom, max_segment: Option<f32>) -> f64
     total
 }
 
-/// A simulation of `vertices` vertices (and `droplets` droplets) for `steps` steps.
-pub fn check_simulation(what: &str, vertices: f64, droplets: f64, steps: f64) -> Result<()> {
+/// A simulation of `vertices` vertices (and `droplets` droplets) for `steps` steps of
+/// `iterations` solver iterations.
+pub fn check_simulation(what: &str, vertices: f64, droplets: f64, steps: f64, iterations: f64) -> Result<()> {
     check_memory(what, vertices * SIM_BYTES_PER_VERTEX + droplets * DROPLET_BYTES)?;
-    check_steps(what, steps, vertices + droplets)
+    check_steps(what, steps, vertices + droplets, iterations)
 }
 
 /// Styling `groom` with `recipe`: the resampled groom, its droplets, every stage's steps, and
@@ -173,7 +178,7 @@ pub fn check_style(groom: &Groom, recipe: &crate::style::Recipe, frames_per_seco
     let frame_bytes = if frames_per_second > 0.0 { frames * vertices * 12.0 } else { 0.0 };
     let what = format!("styling {vertices:.0} vertices with {droplets:.0} droplets for {seconds} s");
     check_memory(&what, vertices * SIM_BYTES_PER_VERTEX + droplets * DROPLET_BYTES + frame_bytes)?;
-    check_steps(&what, steps, vertices + droplets)
+    check_steps(&what, steps, vertices + droplets, settings.iterations.into())
 }
 
 #[cfg(test)]
@@ -199,11 +204,17 @@ mod tests {
 
     #[test]
     fn astronomical_runs_are_refused_with_their_figures() {
-        let e = check_steps("style", steps_for(1e9, 1.0 / 360.0), 100.0).unwrap_err().to_string();
+        let e = check_steps("style", steps_for(1e9, 1.0 / 360.0), 100.0, 5.0).unwrap_err().to_string();
         assert!(e.contains("3.600e11") && e.contains("budget"), "{e}");
+        // Work counts iterations: a day's steps at 5 iterations are 200 days' at 1,000.
+        let (steps, vertices) = (1e6, 1e6);
+        assert!(check_steps("at 5", steps, vertices, 5.0).is_ok());
+        assert!(check_steps("at 1", steps, vertices, 1.0).is_ok());
+        let e = check_steps("at 1000", steps, vertices, 1000.0).unwrap_err().to_string();
+        assert!(e.contains("1000 iterations") && e.contains("2.000e14"), "{e}");
         let e = check_memory("water", 1e12 * DROPLET_BYTES).unwrap_err().to_string();
         assert!(e.contains("128000.000 GB"), "{e}");
-        assert!(check_steps("tiny", 10.0, 10.0).is_ok());
+        assert!(check_steps("tiny", 10.0, 10.0, 1000.0).is_ok());
     }
 
     #[test]

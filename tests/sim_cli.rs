@@ -151,3 +151,40 @@ fn hair_contacts_push_overlapping_strands_apart() {
     assert!((through - 40e-6).abs() < 1e-6, "without contacts nothing moves them: {through} m");
     assert!(apart > 80e-6, "with contacts the tips are still {apart} m apart");
 }
+
+/// The work budget counts solver iterations: a run the budget takes at the default 5 iterations
+/// is refused at 1,000 (200 times the work), with its figures and before any output.
+#[test]
+fn the_work_budget_counts_iterations() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    let generated = coif(&[
+        "generate",
+        "-o",
+        path_str(&input),
+        "--strands",
+        "100",
+        "--vertices",
+        "100",
+        "--length",
+        "0.2",
+    ]);
+    assert!(generated.status.success(), "{}", stderr(&generated));
+    let output = dir.path().join("out.hair");
+    // 7.2e6 steps of 1e4 vertices: 7.2e10 vertex-steps at 5 iterations, 1.44e13 at 1,000.
+    let run = coif(&[
+        "simulate",
+        path_str(&input),
+        path_str(&output),
+        "--seconds",
+        "1e4",
+        "--dt",
+        "1/720",
+        "--iterations",
+        "1000",
+    ]);
+    let message = stderr(&run);
+    assert_eq!(run.status.code(), Some(2), "{message}");
+    assert!(message.contains("1000 iterations") && message.contains("1.440e13"), "{message}");
+    assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
+}

@@ -193,6 +193,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         loaded.groom.vertex_count() as f64,
         0.0,
         coif::limits::steps_for(seconds, params.dt.into()),
+        params.iterations.max(args.settle_iterations.unwrap_or(0)).into(),
     )?;
     let settle = args.settle.then_some(SettleOptions {
         tolerance: args.settle_tolerance,
