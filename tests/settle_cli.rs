@@ -163,4 +163,18 @@ fn style_names_an_unconverged_settle_and_can_require_convergence() {
     assert!(batch.status.success(), "{}", stderr(&batch));
     let log = std::fs::read_to_string(dir.path().join("logs/short.log")).unwrap();
     assert!(log.contains("stage 1 (settle)") && log.contains("did not reach its tolerance"), "{log}");
+
+    // `require_converged = true` makes it a failed task: exit 1 for the batch, the output written
+    // but not recorded as complete, so a re-run does it again rather than skip it.
+    std::fs::write(&manifest, text.replace("[[tasks]]", "require_converged = true\n[[tasks]]")).unwrap();
+    let required = coif(&["batch", path_str(&manifest), "--jobs", "1", "--json"]);
+    assert_eq!(required.status.code(), Some(1), "{}", stderr(&required));
+    let report: serde_json::Value = serde_json::from_slice(&required.stdout).unwrap();
+    assert_eq!(report["failed"].as_u64(), Some(1), "{report}");
+    assert!(dir.path().join("b/short.usda").exists(), "the unconverged result is still written");
+    let log = std::fs::read_to_string(dir.path().join("logs/short.log")).unwrap();
+    assert!(log.contains("task 'short': stage 1 (settle)") && log.contains("force residual"), "{log}");
+    let again = coif(&["batch", path_str(&manifest), "--jobs", "1", "--json"]);
+    let report: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+    assert_eq!((report["failed"].as_u64(), report["skipped"].as_u64()), (Some(1), Some(0)), "{report}");
 }

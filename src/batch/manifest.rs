@@ -10,6 +10,8 @@
 //! preview = "out/{name}/preview.png"      # optional
 //! # optional, as the CLI's --units, --up, --frame and --variant:
 //! # units = 0.01, up = "z", frame = 1001, variants = ["length=long"]
+//! # optional, as `style --require-converged`: the task fails if a settle stage does not converge
+//! # require_converged = true
 //!
 //! [[tasks]]
 //! name = "perm"
@@ -61,6 +63,9 @@ struct TaskSpec {
     frame: Option<f64>,
     /// USD groom: variants to select, `SET=NAME` or `/Prim:SET=NAME` (`--variant`).
     variants: Option<Vec<String>>,
+    /// The task fails (exit 1, outputs written, not recorded as complete) when a settle stage
+    /// does not reach its tolerance (`style --require-converged`).
+    require_converged: Option<bool>,
     /// Recipe values replaced for this task: dotted paths into the recipe (`rods.0.radius`).
     #[serde(default)]
     overrides: BTreeMap<String, toml::Value>,
@@ -89,6 +94,8 @@ pub struct Task {
     /// How the groom file is read (units, up axis, frame) and the USD variants selected.
     pub import: ImportOptions,
     pub variants: Vec<String>,
+    /// Fail when a settle stage does not reach its tolerance.
+    pub require_converged: bool,
     /// "key = value" for each swept parameter (labels on the contact sheet).
     pub wedge_values: Vec<String>,
 }
@@ -178,6 +185,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             preview: preview.map(|p| resolve(&fill(&p))),
             import,
             variants,
+            require_converged: spec.require_converged.or(defaults.require_converged).unwrap_or(false),
             wedge_values,
         });
         Ok(())

@@ -60,7 +60,8 @@ fn effective_inputs(task: &Task) -> Result<(String, String)> {
         .map(|path| std::fs::read(directory.join(path)).unwrap_or_default())
         .collect();
     // How the groom is read is part of the input: another variant or frame is another groom.
-    let reading = format!("{:?} {:?}", task.import, task.variants);
+    // Requiring convergence decides whether a finished run counts as complete.
+    let reading = format!("{:?} {:?} {}", task.import, task.variants, task.require_converged);
     let mut parts: Vec<&[u8]> =
         vec![&groom, effective.as_bytes(), reading.as_bytes(), env!("CARGO_PKG_VERSION").as_bytes()];
     parts.extend(meshes.iter().map(Vec::as_slice));
@@ -109,7 +110,9 @@ pub fn run(task: &Task) -> Result<Outcome> {
     let styled = style(&groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
     // The log says what the report would: a farm's artist reads it, not the JSON.
     let unsettled = styled.report.unconverged_settle();
-    for warning in styled.report.warnings.iter().chain(&unsettled) {
+    // Required, an unconverged settle is the task's error instead.
+    let unsettled_warning = unsettled.as_ref().filter(|_| !task.require_converged);
+    for warning in styled.report.warnings.iter().chain(unsettled_warning) {
         eprintln!("coif: warning: {}: {warning}", task.name);
     }
     for output in &task.outputs {
@@ -120,6 +123,10 @@ pub fn run(task: &Task) -> Result<Outcome> {
             crate::render::RenderSettings { width: 320, height: 240, spp: 16, ..Default::default() };
         let rendered = crate::render::render(&styled.groom, &settings, &|_, _| {})?;
         rendered.image.write(preview)?;
+    }
+    // Written, but not complete: a re-run does it again (the scheduler sees the failure).
+    if let Some(failure) = unsettled.filter(|_| task.require_converged) {
+        return Err(Error::NotConverged(format!("task '{}': {failure}", task.name)));
     }
     Sidecar::record(&task.name, inputs, &outputs)?.write(&sidecar)?;
     Ok(Outcome::Done { seconds: start.elapsed().as_secs_f64() })
@@ -147,6 +154,7 @@ mod tests {
             preview: None,
             import: Default::default(),
             variants: Vec::new(),
+            require_converged: false,
             wedge_values: Vec::new(),
         };
         let before = effective_inputs(&task).unwrap().1;
@@ -160,7 +168,8 @@ mod tests {
             import: crate::io::ImportOptions { frame: Some(12.0), ..Default::default() },
             ..task.clone()
         };
-        for other in [other_variant, other_frame] {
+        let required = Task { require_converged: true, ..task.clone() };
+        for other in [other_variant, other_frame, required] {
             assert_ne!(after, effective_inputs(&other).unwrap().1);
         }
     }
