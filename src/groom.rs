@@ -103,13 +103,15 @@ pub enum GroomError {
     #[error("strand {strand}, vertex {vertex}: width {width} is negative or not finite")]
     BadWidth { strand: usize, vertex: usize, width: f32 },
     #[error(
-        "strand {strand}, vertex {vertex}: width {width} m is too wide to simulate as a hair (at most \
-         {max} m); are the file's widths, or its units, another unit's?"
+        "strand {strand}, vertex {vertex}: width {} m is too wide to simulate as a hair (at most \
+         {max} m); are the file's widths, or its units, another unit's?",
+        crate::validate::shortest(f64::from(*width))
     )]
     TooWide { strand: usize, vertex: usize, width: f32, max: f32 },
     #[error(
-        "strand {strand}, vertex {vertex}: a coordinate of {coordinate:e} m is beyond the {max} m from \
-         the origin a groom is simulated in; are the file's units another unit's?"
+        "strand {strand}, vertex {vertex}: a coordinate of {} m is beyond the {max} m from the origin \
+         a groom is simulated in; are the file's units another unit's?",
+        crate::validate::shortest(f64::from(*coordinate))
     )]
     TooFar { strand: usize, vertex: usize, coordinate: f32, max: f32 },
     #[error("{what} has {found} entries, expected {expected}")]

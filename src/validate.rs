@@ -80,13 +80,15 @@ impl fmt::Display for Range {
 }
 
 /// A number as written: an `f32` widened to `f64` prints as the `f32` (0.001, not
-/// 0.0010000000474974513).
-fn shortest(value: f64) -> String {
+/// 0.0010000000474974513), and from ten million up in exponent form (1e30, not 31 digits).
+pub(crate) fn shortest(value: f64) -> String {
     let narrow = value as f32;
-    if narrow as f64 == value {
-        narrow.to_string()
-    } else {
-        value.to_string()
+    let large = value.abs() >= 1e7;
+    match (narrow as f64 == value, large) {
+        (true, false) => narrow.to_string(),
+        (true, true) => format!("{narrow:e}"),
+        (false, false) => value.to_string(),
+        (false, true) => format!("{value:e}"),
     }
 }
 
@@ -166,5 +168,10 @@ mod tests {
         assert!(e.contains("NaN") && e.contains("[-30, 30]"), "{e}");
         assert!(direction("normal", [0.0; 3]).unwrap_err().contains("zero length"));
         assert!(vector("center", [0.0, f32::INFINITY, 0.0], COORDINATE).unwrap_err().contains("inf"));
+        // Large values in exponent form, as written, not 31 digits.
+        let e = number("--damping", 1e30f32, Range::closed(0.0, 1e4)).unwrap_err();
+        assert!(e.contains("--damping = 1e30 must") && e.contains("[0, 10000]"), "{e}");
+        assert!(FRAME.to_string() == "[-1e9, 1e9]" && MODULUS.to_string() == "[100000, 1e12]");
+        assert_eq!(shortest(0.001f32.into()), "0.001");
     }
 }
