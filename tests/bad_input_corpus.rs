@@ -508,38 +508,28 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.usda", "frame 0"],
     ));
-    // Widths of metres (1e30 m once went through every stage): a file in another unit. Refused
-    // where the strands become rods, naming the file's strand even when only guides are simulated.
+    // Widths of metres (1e30 m once went through every stage) and coordinates a kilometre and
+    // more out (1e30 m overflowed the rods within a step, and `simulate` then refused its own
+    // result naming no file): a file in another unit. Refused where the strands become rods,
+    // naming the file's strand even when only guides are simulated. Strand 2's vertex 1 is bad.
+    let mut unsimulable = Vec::new();
     for width in ["1", "1e30"] {
-        let wide = format!(
-            "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
-             point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.02, 0, 0), (0.02, 0.1, 0)]\n  \
-             float[] widths = [1e-4, 1e-4, 1e-4, 1e-4, 1e-4, {width}] (interpolation = \"vertex\")\n}}\n"
-        );
-        let files = || vec![("in.usda", wide.clone().into_bytes()), ("r.toml", BASE.as_bytes().to_vec())];
-        let runs: [&[&str]; 3] = [
-            &["simulate", "in.usda", "out.usda", "--seconds", "0.01"],
-            &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
-            &["style", "r.toml", "--groom", "in.usda", "--guides", "2", "-o", "out.usda"],
-        ];
-        for args in runs {
-            cases.push(case(
-                &format!("width {width} m: {}", args.join(" ")),
-                files(),
-                args,
-                2,
-                &["in.usda", "strand 2, vertex 1", "too wide"],
-            ));
-        }
+        unsimulable.push((format!("width {width} m"), "0".to_string(), width.to_string(), "too wide"));
     }
-    // Coordinates a kilometre and more out (1e30 m overflowed the rods to infinity within a
-    // step, and `simulate` then refused its own result naming no file): refused like widths.
     for far in ["2000", "-1e6", "1e30"] {
-        let distant = format!(
+        unsimulable.push((
+            format!("coordinate {far} m"),
+            far.to_string(),
+            "1e-4".into(),
+            "1000 m from the origin",
+        ));
+    }
+    for (label, last_z, last_width, expected) in unsimulable {
+        let text = format!(
             "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
-             point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.02, 0, 0), (0.02, 0.1, {far})]\n}}\n"
+             point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.02, 0, 0), (0.02, 0.1, {last_z})]\n  \
+             float[] widths = [1e-4, 1e-4, 1e-4, 1e-4, 1e-4, {last_width}] (interpolation = \"vertex\")\n}}\n"
         );
-        let files = || vec![("in.usda", distant.clone().into_bytes()), ("r.toml", BASE.as_bytes().to_vec())];
         let runs: [&[&str]; 3] = [
             &["simulate", "in.usda", "out.usda", "--seconds", "0.01"],
             &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
@@ -547,11 +537,11 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         ];
         for args in runs {
             cases.push(case(
-                &format!("coordinate {far} m: {}", args.join(" ")),
-                files(),
+                &format!("{label}: {}", args.join(" ")),
+                vec![("in.usda", text.clone().into_bytes()), ("r.toml", BASE.as_bytes().to_vec())],
                 args,
                 2,
-                &["in.usda", "strand 2, vertex 1", "1000 m from the origin"],
+                &["in.usda", "strand 2, vertex 1", expected],
             ));
         }
     }
