@@ -401,6 +401,43 @@ fn unreal_usd_output_has_epic_groom_attributes_and_no_mesh() {
 }
 
 #[test]
+fn unreal_usd_output_of_a_groom_without_groups() {
+    // A `.hair` file, or a plain one-prim USD, has no group table: `--unreal` to USD must give
+    // every strand group 0 (it panicked indexing the missing table), and `style --unreal` writes
+    // the same. Checked in pxr.
+    let dir = tempfile::tempdir().unwrap();
+    let strands: Vec<Vec<glam::Vec3>> = (0..3)
+        .map(|s| (0..5).map(|k| glam::Vec3::new(s as f32 * 0.01, -0.02 * k as f32, 0.0)).collect())
+        .collect();
+    let hair = dir.path().join("one.hair");
+    coif::io::write_groom(&hair, &Groom::from_strands(&strands, 1e-4)).unwrap();
+    let plain = dir.path().join("plain.usda");
+    assert!(coif(&["convert", path_str(&hair), path_str(&plain)]).status.success());
+    let recipe = dir.path().join("brief.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    for ext in ["usda", "usdc"] {
+        for (label, input) in [("hair", &hair), ("usda", &plain)] {
+            let out = dir.path().join(format!("{label}_unreal.{ext}"));
+            let convert = ["convert", path_str(input), path_str(&out), "--unreal"];
+            let styled = dir.path().join(format!("{label}_styled.{ext}"));
+            let args = ["style", path_str(&recipe), "--groom", path_str(input), "-o", path_str(&styled)];
+            let style = [&args[..], &["--unreal", "--quiet"]].concat();
+            for (run, written) in [(coif(&convert), &out), (coif(&style), &styled)] {
+                let label = format!("{label} → {}", written.display());
+                assert!(run.status.success(), "{label}: {}", stderr(&run));
+                let dump = pxr_dump(written, None);
+                let curves = curves_by_path(&dump);
+                assert_eq!(curves.len(), 1, "{label}");
+                let group_ids = &curves[0].1["primvars"]["groom_group_id"];
+                assert_eq!(group_ids["type"], "int[]", "{label}");
+                assert_eq!(f32s(&group_ids["values"]), vec![0.0; 3], "{label}");
+                assert_eq!(f32s(&curves[0].1["counts"]), vec![5.0; 3], "{label}");
+            }
+        }
+    }
+}
+
+#[test]
 fn blender_grooms_convert_round_trips_are_exact_in_pxr() {
     // Blender's USD (centimetres, Z up, a ×100 scale on /root) and its Alembic of the same scene
     // (metres, Y up), converted to .usda and .usdc: pxr must see the same prims, bases, wraps,

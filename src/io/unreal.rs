@@ -59,7 +59,8 @@ pub fn for_usd(groom: &Groom) -> Groom {
     let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
     out.groups.iter_mut().for_each(|g| g.width_interpolation = None);
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
-    let group_ids = out.group_ids.iter().map(|&g| g as f32).collect();
+    // A groom without a group table has no `group_ids`: all its strands are group 0.
+    let group_ids = (0..out.strand_count()).map(|s| out.group_of(s) as f32).collect();
     out.set_attribute(
         Attribute::new(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids).with_kind(AttributeKind::Int),
     );
