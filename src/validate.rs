@@ -81,7 +81,7 @@ impl fmt::Display for Range {
 
 /// A number as written: an `f32` widened to `f64` prints as the `f32` (0.001, not
 /// 0.0010000000474974513), and from ten million up in exponent form (1e30, not 31 digits).
-pub(crate) fn shortest(value: f64) -> String {
+pub fn shortest(value: f64) -> String {
     let narrow = value as f32;
     let large = value.abs() >= 1e7;
     match (narrow as f64 == value, large) {

@@ -8,6 +8,7 @@ use coif::generate::{generate, GenerateParams, Style};
 use coif::info::GroomInfo;
 use coif::io;
 use coif::progress::Progress;
+use coif::validate::shortest;
 use coif::{Error, Result};
 
 use super::args::*;
@@ -529,6 +530,22 @@ fn run_convert(
         let loaded = io::read_groom_selected(input, &options, &import.selection())?;
         return write_and_report(output, &loaded.groom, json, export);
     };
+    // A file's own range is as unchecked as its samples (an `endTimeCode = 1e15` typo): bounded
+    // like a `--frame-range`, before anything is read or written.
+    if timeline.frame_count() > io::timeline::MAX_FRAMES {
+        return Err(Error::format(
+            input,
+            format!(
+                "its timeline runs from frame {} to {} ({} frames at {} fps), more than the {} a \
+                 convert writes; --frame-range FIRST:LAST picks frames, --frame N one",
+                shortest(timeline.first),
+                shortest(timeline.last),
+                timeline.frame_count(),
+                timeline.frames_per_second,
+                io::timeline::MAX_FRAMES
+            ),
+        ));
+    }
     let read = |frame: f64| -> Result<coif::Groom> {
         let options = io::ImportOptions { frame: Some(frame), ..options };
         let selection = io::usda::Selection { time: Some(frame), ..import.selection() };
