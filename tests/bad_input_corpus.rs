@@ -89,6 +89,7 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         ("wetness", "evaporation", &["nan", "-1", "inf"]),
         ("wetness", "airflow_drying", &["nan", "-1", "inf"]),
         ("wetness", "mass_gain", &["nan", "-1", "inf"]),
+        ("head", "size", &["nan", "0", "-1", "inf", "1e4"]),
     ];
     for (table, key, values) in keys {
         for value in *values {
@@ -101,6 +102,15 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
                 &["r.toml", "line 2", key],
             ));
         }
+    }
+    // A rod or head a few micrometres across asked for micrometre segments: the groom was
+    // resampled ten-thousandfold without a word and styling ran for hours.
+    let wrap = "[[stages]]\nkind = \"wrap\"\nduration = 0.01\n";
+    for (label, recipe, culprit) in [
+        ("rod 1e-6 m", format!("[[rods]]\nname = \"r\"\na = [0, 0.05, 0.1]\nb = [0.1, 0.05, 0.1]\nradius = 1e-6\n{wrap}"), "rod 'r'"),
+        ("[head] size = 1e-5", format!("frame = \"head\"\n[head]\nsize = 1e-5\n{wrap}layout = \"rows\"\ndiameter = 0.24\nspacing = 0.4\n"), "[head] size"),
+    ] {
+        cases.push(style_case(&format!("resolution for a {label}"), &recipe, hair, &[culprit, "max_segment"]));
     }
     let water: &[(&str, &str)] = &[
         ("r_min", "nan"),
@@ -508,6 +518,24 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.usda", "frame 0"],
     ));
+    // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
+    // refused before anything is written, whatever the output.
+    for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {
+        let text = animated_usda().replacen(
+            "#usda 1.0\n",
+            &format!("#usda 1.0\n(\n startTimeCode = {start}\n endTimeCode = {end}\n)\n"),
+            1,
+        );
+        for out in ["out.abc", "out.usda"] {
+            cases.push(case(
+                &format!(".usda timeline {start} to {end} → {out}"),
+                vec![("in.usda", text.clone().into_bytes())],
+                &["convert", "in.usda", out],
+                2,
+                &[&["in.usda", "--frame-range"], names].concat(),
+            ));
+        }
+    }
     // Widths of metres (1e30 m once went through every stage) and coordinates a kilometre and
     // more out (1e30 m overflowed the rods within a step, and `simulate` then refused its own
     // result naming no file): a file in another unit. Refused where the strands become rods,

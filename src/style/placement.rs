@@ -277,12 +277,18 @@ pub const DEFAULT_SEGMENT_HEAD_UNITS: f32 = 0.1;
 /// be shorter than the diameter of the rod it winds on (the seed grooms' 3 cm segments wind on
 /// the water set's 5 cm rollers).
 pub const COARSEST_SEGMENT_ROD_DIAMETERS: f32 = 0.75;
+/// The finest segment a groom is styled at, metres (the bottom of `[settings] max_segment`'s
+/// range).
+pub const MIN_SEGMENT: f32 = 1e-5;
 
 /// The resolution a recipe without `max_segment` styles `groom` at: `None` when the groom is as
 /// fine as its head and rods need ([`COARSEST_SEGMENT_HEAD_UNITS`] of the fitted head,
 /// [`COARSEST_SEGMENT_ROD_DIAMETERS`] of the thinnest rod), so it is simulated as it comes;
 /// else the finer of [`DEFAULT_SEGMENT_HEAD_UNITS`] and that limit, so a preset styles a coarse
-/// groom of any head size unchanged, at the same resolution relative to the head.
+/// groom of any head size unchanged, at the same resolution relative to the head. A resolution
+/// finer than an explicit `max_segment` may be ([`MIN_SEGMENT`]) is refused, naming the rod or
+/// head asking for it: a micrometre rod or head would multiply the groom's vertices ten
+/// thousandfold.
 pub fn default_max_segment(recipe: &Recipe, groom: &Groom, frame: Option<HeadFrame>) -> Result<Option<f32>> {
     if recipe.settings.max_segment.is_some() {
         return Ok(recipe.settings.max_segment);
@@ -292,23 +298,55 @@ pub fn default_max_segment(recipe: &Recipe, groom: &Groom, frame: Option<HeadFra
         (Frame::Head, Some(size)) => l * size,
         _ => l,
     };
-    let rod_radii = recipe.rods.iter().map(|r| metres(r.get_ref().frame, r.get_ref().radius));
-    let layout_radii = recipe.stages.iter().filter_map(|s| match s.get_ref() {
+    // Each rod's radius in metres, with what the user wrote it as.
+    let rod_radii = recipe.rods.iter().map(|r| {
+        let r = r.get_ref();
+        (metres(r.frame, r.radius), format!("the recipe's rod '{}'", r.name))
+    });
+    let layout_radii = recipe.stages.iter().enumerate().filter_map(|(index, s)| match s.get_ref() {
         Stage::Wrap { layout, diameter: Some(d), .. } if *layout != Layout::Nearest => {
-            Some(metres(None, 0.5 * d))
+            Some((metres(None, 0.5 * d), format!("the rods of the recipe's stage {} (wrap)", index + 1)))
         }
         _ => None,
     });
-    let rods = rod_radii.chain(layout_radii).map(|r| COARSEST_SEGMENT_ROD_DIAMETERS * 2.0 * r);
-    let limit =
-        rods.clone().chain(size.map(|s| COARSEST_SEGMENT_HEAD_UNITS * s)).fold(f32::INFINITY, f32::min);
+    let rods: Vec<(f32, String)> = rod_radii
+        .chain(layout_radii)
+        .map(|(radius, what)| {
+            (COARSEST_SEGMENT_ROD_DIAMETERS * 2.0 * radius, format!("{what} ({} m across)", 2.0 * radius))
+        })
+        .collect();
+    let limit = rods
+        .iter()
+        .map(|r| r.0)
+        .chain(size.map(|s| COARSEST_SEGMENT_HEAD_UNITS * s))
+        .fold(f32::INFINITY, f32::min);
     let longest = (0..groom.strand_count())
         .flat_map(|s| groom.strand_points(s).windows(2).map(|w| w[0].distance(w[1])))
         .fold(0.0f32, f32::max);
     if !(limit.is_finite() && longest > limit) {
         return Ok(None);
     }
-    let target = rods.chain(size.map(|s| DEFAULT_SEGMENT_HEAD_UNITS * s)).fold(limit, f32::min);
+    let head = size.map(|s| {
+        let what = match recipe.head.size {
+            Some(_) => format!("the recipe's [head] size = {s} m"),
+            None => format!("the head fitted to the roots ({s} m in size)"),
+        };
+        (DEFAULT_SEGMENT_HEAD_UNITS * s, what)
+    });
+    let (target, cause) = rods
+        .into_iter()
+        .chain(head)
+        .fold((f32::INFINITY, String::new()), |finest, next| if next.0 < finest.0 { next } else { finest });
+    if target < MIN_SEGMENT {
+        return Err(Error::Usage(format!(
+            "{cause} would have the groom styled at segments of {} m, finer than the {MIN_SEGMENT} m \
+             [settings] max_segment may be ({} vertices instead of {}); are the recipe's lengths \
+             another unit's? Set [settings] max_segment to style it anyway",
+            crate::validate::shortest(target.into()),
+            crate::validate::shortest(crate::limits::vertices_after_resampling(groom, Some(target))),
+            groom.vertex_count()
+        )));
+    }
     Ok(Some(target))
 }
 

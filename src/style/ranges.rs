@@ -29,7 +29,7 @@
 //! | `amount`, mask `fraction`, bond amounts | [0, 1] |
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
-//! | `[guides]` `reach` | (0, 1000] m |
+//! | `[head]` `size`, `[guides]` `reach` | (0, 1000] m |
 //! | stages | at most 10,000 |
 //! | obstacles, rods | at most 1,000 each |
 use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, ITERATIONS, MODULUS, SECONDS, TIME_STEP};
@@ -101,7 +101,12 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
     table("settings", "density", s.density.into(), DENSITY)?;
     table("settings", "cuticle_peel_per_metre", s.cuticle_peel_per_metre.into(), Range::closed(0.0, 1e3))?;
     if let Some(max) = s.max_segment {
-        table("settings", "max_segment", max.into(), Range::closed(1e-5, 10.0))?;
+        table(
+            "settings",
+            "max_segment",
+            max.into(),
+            Range::closed(super::placement::MIN_SEGMENT.into(), 10.0),
+        )?;
     }
     table("settings", "damping", s.damping.into(), Range::closed(0.0, 1e4))?;
     let b = &recipe.bonds;
@@ -130,6 +135,9 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         table("water", "uptake", p.uptake.into(), Range::closed(0.0, 1e3))?;
     }
 
+    if let Some(size) = recipe.head.size {
+        table("head", "size", size.into(), SIZE)?;
+    }
     if let Some(reach) = recipe.guides.and_then(|g| g.reach) {
         table("guides", "reach", reach.into(), SIZE)?;
     }
