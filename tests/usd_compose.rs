@@ -406,6 +406,22 @@ fn bad_composition_exits_2_naming_file_prim_and_arc() {
     }
     let mut cases = cases;
     cases.push((write("diamond.usda", &diamond), vec![], vec!["10000 nodes", "</Root>"]));
+    // A fan of files: each layer's two prims reference the next layer, 31 deep (2^31 prims).
+    // Refused at the stage's work limit (it took 77 s to get there while every derived node
+    // copied its whole subtree).
+    for level in 0..31 {
+        let prim = |name: &str| match level {
+            30 => format!(" def Xform \"{name}\" {{}}\n"),
+            _ => format!(" def Xform \"{name}\" (\n  references = @fan{}.usda@\n ) {{}}\n", level + 1),
+        };
+        let text = format!(
+            "#usda 1.0\n(\n defaultPrim = \"r\"\n)\ndef Xform \"r\" {{\n{}{}}}\n",
+            prim("a"),
+            prim("b")
+        );
+        write(&format!("fan{level}.usda"), &text);
+    }
+    cases.push((dir.path().join("fan0.usda"), vec![], vec!["more than 5000000 nodes", "</r/a/a/a"]));
     let out = dir.path().join("out.usda");
     for (input, extra, named) in &cases {
         let mut args = vec!["convert", path_str(input), path_str(&out)];

@@ -30,6 +30,7 @@ pub mod arcs;
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use arcs::{Arcs, AssetArc, LayerOffset, ListOp};
 
@@ -122,8 +123,14 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
     }
     drop(seen);
     for name in names {
-        let node =
-            composer.node(stack, vec![Elem::Child(name.clone())], LayerOffset::default(), Arc::Root, 0, 0);
+        let node = composer.node(
+            stack,
+            vec![Elem::Child(name.as_str().into())],
+            LayerOffset::default(),
+            Arc::Root,
+            0,
+            0,
+        );
         if let Some(prim) = composer.prim(&name, "", node, 1)? {
             out.prims.push(prim);
         }
@@ -203,10 +210,12 @@ struct Stack {
     layers: Vec<(usize, LayerOffset)>,
 }
 
+/// One element of a site's path. Names are shared: every node of a prim's index, and every
+/// child's, copies its parent's path, so a deep index copies names a great many times.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 enum Elem {
-    Child(String),
-    Variant(String, String),
+    Child(Rc<str>),
+    Variant(Rc<str>, Rc<str>),
 }
 
 /// How a node joined the index, in strength order.
@@ -293,8 +302,8 @@ fn spec_at<'l>(layer: &'l Layer, path: &[Elem], index: &SiblingIndex) -> Option<
             Elem::Child(name) => child(&prim.children, name, index)?,
             Elem::Variant(set, variant) => {
                 let arcs = prim.arcs.as_deref()?;
-                let set = arcs.variant_sets.iter().find(|s| &s.name == set)?;
-                set.variants.iter().find(|v| &v.name == variant)?
+                let set = arcs.variant_sets.iter().find(|s| *s.name == **set)?;
+                set.variants.iter().find(|v| *v.name == **variant)?
             }
         };
     }
@@ -318,7 +327,7 @@ fn path_text(path: &[Elem]) -> String {
 /// `/A/B` as path elements; `None` for anything but an absolute prim path.
 fn parse_prim_path(text: &str) -> Option<Vec<Elem>> {
     let rest = text.strip_prefix('/')?;
-    let elems: Vec<Elem> = rest.split('/').map(|name| Elem::Child(name.to_string())).collect();
+    let elems: Vec<Elem> = rest.split('/').map(|name| Elem::Child(name.into())).collect();
     let valid = |e: &Elem| matches!(e, Elem::Child(n) if !n.is_empty() && n.chars().all(|c| c.is_alphanumeric() || c == '_'));
     elems.iter().all(valid).then_some(elems)
 }
@@ -654,7 +663,7 @@ impl Composer {
             let Some(variant) = selection else { continue };
             let node = find(root, id).expect("found above");
             let mut path = node.path.clone();
-            path.push(Elem::Variant(set.clone(), variant));
+            path.push(Elem::Variant(set.as_str().into(), variant.into()));
             let (stack, offset) = (node.stack, node.offset);
             let mut child = self.node(stack, path, offset, Arc::Variant, depth, 0);
             if self.specs(&child).is_empty() {
@@ -805,9 +814,12 @@ fn expand_all(composer: &mut Composer, node: &mut Node, depth: usize, stage_path
 /// The node `node` becomes for the child prim `name`, dropping sites with no specs below.
 fn derive(composer: &Composer, node: &Node, name: &str) -> Option<Node> {
     let mut path = node.path.clone();
-    path.push(Elem::Child(name.to_string()));
+    path.push(Elem::Child(name.into()));
     let children: Vec<Node> = node.children.iter().filter_map(|c| derive(composer, c, name)).collect();
-    let derived = Node { path, children, ..node.clone() };
+    // Field by field: `..node.clone()` would copy the whole subtree only to drop it, making a
+    // deep index quadratic (a fan of references took 77 s to reach the work limit).
+    let Node { id, stack, offset, arc, depth, order, .. } = *node;
+    let derived = Node { id, stack, path, offset, arc, depth, order, children };
     let has_specs = !composer.specs(&derived).is_empty();
     (has_specs || !derived.children.is_empty() || derived.arc == Arc::Root).then_some(derived)
 }
