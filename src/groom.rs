@@ -109,6 +109,20 @@ pub enum GroomError {
     )]
     TooWide { strand: usize, vertex: usize, width: f32, max: f32 },
     #[error(
+        "strand {strand}, vertex {vertex}: width {} m is too thin to simulate as a hair (at least \
+         {} m; a width of 0 takes the default); are the file's widths, or its units, another unit's?",
+        crate::validate::shortest(f64::from(*width)),
+        crate::validate::shortest(f64::from(*min))
+    )]
+    TooThin { strand: usize, vertex: usize, width: f32, min: f32 },
+    #[error(
+        "the simulation diverged{} (positions no longer finite) by {seconds:.3} s of simulated time: \
+         the groom's widths, lengths or rest shape, or the settings (dt, iterations, moduli, \
+         gravity), are beyond what the solver holds",
+        stage.as_ref().map_or(String::new(), |s| format!(" in {s}"))
+    )]
+    Diverged { seconds: f64, stage: Option<String> },
+    #[error(
         "strand {strand}, vertex {vertex}: a coordinate of {} m is beyond the {max} m from the origin \
          a groom is simulated in; are the file's units another unit's?",
         crate::validate::shortest(f64::from(*coordinate))

@@ -80,10 +80,11 @@ impl fmt::Display for Range {
 }
 
 /// A number as written: an `f32` widened to `f64` prints as the `f32` (0.001, not
-/// 0.0010000000474974513), and from ten million up in exponent form (1e30, not 31 digits).
+/// 0.0010000000474974513), and from ten million up or below a ten-thousandth in exponent form
+/// (1e30, 1e-9; not 31 digits or nine zeros).
 pub fn shortest(value: f64) -> String {
     let narrow = value as f32;
-    let large = value.abs() >= 1e7;
+    let large = value.abs() >= 1e7 || (value != 0.0 && value.abs() < 1e-4);
     match (narrow as f64 == value, large) {
         (true, false) => narrow.to_string(),
         (true, true) => format!("{narrow:e}"),
@@ -173,5 +174,6 @@ mod tests {
         assert!(e.contains("--damping = 1e30 must") && e.contains("[0, 10000]"), "{e}");
         assert!(FRAME.to_string() == "[-1e9, 1e9]" && MODULUS.to_string() == "[100000, 1e12]");
         assert_eq!(shortest(0.001f32.into()), "0.001");
+        assert_eq!((shortest(1e-6f32.into()), shortest(8e-8)), ("1e-6".into(), "8e-8".into()));
     }
 }

@@ -518,6 +518,22 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.usda", "frame 0"],
     ));
+    // A rest shape no turn has (a rest_darboux is the vector part of a unit quaternion): 1e30
+    // overflowed the rods and was blamed on the output's coordinates.
+    for value in ["1e30", "2"] {
+        let text = format!(
+            "#usda 1.0\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [3, 3]\n  \
+             point3f[] points = [(0, 0.1, 0), (0, 0.09, 0), (0, 0.08, 0), (0.01, 0.1, 0), (0.01, 0.09, 0), (0.01, 0.08, 0)]\n  \
+             float3[] primvars:rest_darboux = [(0, 0, 0), (0, 0, 0), (0, 0, 0), (0, 0, 0), ({value}, 0, 0), (0, 0, 0)] (interpolation = \"vertex\")\n}}\n"
+        );
+        cases.push(case(
+            &format!("rest_darboux {value}"),
+            vec![("in.usda", text.into_bytes())],
+            &["simulate", "in.usda", "out.usda", "--seconds", "0.01"],
+            2,
+            &["in.usda", "rest_darboux", "vertex 4", "at most 1"],
+        ));
+    }
     // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
     // refused before anything is written, whatever the output.
     for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {
@@ -543,6 +559,11 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
     let mut unsimulable = Vec::new();
     for width in ["1", "1e30"] {
         unsimulable.push((format!("width {width} m"), "0".to_string(), width.to_string(), "too wide"));
+    }
+    // Widths of 0.1 µm and less (a millimetre file read as metres): mass and stiffness beyond
+    // f32, and the rods overflowed; the output was then refused as "coordinate is not finite".
+    for width in ["1e-7", "1e-45"] {
+        unsimulable.push((format!("width {width} m"), "0".to_string(), width.to_string(), "too thin"));
     }
     for far in ["2000", "-1e6", "1e30"] {
         unsimulable.push((

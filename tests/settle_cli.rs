@@ -64,7 +64,7 @@ fn settle_options_out_of_range_exit_2_naming_key_and_range() {
         (["--settle-seconds", "0"], "--settle-seconds", "(0, 3600]"),
         (["--settle-seconds", "1e9"], "--settle-seconds", "(0, 3600]"),
         (["--settle-iterations", "0"], "--settle-iterations", "[1, 1000]"),
-        (["--dt", "2"], "--dt", "[0.000001, 0.1]"),
+        (["--dt", "2"], "--dt", "[1e-6, 0.1]"),
         (["--iterations", "5000"], "--iterations", "[1, 1000]"),
     ] {
         let mut args = vec!["simulate", path_str(&input), path_str(&output), "--settle"];
@@ -86,7 +86,7 @@ fn recipe_settle_keys_out_of_range_exit_2_with_key_range_and_line() {
         (format!("{base}tolerance = 0.0\n"), "tolerance", "[1e-5, 0.5]"),
         (format!("{base}tolerance = 5.0\n"), "tolerance", "[1e-5, 0.5]"),
         (base.replace("max_seconds = 1.0", "max_seconds = 0.0"), "max_seconds", "(0, 3600]"),
-        (base.replace("dt = 0.0027777778", "dt = 0.5"), "dt", "[0.000001, 0.1]"),
+        (base.replace("dt = 0.0027777778", "dt = 0.5"), "dt", "[1e-6, 0.1]"),
     ] {
         let recipe = dir.path().join("bad.toml");
         std::fs::write(&recipe, &text).unwrap();

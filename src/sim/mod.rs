@@ -495,6 +495,22 @@ impl Simulation {
         }
     }
 
+    /// Refuses a state that has diverged (a position or frame no longer finite): a groom and
+    /// settings beyond what the solver holds, said as such rather than blamed later on the
+    /// output's "coordinate not finite". Cheap beside a step: one pass over the state. `stage`
+    /// names the styling stage for the message.
+    pub fn check_finite(&self, stage: Option<String>) -> Result<(), crate::groom::GroomError> {
+        let r = &self.rods;
+        let finite = r.positions().iter().all(|p| p.is_finite()) && r.frames().iter().all(|q| q.is_finite());
+        match finite {
+            true => Ok(()),
+            false => Err(crate::groom::GroomError::Diverged {
+                seconds: self.steps_taken() as f64 * self.params.dt as f64,
+                stage,
+            }),
+        }
+    }
+
     /// Largest vertex speed, m/s.
     pub fn max_speed(&self) -> f32 {
         self.rods.velocities().iter().map(|v| v.length()).fold(0.0, f32::max)

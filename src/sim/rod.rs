@@ -17,6 +17,11 @@ use crate::groom::{Groom, GroomError};
 /// of metres (1e30 m read from a file went through every stage before) is a file in another
 /// unit, or widths that mean something else, and would give rods of absurd mass and stiffness.
 pub const MAX_WIDTH: f32 = 0.1;
+/// The thinnest strand simulated, metres (a width of 0 takes [`Material::fallback_width`]): the
+/// finest fibres are a few micrometres; below, bending stiffness (∝ r⁴) and mass (∝ r²) reach
+/// f32's limits and the rods overflow within a step (0.08 µm widths of a millimetre groom read
+/// as metres did).
+pub const MIN_WIDTH: f32 = 1e-6;
 
 /// The farthest from the origin a simulated vertex may be, metres (the range recipes place
 /// obstacles in, [`crate::validate::COORDINATE`]): f32 positions a kilometre out are 60 µm apart,
@@ -24,10 +29,10 @@ pub const MAX_WIDTH: f32 = 0.1;
 /// overflow to infinity within a step. Such a file is in another unit, or broken.
 pub const MAX_COORDINATE: f32 = 1e3;
 
-/// Refuses a groom the rods cannot represent: a strand wider than [`MAX_WIDTH`] or a vertex
-/// farther than [`MAX_COORDINATE`] from the origin on an axis, naming the first. Styling checks
-/// the groom as it was read, so that the strand named is the file's (not a resampled vertex or
-/// the index of a guide among guides).
+/// Refuses a groom the rods cannot represent: a strand wider than [`MAX_WIDTH`] or thinner than
+/// [`MIN_WIDTH`] (but not 0), or a vertex farther than [`MAX_COORDINATE`] from the origin on an
+/// axis, naming the first. Styling checks the groom as it was read, so that the strand named is
+/// the file's (not a resampled vertex or the index of a guide among guides).
 pub fn check_simulable(groom: &Groom) -> Result<(), GroomError> {
     let at = |i: usize| {
         let strand = groom.strand_of(i);
@@ -36,6 +41,10 @@ pub fn check_simulable(groom: &Groom) -> Result<(), GroomError> {
     if let Some(i) = groom.widths.iter().position(|&w| w > MAX_WIDTH) {
         let (strand, vertex) = at(i);
         return Err(GroomError::TooWide { strand, vertex, width: groom.widths[i], max: MAX_WIDTH });
+    }
+    if let Some(i) = groom.widths.iter().position(|&w| w > 0.0 && w < MIN_WIDTH) {
+        let (strand, vertex) = at(i);
+        return Err(GroomError::TooThin { strand, vertex, width: groom.widths[i], min: MIN_WIDTH });
     }
     if let Some(i) = groom.points.iter().position(|p| p.abs().max_element() > MAX_COORDINATE) {
         let (strand, vertex) = at(i);

@@ -60,6 +60,20 @@ impl Simulation {
         if let Some(i) = attribute.data.iter().position(|v| !v.is_finite()) {
             return Err(bad_attribute(REST_DARBOUX, format!("vertex {} is not finite", i / 3)));
         }
+        // The vector part of a unit turn (`darboux_canonical`): at most 1 long, up to round-off
+        // (1e30 once went into the bonds' memory and the rods overflowed within a step).
+        let length = |c: &[f32]| Vec3::from_slice(c).as_dvec3().length();
+        if let Some((i, c)) = attribute.data.chunks_exact(3).enumerate().find(|(_, c)| length(c) > 1.0 + 1e-3)
+        {
+            return Err(bad_attribute(
+                REST_DARBOUX,
+                format!(
+                    "vertex {i} is {} long; a rest_darboux is the vector part of a unit quaternion (the turn \
+                     between neighbouring edge frames), at most 1",
+                    crate::validate::shortest(length(c))
+                ),
+            ));
+        }
         let mut shape: Vec<Vec3> = attribute
             .data
             .chunks_exact(3)

@@ -255,6 +255,10 @@ fn relax<C>(
             if let Some((positions, frames)) = probe.take() {
                 (report.force_residual, report.torque_residual) =
                     s.residuals(&positions, &frames, probe_steps, &mut per_strand);
+                if report.force_residual.is_infinite() {
+                    // Diverged: no number of steps brings it back (the caller says so).
+                    return;
+                }
                 if report.force_residual <= tolerance && report.torque_residual <= tolerance {
                     if asleep == 0 {
                         report.converged = true;
@@ -461,7 +465,12 @@ impl Simulation {
             g if g > 0.0 => g,
             _ => STANDARD_GRAVITY,
         } as f64;
-        let ratio = |a: f64, b: f64| if b > 0.0 { (a / b).sqrt() as f32 } else { 0.0 };
+        // A diverged state (NaN) is as far from rest as can be, not a zero residual.
+        let ratio = |a: f64, b: f64| match a {
+            a if a.is_nan() => f32::INFINITY,
+            a if b > 0.0 => (a / b).sqrt() as f32,
+            _ => 0.0,
+        };
         let (mut worst_force, mut torque, mut moment) = (0.0f32, 0.0f64, 0.0f64);
         per_strand.clear();
         for strand in 0..r.strand_count() {
@@ -594,5 +603,23 @@ mod tests {
         // While disturbed, a unit stays awake however still it is; then it may sleep again.
         assert_eq!(sim.put_to_sleep(|_| true, |strand| strand == 3), 8);
         assert_eq!(sim.put_to_sleep(|_| true, |_| false), 16);
+    }
+
+    #[test]
+    fn a_diverged_state_is_neither_converged_nor_at_rest() {
+        // A NaN position made every residual read 0 ("converged, residual 0"); it reads infinite,
+        // the settle stops at once, and the simulation refuses the state.
+        let strands: Vec<Vec<Vec3>> = (0..2)
+            .map(|k| (0..6).map(|i| Vec3::new(0.05 * k as f32, -0.01 * i as f32, 0.0)).collect())
+            .collect();
+        let groom = Groom::from_strands(&strands, 80e-6);
+        let mut sim = Simulation::new(&groom, SimParams::default()).unwrap();
+        assert!(sim.check_finite(None).is_ok());
+        sim.rods.positions_mut()[3] = Vec3::NAN;
+        let report = sim.settle(&SettleOptions::default(), &crate::sim::NoHooks);
+        assert!(!report.converged && report.force_residual.is_infinite(), "{report:?}");
+        assert!(report.seconds < 1.0, "ran on for {} s", report.seconds);
+        let e = sim.check_finite(Some("stage 2 (dry)".into())).unwrap_err().to_string();
+        assert!(e.contains("diverged in stage 2 (dry)"), "{e}");
     }
 }
