@@ -405,11 +405,19 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         cases.push(convert(format!(".hair {name}"), "in.hair", bytes, &["in.hair"]));
     }
     let mut nan_point = hair.clone();
-    let data = nan_point.len() - 6 * 6 * 12;
-    let _ = data;
     let first_point =
         128 + if u32::from_le_bytes(hair[12..16].try_into().unwrap()) & 1 != 0 { 12 } else { 0 };
     nan_point[first_point..first_point + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    // A point 1e37 m out is a float, but not in Unreal's centimetres: it was written as infinity.
+    let mut far_point = hair.clone();
+    far_point[first_point..first_point + 4].copy_from_slice(&1e37f32.to_le_bytes());
+    cases.push(case(
+        ".hair 1e37 m → --unreal .abc",
+        vec![("in.hair", far_point)],
+        &["convert", "in.hair", "out.abc", "--unreal"],
+        2,
+        &["strand 0, vertex 0", "1e37", "centimetres"],
+    ));
     cases.push(convert(".hair NaN point".into(), "in.hair", nan_point, &["in.hair", "strand 0"]));
     cases.push(convert(".hair is text".into(), "in.hair", b"HAIR but not really".to_vec(), &["in.hair"]));
 

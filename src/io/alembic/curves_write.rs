@@ -312,6 +312,9 @@ impl<W: Write + Seek> CurvesWriter<W> {
         if !groom.meshes.iter().map(|m| m.points.len()).eq(self.mesh_sizes.iter().copied()) {
             return invalid(format!("frame {} has other meshes than the first frame", self.frames));
         }
+        if let Some(problem) = overflow_when_scaled(groom, self.scale) {
+            return invalid(problem);
+        }
         if self.objects.first().is_none_or(|o| o.properties.velocities.is_none()) {
             // Nothing needs the next frame: write this one now, without keeping a copy.
             self.frames += 1;
@@ -692,6 +695,42 @@ impl Tree {
         self.nodes.push((format!("{prefix}/{name}"), object));
         Ok(made)
     }
+}
+
+/// What of `groom` scaling by `scale` (Epic's centimetres) takes beyond f32: a point, a width or
+/// a mesh point over 3.4e36 m would be written as infinity.
+fn overflow_when_scaled(groom: &Groom, scale: f32) -> Option<String> {
+    if scale == 1.0 {
+        return None;
+    }
+    let overflows = |v: f32| !(v * scale).is_finite();
+    let beyond = |what: String, v: f32| {
+        Some(format!(
+            "{what} is {} m, beyond what a float holds in Unreal's centimetres",
+            crate::validate::shortest(v.into())
+        ))
+    };
+    if let Some(i) = groom.points.iter().position(|p| p.to_array().into_iter().any(overflows)) {
+        let strand = groom.strand_of(i);
+        let vertex = i - groom.strand_offsets[strand] as usize;
+        let coordinate = groom.points[i].abs().max_element();
+        return beyond(format!("strand {strand}, vertex {vertex}: a coordinate"), coordinate);
+    }
+    if let Some(i) = groom.widths.iter().position(|&w| overflows(w)) {
+        let strand = groom.strand_of(i);
+        let vertex = i - groom.strand_offsets[strand] as usize;
+        return beyond(format!("strand {strand}, vertex {vertex}: the width"), groom.widths[i]);
+    }
+    // `rest` is a position too, scaled with the points.
+    if let Some(v) = groom.attribute("rest").and_then(|a| a.data.iter().copied().find(|&v| overflows(v))) {
+        return beyond("attribute 'rest': a coordinate".into(), v.abs());
+    }
+    for mesh in &groom.meshes {
+        if let Some(p) = mesh.points.iter().find(|p| p.to_array().into_iter().any(overflows)) {
+            return beyond(format!("mesh {}: a point's coordinate", mesh.path), p.abs().max_element());
+        }
+    }
+    None
 }
 
 /// A PolyMesh object for groom mesh `index` (points scaled by `scale` when written), its
