@@ -542,6 +542,21 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             &["in.usda", "rest_darboux", "vertex 4", "at most 1"],
         ));
     }
+    // Output over an input: the run replaced what it read.
+    let style_files = || vec![("r.toml", BASE.as_bytes().to_vec()), ("g.hair", inputs.hair.clone())];
+    for (args, culprit) in [
+        (&["style", "r.toml", "--groom", "g.hair", "-o", "g.hair"][..], "--groom"),
+        (&["style", "r.toml", "--groom", "g.hair", "-o", "./r.toml"], "the recipe"),
+        (&["simulate", "g.hair", "./g.hair", "--seconds", "0.01"], "the input"),
+    ] {
+        cases.push(case(
+            &format!("output is an input: {}", args.join(" ")),
+            style_files(),
+            args,
+            2,
+            &[culprit, "another file"],
+        ));
+    }
     // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
     // refused before anything is written, whatever the output.
     for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {
@@ -681,6 +696,24 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         2,
         &["m.toml", "'..'"],
     ));
+    // A task writing over an input: a re-run would style its own output again (the batch did).
+    for (label, outputs, culprit) in [
+        ("its groom", "[\"g.hair\"]", "task 'a''s groom"),
+        ("another task's recipe", "[\"out/{name}.usda\", \"r.toml\"]", "task 'a''s recipe"),
+    ] {
+        let manifest = format!(
+            "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = {outputs}\n\n[[tasks]]\nname = \"a\"\n"
+        );
+        for command in [&["batch", "m.toml"][..], &["farm", "status", "m.toml"]] {
+            cases.push(case(
+                &format!("output is {label}: {}", command.join(" ")),
+                files(&manifest),
+                command,
+                2,
+                &["m.toml", culprit],
+            ));
+        }
+    }
     let values: Vec<String> = (0..16).map(|v| format!("{v}.0")).collect();
     let parameters: Vec<String> =
         (0..16).map(|k| format!("\"stages.{k}.duration\" = [{}]", values.join(", "))).collect();

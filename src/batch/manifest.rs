@@ -257,6 +257,25 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             pair[0].display()
         )));
     }
+    // A task writing over a groom or recipe (its own or another's) would change the inputs the
+    // next run reads: a re-run would style its own output again, and tasks on other nodes would
+    // read a file while it is replaced.
+    let inputs: std::collections::HashMap<&PathBuf, (&str, &str)> = tasks
+        .iter()
+        .flat_map(|t| [(&t.groom, (t.name.as_str(), "groom")), (&t.recipe, (t.name.as_str(), "recipe"))])
+        .collect();
+    for task in &tasks {
+        for output in task.outputs.iter().chain(task.preview.iter()) {
+            if let Some((owner, what)) = inputs.get(output) {
+                return Err(bad(format!(
+                    "task '{}' writes {}, task '{owner}''s {what}: a batch does not overwrite its inputs \
+                     (a re-run would style its own output)",
+                    task.name,
+                    output.display()
+                )));
+            }
+        }
+    }
     Ok(Manifest {
         path: path.to_path_buf(),
         logs: resolve(file.logs.as_deref().unwrap_or("logs")),

@@ -5,6 +5,7 @@ use coif::validate::{
     UNITS,
 };
 use coif::Result;
+use std::path::{Path, PathBuf};
 
 use super::args::{GenerateArgs, ImportArgs, RenderArgs, SimulateArgs, StyleArgs};
 
@@ -29,10 +30,32 @@ pub(crate) fn style(args: &StyleArgs) -> Result<()> {
     if let Some(fps) = args.frames {
         flag("--frames", fps, Range::closed(0.0, 1e4))?;
     }
+    let inputs = [
+        ("--groom", Some(&args.groom)),
+        ("the recipe", Some(&args.recipe)),
+        ("--scalp", args.scalp.as_ref()),
+    ];
+    not_an_input(&args.output, &inputs)
+}
+
+/// Refuses an output that is one of the run's inputs (the same file, however named): the run
+/// would replace what it read, and running it again would work on its own result.
+fn not_an_input(output: &Path, inputs: &[(&str, Option<&PathBuf>)]) -> Result<()> {
+    // A file that does not exist yet is no input; one that does is compared by identity.
+    let Ok(written) = std::fs::canonicalize(output) else { return Ok(()) };
+    for (what, input) in inputs {
+        if input.and_then(|p| std::fs::canonicalize(p).ok()).as_ref() == Some(&written) {
+            return Err(coif::Error::Usage(format!(
+                "{}: the output is {what}, an input of the run; write the result to another file",
+                output.display()
+            )));
+        }
+    }
     Ok(())
 }
 
 pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
+    not_an_input(&args.output, &[("the input", Some(&args.input))])?;
     flag("--seconds", args.seconds, SECONDS)?;
     flag("--gravity", args.gravity, COORDINATE)?;
     flag("--dt", coif::sim::driver::parse_time_step(&args.dt)?, TIME_STEP)?;
