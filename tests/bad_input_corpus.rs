@@ -696,10 +696,58 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         2,
         &["m.toml", "'..'"],
     ));
+    // Formats known before anything runs: a typo found after styling left the other outputs.
+    let plain = "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\n";
+    for (label, manifest, culprit) in [
+        (
+            "output .txt",
+            format!("{plain}outputs = [\"out/{{name}}.txt\"]\n[[tasks]]\nname = \"a\"\n"),
+            &["line 5", "out/a.txt"][..],
+        ),
+        (
+            "preview .jpg",
+            format!("{plain}preview = \"p.jpg\"\n[[tasks]]\nname = \"a\"\n"),
+            &["line 5", "p.jpg"],
+        ),
+        (
+            "sheet .jpg",
+            format!(
+                "contact_sheet = \"s.jpg\"\n{plain}preview = \"{{name}}.png\"\n[[tasks]]\nname = \"a\"\n"
+            ),
+            &["s.jpg", ".png"],
+        ),
+        (
+            "sheet of no previews",
+            format!(
+                "contact_sheet = \"s.png\"\n{plain}outputs = [\"{{name}}.usda\"]\n[[tasks]]\nname = \"a\"\n"
+            ),
+            &["contact sheet", "preview"],
+        ),
+        (
+            "sheet of .exr",
+            format!(
+                "contact_sheet = \"s.png\"\n{plain}preview = \"{{name}}.exr\"\n[[tasks]]\nname = \"a\"\n"
+            ),
+            &["a.exr", ".png"],
+        ),
+    ] {
+        cases.push(case(
+            &format!("batch {label}"),
+            files(&manifest),
+            &["batch", "m.toml"],
+            2,
+            &[&["m.toml"], culprit].concat(),
+        ));
+    }
     // A task writing over an input: a re-run would style its own output again (the batch did).
     for (label, outputs, culprit) in [
         ("its groom", "[\"g.hair\"]", "task 'a''s groom"),
-        ("another task's recipe", "[\"out/{name}.usda\", \"r.toml\"]", "task 'a''s recipe"),
+        // Tasks run in any order, on any node: b would read a's output while it is written.
+        (
+            "another task's groom",
+            "[\"{name}.usda\"]\n[[tasks]]\nname = \"b\"\ngroom = \"a.usda\"",
+            "task 'b''s groom",
+        ),
     ] {
         let manifest = format!(
             "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = {outputs}\n\n[[tasks]]\nname = \"a\"\n"

@@ -171,6 +171,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
                 )));
             }
         }
+        // Formats are known now: a typo found after styling left the task's other outputs.
+        let at = |e: Error| bad(format!("line {line}: task '{name}': {e}"));
+        for output in &outputs {
+            crate::io::Format::from_extension(Path::new(&fill(output))).map_err(at)?;
+        }
+        if let Some(preview) = &preview {
+            crate::render::image::ImageFormat::from_path(Path::new(&fill(preview))).map_err(at)?;
+        }
         let mut all_overrides: Vec<(String, toml::Value)> =
             file.defaults.overrides.clone().into_iter().collect();
         all_overrides.extend(spec.overrides.clone());
@@ -274,6 +282,23 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
                     output.display()
                 )));
             }
+        }
+    }
+    if let Some(sheet) = &file.contact_sheet {
+        // The sheet is a PNG of the previews, read back as PNGs.
+        let previews: Vec<&PathBuf> = tasks.iter().filter_map(|t| t.preview.as_ref()).collect();
+        let png = |p: &Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let problem = if !png(Path::new(sheet)) {
+            Some(format!("contact_sheet {sheet}: a contact sheet is written as .png"))
+        } else if previews.is_empty() {
+            Some("a contact sheet needs at least one task with a preview".to_string())
+        } else {
+            previews.iter().find(|p| !png(p)).map(|p| {
+                format!("contact_sheet: the sheet is made of .png previews, and {} is not one", p.display())
+            })
+        };
+        if let Some(problem) = problem {
+            return Err(bad(problem));
         }
     }
     Ok(Manifest {
