@@ -696,6 +696,22 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         2,
         &["m.toml", "'..'"],
     ));
+    // Options that would add lines to the array script (`touch INJECTED` ran on the farm), or
+    // that sbatch would read as something else: refused before the script or logs are written.
+    for (label, args, named) in [
+        ("partition with a line break", &["--partition", "x\ntouch INJECTED"][..], "--partition"),
+        ("partition with a space", &["--partition", "a b"], "--partition"),
+        ("no cpus", &["--cpus", "0"], "--cpus 0"),
+        ("no parallel tasks", &["--max-parallel", "0"], "--max-parallel 0"),
+    ] {
+        cases.push(case(
+            &format!("farm submit: {label}"),
+            files(&format!("{head}[[tasks]]\nname = \"a\"\n")),
+            &[&["farm", "submit", "m.toml", "--dry-run"], args].concat(),
+            2,
+            &[named],
+        ));
+    }
     // Formats known before anything runs: a typo found after styling left the other outputs.
     let plain = "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\n";
     for (label, manifest, culprit) in [

@@ -22,9 +22,56 @@ pub fn farm_dir(manifest: &Path) -> PathBuf {
     manifest.parent().unwrap_or(Path::new(".")).join("farm").join(stem)
 }
 
-/// The sbatch script for a manifest of `tasks` tasks.
-pub fn script(coif: &Path, manifest: &Path, tasks: usize, logs: &Path, options: &SubmitOptions) -> String {
+/// CPUs a task may ask for.
+pub const MAX_CPUS: usize = 4096;
+
+impl SubmitOptions {
+    /// Refuses values sbatch would take as something else: a partition name carrying a line
+    /// break would add lines to the script (`--partition $'x\ntouch y'` ran `touch y` on the
+    /// farm), `--cpus 0` was silently one.
+    fn check(&self) -> Result<()> {
+        if let Some(partition) = &self.partition {
+            let name_char = |c: char| c.is_ascii_alphanumeric() || "-_.,".contains(c);
+            if partition.is_empty() || !partition.chars().all(name_char) {
+                return Err(Error::Usage(format!(
+                    "--partition {partition:?}: a Slurm partition name is letters, digits, '-', '_' and \
+                     '.' (several separated by commas)"
+                )));
+            }
+        }
+        if !(1..=MAX_CPUS).contains(&self.cpus_per_task) {
+            return Err(Error::Usage(format!("--cpus {} must be 1 to {MAX_CPUS}", self.cpus_per_task)));
+        }
+        if self.max_parallel == Some(0) {
+            return Err(Error::Usage("--max-parallel 0: at least one task must run at a time".into()));
+        }
+        Ok(())
+    }
+}
+
+/// The sbatch script for a manifest of `tasks` tasks, or the usage error for options or paths
+/// it cannot carry (checked before anything is written).
+pub fn script(
+    coif: &Path,
+    manifest: &Path,
+    tasks: usize,
+    logs: &Path,
+    options: &SubmitOptions,
+) -> Result<String> {
+    options.check()?;
+    // `#SBATCH` lines end at a line break, quoted or not.
+    for path in [coif, manifest, logs] {
+        if path.to_string_lossy().chars().any(char::is_control) {
+            return Err(Error::Usage(format!(
+                "{:?}: a path with a line break or control character cannot go in a Slurm script",
+                path
+            )));
+        }
+    }
     let stem = manifest.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    // The job name is only a label: anything but a plain name character becomes '_'.
+    let job_name: String =
+        stem.chars().map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
     let quote = |p: &Path| shell_quote(&p.to_string_lossy());
     let mut array = format!("0-{}", tasks.saturating_sub(1));
     if let Some(n) = options.max_parallel {
@@ -32,9 +79,9 @@ pub fn script(coif: &Path, manifest: &Path, tasks: usize, logs: &Path, options: 
     }
     let mut lines = vec![
         "#!/bin/bash".to_string(),
-        format!("#SBATCH --job-name=coif-{stem}"),
+        format!("#SBATCH --job-name=coif-{job_name}"),
         format!("#SBATCH --array={array}"),
-        format!("#SBATCH --cpus-per-task={}", options.cpus_per_task.max(1)),
+        format!("#SBATCH --cpus-per-task={}", options.cpus_per_task),
         format!("#SBATCH --output={}/slurm-%A_%a.out", logs.to_string_lossy()),
     ];
     if let Some(partition) = &options.partition {
@@ -42,11 +89,11 @@ pub fn script(coif: &Path, manifest: &Path, tasks: usize, logs: &Path, options: 
     }
     lines.extend([
         "set -euo pipefail".to_string(),
-        format!("export RAYON_NUM_THREADS={}", options.cpus_per_task.max(1)),
+        format!("export RAYON_NUM_THREADS={}", options.cpus_per_task),
         format!("exec {} batch {} --task \"$SLURM_ARRAY_TASK_ID\"", quote(coif), quote(manifest)),
         String::new(),
     ]);
-    lines.join("\n")
+    Ok(lines.join("\n"))
 }
 
 fn shell_quote(text: &str) -> String {
@@ -101,7 +148,8 @@ mod tests {
             6,
             Path::new("/jobs/logs"),
             &options,
-        );
+        )
+        .unwrap();
         assert!(text.starts_with("#!/bin/bash\n"));
         assert!(text.contains("#SBATCH --array=0-5%4\n"));
         assert!(text.contains("#SBATCH --partition=gpu-free\n"));
@@ -110,5 +158,30 @@ mod tests {
             text.contains(r#"exec '/opt/coif' batch '/jobs/it'\''s.toml' --task "$SLURM_ARRAY_TASK_ID""#),
             "{text}"
         );
+        // The job name is a label: a quote in the manifest's name does not reach the script.
+        assert!(text.contains("#SBATCH --job-name=coif-it_s\n"), "{text}");
+    }
+
+    #[test]
+    fn nothing_a_user_gives_adds_lines_to_the_script() {
+        let run = |partition: &str, cpus: usize, manifest: &str, logs: &str| {
+            let options =
+                SubmitOptions { partition: Some(partition.into()), cpus_per_task: cpus, max_parallel: None };
+            script(Path::new("/opt/coif"), Path::new(manifest), 2, Path::new(logs), &options)
+        };
+        assert!(run("a,b-c_d.e", 1, "/jobs/m.toml", "/jobs/logs").is_ok());
+        for (partition, cpus, manifest, logs, named) in [
+            ("x\ntouch INJECTED", 2, "/jobs/m.toml", "/jobs/logs", "--partition"),
+            ("x y", 2, "/jobs/m.toml", "/jobs/logs", "--partition"),
+            ("", 2, "/jobs/m.toml", "/jobs/logs", "--partition"),
+            ("p", 0, "/jobs/m.toml", "/jobs/logs", "--cpus 0"),
+            ("p", 5000, "/jobs/m.toml", "/jobs/logs", "--cpus 5000"),
+            ("p", 2, "/jobs/m\ntouch INJECTED.toml", "/jobs/logs", "line break"),
+            ("p", 2, "/jobs/m.toml", "/jobs/logs\n#SBATCH --x", "line break"),
+        ] {
+            let e = run(partition, cpus, manifest, logs).unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(e.to_string().contains(named), "{e}");
+        }
     }
 }

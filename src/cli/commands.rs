@@ -430,13 +430,11 @@ fn run_farm(action: FarmAction) -> Result<()> {
             let coif = std::env::current_exe()
                 .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
             let logs = std::path::absolute(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
-            std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
             let options = slurm::SubmitOptions { partition, cpus_per_task: cpus, max_parallel };
+            let text = slurm::script(&coif, &absolute, manifest.tasks.len(), &logs, &options)?;
+            std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
             let dir = slurm::farm_dir(&absolute);
-            let script = slurm::write_script(
-                &dir,
-                &slurm::script(&coif, &absolute, manifest.tasks.len(), &logs, &options),
-            )?;
+            let script = slurm::write_script(&dir, &text)?;
             let job = if dry_run { None } else { Some(slurm::submit(&script)?) };
             if let Some(id) = &job {
                 coif::io::atomic::write_bytes_atomically(&dir.join("job_id"), id.as_bytes())?;
