@@ -696,6 +696,26 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         2,
         &["m.toml", "'..'"],
     ));
+    // A wedge value the recipe refuses is the manifest's error, found before any task runs (each
+    // task failed in its log, naming the recipe at a line of the rewritten text).
+    for (parameters, named) in [
+        ("\"settings.dt\" = [0.002, \"fast\"]", &["w-001", "\"settings.dt\" = \"fast\"", "expected f32"][..]),
+        ("\"settings.damping\" = [1.0, -2.0]", &["w-001", "damping", "[0, 10000]"]),
+        ("\"stages.99.duration\" = [0.01]", &["w-000", "index 99"]),
+        ("\"nosuch.key\" = [1]", &["w-000", "nosuch"]),
+        ("\"\" = [1]", &["w-000", "none empty"]),
+    ] {
+        let manifest = format!("{head}[[wedges]]\nname = \"w\"\nparameters = {{ {parameters} }}\n");
+        for command in [&["batch", "m.toml"][..], &["farm", "submit", "m.toml", "--dry-run"]] {
+            cases.push(case(
+                &format!("wedge {parameters}: {}", command.join(" ")),
+                files(&manifest),
+                command,
+                2,
+                &[&["m.toml", "line 6", "r.toml"], named].concat(),
+            ));
+        }
+    }
     // Options that would add lines to the array script (`touch INJECTED` ran on the farm), or
     // that sbatch would read as something else: refused before the script or logs are written.
     for (label, args, named) in [

@@ -98,6 +98,8 @@ pub struct Task {
     pub require_converged: bool,
     /// "key = value" for each swept parameter (labels on the contact sheet).
     pub wedge_values: Vec<String>,
+    /// The manifest line the task (or its wedge) starts on.
+    pub line: usize,
 }
 
 #[derive(Clone, Debug)]
@@ -195,6 +197,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             variants,
             require_converged: spec.require_converged.or(defaults.require_converged).unwrap_or(false),
             wedge_values,
+            line,
         });
         Ok(())
     };
@@ -351,6 +354,11 @@ pub fn apply_override(
     value: toml::Value,
 ) -> std::result::Result<(), String> {
     let keys: Vec<&str> = path.split('.').collect();
+    if keys.iter().any(|k| k.is_empty()) {
+        return Err(format!(
+            "override {path:?}: a dotted path of keys (settings.dt, stages.1.duration), none empty"
+        ));
+    }
     let (last, parents) = keys.split_last().expect("split always yields a key");
     let mut node = root;
     for (depth, key) in parents.iter().enumerate() {

@@ -37,18 +37,7 @@ fn all_outputs(task: &Task) -> Vec<PathBuf> {
 /// The recipe text with the task's overrides applied, and its digest with the bytes of the groom
 /// and of every mesh the recipe loads.
 fn effective_inputs(task: &Task) -> Result<(String, String)> {
-    let text = crate::io::input::read_text(&task.recipe)?;
-    let effective = if task.overrides.is_empty() {
-        text
-    } else {
-        let mut value: toml::Value =
-            toml::from_str(&text).map_err(|e| Error::format(&task.recipe, e.message()))?;
-        for (key, override_value) in &task.overrides {
-            apply_override(&mut value, key, override_value.clone())
-                .map_err(|m| Error::format(&task.recipe, m))?;
-        }
-        toml::to_string(&value).expect("TOML values serialise")
-    };
+    let effective = effective_recipe(task, crate::io::input::read_text(&task.recipe)?)?;
     crate::io::input::check_regular(&task.groom)?;
     let groom = std::fs::read(&task.groom).map_err(|e| Error::io(&task.groom, e))?;
     let directory = task.recipe.parent().unwrap_or(Path::new("."));
@@ -69,6 +58,20 @@ fn effective_inputs(task: &Task) -> Result<(String, String)> {
     Ok((effective, digest))
 }
 
+/// The recipe `text` with the task's overrides applied.
+fn effective_recipe(task: &Task, text: String) -> Result<String> {
+    if task.overrides.is_empty() {
+        return Ok(text);
+    }
+    let mut value: toml::Value =
+        toml::from_str(&text).map_err(|e| Error::format(&task.recipe, e.message()))?;
+    for (key, override_value) in &task.overrides {
+        apply_override(&mut value, key, override_value.clone())
+            .map_err(|m| Error::format(&task.recipe, m))?;
+    }
+    Ok(toml::to_string(&value).expect("TOML values serialise"))
+}
+
 /// The `path`s of a recipe's mesh obstacles.
 fn mesh_paths(recipe: &toml::Value) -> impl Iterator<Item = &str> {
     let obstacles = recipe.get("obstacles").and_then(toml::Value::as_array);
@@ -77,6 +80,48 @@ fn mesh_paths(recipe: &toml::Value) -> impl Iterator<Item = &str> {
         .flatten()
         .filter(|o| o.get("shape").and_then(toml::Value::as_str) == Some("mesh"))
         .filter_map(|o| o.get("path").and_then(toml::Value::as_str))
+}
+
+/// Checks the task's overrides against its recipe (keys, numbers and rules; not its meshes), so
+/// that a bad wedge value is found before any task runs. A recipe that is fine alone but not
+/// with the overrides is the manifest's error, named at the task's line with the overrides; the
+/// recipe's message then has no line (it would be one of the rewritten text). A recipe that
+/// fails alone is left to the task, which reports it (as a missing groom is).
+pub fn check_overrides(task: &Task, manifest: &Path) -> Result<()> {
+    if task.overrides.is_empty() {
+        return Ok(());
+    }
+    let Ok(original) = crate::io::input::read_text(&task.recipe) else { return Ok(()) };
+    if recipe::parse_unbaked(&original, &task.recipe).is_err() {
+        return Ok(());
+    }
+    let effective = effective_recipe(task, original).map_err(|e| with_overrides(task, manifest, e))?;
+    recipe::parse_unbaked(&effective, &task.recipe).map_err(|e| with_overrides(task, manifest, e))?;
+    Ok(())
+}
+
+/// `error` from the task's recipe under its overrides, as the manifest's error.
+fn with_overrides(task: &Task, manifest: &Path, error: Error) -> Error {
+    let Error::Format { path, message } = &error else { return error };
+    if *path != task.recipe {
+        return error;
+    }
+    let overrides: Vec<String> = task.overrides.iter().map(|(k, v)| format!("{k:?} = {v}")).collect();
+    // "line 3, column 2: …" of the rewritten text would point into the wrong file.
+    let message = match message.split_once(": ") {
+        Some((place, rest)) if place.starts_with("line ") => rest,
+        _ => message.as_str(),
+    };
+    Error::format(
+        manifest,
+        format!(
+            "line {}: task '{}': with {} the recipe {} is refused: {message}",
+            task.line,
+            task.name,
+            overrides.join(", "),
+            task.recipe.display()
+        ),
+    )
 }
 
 /// Whether the task's outputs are complete for its current inputs.
@@ -156,6 +201,7 @@ mod tests {
             variants: Vec::new(),
             require_converged: false,
             wedge_values: Vec::new(),
+            line: 1,
         };
         let before = effective_inputs(&task).unwrap().1;
         assert_eq!(before, effective_inputs(&task).unwrap().1);
