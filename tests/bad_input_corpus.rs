@@ -557,6 +557,27 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             &[culprit, "another file"],
         ));
     }
+    // Fractions outside [0, 1] were clamped without a word (a wetness of -5, a rate of 1e30).
+    for (name, value) in [("wetness", "-5"), ("bond_ionic", "-100"), ("bond_hydrogen", "1e30")] {
+        let text = format!(
+            "#usda 1.0\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [3, 3]\n  \
+             point3f[] points = [(0, 0.1, 0), (0, 0.09, 0), (0, 0.08, 0), (0.01, 0.1, 0), (0.01, 0.09, 0), (0.01, 0.08, 0)]\n  \
+             float[] primvars:{name} = [0, 0, 0, 0, {value}, 0] (interpolation = \"vertex\")\n}}\n"
+        );
+        let runs: [&[&str]; 2] = [
+            &["simulate", "in.usda", "out.usda", "--seconds", "0.01"],
+            &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
+        ];
+        for args in runs {
+            cases.push(case(
+                &format!("{name} {value}: {}", args[0]),
+                vec![("in.usda", text.clone().into_bytes()), ("r.toml", BASE.as_bytes().to_vec())],
+                args,
+                2,
+                &["in.usda", name, "strand 1, vertex 1", value, "[0, 1]"],
+            ));
+        }
+    }
     // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
     // refused before anything is written, whatever the output.
     for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {

@@ -299,6 +299,33 @@ pub struct Simulation {
     asleep: Vec<bool>,
 }
 
+/// Refuses per-vertex bond rates and wetness outside [0, 1] up to round-off (both are fractions):
+/// a wetness of -10 or a rate of -100 was clamped without a word, simulating a groom other than
+/// the file's.
+fn check_fractions(groom: &Groom) -> Result<()> {
+    let names = BondKind::ALL.iter().map(|k| k.attribute_name()).chain([crate::interact::wetness::WETNESS]);
+    for name in names {
+        let Some(attribute) = groom.attribute(name) else { continue };
+        if attribute.rate != AttributeRate::Vertex || attribute.components != 1 {
+            continue;
+        }
+        // Up to round-off: a blend of rates (children's, interpolated from guides) lands a few
+        // ulps past 1, and is clamped as any rate is.
+        if let Some(vertex) = attribute.data.iter().position(|v| !(-1e-5..=1.0 + 1e-5).contains(v)) {
+            let strand = groom.strand_of(vertex);
+            return Err(Error::Groom(crate::groom::GroomError::BadAttribute {
+                name: name.to_string(),
+                problem: format!(
+                    "strand {strand}, vertex {}: {} is outside [0, 1] (a fraction)",
+                    vertex - groom.strand_offsets[strand] as usize,
+                    crate::validate::shortest(attribute.data[vertex].into())
+                ),
+            }));
+        }
+    }
+    Ok(())
+}
+
 impl Simulation {
     /// Rods at rest in the groom's shape, all bonds intact and remembering that shape. Bond rates
     /// the groom carries as `bond_*` attributes are applied (as breaking, so shapes stay).
@@ -316,13 +343,14 @@ impl Simulation {
             steps: 0,
             asleep: Vec::new(),
         };
+        check_fractions(groom)?;
         for kind in BondKind::ALL {
             if let Some(attribute) = groom.attribute(kind.attribute_name()) {
                 if attribute.rate != AttributeRate::Vertex || attribute.components != 1 {
-                    return Err(Error::Usage(format!(
-                        "attribute '{}' must be one float per vertex to drive bond rates",
-                        attribute.name
-                    )));
+                    return Err(Error::Groom(crate::groom::GroomError::BadAttribute {
+                        name: attribute.name.clone(),
+                        problem: "must be one float per vertex to drive bond rates".into(),
+                    }));
                 }
                 let rates = attribute.data.clone();
                 sim.set_bond_rates_with(kind, |vertex| rates[vertex]);
