@@ -360,3 +360,22 @@ fn frames_time_sample_wetness_bonds_and_rest() {
         }
     }
 }
+
+#[test]
+fn strands_of_one_segment_report_intact_bonds() {
+    // Two-vertex strands have no edge pairs, so no bonds: the report said -0.00 (an empty sum)
+    // for every kind, as if all were broken.
+    let dir = tempfile::tempdir().unwrap();
+    let strands: Vec<Vec<Vec3>> = (0..3)
+        .map(|s| vec![Vec3::new(0.01 * s as f32, 0.0, 0.0), Vec3::new(0.01 * s as f32, -0.05, 0.0)])
+        .collect();
+    let groom = dir.path().join("short.hair");
+    coif::io::write_groom(&groom, &Groom::from_strands(&strands, 80e-6)).unwrap();
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    let report = style(&recipe, &groom, &dir.path().join("out.usda"));
+    let rates = &report["report"]["stages"][0]["bond_rates"];
+    for kind in ["hydrogen", "ionic", "disulfide", "peptide"] {
+        assert_eq!(rates[kind].as_f64(), Some(1.0), "{kind}: {rates}");
+    }
+}

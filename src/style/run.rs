@@ -1066,7 +1066,11 @@ impl Session {
         let mean = |kind: BondKind| {
             let rates = self.sim.bonds.rates(kind);
             let centres: Vec<f32> = self.sim.rods().pair_centres().map(|v| rates[v]).collect();
-            centres.iter().sum::<f32>() / centres.len().max(1) as f32
+            // Strands of one segment have no bonds: none is broken (an empty sum is -0.0).
+            match centres.len() {
+                0 => 1.0,
+                n => centres.iter().sum::<f32>() / n as f32,
+            }
         };
         StageReport {
             index,
