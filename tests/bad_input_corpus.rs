@@ -90,6 +90,8 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         ("wetness", "airflow_drying", &["nan", "-1", "inf"]),
         ("wetness", "mass_gain", &["nan", "-1", "inf"]),
         ("head", "size", &["nan", "0", "-1", "inf", "1e4"]),
+        ("guides", "fraction", &["nan", "0", "-0.5", "2"]),
+        ("guides", "count", &["0"]),
     ];
     for (table, key, values) in keys {
         for value in *values {
@@ -102,6 +104,33 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
                 &["r.toml", "line 2", key],
             ));
         }
+    }
+    // [guides] with both count and fraction: named with the recipe's line. (With neither, a
+    // groom's own guides are used, or the run says the groom has none.)
+    let recipe = "[guides]\ncount = 3\nfraction = 0.5\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
+    cases.push(style_case(
+        "[guides] count and fraction",
+        recipe,
+        hair,
+        &["r.toml", "line 1", "count and fraction"],
+    ));
+    let recipe = "[guides]\nreach = 0.1\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
+    cases.push(style_case(
+        "[guides] reach alone, no guides in the groom",
+        recipe,
+        hair,
+        &["neither", "no guides of its own"],
+    ));
+    for value in ["0", "nan", "-1", "1e4"] {
+        let recipe = format!(
+            "[guides]\ncount = 3\nreach = {value}\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n"
+        );
+        cases.push(style_case(
+            &format!("[guides] reach = {value}"),
+            &recipe,
+            hair,
+            &["r.toml", "line 3", "reach"],
+        ));
     }
     // A rod or head a few micrometres across asked for micrometre segments: the groom was
     // resampled ten-thousandfold without a word and styling ran for hours.

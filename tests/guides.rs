@@ -336,7 +336,7 @@ fn impossible_guide_counts_and_reach_exit_2_with_the_numbers() {
         .err()
         .unwrap();
     assert_eq!(err.exit_code(), 2);
-    assert!(err.to_string().contains("beyond the reach of 0.0010 m (10 guides for 2990 children)"), "{err}");
+    assert!(err.to_string().contains("beyond the reach of 0.001 m (10 guides for 2990 children)"), "{err}");
     // A reach that is no distance is refused as the recipe is read, naming its line, key and range
     // (a negative one read as an unreachable guide for every child, NaN as no limit at all).
     for reach in ["-1.0", "0.0", "nan", "inf", "1e4"] {

@@ -57,7 +57,9 @@ fn run_style(args: StyleArgs) -> Result<()> {
     super::checks::style(&args)?;
     let mut recipe = coif::style::recipe::load(&args.recipe)?;
     if let Some(count) = args.guides {
-        recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), ..Default::default() });
+        // --guides N replaces the recipe's count or fraction; its reach stays.
+        let reach = recipe.guides.and_then(|g| g.reach);
+        recipe.guides = Some(coif::guides::GuideSpec { count: Some(count), fraction: None, reach });
     }
     let export = io::ExportOptions { unreal: args.unreal };
     io::check_output(&args.output, &export)?;

@@ -116,8 +116,9 @@ pub fn bind(
     for (&(_, nearest), &strand) in bindings.iter().zip(children) {
         if nearest > reach {
             return Err(Error::Usage(format!(
-                "strand {strand}: its nearest guide is {nearest:.4} m away, beyond the reach of {reach:.4} m \
+                "strand {strand}: its nearest guide is {nearest:.4} m away, beyond the reach of {} m \
                  ({} guides for {} children); add guides or raise [guides] reach",
+                crate::validate::shortest(reach.into()),
                 guide_roots.len(),
                 child_roots.len()
             )));

@@ -69,7 +69,13 @@ impl GuideSpec {
             (None, Some(f)) => {
                 return Err(Error::Usage(format!("[guides] fraction = {f}: must be in (0, 1]")))
             }
-            (None, None) => return Err(Error::Usage("[guides]: give count or fraction".into())),
+            (None, None) => {
+                return Err(Error::Usage(
+                    "[guides] gives neither count nor fraction, and the groom has no guides of its own: \
+                     give one"
+                        .into(),
+                ))
+            }
         };
         if count == 0 || count > strands {
             return Err(Error::Usage(format!(

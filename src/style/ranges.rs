@@ -30,6 +30,7 @@
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | `[head]` `size`, `[guides]` `reach` | (0, 1000] m |
+//! | `[guides]` `fraction` (0, 1]; `count` at least 1 (and at most the strands) | |
 //! | stages | at most 10,000 |
 //! | obstacles, rods | at most 1,000 each |
 use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, ITERATIONS, MODULUS, SECONDS, TIME_STEP};
@@ -138,8 +139,26 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
     if let Some(size) = recipe.head.size {
         table("head", "size", size.into(), SIZE)?;
     }
-    if let Some(reach) = recipe.guides.and_then(|g| g.reach) {
-        table("guides", "reach", reach.into(), SIZE)?;
+    if let Some(guides) = recipe.guides {
+        if let Some(reach) = guides.reach {
+            table("guides", "reach", reach.into(), SIZE)?;
+        }
+        if let Some(fraction) = guides.fraction {
+            table("guides", "fraction", fraction.into(), Range::above(0.0, 1.0))?;
+        }
+        let header = || text.lines().position(|l| l.trim() == "[guides]").map(|i| i + 1);
+        let at = |line: Option<usize>, message: &str| match line {
+            Some(line) => format!("line {line}: [guides] {message}"),
+            None => format!("[guides] {message}"),
+        };
+        match (guides.count, guides.fraction) {
+            (Some(_), Some(_)) => return Err(at(header(), "gives count and fraction: give one")),
+            // The upper bound is the groom's strand count, checked when it is known.
+            (Some(0), _) => {
+                return Err(at(line_of_key(text, "guides", "count"), "count = 0: at least one guide"))
+            }
+            _ => {}
+        }
     }
 
     let counts = [
