@@ -383,6 +383,9 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["--style", "wavy", "--wave-amplitude", "1e30"], "--wave-amplitude"),
         (&["--style", "wavy", "--wavelength", "0"], "--wavelength"),
         (&["--droop", "1e30"], "--droop"),
+        // Shorter than a tenth of a millimetre: it blamed a zero-length segment of its own groom.
+        (&["--length", "1e-9"], "--length"),
+        (&["--length", "0"], "--length"),
     ];
     for (flags, culprit) in generate {
         let mut args = vec!["generate", "-o", "out.hair", "--strands", "5"];

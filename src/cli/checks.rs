@@ -123,7 +123,9 @@ pub(crate) fn generate(args: &GenerateArgs) -> Result<()> {
         &format!("--strands {} × --vertices {}", args.strands, args.vertices),
         vertices * coif::limits::GROOM_BYTES_PER_VERTEX,
     )?;
-    flag("--length", args.length, Range::above(0.0, 100.0))?;
+    // From a tenth of a millimetre: shorter, a strand's segments round to zero length in f32
+    // at a head's distance from the origin.
+    flag("--length", args.length, Range::closed(1e-4, 100.0))?;
     flag("--length-variation", args.length_variation, Range::below(0.0, 1.0))?;
     // Hair to cord (0: the simulation's fallback width), and curls and waves of a head's scale.
     flag("--width", args.width, Range::closed(0.0, 0.01))?;
