@@ -1,5 +1,6 @@
 //! Every number a flag carries, checked (through `coif::validate`) before a command reads or
 //! computes anything: a refusal names the flag, the value and the accepted range (exit code 2).
+//! Also refused here, as early: an output that is one of the run's inputs.
 use coif::validate::{
     flag, flag_direction, flag_vector, Range, COORDINATE, FRACTION, FRAME, ITERATIONS, SECONDS, TIME_STEP,
     UNITS,
