@@ -123,6 +123,11 @@ pub enum GroomError {
     )]
     Diverged { seconds: f64, stage: Option<String> },
     #[error(
+        "the recipe is written in the head frame, but {reason}; give the head in the recipe's [head] \
+         table (center, up, front, size)"
+    )]
+    NoHeadFrame { reason: String },
+    #[error(
         "strand {strand}, vertex {vertex}: a coordinate of {} m is beyond the {max} m from the origin \
          a groom is simulated in; are the file's units another unit's?",
         crate::validate::shortest(f64::from(*coordinate))

@@ -610,6 +610,17 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             ));
         }
     }
+    // Roots no head can be fitted to, for a recipe in the head frame: the groom's file is named.
+    let in_a_line = "#usda 1.0\ndef BasisCurves \"c\" {\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
+         point3f[] points = [(0, 0, 0), (0, -0.1, 0), (0.01, 0, 0), (0.01, -0.1, 0), (0.02, 0, 0), (0.02, -0.1, 0)]\n}\n";
+    let in_head_frame = format!("frame = \"head\"\n{BASE}");
+    cases.push(case(
+        "head frame on roots in a line",
+        vec![("in.usda", in_a_line.as_bytes().to_vec()), ("r.toml", in_head_frame.into_bytes())],
+        &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
+        2,
+        &["in.usda", "head frame", "[head] table"],
+    ));
     // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
     // refused before anything is written, whatever the output.
     for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {

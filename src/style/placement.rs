@@ -364,12 +364,9 @@ fn fit_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
         front: head.front.map(Vec3::from),
         size: head.size,
     };
-    HeadFrame::fit(groom, named.as_deref().or(scalp), &overrides).map_err(|e| {
-        Error::Usage(format!(
-            "the recipe is written in the head frame, but {e}; give the head in the recipe's [head] table \
-             (center, up, front, size)"
-        ))
-    })
+    // The groom's roots (or its scalp) are what cannot be fitted: an error of the groom's file.
+    HeadFrame::fit(groom, named.as_deref().or(scalp), &overrides)
+        .map_err(|e| Error::Groom(crate::groom::GroomError::NoHeadFrame { reason: e.to_string() }))
 }
 
 /// The head as the ellipsoid fitted to the roots of the whole groom the frame was fitted to (a
