@@ -205,6 +205,12 @@ impl Groom {
         self.strand_offsets.partition_point(|&o| o as usize <= vertex) - 1
     }
 
+    /// The strand a vertex index falls in, and the vertex's index within it (for messages).
+    pub fn strand_and_vertex(&self, vertex: usize) -> (usize, usize) {
+        let strand = self.strand_of(vertex);
+        (strand, vertex - self.strand_offsets[strand] as usize)
+    }
+
     pub fn strand_points(&self, strand: usize) -> &[Vec3] {
         &self.points[self.strand_range(strand)]
     }

@@ -52,9 +52,7 @@ impl BatchReport {
 pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport> {
     let start = Instant::now();
     let jobs = jobs.max(1);
-    for task in &manifest.tasks {
-        task::check_overrides(task, &manifest.path)?;
-    }
+    task::check_overrides(manifest)?;
     std::fs::create_dir_all(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let threads_per_task = (cores / jobs).max(1);

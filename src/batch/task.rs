@@ -2,12 +2,13 @@
 //! atomically, an optional preview, and last the completion sidecar. A task whose sidecar proves
 //! its outputs complete for the same inputs is skipped, so re-running a batch resumes it and a
 //! task killed half-way (no sidecar yet) simply runs again.
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
 
-use super::manifest::{apply_override, Task};
+use super::manifest::{apply_override, Manifest, Task};
 use super::sidecar::{digest_parts, remove_stale_temporaries, Sidecar};
 use crate::error::{Error, Result};
 use crate::style::{recipe, style, StyleOptions};
@@ -82,21 +83,24 @@ fn mesh_paths(recipe: &toml::Value) -> impl Iterator<Item = &str> {
         .filter_map(|o| o.get("path").and_then(toml::Value::as_str))
 }
 
-/// Checks the task's overrides against its recipe (keys, numbers and rules; not its meshes), so
-/// that a bad wedge value is found before any task runs. A recipe that is fine alone but not
-/// with the overrides is the manifest's error, named at the task's line with the overrides; the
-/// recipe's message then has no line (it would be one of the rewritten text). A recipe that
-/// fails alone is left to the task, which reports it (as a missing groom is).
-pub fn check_overrides(task: &Task, manifest: &Path) -> Result<()> {
-    if task.overrides.is_empty() {
-        return Ok(());
+/// Checks every task's overrides against its recipe (keys, numbers and rules; not its meshes),
+/// so that a bad wedge value is found before any task runs. A recipe that is fine alone but not
+/// with a task's overrides is the manifest's error, named at the task's line with the overrides;
+/// the recipe's message then has no line (it would be one of the rewritten text). A recipe that
+/// fails alone is left to its tasks, which report it (as a missing groom is). Each recipe is read
+/// and checked once, however many tasks a wedge makes of it.
+pub fn check_overrides(manifest: &Manifest) -> Result<()> {
+    let mut recipes: HashMap<&Path, Option<String>> = HashMap::new();
+    for task in manifest.tasks.iter().filter(|t| !t.overrides.is_empty()) {
+        let original = recipes.entry(&task.recipe).or_insert_with(|| {
+            let text = crate::io::input::read_text(&task.recipe).ok()?;
+            recipe::parse_unbaked(&text, &task.recipe).is_ok().then_some(text)
+        });
+        let Some(original) = original else { continue };
+        let in_manifest = |e| with_overrides(task, &manifest.path, e);
+        let effective = effective_recipe(task, original.clone()).map_err(in_manifest)?;
+        recipe::parse_unbaked(&effective, &task.recipe).map_err(in_manifest)?;
     }
-    let Ok(original) = crate::io::input::read_text(&task.recipe) else { return Ok(()) };
-    if recipe::parse_unbaked(&original, &task.recipe).is_err() {
-        return Ok(());
-    }
-    let effective = effective_recipe(task, original).map_err(|e| with_overrides(task, manifest, e))?;
-    recipe::parse_unbaked(&effective, &task.recipe).map_err(|e| with_overrides(task, manifest, e))?;
     Ok(())
 }
 

@@ -428,9 +428,7 @@ fn run_farm(action: FarmAction) -> Result<()> {
             json,
         } => {
             let manifest = manifest::load(&path)?;
-            for task in &manifest.tasks {
-                batch_task::check_overrides(task, &manifest.path)?;
-            }
+            batch_task::check_overrides(&manifest)?;
             let absolute = std::path::absolute(&path).map_err(|e| Error::io(&path, e))?;
             let coif = std::env::current_exe()
                 .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;

@@ -312,12 +312,11 @@ fn check_fractions(groom: &Groom) -> Result<()> {
         // Up to round-off: a blend of rates (children's, interpolated from guides) lands a few
         // ulps past 1, and is clamped as any rate is.
         if let Some(vertex) = attribute.data.iter().position(|v| !(-1e-5..=1.0 + 1e-5).contains(v)) {
-            let strand = groom.strand_of(vertex);
+            let (strand, index) = groom.strand_and_vertex(vertex);
             return Err(Error::Groom(crate::groom::GroomError::BadAttribute {
                 name: name.to_string(),
                 problem: format!(
-                    "strand {strand}, vertex {}: {} is outside [0, 1] (a fraction)",
-                    vertex - groom.strand_offsets[strand] as usize,
+                    "strand {strand}, vertex {index}: {} is outside [0, 1] (a fraction)",
                     crate::validate::shortest(attribute.data[vertex].into())
                 ),
             }));

@@ -34,20 +34,16 @@ pub const MAX_COORDINATE: f32 = 1e3;
 /// axis, naming the first. Styling checks the groom as it was read, so that the strand named is
 /// the file's (not a resampled vertex or the index of a guide among guides).
 pub fn check_simulable(groom: &Groom) -> Result<(), GroomError> {
-    let at = |i: usize| {
-        let strand = groom.strand_of(i);
-        (strand, i - groom.strand_offsets[strand] as usize)
-    };
     if let Some(i) = groom.widths.iter().position(|&w| w > MAX_WIDTH) {
-        let (strand, vertex) = at(i);
+        let (strand, vertex) = groom.strand_and_vertex(i);
         return Err(GroomError::TooWide { strand, vertex, width: groom.widths[i], max: MAX_WIDTH });
     }
     if let Some(i) = groom.widths.iter().position(|&w| w > 0.0 && w < MIN_WIDTH) {
-        let (strand, vertex) = at(i);
+        let (strand, vertex) = groom.strand_and_vertex(i);
         return Err(GroomError::TooThin { strand, vertex, width: groom.widths[i], min: MIN_WIDTH });
     }
     if let Some(i) = groom.points.iter().position(|p| p.abs().max_element() > MAX_COORDINATE) {
-        let (strand, vertex) = at(i);
+        let (strand, vertex) = groom.strand_and_vertex(i);
         let coordinate = groom.points[i].abs().max_element();
         return Err(GroomError::TooFar { strand, vertex, coordinate, max: MAX_COORDINATE });
     }

@@ -587,13 +587,17 @@ mod tests {
     use super::*;
     use crate::sim::SimParams;
 
+    /// `count` straight strands of `vertices` vertices hanging in a row, 5 cm apart.
+    fn hanging_strands(count: usize, vertices: usize) -> Simulation {
+        let strands: Vec<Vec<Vec3>> = (0..count)
+            .map(|k| (0..vertices).map(|i| Vec3::new(0.05 * k as f32, -0.01 * i as f32, 0.0)).collect())
+            .collect();
+        Simulation::new(&Groom::from_strands(&strands, 80e-6), SimParams::default()).unwrap()
+    }
+
     #[test]
     fn a_disturbed_strand_wakes_its_work_unit_and_keeps_it_awake() {
-        let strands: Vec<Vec<Vec3>> = (0..16)
-            .map(|k| (0..8).map(|i| Vec3::new(0.05 * k as f32, -0.01 * i as f32, 0.0)).collect())
-            .collect();
-        let groom = Groom::from_strands(&strands, 80e-6);
-        let mut sim = Simulation::new(&groom, SimParams::default()).unwrap();
+        let mut sim = hanging_strands(16, 8);
         let units: Vec<_> = sim.rods.work_units().iter().map(|&(first, count, _)| (first, count)).collect();
         assert_eq!(units, [(0, 8), (8, 8)], "two lane groups");
         assert_eq!(sim.put_to_sleep(|_| true, |_| false), 16);
@@ -609,11 +613,7 @@ mod tests {
     fn a_diverged_state_is_neither_converged_nor_at_rest() {
         // A NaN position made every residual read 0 ("converged, residual 0"); it reads infinite,
         // the settle stops at once, and the simulation refuses the state.
-        let strands: Vec<Vec<Vec3>> = (0..2)
-            .map(|k| (0..6).map(|i| Vec3::new(0.05 * k as f32, -0.01 * i as f32, 0.0)).collect())
-            .collect();
-        let groom = Groom::from_strands(&strands, 80e-6);
-        let mut sim = Simulation::new(&groom, SimParams::default()).unwrap();
+        let mut sim = hanging_strands(2, 6);
         assert!(sim.check_finite(None).is_ok());
         sim.rods.positions_mut()[3] = Vec3::NAN;
         let report = sim.settle(&SettleOptions::default(), &crate::sim::NoHooks);

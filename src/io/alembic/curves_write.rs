@@ -711,14 +711,12 @@ fn overflow_when_scaled(groom: &Groom, scale: f32) -> Option<String> {
         ))
     };
     if let Some(i) = groom.points.iter().position(|p| p.to_array().into_iter().any(overflows)) {
-        let strand = groom.strand_of(i);
-        let vertex = i - groom.strand_offsets[strand] as usize;
+        let (strand, vertex) = groom.strand_and_vertex(i);
         let coordinate = groom.points[i].abs().max_element();
         return beyond(format!("strand {strand}, vertex {vertex}: a coordinate"), coordinate);
     }
     if let Some(i) = groom.widths.iter().position(|&w| overflows(w)) {
-        let strand = groom.strand_of(i);
-        let vertex = i - groom.strand_offsets[strand] as usize;
+        let (strand, vertex) = groom.strand_and_vertex(i);
         return beyond(format!("strand {strand}, vertex {vertex}: the width"), groom.widths[i]);
     }
     // `rest` is a position too, scaled with the points.
