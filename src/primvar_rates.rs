@@ -12,6 +12,27 @@
 use crate::groom::CurveBasis;
 use crate::groups::{CurveWrap, Interpolation};
 
+/// Whether `vertices` control points make at least one whole segment of the basis, as USD's
+/// `BasisCurves` requires: cubic curves need 4 (Bézier 3k + 1; pinned non-Bézier ones 2).
+/// Linear strands of one point are refused elsewhere, for every format.
+pub fn is_whole_curve(basis: CurveBasis, wrap: CurveWrap, vertices: usize) -> bool {
+    match (basis, wrap) {
+        (CurveBasis::Linear, _) => true,
+        (CurveBasis::Bezier, _) => vertices >= 4 && (vertices - 1) % 3 == 0,
+        (_, CurveWrap::Pinned) => vertices >= 2,
+        _ => vertices >= 4,
+    }
+}
+
+/// What [`is_whole_curve`] asks of a curve of `basis`, in words.
+pub fn whole_curve_rule(basis: CurveBasis) -> &'static str {
+    if basis == CurveBasis::Bezier {
+        "3k + 1 (at least 4)"
+    } else {
+        "at least 4"
+    }
+}
+
 /// Values per curve of `vertices` control points for `varying` interpolation (segments + 1).
 pub fn varying_count(basis: CurveBasis, wrap: CurveWrap, vertices: usize) -> usize {
     match (basis, wrap) {

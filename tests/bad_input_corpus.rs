@@ -472,6 +472,28 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
     ] {
         cases.push(convert(format!(".usda {name}"), "in.usda", bad.into_bytes(), &["in.usda", "line"]));
     }
+    // Cubic curves too short for one segment of their basis are not valid USD: refused where they
+    // are read (they were read, and refused only when writing a .usda, naming the output).
+    let cubic = |basis: &str, counts: &str, points: usize| {
+        let points = vec!["(0, 0, 0)"; points].join(", ");
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"cubic\"\n    \
+             uniform token basis = \"{basis}\"\n    int[] curveVertexCounts = [{counts}]\n    \
+             point3f[] points = [{points}]\n}}\n"
+        )
+    };
+    for (name, bad, culprit) in [
+        ("3-point B-spline", cubic("bspline", "4, 3", 7), "curve 1 has 3 control points"),
+        ("5-point Bézier", cubic("bezier", "5", 5), "curve 0 has 5 control points"),
+        ("2-point Catmull-Rom", cubic("catmullRom", "2", 2), "curve 0 has 2 control points"),
+    ] {
+        cases.push(convert(
+            format!(".usda {name}"),
+            "in.usda",
+            bad.into_bytes(),
+            &["in.usda", "line 9", culprit],
+        ));
+    }
     cases.push(convert(".usda not UTF-8".into(), "in.usda", b"#usda 1.0\n\xff\xfe".to_vec(), &["in.usda"]));
 
     let abc = &inputs.abc;

@@ -180,18 +180,12 @@ pub fn check_writable(groom: &Groom, path: &Path) -> Result<()> {
     }
     for (strand, count) in groom.vertex_counts().enumerate() {
         let group = groom.group(groom.group_of(strand));
-        let valid = match (group.basis, group.wrap) {
-            (CurveBasis::Linear, _) => true,
-            (CurveBasis::Bezier, _) => count >= 4 && (count - 1) % 3 == 0,
-            (_, CurveWrap::Pinned) => count >= 2,
-            _ => count >= 4,
-        };
-        if !valid {
-            let rule = if group.basis == CurveBasis::Bezier { "3k + 1 (at least 4)" } else { "at least 4" };
+        if !primvar_rates::is_whole_curve(group.basis, group.wrap, count) {
             return Err(Error::Usage(format!(
-                "{}: strand {strand} has {count} control points; {:?} curves in USD need {rule}",
+                "{}: strand {strand} has {count} control points; {:?} curves in USD need {}",
                 path.display(),
-                group.basis
+                group.basis,
+                primvar_rates::whole_curve_rule(group.basis)
             )));
         }
     }

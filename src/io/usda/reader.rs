@@ -407,6 +407,17 @@ impl Walker<'_> {
                 format!("curveVertexCounts add up to {total} points but 'points' has {}", points.len()),
             ));
         }
+        if let Some((curve, &count)) =
+            counts.iter().enumerate().find(|&(_, &c)| !primvar_rates::is_whole_curve(basis, wrap, c as usize))
+        {
+            return Err(at_prim(
+                counts_site,
+                format!(
+                    "curve {curve} has {count} control points; {basis:?} curves need {}",
+                    primvar_rates::whole_curve_rule(basis)
+                ),
+            ));
+        }
         let layout = Layout { counts: &counts, points: points.len(), basis, wrap };
 
         let mut width_interpolation = None;
