@@ -127,6 +127,12 @@ pub enum GroomError {
          table (center, up, front, size)"
     )]
     NoHeadFrame { reason: String },
+    /// The scalp mesh given with the groom (its own, or `--scalp`) does not fit a head frame.
+    #[error(
+        "the recipe is written in the head frame, but the scalp mesh has no curved surface near the \
+         groom's roots; give the head in the recipe's [head] table (center, up, front, size)"
+    )]
+    ScalpNotFitted,
     #[error(
         "strand {strand}, vertex {vertex}: a coordinate of {} m is beyond the {max} m from the origin \
          a groom is simulated in; are the file's units another unit's?",

@@ -302,6 +302,7 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
 
 fn mesh_cases(hair: &[u8]) -> Vec<Case> {
     let cube = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+    let flat = "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 2 3\nf 1 3 4\n";
     let recipe = |extra: &str| {
         format!("[[obstacles]]\nshape = \"mesh\"\nname = \"m\"\npath = \"m.obj\"\n{extra}\n[[stages]]\nkind = \"process\"\nduration = 0.01\n")
     };
@@ -320,6 +321,21 @@ fn mesh_cases(hair: &[u8]) -> Vec<Case> {
         mesh_case("mesh face index", &cube.replace("f 2 3 4", "f 2 3 9"), "", &["m.obj"]),
         mesh_case("mesh no faces", "v 0 0 0\n", "", &["m.obj", "no triangles"]),
         mesh_case("mesh binary", "\u{0}\u{1}\u{2}garbage", "", &["m.obj"]),
+        // A scalp without a curved surface near the roots cannot place a head-frame recipe: the
+        // refusal names the mesh (it named the groom's file).
+        {
+            let recipe = format!("frame = \"head\"\n[head]\nscalp = \"m\"\n{}", recipe(""));
+            let mut c = style_case("[head] scalp mesh flat", &recipe, hair, &["scalp = \"m\"", "m.obj"]);
+            c.files.push(("m.obj".into(), flat.as_bytes().to_vec()));
+            c
+        },
+        {
+            let recipe = format!("[[obstacles]]\nname = \"head\"\nshape = \"scalp\"\n{BASE}");
+            let mut c = style_case("--scalp flat", &recipe, hair, &["flat.obj:", "scalp mesh"]);
+            c.args.extend(["--scalp".into(), "flat.obj".into()]);
+            c.files.push(("flat.obj".into(), flat.as_bytes().to_vec()));
+            c
+        },
     ]
 }
 

@@ -84,7 +84,10 @@ fn run_style(args: StyleArgs) -> Result<()> {
     } else {
         style_groups(&loaded.groom, &args.groups, &recipe, &options)
     }
-    .map_err(|e| e.in_file(&args.groom))?;
+    .map_err(|e| match (e, &args.scalp) {
+        (e @ Error::Groom(coif::groom::GroomError::ScalpNotFitted), Some(scalp)) => e.in_file(scalp),
+        (e, _) => e.in_file(&args.groom),
+    })?;
     let (groom, report) = (&styled.groom, &styled.report);
     let warnings = io::write_animated(
         &args.output,

@@ -21,6 +21,35 @@ use glam::{Quat, Vec3};
 use crate::groom::Groom;
 use crate::interact::mesh_sdf::TriangleMesh;
 
+/// Why no head frame fits: the groom (its roots or tips), or the scalp mesh it was given, which
+/// has no curved surface near the roots.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FitError {
+    Groom(String),
+    Scalp,
+}
+
+impl From<String> for FitError {
+    fn from(reason: String) -> Self {
+        FitError::Groom(reason)
+    }
+}
+
+impl From<&str> for FitError {
+    fn from(reason: &str) -> Self {
+        FitError::Groom(reason.to_owned())
+    }
+}
+
+impl std::fmt::Display for FitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FitError::Groom(reason) => f.write_str(reason),
+            FitError::Scalp => f.write_str("the scalp mesh has no curved surface near the groom's roots"),
+        }
+    }
+}
+
 /// A fitted head frame. Its axes are orthonormal and its size positive (checked on creation).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeadFrame {
@@ -105,7 +134,7 @@ impl HeadFrame {
         groom: &Groom,
         scalp: Option<&TriangleMesh>,
         overrides: &FrameOverrides,
-    ) -> Result<HeadFrame, String> {
+    ) -> Result<HeadFrame, FitError> {
         let strands = groom.strand_count();
         let roots: Vec<Vec3> = (0..strands).map(|s| groom.points[groom.strand_range(s).start]).collect();
         // Where the tips point: hair hangs there under gravity, whatever the head's tilt.
@@ -118,7 +147,7 @@ impl HeadFrame {
             .sum::<Vec3>()
             / strands.max(1) as f32;
 
-        let fitted_sphere = || -> Result<(Vec3, f32), String> {
+        let fitted_sphere = || -> Result<(Vec3, f32), FitError> {
             let from_roots = fit_sphere(roots.iter().map(|&p| (p, 1.0))).ok_or_else(|| {
                 format!("cannot fit a head to the groom's {strands} roots: they do not span a curved scalp")
             })?;
@@ -126,8 +155,7 @@ impl HeadFrame {
             // Only the part of the mesh the hair grows on: a full head's face and neck would pull
             // the sphere away from the scalp the recipe is written against.
             let near = NearRoots::new(&roots, 0.25 * from_roots.1);
-            fit_sphere(mesh.area_samples().filter(|&(c, _)| near.contains(c)))
-                .ok_or_else(|| "the scalp mesh has no curved surface near the groom's roots".to_string())
+            fit_sphere(mesh.area_samples().filter(|&(c, _)| near.contains(c))).ok_or(FitError::Scalp)
         };
         let (center, size) = match (overrides.center, overrides.size) {
             (Some(c), Some(s)) => (c, s),

@@ -8,11 +8,11 @@ use std::sync::Arc;
 use glam::{Quat, Vec3};
 use toml::Spanned;
 
-use super::head_frame::{Ellipsoid, FrameOverrides, HeadFrame};
+use super::head_frame::{Ellipsoid, FitError, FrameOverrides, HeadFrame};
 use super::layout::lay_out;
 use super::recipe::{bake_mesh, Frame, Layout, Obstacle, Recipe, Rod, Stage};
 use crate::error::{Error, Result};
-use crate::groom::Groom;
+use crate::groom::{Groom, GroomError};
 use crate::head::Head;
 use crate::interact::mesh_sdf::TriangleMesh;
 use crate::interact::obstacles::Shape;
@@ -354,7 +354,7 @@ fn fit_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
     let head = &recipe.head;
     let named = head.scalp.as_ref().and_then(|name| {
         recipe.obstacles.iter().find_map(|o| match o.get_ref() {
-            Obstacle::Mesh { name: n, mesh, .. } if n == name => mesh.clone(),
+            Obstacle::Mesh { name: n, mesh, path, .. } if n == name => mesh.clone().map(|m| (m, path)),
             _ => None,
         })
     });
@@ -364,9 +364,19 @@ fn fit_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
         front: head.front.map(Vec3::from),
         size: head.size,
     };
-    // The groom's roots (or its scalp) are what cannot be fitted: an error of the groom's file.
-    HeadFrame::fit(groom, named.as_deref().or(scalp), &overrides)
-        .map_err(|e| Error::Groom(crate::groom::GroomError::NoHeadFrame { reason: e.to_string() }))
+    // What cannot be fitted is the groom's roots (an error of the groom's file), the recipe's
+    // scalp obstacle, or the scalp mesh given with the groom (the caller names its file).
+    let mesh = named.as_ref().map(|(mesh, _)| mesh.as_ref()).or(scalp);
+    HeadFrame::fit(groom, mesh, &overrides).map_err(|e| match (e, &named) {
+        (FitError::Scalp, Some((_, path))) => Error::Usage(format!(
+            "the recipe's [head] scalp = \"{}\" ({}) has no curved surface near the groom's roots; give \
+             the head in the recipe's [head] table (center, up, front, size)",
+            head.scalp.as_deref().unwrap_or_default(),
+            path.display()
+        )),
+        (FitError::Scalp, None) => Error::Groom(GroomError::ScalpNotFitted),
+        (FitError::Groom(reason), _) => Error::Groom(GroomError::NoHeadFrame { reason }),
+    })
 }
 
 /// The head as the ellipsoid fitted to the roots of the whole groom the frame was fitted to (a
