@@ -627,6 +627,40 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             &[culprit, "another file"],
         ));
     }
+    // Files the run reads that only show once the groom is read: a layer the stage composes (the
+    // layer was replaced by the whole groom), and the meshes file `--unreal` writes beside the
+    // output (the input was replaced by its meshes).
+    let layered = || {
+        let root = "#usda 1.0\n(\n    subLayers = [@part.usda@]\n)\n".as_bytes().to_vec();
+        vec![("in.usda", root), ("part.usda", inputs.usda.clone())]
+    };
+    for args in
+        [&["convert", "in.usda", "part.usda"][..], &["simulate", "in.usda", "part.usda", "--seconds", "0.01"]]
+    {
+        cases.push(case(
+            &format!("output is a composed layer: {}", args.join(" ")),
+            layered(),
+            args,
+            2,
+            &["part.usda", "a layer the groom's stage composes", "another file"],
+        ));
+    }
+    let houdini =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/houdini_groom.usda")).unwrap();
+    cases.push(case(
+        "--unreal meshes over the input",
+        vec![("g_meshes.usda", houdini.clone())],
+        &["convert", "--unreal", "g_meshes.usda", "g.usda"],
+        2,
+        &["g_meshes.usda", "the groom it reads", "another file"],
+    ));
+    cases.push(case(
+        "convert over its input",
+        vec![("g.usda", houdini)],
+        &["convert", "g.usda", "./g.usda"],
+        2,
+        &["g.usda", "the groom it reads", "another file"],
+    ));
     // Fractions outside [0, 1] were clamped without a word (a wetness of -5, a rate of 1e30).
     for (name, value) in [("wetness", "-5"), ("bond_ionic", "-100"), ("bond_hydrogen", "1e30")] {
         let text = format!(

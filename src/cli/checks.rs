@@ -42,13 +42,53 @@ pub(crate) fn style(args: &StyleArgs) -> Result<()> {
 /// Refuses an output that is one of the run's inputs (the same file, however named): the run
 /// would replace what it read, and running it again would work on its own result.
 fn not_an_input(output: &Path, inputs: &[(&str, Option<&PathBuf>)]) -> Result<()> {
-    // A file that does not exist yet is no input; one that does is compared by identity.
-    let Ok(written) = std::fs::canonicalize(output) else { return Ok(()) };
-    for (what, input) in inputs {
-        if input.and_then(|p| std::fs::canonicalize(p).ok()).as_ref() == Some(&written) {
+    let inputs: Vec<(String, &Path)> =
+        inputs.iter().filter_map(|(what, path)| path.map(|p| (what.to_string(), p.as_path()))).collect();
+    outputs_are_not_inputs(&[output], &inputs)
+}
+
+/// [`not_an_input`] once the groom is read: every file written (the output, and `--unreal`'s
+/// meshes beside it) against every file read (the groom's, the layers its stage composes, and
+/// `others`, such as the recipe).
+pub(crate) fn nothing_read_is_written(
+    output: &Path,
+    loaded: &coif::io::Loaded,
+    groom: &coif::Groom,
+    export: &coif::io::ExportOptions,
+    others: &[(&str, Option<&PathBuf>)],
+) -> Result<()> {
+    let meshes = coif::io::meshes_output(output, groom, export);
+    let outputs: Vec<&Path> = std::iter::once(output).chain(meshes.as_deref()).collect();
+    let mut inputs: Vec<(String, &Path)> = loaded
+        .files
+        .iter()
+        .enumerate()
+        .map(|(i, file)| {
+            let what = if i == 0 {
+                "the groom it reads".to_string()
+            } else {
+                "a layer the groom's stage composes".to_string()
+            };
+            (what, file.as_path())
+        })
+        .collect();
+    inputs.extend(others.iter().filter_map(|(what, path)| path.map(|p| (what.to_string(), p.as_path()))));
+    outputs_are_not_inputs(&outputs, &inputs)
+}
+
+fn outputs_are_not_inputs(outputs: &[&Path], inputs: &[(String, &Path)]) -> Result<()> {
+    let read: Vec<(&str, &Path, PathBuf)> = inputs
+        .iter()
+        .filter_map(|(what, path)| std::fs::canonicalize(path).ok().map(|c| (what.as_str(), *path, c)))
+        .collect();
+    for output in outputs {
+        // A file that does not exist yet is no input; one that does is compared by identity.
+        let Ok(written) = std::fs::canonicalize(output) else { continue };
+        if let Some((what, path, _)) = read.iter().find(|(_, _, c)| *c == written) {
             return Err(coif::Error::Usage(format!(
-                "{}: the output is {what}, an input of the run; write the result to another file",
-                output.display()
+                "{}: the run would write over {what} ({}); write the result to another file",
+                output.display(),
+                path.display()
             )));
         }
     }

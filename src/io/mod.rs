@@ -117,6 +117,8 @@ pub struct ExportOptions {
 pub struct Loaded {
     pub groom: Groom,
     pub format: Format,
+    /// The files read: the groom's, then the layers a USD stage composes. No output may be one.
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// Reads a groom file, converts it to metres and Y up, and validates it.
@@ -134,6 +136,7 @@ pub fn read_groom_selected(
     // One frame for every format: a USD time code is the frame number on the stage's timeline.
     let selection =
         &usda::Selection { time: selection.time.or(options.frame), variants: selection.variants.clone() };
+    let mut files = vec![path.to_path_buf()];
     let groom = match format {
         Format::Hair | Format::Alembic => {
             if !selection.variants.is_empty() || (format == Format::Hair && selection.time.is_some()) {
@@ -156,7 +159,9 @@ pub fn read_groom_selected(
         // Composition (sublayers, references, payloads, inherits, variants) is native for
         // both formats: no Python is started. A layer without arcs is read in one pass.
         Format::Usda | Format::Usdc if !selection.variants.is_empty() => {
-            usd_compose::read_groom(path, options, selection)?
+            let (groom, layers) = usd_compose::read_groom(path, options, selection)?;
+            files = layers;
+            groom
         }
         Format::Usda | Format::Usdc => {
             let outcome = if format == Format::Usda {
@@ -168,7 +173,10 @@ pub fn read_groom_selected(
             match outcome {
                 usda::ReadOutcome::Groom(groom) => groom,
                 usda::ReadOutcome::NeedsComposition(layer) => {
-                    usd_compose::groom_from_composed(*layer, path, options, selection)?
+                    let (groom, layers) =
+                        usd_compose::groom_and_layers_from_composed(*layer, path, options, selection)?;
+                    files = layers;
+                    groom
                 }
             }
         }
@@ -176,7 +184,7 @@ pub fn read_groom_selected(
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;
-    Ok(Loaded { groom, format })
+    Ok(Loaded { groom, format, files })
 }
 
 /// The format of an existing groom file: its magic bytes, else its extension.

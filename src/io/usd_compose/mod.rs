@@ -60,14 +60,47 @@ pub fn groom_from_composed(
     options: &ImportOptions,
     selection: &Selection,
 ) -> Result<Groom> {
-    let composed = compose(root, path, selection)?;
-    usda::groom_from_layer(composed, path, options, selection.time).map_err(usdc::unline)
+    groom_and_layers(compose(root, path, selection)?, path, options, selection).map(|(groom, _)| groom)
 }
 
-/// Reads a `.usda` or `.usdc` stage, composed, into a groom.
-pub fn read_groom(path: &Path, options: &ImportOptions, selection: &Selection) -> Result<Groom> {
-    let composed = read_stage(path, selection)?;
-    usda::groom_from_layer(composed, path, options, selection.time).map_err(usdc::unline)
+/// Reads a `.usda` or `.usdc` stage, composed, into a groom, with the layer files it was composed
+/// from ([`layers_of`]).
+pub fn read_groom(
+    path: &Path,
+    options: &ImportOptions,
+    selection: &Selection,
+) -> Result<(Groom, Vec<PathBuf>)> {
+    groom_and_layers(read_stage(path, selection)?, path, options, selection)
+}
+
+/// [`groom_from_composed`], with the layer files the stage was composed from ([`layers_of`]).
+pub fn groom_and_layers_from_composed(
+    root: Layer,
+    path: &Path,
+    options: &ImportOptions,
+    selection: &Selection,
+) -> Result<(Groom, Vec<PathBuf>)> {
+    groom_and_layers(compose(root, path, selection)?, path, options, selection)
+}
+
+fn groom_and_layers(
+    composed: Layer,
+    path: &Path,
+    options: &ImportOptions,
+    selection: &Selection,
+) -> Result<(Groom, Vec<PathBuf>)> {
+    let layers = layers_of(&composed, path);
+    let groom = usda::groom_from_layer(composed, path, options, selection.time).map_err(usdc::unline)?;
+    Ok((groom, layers))
+}
+
+/// The files a stage was read from: the root layer's, then those of the layers it composes.
+pub fn layers_of(stage: &Layer, path: &Path) -> Vec<PathBuf> {
+    if stage.sources.is_empty() {
+        vec![path.to_path_buf()]
+    } else {
+        stage.sources.clone()
+    }
 }
 
 /// Reads a `.usda` or `.usdc` stage and composes it (for the cameras and lights of a render).
