@@ -152,6 +152,39 @@ pub enum GroomError {
     Mesh { path: String, problem: String },
 }
 
+/// Strand ids of curve objects (prims) merged into one groom, in object order: `parts` gives each
+/// object's strand count and its ids from the file, `None` when it has none. A file's ids are what
+/// its guide bindings (`groom_closest_guides`) name, so they are kept; only an object whose ids
+/// repeat ones taken by an earlier object (objects numbered each from 0) is moved past the
+/// largest id so far, and objects without ids are numbered after every given id.
+pub fn merged_strand_ids(parts: &[(usize, Option<&[u32]>)]) -> Vec<u32> {
+    let mut taken = std::collections::HashSet::new();
+    let mut next: u32 = 0;
+    let mut ids: Vec<Option<Vec<u32>>> = Vec::with_capacity(parts.len());
+    for (_, given) in parts {
+        ids.push(given.map(|given| {
+            let shift = if given.iter().any(|id| taken.contains(id)) { next } else { 0 };
+            let kept: Vec<u32> = given.iter().map(|&id| id.wrapping_add(shift)).collect();
+            for &id in &kept {
+                taken.insert(id);
+                next = next.max(id.wrapping_add(1));
+            }
+            kept
+        }));
+    }
+    parts
+        .iter()
+        .zip(ids)
+        .flat_map(|(&(count, _), kept)| {
+            kept.unwrap_or_else(|| {
+                let first = next;
+                next = next.wrapping_add(count as u32);
+                (0..count as u32).map(|i| first.wrapping_add(i)).collect()
+            })
+        })
+        .collect()
+}
+
 /// A groom: many strands, each a polyline (or cubic control polygon) rooted on the scalp.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Groom {
@@ -247,11 +280,22 @@ impl Groom {
 
     /// Adds an attribute, replacing one of the same name. Attributes stay sorted by name, so
     /// grooms compare equal and files come out the same whatever order attributes were set in.
+    /// Adds or replaces an attribute; groups that miss it (`CurveGroup::missing`) still do.
     pub fn set_attribute(&mut self, attribute: Attribute) {
         match self.attributes.binary_search_by(|a| a.name.as_str().cmp(&attribute.name)) {
             Ok(index) => self.attributes[index] = attribute,
             Err(index) => self.attributes.insert(index, attribute),
         }
+    }
+
+    /// [`Self::set_attribute`] for an attribute computed for every strand (a simulated state, a
+    /// guide binding): every group carries it, so writers put it on every prim or object, not
+    /// only on those whose file had it.
+    pub fn provide_attribute(&mut self, attribute: Attribute) {
+        for group in &mut self.groups {
+            group.missing.retain(|name| *name != attribute.name);
+        }
+        self.set_attribute(attribute);
     }
 
     pub fn remove_attribute(&mut self, name: &str) -> Option<Attribute> {
@@ -446,6 +490,18 @@ pub fn polyline_length(points: &[Vec3]) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn merged_strand_ids_keep_a_files_ids_and_number_the_rest_after_them() {
+        // Ids given on some objects are kept; objects without come after the largest.
+        let ids = merged_strand_ids(&[(2, Some(&[1000, 1007][..])), (3, None), (1, Some(&[5][..]))]);
+        assert_eq!(ids, vec![1000, 1007, 1008, 1009, 1010, 5]);
+        // Objects numbered each from 0: later ones move past the ids taken.
+        let ids = merged_strand_ids(&[(2, Some(&[0, 1][..])), (2, Some(&[0, 1][..])), (1, None)]);
+        assert_eq!(ids, vec![0, 1, 2, 3, 4]);
+        // No ids anywhere: 0, 1, 2, … in object order.
+        assert_eq!(merged_strand_ids(&[(2, None), (1, None)]), vec![0, 1, 2]);
+    }
 
     fn two_strands() -> Groom {
         Groom::from_strands(

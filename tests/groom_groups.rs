@@ -851,3 +851,129 @@ fn widths_keep_their_interpolation_through_convert() {
         }
     }
 }
+
+/// A stage of three curve prims: guides and children with Epic's `groom_id` (1000 + 7·i) and
+/// bindings naming the guides' ids, and a prim without ids or bindings (a DCC's extra tuft).
+fn stage_with_ids_on_some_prims() -> (String, Vec<u32>) {
+    use coif::generate::{generate, GenerateParams};
+    let groom =
+        generate(&GenerateParams { strands: 45, vertices_per_strand: 6, seed: 5, ..Default::default() })
+            .unwrap();
+    let id = |s: usize| 1000 + 7 * s as u32;
+    let guides: Vec<usize> = (0..40).step_by(4).collect();
+    let children: Vec<usize> = (0..40).filter(|s| s % 4 != 0).collect();
+    let prim = |name: &str, strands: &[usize], bound: Option<bool>| {
+        let counts: Vec<String> = strands.iter().map(|&s| groom.strand_range(s).len().to_string()).collect();
+        let points: Vec<String> = strands
+            .iter()
+            .flat_map(|&s| groom.strand_points(s).iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)))
+            .collect();
+        let mut text = format!(
+            "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
+             int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
+             float[] widths = [0.0001] (interpolation = \"constant\")\n",
+            counts.join(", "),
+            points.join(", ")
+        );
+        if let Some(guide) = bound {
+            let list =
+                |f: &dyn Fn(usize) -> String| strands.iter().map(|&s| f(s)).collect::<Vec<_>>().join(", ");
+            // Each child follows the guide just before it (strands 4k are the guides).
+            let closest = |s: usize| {
+                let g = id(s - s % 4);
+                format!("({g}, {g}, {g})")
+            };
+            text += &format!(
+                "        int[] primvars:groom_id = [{}] (interpolation = \"uniform\")\n        \
+                 int[] primvars:groom_guide = [{}] (interpolation = \"uniform\")\n        \
+                 float3[] primvars:groom_closest_guides = [{}] (interpolation = \"uniform\")\n        \
+                 float3[] primvars:groom_guide_weights = [{}] (interpolation = \"uniform\")\n",
+                list(&|s| id(s).to_string()),
+                list(&|_| (guide as u8).to_string()),
+                list(&closest),
+                list(&|_| "(1, 0, 0)".into()),
+            );
+        }
+        text + "    }\n"
+    };
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\ndef Xform \"groom\"\n{{\n{}{}{}}}\n",
+        prim("guides", &guides, Some(true)),
+        prim("hair", &children, Some(false)),
+        prim("fuzz", &(40..45).collect::<Vec<_>>(), None),
+    );
+    // Ids in strand order of the merged groom: guides, children, then the tuft after the largest.
+    let ids = guides.iter().chain(&children).map(|&s| id(s)).chain(1274..1279).collect();
+    (text, ids)
+}
+
+/// A file's `groom_id`s are what its bindings name: they are kept through reading, conversion and
+/// styling, whatever other prims or objects lack them. The Alembic reader moved every object's
+/// ids past the previous object's largest (a styled groom's bindings then named guides that no
+/// longer had those ids, and coif refused its own output), and the USD reader renumbered every
+/// strand 0, 1, 2, … when one prim had no ids.
+#[test]
+fn a_files_strand_ids_survive_reading_conversion_and_styling() {
+    let dir = tempfile::tempdir().unwrap();
+    let (text, expected) = stage_with_ids_on_some_prims();
+    let input = dir.path().join("in.usda");
+    std::fs::write(&input, text).unwrap();
+    assert_eq!(read(&input).strand_ids, expected, "as read");
+    // Round trips through both formats, twice (ids drifted further on each pass through .abc).
+    let mut previous = input.clone();
+    for (step, ext) in ["abc", "usda", "abc", "usdc", "abc"].iter().enumerate() {
+        for unreal in [false, true] {
+            let out = dir.path().join(format!("step{step}_{unreal}.{ext}"));
+            let mut args = vec!["convert", path_str(&previous), path_str(&out)];
+            if unreal {
+                args.push("--unreal");
+            }
+            let converted = coif(&args);
+            assert!(converted.status.success(), "{args:?}: {}", stderr(&converted));
+            assert_eq!(read(&out).strand_ids, expected, "{args:?}");
+        }
+        previous = dir.path().join(format!("step{step}_false.{ext}"));
+    }
+    // Styled through the file's own guides and bindings; the tuft's strands, bound to no guide,
+    // are bound by coif; the output binds every child to guide ids the output has.
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/recipes/bedhead_scene1.toml");
+    for groom in [&input, &previous] {
+        let out = dir.path().join("styled.usda");
+        let styled = coif(&["style", path_str(&recipe), "--groom", path_str(groom), "-o", path_str(&out)]);
+        assert!(styled.status.success(), "{}: {}", groom.display(), stderr(&styled));
+        let styled = read(&out);
+        assert_eq!(styled.strand_ids, expected, "{}", groom.display());
+        let flags = styled.guides.clone().expect("guide flags");
+        let guide_ids: std::collections::HashSet<u32> =
+            (0..styled.strand_count()).filter(|&s| flags[s]).map(|s| styled.strand_ids[s]).collect();
+        let closest = styled.attribute("groom_closest_guides").expect("bindings");
+        assert!(
+            closest.data.iter().all(|&id| guide_ids.contains(&(id as u32))),
+            "{}: a binding names no guide",
+            groom.display()
+        );
+        // The file's bindings are kept: the first child (strand 10, after the 10 guides) follows
+        // the first guide (id 1000), and the tuft's strands (the last 5) are bound too.
+        assert_eq!(closest.data[30..33], [1000.0; 3], "{}", groom.display());
+        let weights = styled.attribute("groom_guide_weights").expect("weights");
+        assert!(weights.data[40 * 3..].chunks(3).all(|w| (w.iter().sum::<f32>() - 1.0).abs() < 1e-5));
+    }
+}
+
+/// What coif computes for every strand is written on every prim: `simulate` of a groom whose
+/// guides alone had `rest` wrote the simulated rest state on the guides' prim only (the other
+/// prims were written as their file had them, without one).
+#[test]
+fn a_simulated_state_is_written_on_every_prim() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.usda");
+    assert!(read(&houdini_groom()).groups.iter().any(|g| !g.carries("rest")), "the fixture's premise");
+    let simulated = coif(&["simulate", path_str(&houdini_groom()), path_str(&out), "--seconds", "0.01"]);
+    assert!(simulated.status.success(), "{}", stderr(&simulated));
+    let groom = read(&out);
+    for name in ["rest", "rest_darboux", "wetness", "bond_hydrogen"] {
+        for group in &groom.groups {
+            assert!(group.carries(name), "{}: no {name}", group.name);
+        }
+    }
+}

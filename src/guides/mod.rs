@@ -124,25 +124,34 @@ pub fn style(
     let child_ids: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
     let guide_roots: Vec<Vec3> = guide_ids.iter().map(|&g| roots[g]).collect();
     let child_roots: Vec<Vec3> = child_ids.iter().map(|&c| roots[c]).collect();
+    let bind_here = || {
+        let reach = match recipe.guides.and_then(|g| g.reach) {
+            Some(reach) => reach,
+            // The groom's own guides are the artist's choice: each child follows its nearest,
+            // however sparse they are (Blender binds children 8.5 cm from their nearest guide
+            // on a 10 cm head). The default reach guards guides coif chose too few of.
+            None if own_guides => f32::INFINITY,
+            None => binding::default_reach(&guide_roots),
+        };
+        let shape = |s: &usize| binding::shape_of(groom.strand_points(*s));
+        let guide_shapes: Vec<binding::Shape> = guide_ids.iter().map(shape).collect();
+        let child_shapes: Vec<binding::Shape> = child_ids.iter().map(shape).collect();
+        binding::bind(&child_roots, &child_shapes, &child_ids, &guide_roots, &guide_shapes, reach)
+    };
     let bindings = match (&recipe.guides, file_bindings(&groom, &guide_ids, &child_ids)?) {
-        (None, Some(bindings)) => {
+        (None, Some(file)) => {
+            // Children the file binds to no guide (all weights 0: a curve prim or object without
+            // the binding attributes, merged with ones that have them) are bound here.
+            let bindings: Vec<Binding> = if file.iter().all(Option::is_some) {
+                file.into_iter().flatten().collect()
+            } else {
+                let own = bind_here()?;
+                file.into_iter().zip(own).map(|(file, own)| file.unwrap_or(own)).collect()
+            };
             binding::check(&bindings, &child_ids, guide_ids.len())?;
             bindings
         }
-        _ => {
-            let reach = match recipe.guides.and_then(|g| g.reach) {
-                Some(reach) => reach,
-                // The groom's own guides are the artist's choice: each child follows its nearest,
-                // however sparse they are (Blender binds children 8.5 cm from their nearest guide
-                // on a 10 cm head). The default reach guards guides coif chose too few of.
-                None if own_guides => f32::INFINITY,
-                None => binding::default_reach(&guide_roots),
-            };
-            let shape = |s: &usize| binding::shape_of(groom.strand_points(*s));
-            let guide_shapes: Vec<binding::Shape> = guide_ids.iter().map(shape).collect();
-            let child_shapes: Vec<binding::Shape> = child_ids.iter().map(shape).collect();
-            binding::bind(&child_roots, &child_shapes, &child_ids, &guide_roots, &guide_shapes, reach)?
-        }
+        _ => bind_here()?,
     };
 
     let guides = subset(&groom, &guide_ids);
@@ -222,12 +231,12 @@ pub fn style(
     scatter_points(&mut out, &guide_ids, &styled.groom.points);
     scatter_points(&mut out, &child_ids, &child_points);
     for attribute in carried(&last, last_pose, &after, &child_points, &styled.groom.attributes) {
-        out.set_attribute(attribute);
+        out.provide_attribute(attribute);
     }
     hold_children_up(&mut out, &styled.groom, &guide_ids, &child_ids, &placed.recipe)?;
     let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
-    out.set_attribute(closest);
-    out.set_attribute(weights);
+    out.provide_attribute(closest);
+    out.provide_attribute(weights);
     out.guides = Some(flags);
     out.validate()?;
 
@@ -274,8 +283,12 @@ fn rebuilt_frames(points: &[Vec3], offsets: &[u32]) -> Vec<f32> {
 /// The bindings a file brought as `groom_closest_guides` / `groom_guide_weights` (per strand,
 /// three components each), for the children; `None` when the file has none. A child's guides are
 /// named by their strand ids; a weighted entry naming no guide's id is an error with the
-/// child's strand index.
-fn file_bindings(groom: &Groom, guides: &[usize], children: &[usize]) -> Result<Option<Vec<Binding>>> {
+/// child's strand index. A child whose weights are all 0 is bound to nothing (`None`).
+fn file_bindings(
+    groom: &Groom,
+    guides: &[usize],
+    children: &[usize],
+) -> Result<Option<Vec<Option<Binding>>>> {
     let per_strand = |name| {
         groom.attribute(name).filter(|a| a.rate == AttributeRate::Strand && a.components == GUIDES_PER_CHILD)
     };
@@ -317,13 +330,15 @@ fn file_bindings(groom: &Groom, guides: &[usize], children: &[usize]) -> Result<
             };
         }
         // Unweighted slots repeat the first weighted guide, as `binding::bind` writes them.
-        if let Some(first) = (0..GUIDES_PER_CHILD).find(|&k| binding.weights[k] != 0.0) {
-            let guide = binding.guides[first];
-            for k in (0..GUIDES_PER_CHILD).filter(|&k| binding.weights[k] == 0.0) {
-                binding.guides[k] = guide;
-            }
+        let Some(first) = (0..GUIDES_PER_CHILD).find(|&k| binding.weights[k] != 0.0) else {
+            bindings.push(None);
+            continue;
+        };
+        let guide = binding.guides[first];
+        for k in (0..GUIDES_PER_CHILD).filter(|&k| binding.weights[k] == 0.0) {
+            binding.guides[k] = guide;
         }
-        bindings.push(binding);
+        bindings.push(Some(binding));
     }
     Ok(Some(bindings))
 }
@@ -403,7 +418,7 @@ fn hold_children_up(
         let guide_part = styled_guides.attribute(name).expect("styled guides carry their rest state");
         let child_part = Attribute::new(name, AttributeRate::Vertex, 3, parts.concat());
         let merged = merge_vertex_attribute(out, guide_ids, guide_part, child_ids, &child_part);
-        out.set_attribute(merged);
+        out.provide_attribute(merged);
     }
     Ok(())
 }

@@ -555,7 +555,7 @@ impl Simulation {
         groom.points.clear();
         groom.points.extend_from_slice(self.rods.positions());
         for attribute in self.state_attributes() {
-            groom.set_attribute(attribute);
+            groom.provide_attribute(attribute);
         }
     }
 

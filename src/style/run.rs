@@ -232,7 +232,7 @@ pub(crate) fn style_strands(
     let mut out = session.groom.clone();
     out.points = session.sim.rods().positions().to_vec();
     for attribute in session.state() {
-        out.set_attribute(attribute);
+        out.provide_attribute(attribute);
     }
     out.validate()?;
     session.snapshot_droplets();

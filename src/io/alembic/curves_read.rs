@@ -210,21 +210,23 @@ impl<'a> CurvesArchive<'a> {
             Placed { points: Vec::with_capacity(vertices), widths: Vec::with_capacity(vertices) };
         crate::io::input::advise_huge_pages(placed.points.spare_capacity_mut());
         crate::io::input::advise_huge_pages(placed.widths.spare_capacity_mut());
-        // Later objects' ids continue after the earlier ones' (ids from a file may be anything).
-        let mut largest_id: Option<u32> = None;
-        for (index, object) in objects.iter().enumerate() {
-            let mut groom = self.read_object(object, time, &mut placed)?;
-            if index > 0 {
-                let next_id = largest_id.map_or(0, |m| m.wrapping_add(1));
-                groom.strand_ids.iter_mut().for_each(|id| *id = id.wrapping_add(next_id));
-            }
-            largest_id = largest_id.max(groom.strand_ids.iter().max().copied());
+        let mut ids_given = Vec::with_capacity(objects.len());
+        for object in &objects {
+            let (groom, given) = self.read_object(object, time, &mut placed)?;
+            ids_given.push(given);
             parts.push(groom);
             paths.push(object.path.clone());
         }
+        let ids: Vec<(usize, Option<&[u32]>)> = parts
+            .iter()
+            .zip(&ids_given)
+            .map(|(part, &given)| (part.strand_count(), given.then_some(part.strand_ids.as_slice())))
+            .collect();
+        let ids = crate::groom::merged_strand_ids(&ids);
         let mut groom = Groom::concat_placed(parts, placed.points, placed.widths).map_err(|(index, e)| {
             OgawaError(format!("{}: does not fit the curves objects before it: {e}", paths[index]))
         })?;
+        groom.strand_ids = ids;
         groom.drop_default_group_named(super::curves_write::DEFAULT_OBJECT_NAME);
         for (path, xform_paths) in &self.meshes {
             let object = self.resolve_path(path, xform_paths)?;
@@ -424,12 +426,13 @@ impl<'a> CurvesArchive<'a> {
 
     /// One curves object at `time`: its points and widths appended to `placed`, the rest as a
     /// one-group groom whose own points and widths are empty (for [`Groom::concat_placed`]).
+    /// One curves object's groom, and whether the file gave its strand ids (`groom_id`).
     fn read_object(
         &self,
         object: &CurvesObject<'_, 'a>,
         time: f64,
         placed: &mut Placed,
-    ) -> OgawaResult<Groom> {
+    ) -> OgawaResult<(Groom, bool)> {
         let ogawa = &self.archive.ogawa;
         let path = &object.path;
         let bounds = required(object, ".selfBnds")?;
@@ -497,6 +500,7 @@ impl<'a> CurvesArchive<'a> {
         }
         let mut groom = Groom { basis, ..Default::default() };
         groom.strand_ids = (0..counts.len() as u32).collect();
+        let mut ids_given = false;
 
         let uv = arb.and_then(|c| c.get(epic::ROOT_UV)).or_else(|| object.geom.get("uv"));
         if let Some(p) = uv {
@@ -514,6 +518,7 @@ impl<'a> CurvesArchive<'a> {
                 continue; // not something a groom attribute can hold
             }
             if name == epic::ID {
+                ids_given = true;
                 if let Some(ids) = self.strand_ids(member, time, &strands) {
                     groom.strand_ids = ids;
                     continue;
@@ -545,7 +550,7 @@ impl<'a> CurvesArchive<'a> {
         let mut group = CurveGroup::new(path.clone(), basis, wrap_of(basis));
         group.width_interpolation = width_interpolation;
         groom.set_single_group(group);
-        Ok(groom)
+        Ok((groom, ids_given))
     }
 
     /// Epic's `groom_id` as integers, one per strand (no detour through floats: ids past 2^24

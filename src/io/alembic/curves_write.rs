@@ -248,6 +248,9 @@ impl<W: Write + Seek> CurvesWriter<W> {
             Vec::new()
         };
         let several = groups.len() > 1;
+        // Ids are written for every object or none: a reader numbers objects without ids after
+        // the ids it was given, so one object's plain 0, 1, 2, … would read back elsewhere.
+        let write_ids = has_custom_ids(&first.strand_ids);
         let mut tree = Tree { parent, nodes: Vec::new() };
         let mut objects = Vec::with_capacity(groups.len());
         for (group, strands) in groups {
@@ -260,7 +263,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
                         at,
                         name,
                         &part,
-                        (group, several),
+                        (group, several, write_ids),
                         (options.unreal, animated && options.velocities),
                         time_sampling,
                     )
@@ -557,7 +560,7 @@ fn add_curves<W: Write + Seek>(
     parent: ObjectId,
     name: &str,
     part: &GroupPart,
-    (group, several_groups): (usize, bool),
+    (group, several_groups, write_ids): (usize, bool, bool),
     (unreal, with_velocities): (bool, bool),
     ts: u32,
 ) -> (ObjectId, CurveProperties) {
@@ -574,7 +577,7 @@ fn add_curves<W: Write + Seek>(
     if unreal {
         sources.push((epic::WIDTH.to_string(), ParamSource::Widths));
     }
-    if unreal || has_custom_ids(&part.strand_ids) {
+    if unreal || write_ids {
         sources.push((epic::ID.to_string(), ParamSource::StrandIds));
     }
     if part.guides.is_some() {

@@ -928,7 +928,9 @@ fn merge(
             format!("line {lines}: the stage ends without a BasisCurves prim with points"),
         ));
     }
-    let all_ids = found.iter().all(|c| c.strand_ids.is_some());
+    let ids: Vec<(usize, Option<&[u32]>)> =
+        found.iter().map(|c| (c.counts.len(), c.strand_ids.as_deref())).collect();
+    let ids = crate::groom::merged_strand_ids(&ids);
     let sites: Vec<(String, Site)> = found.iter().map(|c| (c.path.clone(), c.site)).collect();
     let in_file = found
         .iter()
@@ -965,9 +967,7 @@ fn merge(
         let (prim_path, site) = &sites[index];
         files.error(*site, format!("prim <{prim_path}> does not fit the prims before it: {e}"))
     })?;
-    if !all_ids {
-        groom.strand_ids = (0..groom.strand_count() as u32).collect();
-    }
+    groom.strand_ids = ids;
     groom.drop_default_group(super::DEFAULT_PRIM_PATH);
     Ok(groom)
 }
