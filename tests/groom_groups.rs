@@ -977,3 +977,60 @@ fn a_simulated_state_is_written_on_every_prim() {
         }
     }
 }
+
+/// `style --group` places the recipe in the head frame of the whole groom, as a run of every
+/// strand does (the README's promise): fitted to a fringe alone, the frame's front turned to the
+/// back of the head. The other groups pass through untouched.
+#[test]
+fn a_group_is_styled_in_the_whole_grooms_head_frame() {
+    use coif::generate::{generate, GenerateParams};
+    let groom =
+        generate(&GenerateParams { strands: 60, vertices_per_strand: 8, seed: 11, ..Default::default() })
+            .unwrap();
+    // The fringe: the strands rooted furthest to the front (+Z on coif's head).
+    let mut by_front: Vec<usize> = (0..groom.strand_count()).collect();
+    by_front.sort_by(|&a, &b| groom.strand_points(b)[0].z.total_cmp(&groom.strand_points(a)[0].z));
+    let (fringe, others) = by_front.split_at(12);
+    let prim = |name: &str, strands: &[usize]| {
+        let counts: Vec<String> = strands.iter().map(|&s| groom.strand_range(s).len().to_string()).collect();
+        let points: Vec<String> = strands
+            .iter()
+            .flat_map(|&s| groom.strand_points(s).iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)))
+            .collect();
+        format!(
+            "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
+             int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
+             float[] widths = [0.0001] (interpolation = \"constant\")\n    }}\n",
+            counts.join(", "),
+            points.join(", ")
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.usda");
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\ndef Xform \"groom\"\n{{\n{}{}}}\n",
+        prim("bangs", fringe),
+        prim("back", others)
+    );
+    std::fs::write(&input, text).unwrap();
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/recipes/bedhead_scene1.toml");
+    let run = |group: Option<&str>| {
+        let out = dir.path().join("out.usda");
+        let mut args =
+            vec!["style", path_str(&recipe), "--groom", path_str(&input), "-o", path_str(&out), "--json"];
+        args.extend(group.iter().flat_map(|g| ["--group", *g]));
+        let styled = coif(&args);
+        assert!(styled.status.success(), "{group:?}: {}", stderr(&styled));
+        let report: Value = serde_json::from_slice(&styled.stdout).unwrap();
+        (report["report"]["head_frame"].clone(), read(&out))
+    };
+    let (whole_frame, _) = run(None);
+    let (fringe_frame, styled) = run(Some("bangs"));
+    assert_eq!(fringe_frame, whole_frame, "the fringe alone was placed in another head frame");
+    let before = read(&input);
+    let back = before.group_strands(1);
+    assert!(back.iter().all(|&s| styled.strand_points(s) == before.strand_points(s)), "the back moved");
+    let fringe_moved =
+        before.group_strands(0).iter().any(|&s| styled.strand_points(s) != before.strand_points(s));
+    assert!(fringe_moved, "the fringe was not styled");
+}

@@ -152,7 +152,7 @@ fn style_groups(
     options: &coif::style::StyleOptions,
 ) -> Result<coif::style::Styled> {
     let (selected, selection) = groom.select_groups(names).map_err(Error::Usage)?;
-    let mut styled = coif::style::style(&selected, recipe, options)?;
+    let mut styled = coif::style::style_part(groom, &selected, recipe, options)?;
     let merged = groom.merge_back(&selection, &styled.groom)?;
     let mut frame = styled.groom.clone();
     let frame_attributes = std::mem::take(&mut styled.frame_attributes);

@@ -8,4 +8,4 @@ pub mod recipe;
 pub mod run;
 
 pub use recipe::Recipe;
-pub use run::{style, StyleOptions, StyleReport, Styled};
+pub use run::{style, style_part, StyleOptions, StyleReport, Styled};

@@ -140,9 +140,18 @@ pub(crate) struct DropletSnapshot {
 /// Without a scalp in `options`, the groom's own mesh under its roots is the scalp
 /// ([`crate::surface_mesh::scalp_of`]); the result keeps the groom's meshes.
 pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    style_part(groom, groom, recipe, options)
+}
+
+/// [`style`] for `part`, strands selected from `whole` (`coif style --group`): placed in the head
+/// frame of the whole groom and colliding with its scalp, as the README promises, so a recipe
+/// means the same head whichever groups it styles (fitted to a fringe alone, its front turned
+/// to the back of the head).
+pub fn style_part(whole: &Groom, part: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<Styled> {
+    let groom = part;
     crate::sim::rod::check_simulable(groom)?;
     let own_scalp;
-    let options = match options.scalp.is_none().then(|| crate::surface_mesh::scalp_of(groom)).flatten() {
+    let options = match options.scalp.is_none().then(|| crate::surface_mesh::scalp_of(whole)).flatten() {
         Some(mesh) => {
             own_scalp = StyleOptions { scalp: Some(Arc::new(mesh)), ..options.clone() };
             &own_scalp
@@ -151,7 +160,7 @@ pub fn style(groom: &Groom, recipe: &Recipe, options: &StyleOptions) -> Result<S
     };
     // One head frame for the run, fitted to the whole groom as it comes (its scalp mesh, else
     // all its roots), whether every strand or only the guides are simulated.
-    let frame = super::placement::head_frame(recipe, groom, options.scalp.as_deref())?;
+    let frame = super::placement::head_frame(recipe, whole, options.scalp.as_deref())?;
     // A recipe without `max_segment` still gets the resolution its head and rods need.
     let resolved;
     let recipe = match super::placement::default_max_segment(recipe, groom, frame)? {
