@@ -84,7 +84,7 @@ fn solve3(mut m: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
 }
 
 /// Resamples every strand at equal arc-length steps no longer than `max_segment`, keeping root
-/// and tip. Widths and per-vertex attributes are interpolated along the arc; strands already
+/// and tip, in a count of points its basis takes (3k + 1 for Bézier curves). Widths and per-vertex attributes are interpolated along the arc; strands already
 /// fine enough are resampled too, so spacing is uniform.
 pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
     let mut out = Groom {
@@ -109,7 +109,12 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
             arc[i] = arc[i - 1] + points[i - 1].distance(points[i]);
         }
         let length = arc[points.len() - 1];
-        let segments = ((length / max_segment).ceil() as usize).max(1);
+        // Still a whole curve of its basis: a Bézier strand keeps 3k + 1 points, a cubic one 4.
+        let group = groom.group(groom.group_of(strand));
+        let mut segments = ((length / max_segment).ceil() as usize).max(1);
+        while !crate::primvar_rates::is_whole_curve(group.basis, group.wrap, segments + 1) {
+            segments += 1;
+        }
         let mut edge = 0;
         for k in 0..=segments {
             let s = length * k as f32 / segments as f32;

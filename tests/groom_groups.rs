@@ -1034,3 +1034,43 @@ fn a_group_is_styled_in_the_whole_grooms_head_frame() {
         before.group_strands(0).iter().any(|&s| styled.strand_points(s) != before.strand_points(s));
     assert!(fringe_moved, "the fringe was not styled");
 }
+
+/// A recipe that resamples strands keeps Bézier curves whole: 3k + 1 points each. The perm's
+/// 4 mm segments gave a Bézier groom 32–43 points per strand: a `.usda` output was refused after
+/// the whole run, and an `.abc` one was written with curves no reader can split into segments.
+#[test]
+fn resampled_bezier_strands_stay_whole_bezier_curves() {
+    use coif::generate::{generate, GenerateParams};
+    let groom =
+        generate(&GenerateParams { strands: 10, vertices_per_strand: 7, seed: 3, ..Default::default() })
+            .unwrap();
+    let points: Vec<String> = groom.points.iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)).collect();
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"hair\"\n{{\n    \
+         uniform token type = \"cubic\"\n    uniform token basis = \"bezier\"\n    \
+         int[] curveVertexCounts = [{}]\n    point3f[] points = [{}]\n    \
+         float[] widths = [0.0001] (interpolation = \"constant\")\n}}\n",
+        ["7"; 10].join(", "),
+        points.join(", ")
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.usda");
+    std::fs::write(&input, text).unwrap();
+    let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/recipes/perm_scene3.toml");
+    for ext in ["usda", "abc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let styled = coif(&["style", path_str(&recipe), "--groom", path_str(&input), "-o", path_str(&out)]);
+        assert!(styled.status.success(), "{ext}: {}", stderr(&styled));
+        // pxr reads the curves (converted from .abc by coif, whose USD writer refuses broken ones).
+        let usda = dir.path().join(format!("{ext}.usda"));
+        let converted = coif(&["convert", path_str(&out), path_str(&usda)]);
+        assert!(converted.status.success(), "{ext}: {}", stderr(&converted));
+        let dump = pxr_dump(&usda, None);
+        let (_, curves) = &curves_by_path(&dump)[0];
+        assert_eq!(curves["basis"], "bezier", "{ext}");
+        let counts: Vec<u64> =
+            curves["counts"].as_array().unwrap().iter().map(|c| c.as_u64().unwrap()).collect();
+        assert!(counts.iter().all(|&n| n >= 4 && (n - 1) % 3 == 0), "{ext}: {counts:?}");
+        assert!(counts.iter().all(|&n| n > 7), "{ext}: not resampled ({counts:?})");
+    }
+}
