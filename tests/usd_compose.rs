@@ -708,3 +708,33 @@ fn every_command_that_reads_a_groom_takes_the_variant_asked_for() {
         .collect();
     assert!(images[0] != images[1], "render read the default variant for --variant length=long");
 }
+
+/// A shot whose range starts before its cache's first time sample (frames 101–110, the cache
+/// referenced with an offset so that its first sample lands on 102): the stage's own range is
+/// read whole, the first sample holding before itself, as pxr evaluates it. coif refused the
+/// default convert ("frame 101 is before the first time sample"). A frame outside the stage's
+/// range and before every sample is still refused.
+#[test]
+fn a_stage_range_that_starts_before_the_first_sample_holds_the_first_sample() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("cache.usda"), timed_curves_layer("timeCodesPerSecond = 24")).unwrap();
+    let shot = dir.path().join("shot.usda");
+    std::fs::write(
+        &shot,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    startTimeCode = 101\n    endTimeCode = 110\n    timeCodesPerSecond = 24\n)\n\n\
+         def \"Groom\" (\n    references = @cache.usda@ (offset = 102)\n)\n{\n}\n",
+    )
+    .unwrap();
+    let out = dir.path().join("anim.usda");
+    let converted = coif(&["convert", path_str(&shot), path_str(&out)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    for frame in [101.0, 102.0, 105.0, 110.0] {
+        let ours = pxr_dump(&out, Some(frame));
+        let theirs = pxr_dump(&shot, Some(frame));
+        let points = |dump: &serde_json::Value| f32s(&dump["curves"][0]["points"]);
+        assert_eq!(points(&ours), points(&theirs), "frame {frame}");
+    }
+    let refused = coif(&["convert", path_str(&shot), path_str(&dir.path().join("f.usda")), "--frame", "100"]);
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    assert!(stderr(&refused).contains("frame 100 is before the first time sample"), "{}", stderr(&refused));
+}

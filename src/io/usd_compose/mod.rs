@@ -134,6 +134,7 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
     // memory has no file to canonicalize).
     let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     let meta = (root.meters_per_unit, root.up_axis.clone(), root.default_prim.clone(), root.lines);
+    let timeline = root.timeline;
     let root_id = composer.add_layer(canonical.clone(), path.to_path_buf(), selection.time, root)?;
     // Sites index the loaded layers, so the root must be the first: the file being read.
     debug_assert_eq!(root_id, 0);
@@ -143,6 +144,7 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
         meters_per_unit: meta.0,
         up_axis: meta.1,
         default_prim: meta.2,
+        timeline,
         ..Default::default()
     };
     let mut names: Vec<String> = Vec::new();

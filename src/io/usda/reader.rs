@@ -122,6 +122,7 @@ pub fn groom_from_layer_in(
 ) -> Result<Groom> {
     let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
+    let authored_start = layer.timeline.start;
     let sources = std::mem::take(&mut layer.sources);
     let files = SiteFiles::new(path, &sources);
     let mut walker =
@@ -131,11 +132,12 @@ pub fn groom_from_layer_in(
     }
     // A frame before the first time sample of everything that places the curves and meshes
     // (their points, the transforms above them) is a frame the animation never reached (0
-    // when it starts at 1): refused, not clamped, as for Alembic. After the last sample the
-    // last value holds, as USD itself (and pxr) defines it: a shot often runs past a groom's
-    // final sample.
+    // when it starts at 1): refused, not clamped, as for Alembic — unless the stage's own range
+    // (`startTimeCode`) holds it: a shot's range may start before its groom's first sample, and
+    // there the first value holds, as pxr reads it. After the last sample the last value holds
+    // too: a shot often runs past a groom's final sample.
     if let (Some(at), Some(first)) = (time, &walker.first_sample) {
-        if at < first.time {
+        if at < first.time && authored_start.is_none_or(|start| at < start) {
             return Err(files.error(
                 first.site,
                 format!(
