@@ -78,6 +78,14 @@ def flatten(args):
     stage.SetEditTarget(stage.GetSessionLayer())
     for spec in args.variant:
         select_variant(stage, spec)
+    # Instanceable prims flatten to references to their prototypes, arcs coif's reader of the
+    # flattened layer does not take: make each instance (nested ones in turn) a plain prim.
+    while True:
+        instances = [prim for prim in stage.Traverse() if prim.IsInstance()]
+        if not instances:
+            break
+        for prim in instances:
+            prim.SetInstanceable(False)
     layer = stage.Flatten()
     if not layer.Export(args.output, args={"format": "usda"}):
         raise RuntimeError(f"{args.output}: usd-core could not write the flattened stage")

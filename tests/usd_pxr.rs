@@ -388,3 +388,40 @@ fn validate_usd_passes_coif_stages_and_fails_on_errors() {
     let report = String::from_utf8_lossy(&out.stdout);
     assert!(report.contains("metersPerUnit") && report.contains("defaultPrim"), "{report}");
 }
+
+/// A `.usdz` whose groom is two instanceable references to one tuft (how a layout instances
+/// repeated assets): usd-core's flattening left them as references to prototypes, and coif
+/// refused the package with exit 1 ("usd-core left composition arcs"). Instances are made plain
+/// prims before flattening, so the package reads as coif's own composition reads its files.
+#[test]
+fn a_usdz_of_instanced_prims_reads_as_its_composed_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let tuft = dir.path().join("tuft.usda");
+    let hair = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms/sample_wavy.hair");
+    let converted = coif(&["convert", path_str(&hair), path_str(&tuft)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let root = dir.path().join("root.usda");
+    std::fs::write(
+        &root,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\
+         def Xform \"A\" (\n    instanceable = true\n    references = @./tuft.usda@\n)\n{\n}\n\
+         def Xform \"B\" (\n    instanceable = true\n    references = @./tuft.usda@\n)\n{\n    double3 xformOp:translate = (0.5, 0, 0)\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n}\n",
+    )
+    .unwrap();
+    let package = dir.path().join("pkg.usdz");
+    let made = std::process::Command::new(python())
+        .arg("-c")
+        .arg("import sys; from pxr import Sdf, UsdUtils; sys.exit(0 if UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(sys.argv[1]), sys.argv[2]) else 1)")
+        .args([path_str(&root), path_str(&package)])
+        .output()
+        .unwrap();
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    let out = dir.path().join("out.usda");
+    let read = coif(&["convert", path_str(&package), path_str(&out)]);
+    assert!(read.status.success(), "{}", stderr(&read));
+    let composed = coif::io::read_groom(&root, &Default::default()).unwrap().groom;
+    let from_package = coif::io::read_groom(&out, &Default::default()).unwrap().groom;
+    let single = coif::io::read_groom(&tuft, &Default::default()).unwrap().groom;
+    assert_eq!(from_package.strand_count(), 2 * single.strand_count());
+    assert_eq!(from_package.points, composed.points);
+}
