@@ -282,3 +282,47 @@ fn an_xform_parent_is_written_and_applied_on_reading() {
     }
     assert_eq!(back.widths, groom.widths);
 }
+
+/// Samples off the whole frames (Blender's motion-blur sub-samples at a ±0.25-frame shutter;
+/// here a file sampled at frames 0.75, 1.75, …, 4.75) span whole frames 1 to 4: `info` and a
+/// default `convert` go by those, each frame interpolated between the samples around it. The
+/// range was the samples' own (0.75 to 4.75), so a convert wrote fractional time codes and
+/// missed the last frame Blender exported.
+#[test]
+fn sub_frame_samples_span_the_whole_frames_between_them() {
+    use coif::io::timeline::Timeline;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("blur.abc");
+    let base = full_groom();
+    let frames: Vec<Groom> = (0..5).map(|f| frame(&base, f).0).collect();
+    let timeline = Timeline { first: 0.75, last: 4.75, frames_per_second: 24.0 };
+    coif::io::write_frames(
+        &path,
+        &frames[0],
+        frames[1..].iter().cloned().map(Ok),
+        &timeline,
+        &Default::default(),
+    )
+    .unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let archive = CurvesArchive::open(&bytes).unwrap();
+    assert!((archive.frame_time(0) * 24.0 - 0.75).abs() < 1e-9, "the file's samples are off the frames");
+    assert_eq!(archive.frame_range(), (1.0, 4.0));
+    let out = dir.path().join("out.usda");
+    let converted = coif(&["convert", path_str(&path), path_str(&out), "--json"]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let report: serde_json::Value = serde_json::from_slice(&converted.stdout).unwrap();
+    assert_eq!(
+        (report["frames"]["first"].as_f64(), report["frames"]["last"].as_f64()),
+        (Some(1.0), Some(4.0))
+    );
+    // Frame 2 lies a quarter of the way from the sample at 1.75 to the one at 2.75.
+    let at = |frame: f64| {
+        let options = ImportOptions { frame: Some(frame), ..Default::default() };
+        read_groom(&out, &options).unwrap().groom.points
+    };
+    let expected: Vec<Vec3> =
+        frames[1].points.iter().zip(&frames[2].points).map(|(a, b)| a.lerp(*b, 0.25)).collect();
+    let got = at(2.0);
+    assert!(got.iter().zip(&expected).all(|(a, b)| a.distance(*b) < 1e-6), "frame 2");
+}

@@ -164,10 +164,19 @@ impl<'a> CurvesArchive<'a> {
         self.fps
     }
 
-    /// The frame numbers of the first and last sample times (equal for a static file).
+    /// The first and last whole frames the samples span (equal for a static file). Motion-blur
+    /// sub-samples (Blender's shutter of ±0.25 frame puts them at 0.75, 1.25, …, 5.25) span
+    /// frames 1 to 5, not 0.75 to 4.75; samples that span no whole frame give their own range.
     pub fn frame_range(&self) -> (f64, f64) {
         let first = self.frame_time(0) * self.fps;
-        (first, self.frame_time(self.frame_count() - 1) * self.fps)
+        let last = self.frame_time(self.frame_count() - 1) * self.fps;
+        let (whole_first, whole_last) =
+            ((first - SAME_TIME_IN_FRAMES).ceil(), (last + SAME_TIME_IN_FRAMES).floor());
+        if whole_first <= whole_last {
+            (whole_first, whole_last)
+        } else {
+            (first, last)
+        }
     }
 
     /// Every curves object merged into one groom, at frame number `frame` of the file's
