@@ -1074,3 +1074,40 @@ fn resampled_bezier_strands_stay_whole_bezier_curves() {
         assert!(counts.iter().all(|&n| n > 7), "{ext}: not resampled ({counts:?})");
     }
 }
+
+/// A file's own Unreal groups (`groom_group_id` 3, 7, 9 on one prim) are what `--unreal` writes:
+/// USD output replaced them with the curve group's index (all 0), and Alembic output wrote two
+/// `groom_group_id` properties into one compound (the file's and coif's).
+#[test]
+fn a_files_own_unreal_group_ids_are_written_once_and_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.usda");
+    let points: Vec<String> = (0..6)
+        .flat_map(|s| (0..3).map(move |k| format!("({}, {}, 0)", 0.01 * s as f32, -0.01 * k as f32)))
+        .collect();
+    std::fs::write(
+        &input,
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"hair\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [3, 3, 3, 3, 3, 3]\n    point3f[] points = [{}]\n    \
+             int[] primvars:groom_group_id = [3, 3, 7, 7, 9, 9] (interpolation = \"uniform\")\n}}\n",
+            points.join(", ")
+        ),
+    )
+    .unwrap();
+    let expected = [3.0, 3.0, 7.0, 7.0, 9.0, 9.0];
+    let usda = dir.path().join("u.usda");
+    let abc = dir.path().join("u.abc");
+    for out in [&usda, &abc] {
+        let converted = coif(&["convert", "--unreal", path_str(&input), path_str(out)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+    }
+    let dump = pxr_dump(&usda, None);
+    let (_, curves) = &curves_by_path(&dump)[0];
+    assert_eq!(f32s(&curves["primvars"]["groom_group_id"]["values"]), expected, "{curves}");
+    let bytes = std::fs::read(&abc).unwrap();
+    let named = bytes.windows(b"groom_group_id".len()).filter(|w| w == b"groom_group_id").count();
+    assert_eq!(named, 1, "one groom_group_id property in the Alembic output");
+    // Read back as the Epic groom file it is (Epic's prefix dropped).
+    assert_eq!(read(&abc).attribute("group_id").expect("group ids").data, expected);
+}

@@ -59,11 +59,14 @@ pub fn for_usd(groom: &Groom) -> Groom {
     let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
     out.groups.iter_mut().for_each(|g| g.width_interpolation = None);
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
-    // A groom without a group table has no `group_ids`: all its strands are group 0.
-    let group_ids = (0..out.strand_count()).map(|s| out.group_of(s) as f32).collect();
-    out.set_attribute(
-        Attribute::new(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids).with_kind(AttributeKind::Int),
-    );
+    // A groom's own `groom_group_id` (a file's Unreal groups) stays; else each curve group is
+    // one (a groom without a group table has no `group_ids`: all its strands are group 0).
+    if out.attribute(epic::GROUP_ID).is_none() {
+        let group_ids = (0..out.strand_count()).map(|s| out.group_of(s) as f32).collect();
+        out.set_attribute(
+            Attribute::new(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids).with_kind(AttributeKind::Int),
+        );
+    }
     if let Some(uvs) = &out.root_uvs {
         let data = uvs.iter().flatten().copied().collect();
         out.set_attribute(Attribute::new(epic::ROOT_UV, AttributeRate::Strand, 2, data));

@@ -460,6 +460,16 @@ fn layout(groom: &Groom) -> Vec<(String, AttributeRate, usize)> {
 }
 
 /// Strand ids are only worth writing when they are not simply 0, 1, 2, …
+/// The `.arbGeomParams` name of a groom attribute (Epic's names with `--unreal`).
+fn param_name(unreal: bool, attribute: &str) -> String {
+    match (unreal, attribute) {
+        (false, name) => name.to_string(),
+        (true, attr::COLOR) => epic::COLOR.to_string(),
+        (true, name) if name.starts_with(epic::PREFIX) => name.to_string(),
+        (true, name) => format!("{}{name}", epic::PREFIX),
+    }
+}
+
 fn has_custom_ids(ids: &[u32]) -> bool {
     ids.iter().enumerate().any(|(i, &id)| id != i as u32)
 }
@@ -583,20 +593,16 @@ fn add_curves<W: Write + Seek>(
     if part.guides.is_some() {
         sources.push((epic::GUIDE.to_string(), ParamSource::Guides));
     }
-    if unreal || several_groups {
+    // A groom's own `groom_group_id` (a file's Unreal groups) is written as it is, not replaced.
+    let own_group_ids = part.attributes.iter().any(|(a, _)| param_name(unreal, &a.name) == epic::GROUP_ID);
+    if (unreal || several_groups) && !own_group_ids {
         sources.push((epic::GROUP_ID.to_string(), ParamSource::GroupId(group as u32)));
     }
     if unreal && part.root_uvs.is_some() {
         sources.push((epic::ROOT_UV.to_string(), ParamSource::RootUvs));
     }
     for (attribute, _) in &part.attributes {
-        let name = match (unreal, attribute.name.as_str()) {
-            (false, name) => name.to_string(),
-            (true, attr::COLOR) => epic::COLOR.to_string(),
-            (true, name) if name.starts_with(epic::PREFIX) => name.to_string(),
-            (true, name) => format!("{}{name}", epic::PREFIX),
-        };
-        sources.push((name, ParamSource::Attribute(attribute.name.clone())));
+        sources.push((param_name(unreal, &attribute.name), ParamSource::Attribute(attribute.name.clone())));
     }
     let mut params = Vec::new();
     if !sources.is_empty() {
