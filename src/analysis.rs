@@ -84,8 +84,9 @@ fn solve3(mut m: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
 }
 
 /// Resamples every strand at equal arc-length steps no longer than `max_segment`, keeping root
-/// and tip, in a count of points its basis takes (3k + 1 for Bézier curves). Widths and per-vertex attributes are interpolated along the arc; strands already
-/// fine enough are resampled too, so spacing is uniform.
+/// and tip, in a count of points its basis takes (3k + 1 for Bézier curves). Widths and
+/// per-vertex attributes are interpolated along the arc; strands already fine enough are
+/// resampled too, so spacing is uniform.
 pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
     let mut out = Groom {
         strand_offsets: vec![0],

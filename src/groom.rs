@@ -280,7 +280,7 @@ impl Groom {
 
     /// Adds an attribute, replacing one of the same name. Attributes stay sorted by name, so
     /// grooms compare equal and files come out the same whatever order attributes were set in.
-    /// Adds or replaces an attribute; groups that miss it (`CurveGroup::missing`) still do.
+    /// Groups that miss it (`CurveGroup::missing`) still do ([`Self::provide_attribute`]).
     pub fn set_attribute(&mut self, attribute: Attribute) {
         match self.attributes.binary_search_by(|a| a.name.as_str().cmp(&attribute.name)) {
             Ok(index) => self.attributes[index] = attribute,

@@ -852,6 +852,23 @@ fn widths_keep_their_interpolation_through_convert() {
     }
 }
 
+/// A linear `BasisCurves` prim `name` of `groom`'s `strands` (0.1 mm wide), with `extra` lines
+/// (primvars) inside it.
+fn linear_prim(groom: &Groom, name: &str, strands: &[usize], extra: &str) -> String {
+    let counts: Vec<String> = strands.iter().map(|&s| groom.strand_range(s).len().to_string()).collect();
+    let points: Vec<String> = strands
+        .iter()
+        .flat_map(|&s| groom.strand_points(s).iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)))
+        .collect();
+    format!(
+        "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
+         int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
+         float[] widths = [0.0001] (interpolation = \"constant\")\n{extra}    }}\n",
+        counts.join(", "),
+        points.join(", ")
+    )
+}
+
 /// A stage of three curve prims: guides and children with Epic's `groom_id` (1000 + 7·i) and
 /// bindings naming the guides' ids, and a prim without ids or bindings (a DCC's extra tuft).
 fn stage_with_ids_on_some_prims() -> (String, Vec<u32>) {
@@ -863,18 +880,7 @@ fn stage_with_ids_on_some_prims() -> (String, Vec<u32>) {
     let guides: Vec<usize> = (0..40).step_by(4).collect();
     let children: Vec<usize> = (0..40).filter(|s| s % 4 != 0).collect();
     let prim = |name: &str, strands: &[usize], bound: Option<bool>| {
-        let counts: Vec<String> = strands.iter().map(|&s| groom.strand_range(s).len().to_string()).collect();
-        let points: Vec<String> = strands
-            .iter()
-            .flat_map(|&s| groom.strand_points(s).iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)))
-            .collect();
-        let mut text = format!(
-            "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
-             int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
-             float[] widths = [0.0001] (interpolation = \"constant\")\n",
-            counts.join(", "),
-            points.join(", ")
-        );
+        let mut text = String::new();
         if let Some(guide) = bound {
             let list =
                 |f: &dyn Fn(usize) -> String| strands.iter().map(|&s| f(s)).collect::<Vec<_>>().join(", ");
@@ -894,7 +900,7 @@ fn stage_with_ids_on_some_prims() -> (String, Vec<u32>) {
                 list(&|_| "(1, 0, 0)".into()),
             );
         }
-        text + "    }\n"
+        linear_prim(&groom, name, strands, &text)
     };
     let text = format!(
         "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\ndef Xform \"groom\"\n{{\n{}{}{}}}\n",
@@ -991,20 +997,7 @@ fn a_group_is_styled_in_the_whole_grooms_head_frame() {
     let mut by_front: Vec<usize> = (0..groom.strand_count()).collect();
     by_front.sort_by(|&a, &b| groom.strand_points(b)[0].z.total_cmp(&groom.strand_points(a)[0].z));
     let (fringe, others) = by_front.split_at(12);
-    let prim = |name: &str, strands: &[usize]| {
-        let counts: Vec<String> = strands.iter().map(|&s| groom.strand_range(s).len().to_string()).collect();
-        let points: Vec<String> = strands
-            .iter()
-            .flat_map(|&s| groom.strand_points(s).iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)))
-            .collect();
-        format!(
-            "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
-             int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
-             float[] widths = [0.0001] (interpolation = \"constant\")\n    }}\n",
-            counts.join(", "),
-            points.join(", ")
-        )
-    };
+    let prim = |name: &str, strands: &[usize]| linear_prim(&groom, name, strands, "");
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("in.usda");
     let text = format!(

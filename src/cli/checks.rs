@@ -53,11 +53,11 @@ fn not_an_input(output: &Path, inputs: &[(&str, Option<&PathBuf>)]) -> Result<()
 pub(crate) fn nothing_read_is_written(
     output: &Path,
     loaded: &coif::io::Loaded,
-    groom: &coif::Groom,
     export: &coif::io::ExportOptions,
     others: &[(&str, Option<&PathBuf>)],
 ) -> Result<()> {
-    let meshes = coif::io::meshes_output(output, groom, export);
+    // Styled and simulated grooms keep the meshes of the groom read.
+    let meshes = coif::io::meshes_output(output, &loaded.groom, export);
     let outputs: Vec<&Path> = std::iter::once(output).chain(meshes.as_deref()).collect();
     let mut inputs: Vec<(String, &Path)> = loaded
         .files

@@ -70,9 +70,8 @@ fn run_style(args: StyleArgs) -> Result<()> {
     }
     let loaded =
         io::read_groom_selected(&args.groom, &args.import.options(&args.groom)?, &args.import.selection())?;
-    // The groom's own meshes stay in the styled groom, so `--unreal` writes them beside it.
     let others = [("the recipe", Some(&args.recipe)), ("--scalp", args.scalp.as_ref())];
-    super::checks::nothing_read_is_written(&args.output, &loaded, &loaded.groom, &export, &others)?;
+    super::checks::nothing_read_is_written(&args.output, &loaded, &export, &others)?;
     let progress = args.progress.mode(args.quiet, args.json);
     let scalp = match &args.scalp {
         Some(path) => {
@@ -181,13 +180,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     io::check_output(&args.output, &io::ExportOptions::default())?;
     let loaded =
         io::read_groom_selected(&args.input, &args.import.options(&args.input)?, &args.import.selection())?;
-    super::checks::nothing_read_is_written(
-        &args.output,
-        &loaded,
-        &loaded.groom,
-        &io::ExportOptions::default(),
-        &[],
-    )?;
+    super::checks::nothing_read_is_written(&args.output, &loaded, &io::ExportOptions::default(), &[])?;
     let defaults = SimParams::for_solver(args.solver.into());
     let params = SimParams {
         dt: parse_time_step(&args.dt)?,
@@ -542,7 +535,7 @@ fn run_convert(
     };
     let Some(timeline) = timeline else {
         let loaded = io::read_groom_selected(input, &options, &import.selection())?;
-        super::checks::nothing_read_is_written(output, &loaded, &loaded.groom, export, &[])?;
+        super::checks::nothing_read_is_written(output, &loaded, export, &[])?;
         return write_and_report(output, &loaded.groom, json, export);
     };
     // A file's own range is as unchecked as its samples (an `endTimeCode = 1e15` typo): bounded
@@ -567,7 +560,7 @@ fn run_convert(
         io::read_groom_selected(input, &options, &selection)
     };
     let loaded = read(timeline.first)?;
-    super::checks::nothing_read_is_written(output, &loaded, &loaded.groom, export, &[])?;
+    super::checks::nothing_read_is_written(output, &loaded, export, &[])?;
     let first = loaded.groom;
     let rest = timeline.frames().skip(1).map(|frame| read(frame).map(|loaded| loaded.groom));
     let warnings = io::write_frames(output, &first, rest, &timeline, export)?;

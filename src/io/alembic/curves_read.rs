@@ -434,8 +434,8 @@ impl<'a> CurvesArchive<'a> {
     }
 
     /// One curves object at `time`: its points and widths appended to `placed`, the rest as a
-    /// one-group groom whose own points and widths are empty (for [`Groom::concat_placed`]).
-    /// One curves object's groom, and whether the file gave its strand ids (`groom_id`).
+    /// one-group groom whose own points and widths are empty (for [`Groom::concat_placed`]), and
+    /// whether the file gave its strand ids (`groom_id`).
     fn read_object(
         &self,
         object: &CurvesObject<'_, 'a>,

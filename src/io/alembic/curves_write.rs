@@ -459,7 +459,6 @@ fn layout(groom: &Groom) -> Vec<(String, AttributeRate, usize)> {
     layout
 }
 
-/// Strand ids are only worth writing when they are not simply 0, 1, 2, …
 /// The `.arbGeomParams` name of a groom attribute (Epic's names with `--unreal`).
 fn param_name(unreal: bool, attribute: &str) -> String {
     match (unreal, attribute) {
@@ -470,6 +469,7 @@ fn param_name(unreal: bool, attribute: &str) -> String {
     }
 }
 
+/// Strand ids are only worth writing when they are not simply 0, 1, 2, …
 fn has_custom_ids(ids: &[u32]) -> bool {
     ids.iter().enumerate().any(|(i, &id)| id != i as u32)
 }

@@ -95,7 +95,7 @@ fn groom_and_layers(
 }
 
 /// The files a stage was read from: the root layer's, then those of the layers it composes.
-pub fn layers_of(stage: &Layer, path: &Path) -> Vec<PathBuf> {
+fn layers_of(stage: &Layer, path: &Path) -> Vec<PathBuf> {
     if stage.sources.is_empty() {
         vec![path.to_path_buf()]
     } else {
