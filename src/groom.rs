@@ -133,6 +133,9 @@ pub enum GroomError {
          groom's roots; give the head in the recipe's [head] table (center, up, front, size)"
     )]
     ScalpNotFitted,
+    /// The file's guide bindings (`groom_closest_guides`, `groom_guide_weights`) are unusable.
+    #[error("{0}")]
+    Binding(String),
     #[error(
         "strand {strand}, vertex {vertex}: a coordinate of {} m is beyond the {max} m from the origin \
          a groom is simulated in; are the file's units another unit's?",

@@ -732,6 +732,34 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             "1000 m from the origin",
         ));
     }
+    // A file's own guide bindings that cannot be used are refused naming the file (they named
+    // only the strand).
+    for (label, closest, weights, expected) in [
+        ("weights sum to 0.5", "(0, 0, 0)", "(0.5, 0, 0)", "sum to 0.5"),
+        ("a binding names a missing guide", "(7, 7, 7)", "(1, 0, 0)", "groom_id 7"),
+    ] {
+        let text = format!(
+            "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
+             point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.02, 0, 0), (0.02, 0.1, 0)]\n  \
+             int[] primvars:groom_guide = [1, 0, 0] (interpolation = \"uniform\")\n  \
+             float3[] primvars:groom_closest_guides = [(0, 0, 0), {closest}, (0, 0, 0)] (interpolation = \"uniform\")\n  \
+             float3[] primvars:groom_guide_weights = [(1, 0, 0), {weights}, (1, 0, 0)] (interpolation = \"uniform\")\n}}\n"
+        );
+        cases.push(case(
+            &format!("bindings: {label}"),
+            vec![("in.usda", text.into_bytes()), ("r.toml", BASE.as_bytes().to_vec())],
+            &["style", "r.toml", "--groom", "in.usda", "-o", "out.usda"],
+            2,
+            &["in.usda:", "strand 1", expected],
+        ));
+    }
+    cases.push(case(
+        "--guides 0",
+        vec![("g.hair", inputs.hair.clone()), ("r.toml", BASE.as_bytes().to_vec())],
+        &["style", "r.toml", "--groom", "g.hair", "--guides", "0", "-o", "out.usda"],
+        2,
+        &["--guides = 0", "[1, 1e9]"],
+    ));
     for (label, last_z, last_width, expected) in unsimulable {
         let text = format!(
             "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \

@@ -316,7 +316,9 @@ fn impossible_guide_counts_and_reach_exit_2_with_the_numbers() {
     let input = dir.path().join("head.hair");
     coif::io::write_groom(&input, groom).unwrap();
     let out = dir.path().join("out.usda");
-    for (count, expected) in [("0", "0 guides"), ("3001", "3001 guides, but the groom has 3000 strands")] {
+    for (count, expected) in
+        [("0", "--guides = 0 must be"), ("3001", "3001 guides, but the groom has 3000 strands")]
+    {
         let output = common::coif(&[
             "style",
             "grooms/recipes/perm_full_head.toml",

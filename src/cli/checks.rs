@@ -31,6 +31,10 @@ pub(crate) fn style(args: &StyleArgs) -> Result<()> {
     if let Some(fps) = args.frames {
         flag("--frames", fps, Range::closed(0.0, 1e4))?;
     }
+    if let Some(guides) = args.guides {
+        // At least one; more than the groom's strands is refused once it is read.
+        flag("--guides", guides as f64, Range::closed(1.0, 1e9))?;
+    }
     let inputs = [
         ("--groom", Some(&args.groom)),
         ("the recipe", Some(&args.recipe)),

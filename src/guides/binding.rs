@@ -167,23 +167,28 @@ pub fn check(bindings: &[Binding], children: &[usize], guide_count: usize) -> Re
     for (binding, &strand) in bindings.iter().zip(children) {
         for (&g, &w) in binding.guides.iter().zip(&binding.weights) {
             if w != 0.0 && g as usize >= guide_count {
-                return Err(Error::Usage(format!(
+                return Err(file_error(format!(
                     "strand {strand}: groom_closest_guides names guide {g}, but the groom has {guide_count} guides"
                 )));
             }
             if !(w.is_finite() && w >= 0.0) {
-                return Err(Error::Usage(format!("strand {strand}: groom_guide_weights has weight {w}")));
+                return Err(file_error(format!("strand {strand}: groom_guide_weights has weight {w}")));
             }
         }
         let sum: f32 = binding.weights.iter().sum();
         if (sum - 1.0).abs() > 1e-3 {
-            return Err(Error::Usage(format!(
+            return Err(file_error(format!(
                 "strand {strand}: groom_guide_weights sum to {sum}, not 1 ({:?})",
                 binding.weights
             )));
         }
     }
     Ok(())
+}
+
+/// A refusal of the groom file's own bindings: callers name the file ([`Error::in_file`]).
+pub(super) fn file_error(message: String) -> Error {
+    Error::Groom(crate::groom::GroomError::Binding(message))
 }
 
 #[cfg(test)]

@@ -298,7 +298,7 @@ fn file_bindings(
     let mut by_id = std::collections::HashMap::with_capacity(guides.len());
     for (index, &g) in guides.iter().enumerate() {
         if let Some(other) = by_id.insert(groom.strand_ids[g], index) {
-            return Err(Error::Usage(format!(
+            return Err(binding::file_error(format!(
                 "strands {} and {g} are guides with the same groom_id {}: groom_closest_guides cannot tell them apart",
                 guides[other], groom.strand_ids[g]
             )));
@@ -321,7 +321,7 @@ fn file_bindings(
             binding.guides[k] = match guide {
                 Some(&index) => index as u32,
                 None => {
-                    return Err(Error::Usage(format!(
+                    return Err(binding::file_error(format!(
                         "strand {c}: groom_closest_guides names groom_id {id} with weight {weight}, but none of the \
                          groom's {} guides has that id",
                         guides.len()
@@ -354,7 +354,7 @@ fn binding_attributes(
     let id = |g: usize| {
         match strand_ids[g] {
         id if id < EXACT_IDS => Ok(id as f32),
-        id => Err(Error::Usage(format!(
+        id => Err(binding::file_error(format!(
             "strand {g}: a guide's groom_id {id} is too large for groom_closest_guides (ids below {EXACT_IDS} \
              stay exact in USD's float3)"
         ))),
