@@ -123,8 +123,8 @@ pub fn style(
     let guide_ids: Vec<usize> = (0..strands).filter(|&s| flags[s]).collect();
     let child_ids: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
     let guide_roots: Vec<Vec3> = guide_ids.iter().map(|&g| roots[g]).collect();
-    let child_roots: Vec<Vec3> = child_ids.iter().map(|&c| roots[c]).collect();
-    let bind_here = || {
+    // Binds the children `which` (strand indices) as coif chooses, in that order.
+    let bind_here = |which: &[usize]| {
         let reach = match recipe.guides.and_then(|g| g.reach) {
             Some(reach) => reach,
             // The groom's own guides are the artist's choice: each child follows its nearest,
@@ -135,23 +135,25 @@ pub fn style(
         };
         let shape = |s: &usize| binding::shape_of(groom.strand_points(*s));
         let guide_shapes: Vec<binding::Shape> = guide_ids.iter().map(shape).collect();
-        let child_shapes: Vec<binding::Shape> = child_ids.iter().map(shape).collect();
-        binding::bind(&child_roots, &child_shapes, &child_ids, &guide_roots, &guide_shapes, reach)
+        let child_shapes: Vec<binding::Shape> = which.iter().map(shape).collect();
+        let child_roots: Vec<Vec3> = which.iter().map(|&c| roots[c]).collect();
+        binding::bind(&child_roots, &child_shapes, which, &guide_roots, &guide_shapes, reach)
     };
     let bindings = match (&recipe.guides, file_bindings(&groom, &guide_ids, &child_ids)?) {
         (None, Some(file)) => {
             // Children the file binds to no guide (all weights 0: a curve prim or object without
             // the binding attributes, merged with ones that have them) are bound here.
-            let bindings: Vec<Binding> = if file.iter().all(Option::is_some) {
-                file.into_iter().flatten().collect()
-            } else {
-                let own = bind_here()?;
-                file.into_iter().zip(own).map(|(file, own)| file.unwrap_or(own)).collect()
-            };
+            let unbound: Vec<usize> =
+                child_ids.iter().zip(&file).filter(|(_, b)| b.is_none()).map(|(&c, _)| c).collect();
+            let mut own = if unbound.is_empty() { Vec::new() } else { bind_here(&unbound)? }.into_iter();
+            let bindings: Vec<Binding> = file
+                .into_iter()
+                .map(|b| b.or_else(|| own.next()).expect("one binding per unbound child"))
+                .collect();
             binding::check(&bindings, &child_ids, guide_ids.len())?;
             bindings
         }
-        _ => bind_here()?,
+        _ => bind_here(&child_ids)?,
     };
 
     let guides = subset(&groom, &guide_ids);
