@@ -94,6 +94,12 @@ impl CurveGroup {
         self.interpolations.iter().find(|(n, _)| n == name).map(|&(_, i)| i)
     }
 
+    /// The name `missing` gives the groom's root UVs (`Groom::root_uvs`): a group whose file had
+    /// none, merged with groups that have them, has zeros there that are no UVs (Unreal would
+    /// take `(0, 0)` for a real root UV and skip its own projection). No file's attribute is
+    /// named so.
+    pub const ROOT_UVS: &'static str = "(root uvs)";
+
     /// Whether the group carries attribute `name`.
     pub fn carries(&self, name: &str) -> bool {
         !self.missing.iter().any(|m| m == name)
@@ -204,6 +210,9 @@ impl Groom {
             let mut part = assemble(&[(self, &strands)])?;
             let group = self.group(g).into_owned();
             part.attributes.retain(|a| group.carries(&a.name));
+            if !group.carries(CurveGroup::ROOT_UVS) {
+                part.root_uvs = None;
+            }
             let mut table_entry = group.clone();
             table_entry.missing.clear();
             part.set_single_group(table_entry);
@@ -448,6 +457,7 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
     let any_uvs = parts.iter().any(|(g, _)| g.root_uvs.is_some());
     let any_guides = parts.iter().any(|(g, _)| g.guides.is_some());
     let (mut uvs, mut guides) = (Vec::new(), Vec::new());
+    let mut carries_uvs = vec![false; out.groups.len()];
     for ((groom, strands), map) in parts.iter().zip(&group_maps) {
         for run in runs(groom, strands) {
             let (first, last) = (run.start, run.end - 1);
@@ -470,6 +480,10 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
         for &s in strands.iter() {
             if any_uvs {
                 uvs.push(groom.root_uvs.as_ref().map_or([0.0; 2], |u| u[s]));
+                let group = groom.group_of(s);
+                if groom.root_uvs.is_some() && groom.group(group).carries(CurveGroup::ROOT_UVS) {
+                    carries_uvs[map[group] as usize] = true;
+                }
             }
             if any_guides {
                 guides.push(groom.guides.as_ref().is_some_and(|g| g[s]));
@@ -478,6 +492,13 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
     }
     out.root_uvs = any_uvs.then_some(uvs);
     out.guides = any_guides.then_some(guides);
+    if any_uvs {
+        for (group, carried) in out.groups.iter_mut().zip(carries_uvs) {
+            if !carried {
+                group.missing.push(CurveGroup::ROOT_UVS.to_string());
+            }
+        }
+    }
     if let Some(placed) = placed {
         out.points = placed.points;
         out.widths = placed.widths;
@@ -630,6 +651,26 @@ mod tests {
         assert_eq!(parts.len(), 2);
         assert_eq!(*parts[0].2, guides);
         assert_eq!(*parts[1].2, children);
+    }
+
+    #[test]
+    fn root_uvs_of_some_groups_are_missing_in_the_others() {
+        let mut guides = prim("/Groom/Guides", CurveBasis::Linear, 2, false);
+        guides.root_uvs = Some(vec![[0.25, 0.5], [0.75, 0.5]]);
+        let children = prim("/Groom/Hair", CurveBasis::Linear, 3, false);
+        let groom = Groom::concat(vec![guides.clone(), children.clone()]).unwrap();
+        assert!(groom.groups[0].carries(CurveGroup::ROOT_UVS));
+        assert!(!groom.groups[1].carries(CurveGroup::ROOT_UVS));
+        let parts = groom.split_groups().unwrap();
+        assert_eq!(
+            (*parts[0].2 == guides, *parts[1].2 == children),
+            (true, true),
+            "split gives the parts back"
+        );
+        // Merged again (a selection put back), the children still have none.
+        let again = Groom::concat(vec![(*parts[1].2).clone(), groom.clone()]).unwrap();
+        assert!(!again.groups[again.group_ids[0] as usize].carries(CurveGroup::ROOT_UVS));
+        assert!(again.groups[again.group_ids[3] as usize].carries(CurveGroup::ROOT_UVS));
     }
 
     #[test]

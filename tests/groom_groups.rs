@@ -1104,3 +1104,75 @@ fn a_files_own_unreal_group_ids_are_written_once_and_kept() {
     // Read back as the Epic groom file it is (Epic's prefix dropped).
     assert_eq!(read(&abc).attribute("group_id").expect("group ids").data, expected);
 }
+
+/// What one prim has and another lacks is not made up for the other: a prim with root UVs
+/// (`st`) and a per-strand `mask` beside a tuft with neither. Written, the tuft's prim held
+/// `st = (0, 0)` for every strand (Unreal takes that for real root UVs and skips its own
+/// projection), and `--unreal` gave it zero `groom_mask`, `groom_root_uv` too. Checked in pxr,
+/// after USD and Alembic round trips.
+#[test]
+fn a_prims_missing_root_uvs_and_attributes_stay_missing() {
+    use coif::generate::{generate, GenerateParams};
+    let dir = tempfile::tempdir().unwrap();
+    let groom =
+        generate(&GenerateParams { strands: 8, vertices_per_strand: 5, seed: 3, ..Default::default() })
+            .unwrap();
+    let (styled, tuft): (Vec<usize>, Vec<usize>) = ((0..5).collect(), (5..8).collect());
+    let uvs: Vec<String> = styled.iter().map(|&s| format!("({}, 0.5)", 0.1 * s as f32)).collect();
+    let masks: Vec<String> = styled.iter().map(|&s| (0.25 * s as f32).to_string()).collect();
+    let extra = format!(
+        "        texCoord2f[] primvars:st = [{}] (interpolation = \"uniform\")\n        \
+         float[] primvars:mask = [{}] (interpolation = \"uniform\")\n",
+        uvs.join(", "),
+        masks.join(", ")
+    );
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\ndef Xform \"groom\"\n{{\n{}{}}}\n",
+        linear_prim(&groom, "styled", &styled, &extra),
+        linear_prim(&groom, "tuft", &tuft, ""),
+    );
+    let input = dir.path().join("in.usda");
+    std::fs::write(&input, text).unwrap();
+    let via_abc = dir.path().join("via.abc");
+    let via_unreal_abc = dir.path().join("via_unreal.abc");
+    for (from, to) in [(&input, &via_abc), (&input, &via_unreal_abc)] {
+        let unreal = to == &via_unreal_abc;
+        let mut args = vec!["convert", path_str(from), path_str(to)];
+        args.extend(unreal.then_some("--unreal"));
+        let run = coif(&args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+    }
+    let expected_uvs: Vec<f32> = styled.iter().flat_map(|&s| [0.1 * s as f32, 0.5]).collect();
+    let expected_masks: Vec<f32> = styled.iter().map(|&s| 0.25 * s as f32).collect();
+    for (source, unreal, ext) in [
+        (&input, false, "usda"),
+        (&input, false, "usdc"),
+        (&input, true, "usda"),
+        (&via_abc, false, "usda"),
+        (&via_unreal_abc, false, "usda"),
+    ] {
+        let out = dir.path().join(format!("out_{unreal}.{ext}"));
+        let mut args = vec!["convert", path_str(source), path_str(&out)];
+        args.extend(unreal.then_some("--unreal"));
+        let run = coif(&args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+        let written = pxr_dump(&out, None);
+        let curves = curves_by_path(&written);
+        let prim = |name: &str| &curves.iter().find(|(path, _)| path.ends_with(name)).expect(name).1;
+        let label = format!("{args:?}");
+        // Unreal's names where --unreal wrote them (the Alembic one is read back by coif, whose
+        // reader gives `groom_root_uv` back as root UVs).
+        let (uv_name, mask_name) = if unreal { ("groom_root_uv", "groom_mask") } else { ("st", "mask") };
+        let styled_prim = prim("styled");
+        assert_eq!(f32s(&styled_prim["primvars"][uv_name]["values"]), expected_uvs, "{label}");
+        assert_eq!(f32s(&styled_prim["primvars"][mask_name]["values"]), expected_masks, "{label}");
+        let tuft_primvars: Vec<&String> =
+            prim("tuft")["primvars"].as_object().expect("primvars").keys().collect();
+        for name in ["st", "groom_root_uv", "mask", "groom_mask"] {
+            assert!(
+                !tuft_primvars.iter().any(|n| *n == name),
+                "{label}: the tuft got {name}: {tuft_primvars:?}"
+            );
+        }
+    }
+}

@@ -9,7 +9,7 @@
 //! `widths`, scaled to centimetres by the file's units.
 use std::path::{Path, PathBuf};
 
-use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, Groom};
+use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveGroup, Groom};
 
 use super::alembic::curves_write::epic;
 
@@ -24,18 +24,25 @@ pub fn with_root_uvs(groom: &Groom) -> Option<Groom> {
     }
     let mut out = groom.clone();
     out.root_uvs = Some(uv.data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+    for group in out.groups.iter_mut().filter(|g| !g.carries(SURFACE_UV)) {
+        group.missing.push(CurveGroup::ROOT_UVS.to_string());
+    }
     Some(out)
 }
 
 /// An attribute under the name Unreal's USD importer reads: `color` as `groom_color`, every other
 /// name prefixed `groom_` unless it has the prefix.
 pub fn renamed_for_usd(mut attribute: Attribute) -> Attribute {
-    attribute.name = match attribute.name.as_str() {
+    attribute.name = name_for_usd(&attribute.name);
+    attribute
+}
+
+fn name_for_usd(name: &str) -> String {
+    match name {
         attr::COLOR => epic::COLOR.to_string(),
         name if name.starts_with(epic::PREFIX) => name.to_string(),
         name => format!("{}{name}", epic::PREFIX),
-    };
-    attribute
+    }
 }
 
 /// Where `--unreal` output puts the groom's meshes (a scalp, head or body): Unreal's groom
@@ -59,6 +66,12 @@ pub fn for_usd(groom: &Groom) -> Groom {
     let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
     out.groups.iter_mut().for_each(|g| g.width_interpolation = None);
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
+    // What a group misses, it misses under the new names too.
+    for group in &mut out.groups {
+        for name in group.missing.iter_mut().filter(|n| *n != CurveGroup::ROOT_UVS) {
+            *name = name_for_usd(name);
+        }
+    }
     // A groom's own `groom_group_id` (a file's Unreal groups) stays; else each curve group is
     // one (a groom without a group table has no `group_ids`: all its strands are group 0).
     if out.attribute(epic::GROUP_ID).is_none() {
@@ -70,6 +83,10 @@ pub fn for_usd(groom: &Groom) -> Groom {
     if let Some(uvs) = &out.root_uvs {
         let data = uvs.iter().flatten().copied().collect();
         out.set_attribute(Attribute::new(epic::ROOT_UV, AttributeRate::Strand, 2, data));
+        // Groups without root UVs get none under Unreal's name either.
+        for group in out.groups.iter_mut().filter(|g| !g.carries(CurveGroup::ROOT_UVS)) {
+            group.missing.push(epic::ROOT_UV.to_string());
+        }
     }
     out
 }

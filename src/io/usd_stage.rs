@@ -555,7 +555,7 @@ fn primvars<'g>(
         let guides = strands.per_strand(guides, 1);
         primvars.push(uniform_ints(names::GROOM_GUIDE, guides.iter().map(|&g| g as i32).collect()));
     }
-    if let Some(uvs) = &groom.root_uvs {
+    if let Some(uvs) = groom.root_uvs.as_ref().filter(|_| group.carries(CurveGroup::ROOT_UVS)) {
         let uvs = strands.per_strand(bytemuck::cast_slice::<_, f32>(uvs), 2);
         let name = format!("primvars:{}", names::ST);
         primvars.push(

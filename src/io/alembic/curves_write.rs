@@ -173,7 +173,11 @@ impl<'g> GroupPart<'g> {
             counts: strands.counts(groom),
             strand_ids: strands.per_strand(&groom.strand_ids, 1),
             guides: groom.guides.as_deref().map(|g| strands.per_strand(g, 1)),
-            root_uvs: groom.root_uvs.as_deref().map(|u| strands.per_strand(u, 1)),
+            root_uvs: groom
+                .root_uvs
+                .as_deref()
+                .filter(|_| group.carries(CurveGroup::ROOT_UVS))
+                .map(|u| strands.per_strand(u, 1)),
             attributes,
             group,
         }
