@@ -298,6 +298,7 @@ fn sub_frame_samples_span_the_whole_frames_between_them() {
     let timeline = Timeline { first: 0.75, last: 4.75, frames_per_second: 24.0 };
     coif::io::write_frames(
         &path,
+        std::path::Path::new("a groom cache"),
         &frames[0],
         frames[1..].iter().cloned().map(Ok),
         &timeline,

@@ -596,6 +596,25 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         2,
         &["in.usda", "frame 0"],
     ));
+    // Strands that change between samples: the input is named (the output was, which was never
+    // read), with the frame and the way out.
+    let varying = animated_usda()
+        .replacen("    2: [(0, 0, 0), (0, 2, 0)],", "    2: [(0, 0, 0), (0, 2, 0), (1, 0, 0)],", 1)
+        .replacen(
+            "  int[] curveVertexCounts = [2]\n",
+            "  int[] curveVertexCounts.timeSamples = {\n    1: [2],\n    2: [3],\n  }\n",
+            1,
+        )
+        .replacen("#usda 1.0\n", "#usda 1.0\n(\n startTimeCode = 1\n endTimeCode = 2\n)\n", 1);
+    for out in ["out.usda", "out.abc"] {
+        cases.push(case(
+            &format!(".usda strands that change between frames → {out}"),
+            vec![("in.usda", varying.clone().into_bytes())],
+            &["convert", "in.usda", out],
+            2,
+            &["in.usda: frame 2 has other strands than frame 1", "--frame N"],
+        ));
+    }
     // A rest shape no turn has (a rest_darboux is the vector part of a unit quaternion): 1e30
     // overflowed the rods and was blamed on the output's coordinates.
     for value in ["1e30", "2"] {

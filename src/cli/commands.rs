@@ -563,7 +563,7 @@ fn run_convert(
     super::checks::nothing_read_is_written(output, &loaded, export, &[])?;
     let first = loaded.groom;
     let rest = timeline.frames().skip(1).map(|frame| read(frame).map(|loaded| loaded.groom));
-    let warnings = io::write_frames(output, &first, rest, &timeline, export)?;
+    let warnings = io::write_frames(output, input, &first, rest, &timeline, export)?;
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }

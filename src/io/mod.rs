@@ -465,9 +465,10 @@ pub fn write_animated(
 /// `timeline.first`, `+ 1`, …: Alembic streams them to disk one at a time; USD holds what
 /// changes (points, mesh points, attributes that differ from the first frame's; checked against
 /// the memory limit first) until the stage is written. A frame whose strands differ from the
-/// first's is refused, naming its frame number.
+/// first's is refused, naming `source` (where the frames come from) and its frame number.
 pub fn write_frames(
     path: &Path,
+    source: &Path,
     first: &Groom,
     rest: impl Iterator<Item = Result<Groom>>,
     timeline: &timeline::Timeline,
@@ -480,22 +481,26 @@ pub fn write_frames(
     let same_topology = |k: u64, groom: &Groom| -> Result<()> {
         if groom.strand_offsets != first.strand_offsets || groom.group_ids != first.group_ids {
             return Err(Error::Usage(format!(
-                "{}: frame {} has other strands than frame {} ({} vs {} vertices); coif writes animation of constant topology",
-                path.display(),
+                "{}: frame {} has other strands than frame {} ({} vs {} vertices); coif writes animation \
+                 of constant topology, so {} is not written (--frame N writes one frame)",
+                source.display(),
                 timeline.frame(k),
                 timeline.first,
                 groom.vertex_count(),
-                first.vertex_count()
+                first.vertex_count(),
+                path.display()
             )));
         }
         let meshes =
             |g: &Groom| g.meshes.iter().map(|m| (m.path.clone(), m.points.len())).collect::<Vec<_>>();
         if meshes(groom) != meshes(first) {
             return Err(Error::Usage(format!(
-                "{}: frame {} has other meshes than frame {}; coif writes animation of constant topology",
-                path.display(),
+                "{}: frame {} has other meshes than frame {}; coif writes animation of constant \
+                 topology, so {} is not written (--frame N writes one frame)",
+                source.display(),
                 timeline.frame(k),
                 timeline.first,
+                path.display(),
             )));
         }
         Ok(())
