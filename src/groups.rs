@@ -233,10 +233,19 @@ impl Groom {
             match found {
                 Some(g) => wanted.push(g),
                 None => {
-                    let known: Vec<String> =
-                        (0..self.group_count()).map(|g| format!("'{}'", self.group(g).name)).collect();
+                    let known: Vec<String> = (0..self.group_count())
+                        .map(|g| self.group(g).name.clone())
+                        .filter(|name| !name.is_empty())
+                        .map(|name| format!("'{name}'"))
+                        .collect();
+                    if known.is_empty() {
+                        return Err(format!(
+                            "it has no named groups for --group '{name}' to pick (its curves are one \
+                             unnamed set, as in every .hair file)"
+                        ));
+                    }
                     return Err(format!(
-                        "the groom has no group named '{name}'; its groups are {}",
+                        "it has no group named '{name}'; its groups are {}",
                         known.join(", ")
                     ));
                 }

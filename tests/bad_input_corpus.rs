@@ -423,6 +423,22 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         &["--max-memory"],
     ));
     cases.push(case("info --frame nan", g(), &["info", "g.hair", "--frame", "nan"], 2, &["--frame"]));
+    // A group the groom does not have: the groom file is named, with the groups it has (a .hair
+    // file has none: it read "its groups are ''").
+    let one_prim = "#usda 1.0\ndef BasisCurves \"tuft\" {\n  uniform token type = \"linear\"\n  \
+                    int[] curveVertexCounts = [2]\n  point3f[] points = [(0, 0, 0), (0, 1, 0)]\n}\n";
+    for (groom, bytes, names) in [
+        ("g.hair", hair.to_vec(), &["g.hair", "no named groups for --group 'x'"][..]),
+        ("g.usda", one_prim.as_bytes().to_vec(), &["g.usda", "no group named 'x'", "'/tuft'"]),
+    ] {
+        cases.push(case(
+            &format!("style --group x of {groom}"),
+            vec![("r.toml", BASE.as_bytes().to_vec()), (groom, bytes)],
+            &["style", "r.toml", "--groom", groom, "--group", "x", "-o", "out.usda"],
+            2,
+            names,
+        ));
+    }
     cases
 }
 

@@ -84,7 +84,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
     let styled = if args.groups.is_empty() {
         coif::style::style(&loaded.groom, &recipe, &options)
     } else {
-        style_groups(&loaded.groom, &args.groups, &recipe, &options)
+        style_groups(&args.groom, &loaded.groom, &args.groups, &recipe, &options)
     }
     .map_err(|e| match (e, &args.scalp) {
         (e @ Error::Groom(coif::groom::GroomError::ScalpNotFitted), Some(scalp)) => e.in_file(scalp),
@@ -143,14 +143,16 @@ fn run_style(args: StyleArgs) -> Result<()> {
 }
 
 /// Styles the groups named by `--group` and puts them back among the untouched ones (frames
-/// too: the other groups stand still in every frame, with their own attribute values).
+/// too: the other groups stand still in every frame, with their own attribute values). A name
+/// the groom read from `path` has no group of is refused naming the file.
 fn style_groups(
+    path: &Path,
     groom: &coif::Groom,
     names: &[String],
     recipe: &coif::style::recipe::Recipe,
     options: &coif::style::StyleOptions,
 ) -> Result<coif::style::Styled> {
-    let (selected, selection) = groom.select_groups(names).map_err(Error::Usage)?;
+    let (selected, selection) = groom.select_groups(names).map_err(|message| Error::format(path, message))?;
     let mut styled = coif::style::style_part(groom, &selected, recipe, options)?;
     let merged = groom.merge_back(&selection, &styled.groom)?;
     let mut frame = styled.groom.clone();
