@@ -1176,3 +1176,20 @@ fn a_prims_missing_root_uvs_and_attributes_stay_missing() {
         }
     }
 }
+
+/// `.hair` holds polylines: every curved basis of a groom of several prims is warned about, not
+/// only the first prim's (the B-spline fuzz after linear hair went unmentioned).
+#[test]
+fn hair_output_warns_about_every_curved_basis() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.hair");
+    let run = coif(&["convert", path_str(&houdini_groom()), path_str(&out)]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bases: Vec<CurveBasis> =
+        read(&houdini_groom()).groups.iter().map(|g| g.basis).filter(|&b| b != CurveBasis::Linear).collect();
+    assert_eq!(bases, [CurveBasis::CatmullRom, CurveBasis::BSpline], "the fixture's curved prims");
+    for basis in bases {
+        let warning = format!("drops the {basis:?} basis (points are written as polylines)");
+        assert!(stderr(&run).contains(&warning), "no {warning:?} in: {}", stderr(&run));
+    }
+}

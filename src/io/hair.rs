@@ -213,8 +213,16 @@ pub fn unsupported(groom: &Groom) -> Vec<String> {
     if groom.guides.is_some() {
         lost.push("guide flags".into());
     }
-    if groom.basis != crate::groom::CurveBasis::Linear {
-        lost.push(format!("the {:?} basis (points are written as polylines)", groom.basis));
+    // Every group's basis (`groom.basis` is only the first group's): a linear first prim hid
+    // the Bézier curves after it.
+    let mut curved: Vec<crate::groom::CurveBasis> = Vec::new();
+    for basis in (0..groom.group_count()).map(|g| groom.group(g).basis) {
+        if basis != crate::groom::CurveBasis::Linear && !curved.contains(&basis) {
+            curved.push(basis);
+        }
+    }
+    for basis in curved {
+        lost.push(format!("the {basis:?} basis (points are written as polylines)"));
     }
     lost
 }
