@@ -125,6 +125,35 @@ fn a_failing_task_does_not_stop_the_others() {
     assert!(log.contains("missing.hair"), "{log}");
 }
 
+/// A task's output that is a layer its groom's stage composes (a shot referencing the groom
+/// cache) is refused: the manifest names only the shot, so its check cannot see it, and the
+/// batch overwrote the cache (exit 0), so that every later read of the shot read a styled groom.
+#[test]
+fn a_task_does_not_write_over_a_layer_its_groom_composes() {
+    let manifest =
+        "[defaults]\ngroom = \"shot.usda\"\nrecipe = \"quick.toml\"\noutputs = [\"cache.usda\"]\n\n\
+                    [[tasks]]\nname = \"a\"\n";
+    let dir = job(manifest);
+    let cache = dir.path().join("cache.usda");
+    let converted = coif(&["convert", path_str(&dir.path().join("groom.hair")), path_str(&cache)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    std::fs::write(
+        dir.path().join("shot.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"shot\"\n    metersPerUnit = 1\n)\n\
+         def Xform \"shot\" (\n    references = @cache.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+    let before = std::fs::read(&cache).unwrap();
+    let out = coif(&["batch", path_str(&dir.path().join("m.toml")), "--json"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(std::fs::read(&cache).unwrap() == before, "the cache was written over");
+    let log = std::fs::read_to_string(dir.path().join("logs/a.log")).unwrap();
+    assert!(
+        log.contains("cache.usda") && log.contains("a layer its groom") && log.contains("shot.usda"),
+        "{log}"
+    );
+}
+
 #[test]
 fn a_task_killed_half_way_leaves_no_output_and_reruns_to_the_same_bytes() {
     // A long release: a settle ends as soon as it reaches its tolerance, a stage's duration not.

@@ -128,6 +128,28 @@ fn with_overrides(task: &Task, manifest: &Path, error: Error) -> Error {
     )
 }
 
+/// A task's outputs against the files its groom's stage composes (layers it references or
+/// sublayers), which the manifest's own check cannot see: writing over one would change what
+/// the groom reads, for this task's re-run and for every task reading that stage.
+fn refuse_writing_a_layer(task: &Task, files: &[PathBuf]) -> Result<()> {
+    let layers: Vec<(PathBuf, &PathBuf)> =
+        files.iter().skip(1).filter_map(|f| std::fs::canonicalize(f).ok().map(|c| (c, f))).collect();
+    for output in all_outputs(task) {
+        let Ok(written) = std::fs::canonicalize(&output) else { continue };
+        if let Some((_, layer)) = layers.iter().find(|(c, _)| *c == written) {
+            return Err(Error::Usage(format!(
+                "task '{}' writes {}, a layer its groom {} composes ({}): a batch does not overwrite \
+                 its inputs",
+                task.name,
+                output.display(),
+                task.groom.display(),
+                layer.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Whether the task's outputs are complete for its current inputs.
 pub fn is_complete(task: &Task) -> bool {
     let Ok((_, inputs)) = effective_inputs(task) else { return false };
@@ -153,7 +175,9 @@ pub fn run(task: &Task) -> Result<Outcome> {
         }
     }
     let selection = crate::io::usda::Selection { time: None, variants: task.variants.clone() };
-    let groom = crate::io::read_groom_selected(&task.groom, &task.import, &selection)?.groom;
+    let loaded = crate::io::read_groom_selected(&task.groom, &task.import, &selection)?;
+    refuse_writing_a_layer(task, &loaded.files)?;
+    let groom = loaded.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
     let styled = style(&groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
