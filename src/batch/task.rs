@@ -132,22 +132,12 @@ fn with_overrides(task: &Task, manifest: &Path, error: Error) -> Error {
 /// sublayers), which the manifest's own check cannot see: writing over one would change what
 /// the groom reads, for this task's re-run and for every task reading that stage.
 fn refuse_writing_a_layer(task: &Task, files: &[PathBuf]) -> Result<()> {
-    let layers: Vec<(PathBuf, &PathBuf)> =
-        files.iter().skip(1).filter_map(|f| std::fs::canonicalize(f).ok().map(|c| (c, f))).collect();
-    for output in all_outputs(task) {
-        let Ok(written) = std::fs::canonicalize(&output) else { continue };
-        if let Some((_, layer)) = layers.iter().find(|(c, _)| *c == written) {
-            return Err(Error::Usage(format!(
-                "task '{}' writes {}, a layer its groom {} composes ({}): a batch does not overwrite \
-                 its inputs",
-                task.name,
-                output.display(),
-                task.groom.display(),
-                layer.display()
-            )));
-        }
-    }
-    Ok(())
+    let what = format!("a layer its groom {} composes", task.groom.display());
+    let layers: Vec<(String, &Path)> = files.iter().skip(1).map(|f| (what.clone(), f.as_path())).collect();
+    let outputs = all_outputs(task);
+    let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
+    crate::io::refuse_writing_inputs(&outputs, &layers)
+        .map_err(|e| Error::Usage(format!("task '{}': {e}", task.name)))
 }
 
 /// Whether the task's outputs are complete for its current inputs.

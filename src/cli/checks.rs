@@ -48,7 +48,7 @@ pub(crate) fn style(args: &StyleArgs) -> Result<()> {
 fn not_an_input(output: &Path, inputs: &[(&str, Option<&PathBuf>)]) -> Result<()> {
     let inputs: Vec<(String, &Path)> =
         inputs.iter().filter_map(|(what, path)| path.map(|p| (what.to_string(), p.as_path()))).collect();
-    outputs_are_not_inputs(&[output], &inputs)
+    coif::io::refuse_writing_inputs(&[output], &inputs)
 }
 
 /// [`not_an_input`] once the groom is read: every file written (the output, and `--unreal`'s
@@ -77,26 +77,7 @@ pub(crate) fn nothing_read_is_written(
         })
         .collect();
     inputs.extend(others.iter().filter_map(|(what, path)| path.map(|p| (what.to_string(), p.as_path()))));
-    outputs_are_not_inputs(&outputs, &inputs)
-}
-
-fn outputs_are_not_inputs(outputs: &[&Path], inputs: &[(String, &Path)]) -> Result<()> {
-    let read: Vec<(&str, &Path, PathBuf)> = inputs
-        .iter()
-        .filter_map(|(what, path)| std::fs::canonicalize(path).ok().map(|c| (what.as_str(), *path, c)))
-        .collect();
-    for output in outputs {
-        // A file that does not exist yet is no input; one that does is compared by identity.
-        let Ok(written) = std::fs::canonicalize(output) else { continue };
-        if let Some((what, path, _)) = read.iter().find(|(_, _, c)| *c == written) {
-            return Err(coif::Error::Usage(format!(
-                "{}: the run would write over {what} ({}); write the result to another file",
-                output.display(),
-                path.display()
-            )));
-        }
-    }
-    Ok(())
+    coif::io::refuse_writing_inputs(&outputs, &inputs)
 }
 
 pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {

@@ -346,6 +346,27 @@ pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> 
     }
 }
 
+/// Refuses (exit 2) when any of `outputs` is, by identity, one of the files read (`inputs`, each
+/// with what it is to the run): writing it would replace what the run read.
+pub fn refuse_writing_inputs(outputs: &[&Path], inputs: &[(String, &Path)]) -> Result<()> {
+    let read: Vec<(&str, &Path, std::path::PathBuf)> = inputs
+        .iter()
+        .filter_map(|(what, path)| std::fs::canonicalize(path).ok().map(|c| (what.as_str(), *path, c)))
+        .collect();
+    for output in outputs {
+        // A file that does not exist yet is no input; one that does is compared by identity.
+        let Ok(written) = std::fs::canonicalize(output) else { continue };
+        if let Some((what, path, _)) = read.iter().find(|(_, _, c)| *c == written) {
+            return Err(Error::Usage(format!(
+                "{}: the run would write over {what} ({}); write the result to another file",
+                output.display(),
+                path.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The format `path` is written in with `options`, or the usage error: `--unreal` writes only
 /// the formats Unreal's groom importers read, and the output's directory must exist. Commands
 /// check it before any work.
