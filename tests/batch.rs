@@ -154,6 +154,68 @@ fn a_task_does_not_write_over_a_layer_its_groom_composes() {
     );
 }
 
+/// A shot that references its groom cache is one input with the cache: when the cache changes
+/// and the shot does not, a re-run styles the task again (the sidecar digested the shot's bytes
+/// only, so the task was skipped and its outputs kept the old cache's groom).
+#[test]
+fn a_changed_layer_under_an_unchanged_shot_runs_the_task_again() {
+    let manifest = "[defaults]\ngroom = \"shot.usda\"\nrecipe = \"quick.toml\"\n\
+                    outputs = [\"out/styled.usda\"]\n\n[[tasks]]\nname = \"a\"\n";
+    let dir = job(manifest);
+    let cache = dir.path().join("cache.usda");
+    let convert = |groom: &Path| {
+        let out = coif(&["convert", path_str(groom), path_str(&cache)]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    };
+    convert(&dir.path().join("groom.hair"));
+    std::fs::write(
+        dir.path().join("shot.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"shot\"\n    metersPerUnit = 1\n)\n\
+         def Xform \"shot\" (\n    references = @cache.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+    assert_eq!(batch(dir.path(), "1")["done"], 1);
+    let first = std::fs::read(dir.path().join("out/styled.usda")).unwrap();
+    let again = batch(dir.path(), "1");
+    assert_eq!((again["skipped"].as_u64(), again["done"].as_u64()), (Some(1), Some(0)), "{again}");
+
+    // Another groom in the cache: the shot's bytes are the same, the groom it composes is not.
+    let other = dir.path().join("other.hair");
+    let made = coif(&[
+        "generate",
+        "-o",
+        path_str(&other),
+        "--strands",
+        "40",
+        "--vertices",
+        "8",
+        "--length",
+        "0.2",
+        "--seed",
+        "5",
+    ]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    convert(&other);
+    let rerun = batch(dir.path(), "1");
+    assert_eq!((rerun["skipped"].as_u64(), rerun["done"].as_u64()), (Some(0), Some(1)), "{rerun}");
+    let second = std::fs::read(dir.path().join("out/styled.usda")).unwrap();
+    assert!(first != second, "the output still holds the old cache's groom");
+    let direct = dir.path().join("direct.usda");
+    let styled = coif(&[
+        "style",
+        path_str(&dir.path().join("quick.toml")),
+        "--groom",
+        path_str(&dir.path().join("shot.usda")),
+        "-o",
+        path_str(&direct),
+    ]);
+    assert!(styled.status.success(), "{}", stderr(&styled));
+    assert!(
+        std::fs::read(&direct).unwrap() == second,
+        "the re-run's output differs from styling the shot now"
+    );
+}
+
 #[test]
 fn a_task_killed_half_way_leaves_no_output_and_reruns_to_the_same_bytes() {
     // A long release: a settle ends as soon as it reaches its tolerance, a stage's duration not.

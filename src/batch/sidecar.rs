@@ -1,7 +1,9 @@
 //! Completion records. A task writes its outputs atomically, then a small JSON sidecar with each
-//! output's size and SHA-256 and a digest of its inputs. A task is complete — and a re-run skips
-//! it — only if the sidecar exists, was made from the same inputs, and every output still has
-//! the recorded size and checksum. A task killed half-way has no sidecar, so it runs again.
+//! output's size and SHA-256, a digest of its inputs, and the size and SHA-256 of every layer its
+//! groom's stage composed (which only reading the groom tells). A task is complete — and a re-run
+//! skips it — only if the sidecar exists, was made from the same inputs, every composed layer
+//! still has its recorded bytes, and every output still has the recorded size and checksum. A
+//! task killed half-way has no sidecar, so it runs again.
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -11,8 +13,9 @@ use sha2::{Digest, Sha256};
 use crate::error::{Error, Result};
 use crate::io::atomic::write_bytes_atomically;
 
+/// A file as it was when the task finished.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct OutputRecord {
+pub struct FileRecord {
     pub path: PathBuf,
     pub size: u64,
     pub sha256: String,
@@ -23,7 +26,13 @@ pub struct Sidecar {
     pub task: String,
     /// SHA-256 over the inputs (groom bytes, effective recipe, coif version).
     pub inputs: String,
-    pub outputs: Vec<OutputRecord>,
+    pub outputs: Vec<FileRecord>,
+    /// The layers the groom's stage composed besides the groom file itself (its references and
+    /// sublayers): a changed cache under an unchanged shot is another input. The groom's bytes
+    /// decide which layers it composes, and so do those layers', so the recorded set stays right
+    /// until one of them changes.
+    #[serde(default)]
+    pub layers: Vec<FileRecord>,
 }
 
 /// SHA-256 of a file, streamed.
@@ -57,17 +66,29 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+impl FileRecord {
+    fn of(path: &Path) -> Result<FileRecord> {
+        let (size, sha256) = file_sha256(path)?;
+        Ok(FileRecord { path: path.to_path_buf(), size, sha256 })
+    }
+
+    /// Whether the file at the recorded path still has the recorded bytes.
+    fn holds(&self) -> bool {
+        std::fs::metadata(&self.path).is_ok_and(|m| m.len() == self.size)
+            && file_sha256(&self.path).is_ok_and(|(_, sha)| sha == self.sha256)
+    }
+}
+
 impl Sidecar {
-    /// Records the current state of `outputs`.
-    pub fn record(task: &str, inputs: String, outputs: &[PathBuf]) -> Result<Sidecar> {
-        let outputs = outputs
+    /// Records the current state of `outputs` and of the composed `layers`.
+    pub fn record(task: &str, inputs: String, outputs: &[PathBuf], layers: &[PathBuf]) -> Result<Sidecar> {
+        let outputs = outputs.iter().map(|path| FileRecord::of(path)).collect::<Result<_>>()?;
+        // Absolute, so that a re-run from another directory (a farm node's) finds them.
+        let layers = layers
             .iter()
-            .map(|path| {
-                let (size, sha256) = file_sha256(path)?;
-                Ok(OutputRecord { path: path.clone(), size, sha256 })
-            })
+            .map(|path| FileRecord::of(&std::fs::canonicalize(path).unwrap_or_else(|_| path.clone())))
             .collect::<Result<_>>()?;
-        Ok(Sidecar { task: task.to_string(), inputs, outputs })
+        Ok(Sidecar { task: task.to_string(), inputs, outputs, layers })
     }
 
     pub fn write(&self, path: &Path) -> Result<()> {
@@ -82,12 +103,9 @@ impl Sidecar {
     /// Whether this record proves the task done for these inputs and outputs.
     pub fn proves_complete(&self, inputs: &str, outputs: &[PathBuf]) -> bool {
         self.inputs == inputs
+            && self.layers.iter().all(FileRecord::holds)
             && self.outputs.len() == outputs.len()
-            && self.outputs.iter().zip(outputs).all(|(record, path)| {
-                &record.path == path
-                    && std::fs::metadata(path).is_ok_and(|m| m.len() == record.size)
-                    && file_sha256(path).is_ok_and(|(_, sha)| sha == record.sha256)
-            })
+            && self.outputs.iter().zip(outputs).all(|(record, path)| &record.path == path && record.holds())
     }
 }
 
@@ -115,12 +133,18 @@ mod tests {
         let out = dir.path().join("a.bin");
         std::fs::write(&out, b"styled hair").unwrap();
         let outputs = vec![out.clone()];
-        let sidecar = Sidecar::record("t", "inputs-1".into(), &outputs).unwrap();
+        let layer = dir.path().join("cache.usda");
+        std::fs::write(&layer, b"#usda 1.0\n").unwrap();
+        let sidecar = Sidecar::record("t", "inputs-1".into(), &outputs, std::slice::from_ref(&layer)).unwrap();
         let path = dir.path().join("t.task.json");
         sidecar.write(&path).unwrap();
         let read = Sidecar::read(&path).unwrap();
         assert!(read.proves_complete("inputs-1", &outputs));
         assert!(!read.proves_complete("inputs-2", &outputs), "other inputs must re-run");
+        std::fs::write(&layer, b"#usda 1.1\n").unwrap();
+        assert!(!read.proves_complete("inputs-1", &outputs), "a changed composed layer must re-run");
+        std::fs::write(&layer, b"#usda 1.0\n").unwrap();
+        assert!(read.proves_complete("inputs-1", &outputs));
         std::fs::write(&out, b"styled hairX").unwrap();
         assert!(!read.proves_complete("inputs-1", &outputs), "a changed output must re-run");
         std::fs::write(&out, b"styled hairs").unwrap();

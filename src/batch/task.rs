@@ -167,10 +167,10 @@ pub fn run(task: &Task) -> Result<Outcome> {
     let selection = crate::io::usda::Selection { time: None, variants: task.variants.clone() };
     let loaded = crate::io::read_groom_selected(&task.groom, &task.import, &selection)?;
     refuse_writing_a_layer(task, &loaded.files)?;
-    let groom = loaded.groom;
+    let groom = &loaded.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
-    let styled = style(&groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
+    let styled = style(groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
     // The log says what the report would: a farm's artist reads it, not the JSON.
     let unsettled = styled.report.unconverged_settle();
     // Required, an unconverged settle is the task's error instead.
@@ -191,7 +191,8 @@ pub fn run(task: &Task) -> Result<Outcome> {
     if let Some(failure) = unsettled.filter(|_| task.require_converged) {
         return Err(Error::NotConverged(format!("task '{}': {failure}", task.name)));
     }
-    Sidecar::record(&task.name, inputs, &outputs)?.write(&sidecar)?;
+    Sidecar::record(&task.name, inputs, &outputs, loaded.files.get(1..).unwrap_or_default())?
+        .write(&sidecar)?;
     Ok(Outcome::Done { seconds: start.elapsed().as_secs_f64() })
 }
 
