@@ -73,6 +73,10 @@ pub struct CurveGroup {
     pub wrap: CurveWrap,
     /// USD `purpose` (`"guide"` for Houdini's guide curves), when authored.
     pub purpose: Option<String>,
+    /// USD `visibility = "invisible"` on the prim or an ancestor (an Alembic object's `visible`
+    /// property 0): the curves are kept, styled and written back invisible; previews leave them
+    /// out, as a renderer would.
+    pub invisible: bool,
     /// Groom attributes this group does not carry (the groom pads them with zeros for its
     /// strands; writers leave them out of this group's prim).
     pub missing: Vec<String>,
@@ -436,6 +440,7 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
                     && o.basis == group.basis
                     && o.wrap == group.wrap
                     && o.purpose == group.purpose
+                    && o.invisible == group.invisible
             }) {
                 Some(i) => i,
                 None => {

@@ -67,6 +67,10 @@ pub struct GroupInfo {
     pub basis: CurveBasis,
     pub wrap: crate::groom::CurveWrap,
     pub strands: usize,
+    /// USD `purpose`, when not `default` (`"guide"` for guide curves).
+    pub purpose: Option<String>,
+    /// The prim (or an ancestor) is invisible.
+    pub invisible: bool,
 }
 
 impl GroomInfo {
@@ -95,6 +99,8 @@ impl GroomInfo {
                     basis: group.basis,
                     wrap: group.wrap,
                     strands: groom.group_ids.iter().filter(|&&id| id as usize == g).count(),
+                    purpose: group.purpose.clone(),
+                    invisible: group.invisible,
                 })
                 .collect(),
             meshes: groom
@@ -136,7 +142,13 @@ impl std::fmt::Display for GroomInfo {
             writeln!(f, "guides       {}", self.guides)?;
         }
         for g in &self.groups {
-            writeln!(f, "group        {} ({} strands, {:?} {:?})", g.name, g.strands, g.basis, g.wrap)?;
+            let purpose = g.purpose.as_ref().map(|p| format!(", purpose {p}")).unwrap_or_default();
+            let invisible = if g.invisible { ", invisible" } else { "" };
+            writeln!(
+                f,
+                "group        {} ({} strands, {:?} {:?}{purpose}{invisible})",
+                g.name, g.strands, g.basis, g.wrap
+            )?;
         }
         for m in &self.meshes {
             writeln!(f, "mesh         {} ({} points, {} faces)", m.path, m.points, m.faces)?;

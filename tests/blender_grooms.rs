@@ -523,6 +523,32 @@ fn coif_style_uses_the_file_mesh_and_scalp_overrides_it() {
     assert!((other - own).abs() > 0.005, "--scalp replaces the file's mesh: {other} vs {own}");
 }
 
+/// Blender writes AbcGeom's `visible = 0` for objects hidden in its viewport; coif reads their
+/// curves as an invisible group (kept, styled, written back invisible, left out of previews), and
+/// the other objects' stay visible.
+#[test]
+fn objects_blender_hides_are_read_as_invisible_groups() {
+    let dir = tempfile::tempdir().unwrap();
+    let exported = dir.path().join("hidden.abc");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_groom.abc");
+    let args = ["--hide-and-export", "Guides", exported.to_str().unwrap()];
+    if bpy_reimport_args(&source, &args).is_none() {
+        return;
+    }
+    let groom = read_groom(&exported, &ImportOptions::default()).unwrap().groom;
+    let groups: Vec<(String, bool)> =
+        (0..groom.group_count()).map(|g| (groom.group(g).name.clone(), groom.group(g).invisible)).collect();
+    assert_eq!(groups.len(), 2, "{groups:?}");
+    for (name, invisible) in &groups {
+        assert_eq!(*invisible, name.contains("Guides"), "{groups:?}");
+    }
+    let usda = dir.path().join("hidden.usda");
+    let converted = common::coif(&["convert", exported.to_str().unwrap(), usda.to_str().unwrap()]);
+    assert!(converted.status.success(), "{}", common::stderr(&converted));
+    let text = std::fs::read_to_string(&usda).unwrap();
+    assert_eq!(text.matches("token visibility = \"invisible\"").count(), 1, "{text}");
+}
+
 /// What Blender's own importer makes of a file: its curves and mesh objects with their counts,
 /// curve types, radii, world positions and `groom_*` attributes (tests/blender/bpy_reimport.py),
 /// or `None` when bpy is not installed (`make test` and `make check-blender` install it; a bare

@@ -1193,3 +1193,104 @@ fn hair_output_warns_about_every_curved_basis() {
         assert!(stderr(&run).contains(&warning), "no {warning:?} in: {}", stderr(&run));
     }
 }
+
+/// Two linear curves of three points at `x` (centimetres), as a prim body.
+fn two_curves(x: f32) -> String {
+    let points: Vec<String> = [0.0, 1.0]
+        .iter()
+        .flat_map(|dz| (0..3).map(move |k| format!("({x}, {}, {dz})", 4.0 * k as f32)))
+        .collect();
+    format!(
+        "uniform token type = \"linear\"\n int[] curveVertexCounts = [3, 3]\n point3f[] points = [{}]\n",
+        points.join(", ")
+    )
+}
+
+/// Purpose and visibility as pxr computes them: inherited from imageable ancestors (a prim's own
+/// purpose wins, an invisible ancestor hides every descendant, a typeless prim neither sets nor
+/// stops either). coif read only a curves prim's own purpose and no visibility, so guides grouped
+/// under an Xform of purpose "guide" became render hair and hidden prims came out visible.
+#[test]
+fn inherited_purpose_and_visibility_are_read_used_and_written_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let stage = format!(
+        "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\n\
+         def Xform \"groom\"\n{{\n\
+         def \"typeless\"\n{{\n uniform token purpose = \"guide\"\n token visibility = \"invisible\"\n\
+         def BasisCurves \"hair\"\n{{\n{}}}\n}}\n\
+         def BasisCurves \"plain\"\n{{\n{}}}\n\
+         def Xform \"guides\"\n{{\n uniform token purpose = \"guide\"\n token visibility = \"invisible\"\n\
+         def BasisCurves \"long\"\n{{\n{}}}\n\
+         def BasisCurves \"own\"\n{{\n uniform token purpose = \"render\"\n{}}}\n}}\n\
+         def Scope \"hidden\"\n{{\n token visibility = \"invisible\"\n def \"deep\"\n{{\n\
+         def BasisCurves \"fuzz\"\n{{\n{}}}\n}}\n}}\n}}\n",
+        two_curves(0.0),
+        two_curves(2.0),
+        two_curves(4.0),
+        two_curves(6.0),
+        two_curves(8.0)
+    );
+    let source = dir.path().join("source.usda");
+    std::fs::write(&source, &stage).unwrap();
+    let computed = |path: &Path| -> Vec<(String, Value, Value)> {
+        let dump = pxr_dump(path, None);
+        let curves = curves_by_path(&dump);
+        curves
+            .into_iter()
+            .map(|(p, c)| (p, c["computedPurpose"].clone(), c["computedVisibility"].clone()))
+            .collect()
+    };
+    let expected = computed(&source);
+    let invisible: Vec<&str> =
+        expected.iter().filter(|(_, _, v)| v == "invisible").map(|(p, _, _)| p.as_str()).collect();
+    assert_eq!(invisible, ["/groom/guides/long", "/groom/guides/own", "/groom/hidden/deep/fuzz"], "pxr");
+
+    // coif's reading: the inherited guide purpose flags the guides, and the groups know.
+    let groom = read(&source);
+    assert_eq!(groom.guides.clone().unwrap(), [vec![false; 4], vec![true; 2], vec![false; 4]].concat());
+    let read_invisible: Vec<String> = (0..groom.group_count())
+        .filter(|&g| groom.group(g).invisible)
+        .map(|g| groom.group(g).name.clone())
+        .collect();
+    assert_eq!(read_invisible, invisible);
+
+    for name in ["out.usda", "out.usdc"] {
+        let out = dir.path().join(name);
+        let converted = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        assert_eq!(computed(&out), expected, "{name}: purpose and visibility as pxr computes them");
+    }
+    // Alembic keeps visibility (AbcGeom's `visible`) and the guides (`groom_guide`).
+    let abc = dir.path().join("out.abc");
+    let back = dir.path().join("back.usda");
+    for (from, to) in [(&source, &abc), (&abc, &back)] {
+        let converted = coif(&["convert", path_str(from), path_str(to)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+    }
+    let visibility = |rows: Vec<(String, Value, Value)>| -> Vec<(String, Value)> {
+        rows.into_iter().map(|(p, _, v)| (p, v)).collect()
+    };
+    assert_eq!(visibility(computed(&back)), visibility(expected.clone()), "through .abc");
+    assert_eq!(read(&abc).guides, groom.guides, "through .abc");
+    // .hair has no visibility: the hidden prims are named, not silently shown.
+    let hair = dir.path().join("out.hair");
+    let converted = coif(&["convert", path_str(&source), path_str(&hair)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let warning = format!("the invisibility of {}", invisible.join(", "));
+    assert!(stderr(&converted).contains(&warning), "no {warning:?} in: {}", stderr(&converted));
+
+    // A preview draws what a renderer would: the same image as the stage without hidden prims
+    // (listed last, so the visible strands keep their indices), another one with them shown.
+    let render = |stage_text: &str, name: &str| -> Vec<u8> {
+        let (usda, png) = (dir.path().join(format!("{name}.usda")), dir.path().join(format!("{name}.png")));
+        std::fs::write(&usda, stage_text).unwrap();
+        let out = coif(&["render", path_str(&usda), "-o", path_str(&png), "--res", "40x30", "--spp", "4"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        std::fs::read(&png).unwrap()
+    };
+    let cut = stage.find("def Xform \"guides\"").unwrap();
+    let without_hidden = format!("{}}}\n", &stage[..cut]);
+    let with_hidden = render(&stage, "with_hidden");
+    assert!(with_hidden == render(&without_hidden, "without_hidden"), "hidden prims were drawn");
+    assert!(with_hidden != render(&stage.replace("\"invisible\"", "\"inherited\""), "all_shown"));
+}

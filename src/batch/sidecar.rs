@@ -135,7 +135,8 @@ mod tests {
         let outputs = vec![out.clone()];
         let layer = dir.path().join("cache.usda");
         std::fs::write(&layer, b"#usda 1.0\n").unwrap();
-        let sidecar = Sidecar::record("t", "inputs-1".into(), &outputs, std::slice::from_ref(&layer)).unwrap();
+        let sidecar =
+            Sidecar::record("t", "inputs-1".into(), &outputs, std::slice::from_ref(&layer)).unwrap();
         let path = dir.path().join("t.task.json");
         sidecar.write(&path).unwrap();
         let read = Sidecar::read(&path).unwrap();

@@ -224,6 +224,16 @@ pub fn unsupported(groom: &Groom) -> Vec<String> {
     for basis in curved {
         lost.push(format!("the {basis:?} basis (points are written as polylines)"));
     }
+    let hidden: Vec<String> = (0..groom.group_count())
+        .filter(|&g| groom.group(g).invisible)
+        .map(|g| groom.group(g).name.clone())
+        .collect();
+    if !hidden.is_empty() {
+        lost.push(format!(
+            "the invisibility of {} (their curves are written like the others)",
+            hidden.join(", ")
+        ));
+    }
     lost
 }
 

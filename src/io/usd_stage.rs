@@ -6,7 +6,8 @@
 //! The stage: layer metadata (`defaultPrim`, `doc`, `metersPerUnit`, `upAxis`, and the time codes
 //! when animated), then one `BasisCurves` prim per curve group at the group's path
 //! (`/Groom/Strands` for a groom without groups) with `Xform`s above. Each curve prim holds
-//! `basis` (cubic only), `purpose` (when the group has one), `type`, `wrap`,
+//! `basis` (cubic only), `purpose` (when the group has one), `visibility` (when invisible),
+//! `type`, `wrap`,
 //! `curveVertexCounts`, `widths` (per vertex, or at the rate the file gave them while they fit
 //! it), the primvars, `points` and `extent` — default values, or time samples of `points`, `extent` and of every primvar that changes when animated. Then
 //! one `Mesh` prim per groom mesh (a scalp, head or body) at the path it was read from: its faces,
@@ -395,6 +396,13 @@ fn curves_prim<'g>(
     }
     if let Some(purpose) = &group.purpose {
         properties.push(Property::uniform_token("purpose", purpose.clone()));
+    }
+    if group.invisible {
+        properties.push(Property::new(
+            "visibility",
+            "token",
+            Value::Default(Data::Token("invisible".into())),
+        ));
     }
     let wrap = match group.wrap {
         CurveWrap::Nonperiodic => "nonperiodic",

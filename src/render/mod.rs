@@ -217,8 +217,10 @@ fn make_camera(settings: &RenderSettings, bounds: (Vec3, Vec3)) -> Camera {
 
 /// Bounds of the groom's points padded by their radii, and of the head when it will be shown.
 fn groom_bounds(groom: &Groom, options: &SceneOptions) -> Result<(Vec3, Vec3)> {
+    let shown = scene::shown_strands(groom)?;
+    let points = shown.iter().flat_map(|&strand| &groom.points[groom.strand_range(strand)]);
     let (mut lo, mut hi) =
-        groom.bounds().ok_or_else(|| Error::Usage("render: the groom has no strands to render".into()))?;
+        points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     if options.head.analytic_head(groom) {
         let head = crate::head::Head::default();
         lo = lo.min(head.center - head.radii);

@@ -234,6 +234,19 @@ pub fn transparency_coin(ray_id: u32, strand: u32) -> f32 {
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
+/// The strands a render draws: curves of invisible prims stay in the groom but are not drawn,
+/// as a renderer would not draw them. An error when there are none.
+pub fn shown_strands(groom: &Groom) -> Result<Vec<usize>> {
+    let invisible: Vec<bool> = (0..groom.group_count()).map(|g| groom.group(g).invisible).collect();
+    let shown: Vec<usize> =
+        (0..groom.strand_count()).filter(|&strand| !invisible[groom.group_of(strand)]).collect();
+    if shown.is_empty() {
+        let why = if groom.strand_count() == 0 { "has no strands" } else { "is all in invisible prims" };
+        return Err(Error::Usage(format!("render: the groom {why}; there is nothing to render")));
+    }
+    Ok(shown)
+}
+
 /// Whether most strand roots sit on coif's default head (within a few millimetres).
 pub fn roots_on_default_head(groom: &Groom) -> bool {
     let head = Head::default();
@@ -308,9 +321,10 @@ impl<'d> RenderScene<'d> {
             opacity.push(alpha);
         }
 
+        let shown = shown_strands(groom)?;
         let mut segments = Vec::new();
         let mut starts = Vec::new();
-        for strand in 0..groom.strand_count() {
+        for &strand in &shown {
             let range = groom.strand_range(strand);
             let (first, count) = (range.start, range.len());
             let step = match curve {
@@ -348,7 +362,7 @@ impl<'d> RenderScene<'d> {
 
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for p in &points {
+        for p in shown.iter().flat_map(|&strand| &points[groom.strand_range(strand)]) {
             let r = Vec3::splat(p[3]);
             let c = Vec3::new(p[0], p[1], p[2]);
             lo = lo.min(c - r);

@@ -64,6 +64,9 @@ def dump(path, time=None):
             "basis": curves.GetBasisAttr().Get(),
             "wrap": curves.GetWrapAttr().Get(),
             "purpose": UsdGeom.Imageable(prim).GetPurposeAttr().Get(),
+            # What renderers and DCC tools act on: inherited from imageable ancestors.
+            "computedPurpose": UsdGeom.Imageable(prim).ComputePurpose(),
+            "computedVisibility": UsdGeom.Imageable(prim).ComputeVisibility(code),
             "segmentEnds": curves.ComputeVaryingDataSize(code),
             "counts": list(curves.GetCurveVertexCountsAttr().Get(code)),
             "points": floats(points),

@@ -6,7 +6,7 @@ use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::archive_read::{Archive, Compound, Object, Property, Sampled};
-use super::curves_write::{epic, CURVE_SCHEMA, XFORM_SCHEMA};
+use super::curves_write::{epic, CURVE_SCHEMA, VISIBILITY_HIDDEN, VISIBLE, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
@@ -558,8 +558,28 @@ impl<'a> CurvesArchive<'a> {
         groom.strand_offsets = offsets;
         let mut group = CurveGroup::new(path.clone(), basis, wrap_of(basis));
         group.width_interpolation = width_interpolation;
+        group.invisible = self.hidden(path, time)?;
         groom.set_single_group(group);
         Ok((groom, ids_given))
+    }
+
+    /// Whether the object at `path` is hidden at `time` by AbcGeom's `visible` property: its own
+    /// value, or while that is deferred (-1) or absent, its nearest ancestor's.
+    fn hidden(&self, path: &str, time: f64) -> OgawaResult<bool> {
+        let names: Vec<&str> = path.split('/').filter(|p| !p.is_empty()).collect();
+        for depth in (1..=names.len()).rev() {
+            let Some(object) = find(&self.archive.top, &names[..depth].join("/")) else { continue };
+            let Some(visible) = object.properties.sampled(VISIBLE) else { continue };
+            let value = visible
+                .read_f64(&self.archive.ogawa, self.index_at(visible, time))
+                .map_err(|e| OgawaError(format!("/{}: {}", names[..depth].join("/"), e.0)))?;
+            match value.first() {
+                Some(&v) if v == VISIBILITY_HIDDEN as f64 => return Ok(true),
+                Some(&v) if v > 0.0 => return Ok(false),
+                _ => {}
+            }
+        }
+        Ok(false)
     }
 
     /// Epic's `groom_id` as integers, one per strand (no detour through floats: ids past 2^24

@@ -24,6 +24,10 @@ pub const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
 const GEOM_BASE: &str = "AbcGeom_GeomBase_v1";
 /// The curves object of a groom without groups.
 pub const DEFAULT_OBJECT_NAME: &str = "curves";
+/// AbcGeom's visibility: an int8 scalar on an object's top compound, -1 deferred to the parent,
+/// 0 hidden, 1 visible.
+pub const VISIBLE: &str = "visible";
+pub const VISIBILITY_HIDDEN: i8 = 0;
 
 /// Epic's groom attribute names, and the spec version coif follows in Unreal mode.
 pub mod epic {
@@ -101,6 +105,8 @@ struct CurveProperties {
     velocities: Option<PropertyId>,
     uv: Option<PropertyId>,
     width: PropertyId,
+    /// Alembic's `visible` (int8: 0 hidden), on objects of invisible groups only.
+    hidden: Option<PropertyId>,
     /// The rate of `width` (and Unreal's `groom_width`) when not per vertex: the file's, which
     /// the first frame's widths fit (see [`primvar_rates::widths_at`]).
     width_rate: Option<Interpolation>,
@@ -438,6 +444,9 @@ impl<W: Write + Seek> CurvesWriter<W> {
         }
         let (bytes, elements) = param_bytes(part, &ParamSource::Widths, &widths, scale);
         samples.push((p.width, bytes, elements));
+        if let Some(id) = p.hidden {
+            samples.push((id, Cow::Borrowed(&[VISIBILITY_HIDDEN as u8][..]), 1));
+        }
         // Keys are pure functions of the bytes: hash on every core, then write in order.
         let keys: Vec<[u8; 16]> = samples.par_iter().map(|(_, bytes, _)| sample_key(bytes)).collect();
         for ((id, bytes, elements), key) in samples.iter().zip(keys) {
@@ -648,6 +657,11 @@ fn add_curves<W: Write + Seek>(
     });
     let width =
         archive.add_array(geom, "width", geom_param_metadata(width_scope, Pod::F32, 1, ""), Pod::F32, 1, ts);
+    // Beside `.geom`, as AbcGeom's `CreateVisibilityProperty` places it.
+    let hidden = part.group.invisible.then(|| {
+        let top = archive.properties(object);
+        archive.add_scalar(top, VISIBLE, MetaData::new(), Pod::I8, 1, ts)
+    });
     let properties = CurveProperties {
         bounds,
         positions,
@@ -656,6 +670,7 @@ fn add_curves<W: Write + Seek>(
         velocities,
         uv,
         width,
+        hidden,
         width_rate,
         params,
     };

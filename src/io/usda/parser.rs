@@ -1112,6 +1112,7 @@ pub fn wanted(name: &str) -> bool {
             | "basis"
             | "wrap"
             | "purpose"
+            | "visibility"
             | "xformOpOrder"
             // Meshes (a scalp or head beside the curves).
             | "faceVertexCounts"

@@ -26,6 +26,7 @@ struct Curves {
     basis: CurveBasis,
     wrap: CurveWrap,
     purpose: Option<String>,
+    invisible: bool,
     counts: Vec<u32>,
     /// In the file's space until [`merge`] puts them in coif's with `to_coif`.
     points: Bulk<Vec3>,
@@ -128,7 +129,7 @@ pub fn groom_from_layer_in(
     let mut walker =
         Walker { files, arrays, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
     for prim in layer.prims {
-        walker.visit(prim, "", DMat4::IDENTITY, None)?;
+        walker.visit(prim, "", DMat4::IDENTITY, None, Imageable::default())?;
     }
     // A frame before the first time sample of everything that places the curves and meshes
     // (their points, the transforms above them) is a frame the animation never reached (0
@@ -187,19 +188,67 @@ impl FirstSample {
     }
 }
 
+/// What a prim inherits from its imageable ancestors (UsdGeomImageable): the `purpose` of the
+/// nearest one that authors it (a prim's own, when authored, wins), and whether any of them is
+/// `invisible` (no descendant can be visible again). As pxr computes them, prims that are not
+/// imageable (typeless, materials) neither set nor stop either.
+#[derive(Clone, Debug, Default)]
+struct Imageable {
+    purpose: Option<String>,
+    invisible: bool,
+}
+
+impl Imageable {
+    /// Prim types of UsdGeom and UsdSkel that are imageable and may hold or group curves.
+    fn is_imageable(type_name: &str) -> bool {
+        matches!(
+            type_name,
+            "Xform"
+                | "Scope"
+                | "BasisCurves"
+                | "NurbsCurves"
+                | "HermiteCurves"
+                | "Mesh"
+                | "Points"
+                | "PointInstancer"
+                | "SkelRoot"
+                | "Skeleton"
+                | "Capsule"
+                | "Cone"
+                | "Cube"
+                | "Cylinder"
+                | "Sphere"
+                | "Plane"
+                | "Camera"
+        )
+    }
+}
+
 impl Walker<'_> {
-    /// `chain_first`: the earliest time sample of the transforms above `prim`.
+    /// `chain_first`: the earliest time sample of the transforms above `prim`; `inherited`: the
+    /// purpose and visibility its ancestors give it.
     fn visit(
         &mut self,
         mut prim: Prim,
         parent_path: &str,
         parent: DMat4,
         chain_first: Option<FirstSample>,
+        inherited: Imageable,
     ) -> Result<()> {
         if !prim.is_defined_and_active() {
             return Ok(());
         }
         let prim_path = format!("{parent_path}/{}", prim.name);
+        let imageable = if Imageable::is_imageable(&prim.type_name) {
+            let purpose = self.token(&prim, &prim_path, "purpose")?;
+            let visibility = self.token(&prim, &prim_path, "visibility")?;
+            Imageable {
+                purpose: purpose.or(inherited.purpose),
+                invisible: inherited.invisible || visibility.as_deref() == Some("invisible"),
+            }
+        } else {
+            inherited
+        };
         let (local, reset) =
             local_transform(&prim, self.time).map_err(|(site, m)| self.error(&prim_path, site, m))?;
         // `!resetXformStack!`: the ancestors' transforms do not apply to this prim.
@@ -216,7 +265,7 @@ impl Walker<'_> {
         let mut first_here = None;
         if prim.type_name == "BasisCurves" {
             first_here = placed(&prim);
-            if let Some(curves) = self.curves(&mut prim, &prim_path, world)? {
+            if let Some(curves) = self.curves(&mut prim, &prim_path, world, &imageable)? {
                 self.found.push(curves);
             }
         } else if matches!(prim.type_name.as_str(), "NurbsCurves" | "HermiteCurves")
@@ -245,9 +294,18 @@ impl Walker<'_> {
             }
         }
         for child in children {
-            self.visit(child, &prim_path, world, chain_first.clone())?;
+            self.visit(child, &prim_path, world, chain_first.clone(), imageable.clone())?;
         }
         Ok(())
+    }
+
+    /// The value of `prim`'s token attribute `name` at the walker's time, when authored.
+    fn token(&self, prim: &Prim, prim_path: &str, name: &str) -> Result<Option<String>> {
+        match prim.attribute(name).and_then(|a| value_at(a, self.time).map(|v| (a.site, v))) {
+            None => Ok(None),
+            Some((_, Value::Text(t))) if t.len() == 1 => Ok(Some(t[0].clone())),
+            Some((site, _)) => Err(self.error(prim_path, site, format!("'{name}' must be a token"))),
+        }
     }
 
     fn error(&self, prim_path: &str, site: Site, message: impl std::fmt::Display) -> Error {
@@ -334,15 +392,17 @@ impl Walker<'_> {
     }
 
     /// Reads one `BasisCurves` prim; `None` when it has no points (an empty placeholder).
-    fn curves(&self, prim: &mut Prim, prim_path: &str, world: DMat4) -> Result<Option<Curves>> {
+    fn curves(
+        &self,
+        prim: &mut Prim,
+        prim_path: &str,
+        world: DMat4,
+        imageable: &Imageable,
+    ) -> Result<Option<Curves>> {
         let time = self.time;
         let at_prim = |site: Site, message: String| self.error(prim_path, site, message);
         let token = |prim: &Prim, name: &str, fallback: &str| -> Result<String> {
-            match prim.attribute(name).and_then(|a| value_at(a, time).map(|v| (a.site, v))) {
-                None => Ok(fallback.to_string()),
-                Some((_, Value::Text(t))) if t.len() == 1 => Ok(t[0].clone()),
-                Some((site, _)) => Err(at_prim(site, format!("'{name}' must be a token"))),
-            }
+            Ok(self.token(prim, prim_path, name)?.unwrap_or_else(|| fallback.to_string()))
         };
         let curve_type = token(prim, "type", "cubic")?;
         let basis_name = token(prim, "basis", "bezier")?;
@@ -368,8 +428,7 @@ impl Walker<'_> {
                 )),
                 other => return Err(at_prim(prim.site, format!("unknown wrap \"{other}\""))),
             };
-        let purpose = token(prim, "purpose", "default")?;
-        let purpose = (purpose != "default").then_some(purpose);
+        let purpose = imageable.purpose.clone().filter(|p| p != "default");
 
         let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
             return Ok(None);
@@ -465,6 +524,7 @@ impl Walker<'_> {
             basis,
             wrap,
             purpose,
+            invisible: imageable.invisible,
             counts: counts.clone(),
             points,
             widths,
@@ -1047,6 +1107,7 @@ impl Curves {
         }
         let mut group = CurveGroup::new(self.path, self.basis, self.wrap);
         group.purpose = self.purpose;
+        group.invisible = self.invisible;
         group.interpolations = self.interpolations;
         group.width_interpolation = self.width_interpolation;
         groom.set_single_group(group);
