@@ -1294,3 +1294,36 @@ fn inherited_purpose_and_visibility_are_read_used_and_written_back() {
     assert!(with_hidden == render(&without_hidden, "without_hidden"), "hidden prims were drawn");
     assert!(with_hidden != render(&stage.replace("\"invisible\"", "\"inherited\""), "all_shown"));
 }
+
+/// A per-vertex `primvars:st` (Houdini's `uv` along each curve, which its USD export names
+/// `st`) is an attribute like any other: it was dropped on writing ("clashes with primvar 'st'")
+/// because `st` is where root UVs go, although this groom has none.
+#[test]
+fn a_per_vertex_st_is_kept_where_there_are_no_root_uvs() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("uv_along.usda");
+    std::fs::write(
+        &source,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"c\"\n{\n\
+         uniform token type = \"linear\"\n int[] curveVertexCounts = [2, 3]\n\
+         point3f[] points = [(0,0,0), (0,0.1,0), (0.1,0,0), (0.1,0.1,0), (0.1,0.2,0)]\n\
+         texCoord2f[] primvars:st = [(0.1,0.2), (0.3,0.4), (0.5,0.6), (0.7,0.8), (0.9,1)] (\n\
+         interpolation = \"vertex\"\n )\n}\n",
+    )
+    .unwrap();
+    let st = |path: &Path| pxr_dump(path, None)["curves"][0]["primvars"]["st"].clone();
+    let expected = st(&source);
+    assert_eq!(expected["interpolation"], "vertex");
+    for name in ["out.usda", "out.usdc"] {
+        let out = dir.path().join(name);
+        let converted = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        assert!(!stderr(&converted).contains("clashes"), "{name}: {}", stderr(&converted));
+        let written = st(&out);
+        for key in ["type", "interpolation"] {
+            assert_eq!(written[key], expected[key], "{name}: {key}");
+        }
+        assert_eq!(f32s(&written["values"]), f32s(&expected["values"]), "{name}");
+        assert!(read(&out).root_uvs.is_none(), "{name}: per-vertex st is no root UV");
+    }
+}

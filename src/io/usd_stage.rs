@@ -550,8 +550,15 @@ fn primvars<'g>(
 ) -> (Vec<Property<'g>>, Vec<String>) {
     let mut primvars = Vec::new();
     let mut warnings = Vec::new();
-    // Names the reader gives a meaning of their own are never taken by attributes.
-    let mut used: Vec<String> = [names::GROOM_ID, names::GROOM_GUIDE, names::ST].map(String::from).to_vec();
+    // Names the reader gives a meaning of their own are never taken by attributes: `st` is the
+    // root UVs where the group has them, and reads back as them at one value per strand; per
+    // vertex (Houdini's `uv` along each curve, written as `st`) it is an attribute like others.
+    let writes_root_uvs = groom.root_uvs.is_some() && group.carries(CurveGroup::ROOT_UVS);
+    let mut used: Vec<String> = [names::GROOM_ID, names::GROOM_GUIDE].map(String::from).to_vec();
+    let reads_as_root_uvs = |a: &Attribute| a.rate == AttributeRate::Strand && a.components == 2;
+    if writes_root_uvs || groom.attribute(names::ST).is_some_and(reads_as_root_uvs) {
+        used.push(names::ST.into());
+    }
     let uniform_ints = |name: &str, values: Vec<i32>| {
         let data = Data::Ints { values: Cow::Owned(values), components: 1 };
         Property::new(format!("primvars:{name}"), "int[]", Value::Default(data)).interpolated("uniform")
@@ -563,7 +570,7 @@ fn primvars<'g>(
         let guides = strands.per_strand(guides, 1);
         primvars.push(uniform_ints(names::GROOM_GUIDE, guides.iter().map(|&g| g as i32).collect()));
     }
-    if let Some(uvs) = groom.root_uvs.as_ref().filter(|_| group.carries(CurveGroup::ROOT_UVS)) {
+    if let Some(uvs) = groom.root_uvs.as_ref().filter(|_| writes_root_uvs) {
         let uvs = strands.per_strand(bytemuck::cast_slice::<_, f32>(uvs), 2);
         let name = format!("primvars:{}", names::ST);
         primvars.push(
