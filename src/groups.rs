@@ -82,6 +82,9 @@ pub struct CurveGroup {
     pub missing: Vec<String>,
     /// Attributes this group's file gave an [`Interpolation`] their rate does not say.
     pub interpolations: Vec<(String, Interpolation)>,
+    /// Attributes this group's file gave as scalar arrays with an `elementSize` (their
+    /// components), as Houdini writes array attributes; writers give them back so.
+    pub element_sized: Vec<String>,
     /// How the file gave the widths (`None`: per vertex); the groom keeps them per vertex and
     /// writers give them back at this rate while the values fit it
     /// ([`crate::primvar_rates::widths_at`]).

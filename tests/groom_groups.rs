@@ -1327,3 +1327,41 @@ fn a_per_vertex_st_is_kept_where_there_are_no_root_uvs() {
         assert!(read(&out).root_uvs.is_none(), "{name}: per-vertex st is no root UV");
     }
 }
+
+/// Scalar arrays with an `elementSize` (how Houdini writes array attributes, such as three guide
+/// ids per curve) are written back as they came: `int[] (elementSize = 3)` became `float3[]`.
+#[test]
+fn element_sized_primvars_keep_their_type_and_element_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("arrays.usda");
+    std::fs::write(
+        &source,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"c\"\n{\n\
+         uniform token type = \"linear\"\n int[] curveVertexCounts = [2, 3]\n\
+         point3f[] points = [(0,0,0), (0,0.1,0), (0.1,0,0), (0.1,0.1,0), (0.1,0.2,0)]\n\
+         int[] primvars:guide_ids = [1, 2, 3, 4, 5, 6] (\n interpolation = \"uniform\"\n elementSize = 3\n )\n\
+         float[] primvars:guide_weights = [0.5, 0.25, 0.25, 1, 0, 0] (\n interpolation = \"uniform\"\n elementSize = 3\n )\n\
+         float[] primvars:along = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9] (\n interpolation = \"vertex\"\n elementSize = 2\n )\n\
+         float3[] primvars:tuple = [(1, 2, 3), (4, 5, 6)] (\n interpolation = \"uniform\"\n )\n}\n",
+    )
+    .unwrap();
+    let primvars = |path: &Path| pxr_dump(path, None)["curves"][0]["primvars"].clone();
+    let expected = primvars(&source);
+    assert_eq!(expected["guide_ids"]["elementSize"], 3, "{expected}");
+    for name in ["out.usda", "out.usdc"] {
+        let out = dir.path().join(name);
+        let converted = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        let written = primvars(&out);
+        for primvar in ["guide_ids", "guide_weights", "along", "tuple"] {
+            for key in ["type", "interpolation", "elementSize"] {
+                assert_eq!(written[primvar][key], expected[primvar][key], "{name}: {primvar} {key}");
+            }
+            assert_eq!(
+                f32s(&written[primvar]["values"]),
+                f32s(&expected[primvar]["values"]),
+                "{name}: {primvar}"
+            );
+        }
+    }
+}

@@ -64,7 +64,9 @@ pub fn meshes_path(groom_path: &Path) -> PathBuf {
 /// vertex (the rate its documentation and coif's tests know it reads).
 pub fn for_usd(groom: &Groom) -> Groom {
     let mut out = with_root_uvs(groom).unwrap_or_else(|| groom.clone());
-    out.groups.iter_mut().for_each(|g| g.width_interpolation = None);
+    // Unreal's attribute types are tuples (`groom_guide_weights` float×3), never arrays with an
+    // `elementSize`.
+    out.groups.iter_mut().for_each(|g| (g.width_interpolation, g.element_sized) = (None, Vec::new()));
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
     // What a group misses, it misses under the new names too.
     for group in &mut out.groups {

@@ -106,6 +106,8 @@ pub struct Property<'g> {
     pub uniform: bool,
     pub value: Value<'g>,
     pub interpolation: Option<&'static str>,
+    /// `elementSize`: values per element of a scalar array (a file's array attribute).
+    pub element_size: Option<usize>,
 }
 
 pub enum Value<'g> {
@@ -133,7 +135,14 @@ pub enum Data<'g> {
 
 impl<'g> Property<'g> {
     fn new(name: impl Into<String>, type_name: &'static str, value: Value<'g>) -> Self {
-        Property { name: name.into(), type_name, uniform: false, value, interpolation: None }
+        Property {
+            name: name.into(),
+            type_name,
+            uniform: false,
+            value,
+            interpolation: None,
+            element_size: None,
+        }
     }
 
     fn uniform_token(name: &str, token: impl Into<Cow<'g, str>>) -> Self {
@@ -595,7 +604,12 @@ fn primvars<'g>(
                 attribute.name
             ));
         }
-        let type_name = usd_type(attribute.kind, &attribute.name, attribute.components);
+        // A scalar array with `elementSize` where the file gave one (Houdini's array attributes):
+        // `int[]` with three per curve stays so, not `float3[]`.
+        let element_size = (group.element_sized.contains(&attribute.name) && attribute.components > 1)
+            .then_some(attribute.components);
+        let type_name =
+            usd_type(attribute.kind, &attribute.name, element_size.map_or(attribute.components, |_| 1));
         let sampled = animation.filter(|a| a.attribute(0, &attribute.name).is_some());
         // The file's own interpolation where the values still fit it (one value for the prim;
         // varying = vertex on linear and pinned curves); else the rate's.
@@ -618,7 +632,9 @@ fn primvars<'g>(
             (None, AttributeRate::Strand) => "uniform",
         };
         let one_value = interpolation == "constant";
-        let data = |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name, one_value);
+        let flat = element_size.is_some();
+        let data =
+            |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name, one_value, flat);
         let value = match sampled {
             Some(a) => Value::TimeSamples(
                 (0..a.points.len())
@@ -628,29 +644,32 @@ fn primvars<'g>(
             None => Value::Default(data(attribute)),
         };
         used.push(name.clone());
-        primvars
-            .push(Property::new(format!("primvars:{name}"), type_name, value).interpolated(interpolation));
+        let property =
+            Property::new(format!("primvars:{name}"), type_name, value).interpolated(interpolation);
+        primvars.push(Property { element_size, ..property });
     }
     (primvars, warnings)
 }
 
 /// A group's values of an attribute, as `type_name` holds them.
-/// `one_value`: only the first strand's (a `constant` primvar).
+/// `one_value`: only the first strand's (a `constant` primvar). `flat`: as a scalar array (its
+/// components are the `elementSize`).
 fn primvar_data<'g>(
     groom: &Groom,
     strands: &Strands,
     attribute: &'g Attribute,
     type_name: &str,
     one_value: bool,
+    flat: bool,
 ) -> Data<'g> {
-    let components = attribute.components;
     let mut values = match attribute.rate {
-        AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, components),
-        AttributeRate::Strand => strands.per_strand(&attribute.data, components),
+        AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, attribute.components),
+        AttributeRate::Strand => strands.per_strand(&attribute.data, attribute.components),
     };
     if one_value {
-        values.to_mut().truncate(components);
+        values.to_mut().truncate(attribute.components);
     }
+    let components = if flat { 1 } else { attribute.components };
     match attribute.kind {
         // Int and bool tuples have no USD type of their own here: they go as floats.
         AttributeKind::Int if type_name == "int[]" => {

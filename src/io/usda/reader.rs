@@ -39,6 +39,8 @@ struct Curves {
     attributes: Vec<GroomAttribute>,
     /// Attributes read from `constant` or exactly-per-vertex `varying` primvars.
     interpolations: Vec<(String, Interpolation)>,
+    /// Attributes read from scalar arrays with an `elementSize` above 1.
+    element_sized: Vec<String>,
     width_interpolation: Option<Interpolation>,
 }
 
@@ -534,6 +536,7 @@ impl Walker<'_> {
             guides: None,
             attributes: Vec::new(),
             interpolations: Vec::new(),
+            element_sized: Vec::new(),
             width_interpolation,
         };
         let primvar_names: Vec<String> = prim
@@ -608,6 +611,9 @@ impl Walker<'_> {
                     };
                     if let Some(interpolation) = interpolation {
                         curves.interpolations.push((groom_name.clone(), interpolation));
+                    }
+                    if kind_components == 1 && element_size > 1 {
+                        curves.element_sized.push(groom_name.clone());
                     }
                     curves
                         .attributes
@@ -1109,6 +1115,7 @@ impl Curves {
         group.purpose = self.purpose;
         group.invisible = self.invisible;
         group.interpolations = self.interpolations;
+        group.element_sized = self.element_sized;
         group.width_interpolation = self.width_interpolation;
         groom.set_single_group(group);
         groom

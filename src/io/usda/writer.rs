@@ -91,9 +91,15 @@ fn write_prim(prim: &Prim, out: &mut (impl Write + ?Sized), depth: usize) -> std
 fn write_property(property: &Property, out: &mut (impl Write + ?Sized), indent: &str) -> std::io::Result<()> {
     let uniform = if property.uniform { "uniform " } else { "" };
     let declaration = format!("{indent}{uniform}{} {}", property.type_name, property.name);
-    let metadata = property
-        .interpolation
-        .map(|interpolation| format!(" (\n{indent}    interpolation = \"{interpolation}\"\n{indent})"));
+    // Fields in the order usd-core writes them.
+    let mut fields = Vec::new();
+    if let Some(size) = property.element_size {
+        fields.push(format!("{indent}    elementSize = {size}\n"));
+    }
+    if let Some(interpolation) = property.interpolation {
+        fields.push(format!("{indent}    interpolation = \"{interpolation}\"\n"));
+    }
+    let metadata = (!fields.is_empty()).then(|| format!(" (\n{}{indent})", fields.concat()));
     match &property.value {
         Value::Default(data) => {
             out.write_all(format!("{declaration} = ").as_bytes())?;

@@ -82,6 +82,9 @@ fn attribute_fields<W: Write + Seek>(
         ("custom", rep::inline(Type::Bool, 0)),
         (field, value),
     ];
+    if let Some(size) = property.element_size {
+        fields.push(("elementSize", rep::inline(Type::Int, size as u32 as u64)));
+    }
     if let Some(interpolation) = property.interpolation {
         fields.push(("interpolation", e.token_value(interpolation)));
     }
