@@ -59,6 +59,8 @@ pub struct MeshInfo {
     pub path: String,
     pub points: usize,
     pub faces: usize,
+    /// Hidden in its file.
+    pub invisible: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -110,6 +112,7 @@ impl GroomInfo {
                     path: m.path.clone(),
                     points: m.points.len(),
                     faces: m.face_counts.len(),
+                    invisible: m.invisible,
                 })
                 .collect(),
         }
@@ -151,7 +154,8 @@ impl std::fmt::Display for GroomInfo {
             )?;
         }
         for m in &self.meshes {
-            writeln!(f, "mesh         {} ({} points, {} faces)", m.path, m.points, m.faces)?;
+            let invisible = if m.invisible { ", invisible" } else { "" };
+            writeln!(f, "mesh         {} ({} points, {} faces{invisible})", m.path, m.points, m.faces)?;
         }
         for a in &self.attributes {
             writeln!(

@@ -20,6 +20,10 @@ pub struct SurfaceMesh {
     pub face_indices: Vec<u32>,
     /// The mesh's own data (UVs, normals, rest positions, masks), passed through conversions.
     pub primvars: Vec<MeshPrimvar>,
+    /// Hidden in its file (USD `visibility = "invisible"` on it or an ancestor, Alembic
+    /// `visible = 0`), as scalp and head meshes often are: still a collider, written back hidden,
+    /// left out of previews.
+    pub invisible: bool,
 }
 
 /// Where a mesh primvar's values sit (USD interpolation; Alembic `geoScope`).
@@ -366,6 +370,7 @@ mod tests {
             face_counts: vec![4; 6],
             face_indices: faces.iter().flatten().copied().collect(),
             primvars: Vec::new(),
+            invisible: false,
         }
     }
 

@@ -523,9 +523,9 @@ fn coif_style_uses_the_file_mesh_and_scalp_overrides_it() {
     assert!((other - own).abs() > 0.005, "--scalp replaces the file's mesh: {other} vs {own}");
 }
 
-/// Blender writes AbcGeom's `visible = 0` for objects hidden in its viewport; coif reads their
-/// curves as an invisible group (kept, styled, written back invisible, left out of previews), and
-/// the other objects' stay visible.
+/// Blender writes AbcGeom's `visible = 0` for curves objects hidden in its viewport; coif reads
+/// their curves as an invisible group (kept, styled, written back invisible, left out of
+/// previews), and the other objects' stay visible. (A hidden mesh object Blender leaves out.)
 #[test]
 fn objects_blender_hides_are_read_as_invisible_groups() {
     let dir = tempfile::tempdir().unwrap();
@@ -542,6 +542,7 @@ fn objects_blender_hides_are_read_as_invisible_groups() {
     for (name, invisible) in &groups {
         assert_eq!(*invisible, name.contains("Guides"), "{groups:?}");
     }
+    assert!(groom.meshes.iter().all(|m| !m.invisible), "the head mesh was not hidden");
     let usda = dir.path().join("hidden.usda");
     let converted = common::coif(&["convert", exported.to_str().unwrap(), usda.to_str().unwrap()]);
     assert!(converted.status.success(), "{}", common::stderr(&converted));

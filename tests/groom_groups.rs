@@ -1365,3 +1365,49 @@ fn element_sized_primvars_keep_their_type_and_element_size() {
         }
     }
 }
+
+/// A scalp mesh hidden in its file (as grooms often bring theirs) stays hidden: it came out
+/// visible in every output, and previews drew it.
+#[test]
+fn a_hidden_scalp_mesh_stays_hidden_and_is_not_drawn() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh =
+        "def Mesh \"scalp\"\n{\n int[] faceVertexCounts = [4]\n int[] faceVertexIndices = [0, 1, 2, 3]\n\
+                point3f[] points = [(-10, -1, -5), (10, -1, -5), (10, 9, -5), (-10, 9, -5)]\n}\n";
+    let stage = |body: &str| {
+        format!(
+            "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\n\
+             def Xform \"groom\"\n{{\n def BasisCurves \"hair\"\n{{\n{}}}\n{body}}}\n",
+            two_curves(0.0)
+        )
+    };
+    let hidden = format!("def Xform \"hidden\"\n{{\n token visibility = \"invisible\"\n{mesh}}}\n");
+    let source = dir.path().join("source.usda");
+    std::fs::write(&source, stage(&hidden)).unwrap();
+    let visibility = |path: &Path| pxr_dump(path, None)["meshes"][0]["computedVisibility"].clone();
+    assert_eq!(visibility(&source), "invisible", "pxr");
+    assert!(read(&source).meshes[0].invisible);
+    let (abc, back) = (dir.path().join("out.abc"), dir.path().join("back.usda"));
+    for (from, to) in [
+        (source.clone(), dir.path().join("out.usda")),
+        (source.clone(), dir.path().join("out.usdc")),
+        (source.clone(), abc.clone()),
+        (abc, back.clone()),
+    ] {
+        let converted = coif(&["convert", path_str(&from), path_str(&to)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        if to.extension().unwrap() != "abc" {
+            assert_eq!(visibility(&to), "invisible", "{}", to.display());
+        }
+    }
+    let render = |text: &str, name: &str| -> Vec<u8> {
+        let (usda, png) = (dir.path().join(format!("{name}.usda")), dir.path().join(format!("{name}.png")));
+        std::fs::write(&usda, text).unwrap();
+        let out = coif(&["render", path_str(&usda), "-o", path_str(&png), "--res", "40x30", "--spp", "4"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        std::fs::read(&png).unwrap()
+    };
+    let with_hidden = render(&stage(&hidden), "hidden");
+    assert!(with_hidden == render(&stage(""), "none"), "the hidden mesh was drawn");
+    assert!(with_hidden != render(&stage(mesh), "shown"), "a shown mesh is drawn");
+}

@@ -234,7 +234,7 @@ pub(crate) struct RenderArgs {
     /// Widen strands to at least this many pixels, fading them so average coverage is unchanged.
     #[arg(long, default_value_t = 0.0, value_name = "PIXELS")]
     pub(crate) min_pixel_width: f32,
-    /// Show coif's analytic head under the hair.
+    /// Show a head under the hair: the groom's own meshes, else coif's analytic head.
     #[arg(long, value_enum, default_value_t = HeadArg::Auto)]
     pub(crate) head: HeadArg,
     /// Leave out the floor.
@@ -530,11 +530,14 @@ impl From<ViewArg> for View {
     }
 }
 
-/// `--head`: whether to put the analytic head under the hair.
+/// `--head`: whether to put a head under the hair: the groom's own meshes, else the analytic
+/// head.
 #[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum HeadArg {
-    /// When the strand roots sit on coif's default head.
+    /// The meshes the groom's file shows; else the analytic head when the strand roots sit on
+    /// coif's default head.
     Auto,
+    /// The groom's meshes, hidden ones too; else the analytic head.
     On,
     Off,
 }

@@ -407,11 +407,7 @@ fn curves_prim<'g>(
         properties.push(Property::uniform_token("purpose", purpose.clone()));
     }
     if group.invisible {
-        properties.push(Property::new(
-            "visibility",
-            "token",
-            Value::Default(Data::Token("invisible".into())),
-        ));
+        properties.push(invisible());
     }
     let wrap = match group.wrap {
         CurveWrap::Nonperiodic => "nonperiodic",
@@ -506,7 +502,15 @@ fn mesh_prim<'g>(mesh: &'g SurfaceMesh, index: usize, animation: Option<&Animati
     properties.extend(mesh.primvars.iter().flat_map(mesh_primvar));
     properties.push(Property::uniform_token("orientation", "rightHanded"));
     properties.push(Property::uniform_token("subdivisionScheme", "none"));
+    if mesh.invisible {
+        properties.push(invisible());
+    }
     Prim { name: String::new(), type_name: "Mesh", properties, children: Vec::new() }
+}
+
+/// `visibility = "invisible"`: a prim hidden in the file it came from.
+fn invisible<'g>() -> Property<'g> {
+    Property::new("visibility", "token", Value::Default(Data::Token("invisible".into())))
 }
 
 /// A mesh primvar as USD properties: `primvars:NAME` (the mesh's plain `normals` attribute for

@@ -226,11 +226,9 @@ fn groom_bounds(groom: &Groom, options: &SceneOptions) -> Result<(Vec3, Vec3)> {
         lo = lo.min(head.center - head.radii);
         hi = hi.max(head.center + head.radii);
     }
-    if options.head.own_meshes() {
-        for p in groom.meshes.iter().flat_map(|m| &m.points) {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
+    for p in options.head.own_meshes(groom).flat_map(|m| &m.points) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
     }
     Ok((lo, hi))
 }

@@ -12,8 +12,8 @@ use crate::render::hair_bsdf::MELANIN_RANGE;
 /// file), or coif's analytic head.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum HeadMode {
-    /// The groom's own meshes when its file brings any; else the analytic head when the strand
-    /// roots sit on it (grooms from `coif generate`).
+    /// The groom's own meshes (those its file shows) when its file brings any; else the analytic
+    /// head when the strand roots sit on it (grooms from `coif generate`).
     #[default]
     Auto,
     /// The groom's own meshes, else the analytic head.
@@ -33,9 +33,14 @@ impl HeadMode {
         }
     }
 
-    /// Whether the groom's own meshes are drawn.
-    pub fn own_meshes(self) -> bool {
-        self != HeadMode::Off
+    /// The groom's own meshes that are drawn: those its file shows (a scalp hidden there stays
+    /// hidden), or every one when a head is asked for.
+    pub fn own_meshes(self, groom: &Groom) -> impl Iterator<Item = &crate::surface_mesh::SurfaceMesh> {
+        groom.meshes.iter().filter(move |mesh| match self {
+            HeadMode::Off => false,
+            HeadMode::On => true,
+            HeadMode::Auto => !mesh.invisible,
+        })
     }
 }
 
@@ -379,14 +384,12 @@ impl<'d> RenderScene<'d> {
             None => None,
         };
         let mut mesh_geometries = Vec::new();
-        if options.head.own_meshes() {
-            for mesh in &groom.meshes {
-                for p in &mesh.points {
-                    lo = lo.min(*p);
-                    hi = hi.max(*p);
-                }
-                mesh_geometries.push(embree.add_triangle_mesh(&mesh.points, &mesh.triangles())?);
+        for mesh in options.head.own_meshes(groom) {
+            for p in &mesh.points {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
             }
+            mesh_geometries.push(embree.add_triangle_mesh(&mesh.points, &mesh.triangles())?);
         }
         if !lo.is_finite() {
             return Err(Error::Usage("render: the groom has no strands to render".into()));

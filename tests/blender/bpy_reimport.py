@@ -2,8 +2,9 @@
 
   bpy_reimport.py FILE [--frames FIRST:LAST] [--hide-and-export NAME OUT.abc]
       FILE is .abc (wm.alembic_import) or .usd/.usda/.usdc/.usdz (wm.usd_import)
-      --hide-and-export: hides the objects whose names start with NAME (the eye in the
-      outliner) and exports the scene to OUT.abc with Blender's Alembic exporter.
+      --hide-and-export: hides the objects whose names start with NAME (or with any of
+      several NAMEs joined by commas; the eye in the outliner) and exports the scene to OUT.abc
+      with Blender's Alembic exporter.
 
 For every curves object ("objects"): its name, curve and point counts, the set of its curve types
 (Blender's `curve_type` codes: 0 Catmull-Rom, the default when the attribute is absent, 1 poly,
@@ -100,9 +101,9 @@ def main():
     scene = bpy.context.scene
     if "--hide-and-export" in args:
         at = args.index("--hide-and-export")
-        name, out = args[at + 1], args[at + 2]
+        names, out = args[at + 1].split(","), args[at + 2]
         for obj in scene.objects:
-            if obj.name.startswith(name):
+            if any(obj.name.startswith(name) for name in names):
                 obj.hide_set(True)
         bpy.ops.wm.alembic_export(filepath=out, evaluation_mode="VIEWPORT")
     by_name = sorted(scene.objects, key=lambda o: o.name)

@@ -102,6 +102,7 @@ def dump(path, time=None):
             "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points or []),
             "orientation": mesh.GetOrientationAttr().Get(),
             "subdivisionScheme": mesh.GetSubdivisionSchemeAttr().Get(),
+            "computedVisibility": mesh.ComputeVisibility(code),
             "pointsTimeSamples": mesh.GetPointsAttr().GetTimeSamples(),
             "extent": floats(mesh.GetExtentAttr().Get(code) or []),
             "computedExtent": floats(UsdGeom.Boundable.ComputeExtentFromPlugins(mesh, code) or []),

@@ -266,8 +266,15 @@ impl<'a> CurvesArchive<'a> {
             return Ok(None);
         }
         let matrix = self.world_matrix(object, time)?;
-        let mut mesh =
-            SurfaceMesh { path: path.clone(), points, face_counts, face_indices, primvars: Vec::new() };
+        let mut mesh = SurfaceMesh {
+            path: path.clone(),
+            points,
+            face_counts,
+            face_indices,
+            primvars: Vec::new(),
+            invisible: false,
+        };
+        mesh.invisible = self.hidden(path, time)?;
         let arb = object.geom.compound(".arbGeomParams");
         let arb_members = arb.map(|c| c.members.as_slice()).unwrap_or(&[]);
         // The UV set keeps the name its `sourceName` gives (Blender writes its map's, `UVMap`).

@@ -134,6 +134,8 @@ struct MeshObject {
     face_counts: PropertyId,
     /// The faces wound clockwise (the file's convention), fixed by the first frame.
     clockwise_indices: Vec<i32>,
+    /// Alembic's `visible` of a hidden mesh.
+    hidden: Option<PropertyId>,
 }
 
 /// The curves object of one group: its properties, the group's index and its strands.
@@ -378,6 +380,9 @@ impl<W: Write + Seek> CurvesWriter<W> {
             ];
             for (id, bytes, elements) in samples {
                 self.archive.set_sample(id, &bytes, elements)?;
+            }
+            if let Some(id) = object.hidden {
+                self.archive.set_sample(id, &[VISIBILITY_HIDDEN as u8], 1)?;
             }
         }
         for k in 0..self.objects.len() {
@@ -657,11 +662,7 @@ fn add_curves<W: Write + Seek>(
     });
     let width =
         archive.add_array(geom, "width", geom_param_metadata(width_scope, Pod::F32, 1, ""), Pod::F32, 1, ts);
-    // Beside `.geom`, as AbcGeom's `CreateVisibilityProperty` places it.
-    let hidden = part.group.invisible.then(|| {
-        let top = archive.properties(object);
-        archive.add_scalar(top, VISIBLE, MetaData::new(), Pod::I8, 1, ts)
-    });
+    let hidden = part.group.invisible.then(|| hidden_property(archive, object, ts));
     let properties = CurveProperties {
         bounds,
         positions,
@@ -789,6 +790,7 @@ fn add_polymesh<W: Write + Seek>(
         };
         add_mesh_param(archive, parent, name, primvar)
     });
+    let hidden = mesh.invisible.then(|| hidden_property(archive, object, ts));
     let made = written.map(|()| MeshObject {
         mesh: index,
         bounds,
@@ -796,8 +798,16 @@ fn add_polymesh<W: Write + Seek>(
         face_indices,
         face_counts,
         clockwise_indices,
+        hidden,
     });
     (object, made)
+}
+
+/// An object's `visible` property, beside `.geom` as AbcGeom's `CreateVisibilityProperty`
+/// places it; its samples say hidden.
+fn hidden_property<W: Write + Seek>(archive: &mut ArchiveWriter<W>, object: ObjectId, ts: u32) -> PropertyId {
+    let top = archive.properties(object);
+    archive.add_scalar(top, VISIBLE, MetaData::new(), Pod::I8, 1, ts)
 }
 
 /// One mesh primvar as a geometry parameter with one sample: a plain array, or a `.vals` /

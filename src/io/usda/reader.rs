@@ -287,7 +287,7 @@ impl Walker<'_> {
         } else if prim.type_name == "Mesh" {
             first_here = placed(&prim);
             if let Some(mesh) = self.mesh(&mut prim, &prim_path, world)? {
-                self.meshes.push(mesh);
+                self.meshes.push(SurfaceMesh { invisible: imageable.invisible, ..mesh });
             }
         }
         if let Some(first) = first_here {
@@ -378,6 +378,7 @@ impl Walker<'_> {
             face_counts,
             face_indices,
             primvars: Vec::new(),
+            invisible: false,
         };
         mesh.primvars = mesh_primvars(prim, time).map_err(|(site, m)| at_prim(site, m))?;
         let left_handed = match prim.attribute("orientation").and_then(|a| value_at(a, time)) {
