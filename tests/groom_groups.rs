@@ -1194,6 +1194,15 @@ fn hair_output_warns_about_every_curved_basis() {
     }
 }
 
+/// The PNG bytes of `coif render` of a stage written from `text` as `NAME.usda` in `dir`.
+fn render_stage(dir: &Path, text: &str, name: &str) -> Vec<u8> {
+    let (usda, png) = (dir.join(format!("{name}.usda")), dir.join(format!("{name}.png")));
+    std::fs::write(&usda, text).unwrap();
+    let out = coif(&["render", path_str(&usda), "-o", path_str(&png), "--res", "40x30", "--spp", "4"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::read(&png).unwrap()
+}
+
 /// Two linear curves of three points at `x` (centimetres), as a prim body.
 fn two_curves(x: f32) -> String {
     let points: Vec<String> = [0.0, 1.0]
@@ -1281,13 +1290,7 @@ fn inherited_purpose_and_visibility_are_read_used_and_written_back() {
 
     // A preview draws what a renderer would: the same image as the stage without hidden prims
     // (listed last, so the visible strands keep their indices), another one with them shown.
-    let render = |stage_text: &str, name: &str| -> Vec<u8> {
-        let (usda, png) = (dir.path().join(format!("{name}.usda")), dir.path().join(format!("{name}.png")));
-        std::fs::write(&usda, stage_text).unwrap();
-        let out = coif(&["render", path_str(&usda), "-o", path_str(&png), "--res", "40x30", "--spp", "4"]);
-        assert!(out.status.success(), "{}", stderr(&out));
-        std::fs::read(&png).unwrap()
-    };
+    let render = |text: &str, name: &str| render_stage(dir.path(), text, name);
     let cut = stage.find("def Xform \"guides\"").unwrap();
     let without_hidden = format!("{}}}\n", &stage[..cut]);
     let with_hidden = render(&stage, "with_hidden");
@@ -1400,13 +1403,7 @@ fn a_hidden_scalp_mesh_stays_hidden_and_is_not_drawn() {
             assert_eq!(visibility(&to), "invisible", "{}", to.display());
         }
     }
-    let render = |text: &str, name: &str| -> Vec<u8> {
-        let (usda, png) = (dir.path().join(format!("{name}.usda")), dir.path().join(format!("{name}.png")));
-        std::fs::write(&usda, text).unwrap();
-        let out = coif(&["render", path_str(&usda), "-o", path_str(&png), "--res", "40x30", "--spp", "4"]);
-        assert!(out.status.success(), "{}", stderr(&out));
-        std::fs::read(&png).unwrap()
-    };
+    let render = |text: &str, name: &str| render_stage(dir.path(), text, name);
     let with_hidden = render(&stage(&hidden), "hidden");
     assert!(with_hidden == render(&stage(""), "none"), "the hidden mesh was drawn");
     assert!(with_hidden != render(&stage(mesh), "shown"), "a shown mesh is drawn");
