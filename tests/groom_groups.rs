@@ -1408,3 +1408,54 @@ fn a_hidden_scalp_mesh_stays_hidden_and_is_not_drawn() {
     assert!(with_hidden == render(&stage(""), "none"), "the hidden mesh was drawn");
     assert!(with_hidden != render(&stage(mesh), "shown"), "a shown mesh is drawn");
 }
+
+/// A file's int pairs, triples and quadruples keep their type (they became `float2[]`…`float4[]`),
+/// through `.usda`, `.usdc` and Alembic (int32×N); `--unreal` writes them as floats, the types
+/// Unreal's USD importer reads.
+#[test]
+fn int_tuple_primvars_stay_int_tuples() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("ints.usda");
+    std::fs::write(
+        &source,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"c\"\n{\n\
+         uniform token type = \"linear\"\n int[] curveVertexCounts = [2, 3]\n\
+         point3f[] points = [(0,0,0), (0,0.1,0), (0.1,0,0), (0.1,0.1,0), (0.1,0.2,0)]\n\
+         int2[] primvars:pair = [(1, 2), (3, 4)] (\n interpolation = \"uniform\"\n )\n\
+         int3[] primvars:cell = [(1, 2, 3), (4, 5, 6), (7, 8, 9), (10, 11, 12), (13, 14, 15)] (\n interpolation = \"vertex\"\n )\n\
+         int4[] primvars:quad = [(1, 2, 3, 4), (5, 6, 7, 8)] (\n interpolation = \"uniform\"\n )\n}\n",
+    )
+    .unwrap();
+    let primvars = |path: &Path| pxr_dump(path, None)["curves"][0]["primvars"].clone();
+    let expected = primvars(&source);
+    let (abc, back) = (dir.path().join("out.abc"), dir.path().join("back.usda"));
+    let runs = [
+        (source.clone(), dir.path().join("out.usda")),
+        (source.clone(), dir.path().join("out.usdc")),
+        (source.clone(), abc.clone()),
+        (abc, back.clone()),
+    ];
+    for (from, to) in runs {
+        let converted = coif(&["convert", path_str(&from), path_str(&to)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        if to.extension().unwrap() == "abc" {
+            continue;
+        }
+        let written = primvars(&to);
+        for primvar in ["pair", "cell", "quad"] {
+            for key in ["type", "interpolation"] {
+                assert_eq!(
+                    written[primvar][key],
+                    expected[primvar][key],
+                    "{}: {primvar} {key}",
+                    to.display()
+                );
+            }
+            assert_eq!(f32s(&written[primvar]["values"]), f32s(&expected[primvar]["values"]), "{primvar}");
+        }
+    }
+    let unreal = dir.path().join("unreal.usda");
+    let converted = coif(&["convert", "--unreal", path_str(&source), path_str(&unreal)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    assert_eq!(primvars(&unreal)["groom_cell"]["type"], "float3[]");
+}

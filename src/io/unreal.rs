@@ -68,6 +68,10 @@ pub fn for_usd(groom: &Groom) -> Groom {
     // `elementSize`.
     out.groups.iter_mut().for_each(|g| (g.width_interpolation, g.element_sized) = (None, Vec::new()));
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
+    // Unreal's USD importer reads int, float, float2 and float3 primvars: int tuples go as floats.
+    for attribute in out.attributes.iter_mut().filter(|a| a.kind == AttributeKind::Int && a.components > 1) {
+        attribute.kind = AttributeKind::Float;
+    }
     // What a group misses, it misses under the new names too.
     for group in &mut out.groups {
         for name in group.missing.iter_mut().filter(|n| *n != CurveGroup::ROOT_UVS) {

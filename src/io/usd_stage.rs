@@ -518,9 +518,9 @@ fn invisible<'g>() -> Property<'g> {
 fn mesh_primvar(primvar: &MeshPrimvar) -> Vec<Property<'_>> {
     let type_name = usd_type(primvar.kind, &primvar.name, primvar.components);
     let data = match primvar.kind {
-        AttributeKind::Int if type_name == "int[]" => Data::Ints {
+        AttributeKind::Int if type_name.starts_with("int") => Data::Ints {
             values: Cow::Owned(primvar.values.iter().map(|&v| v as i32).collect()),
-            components: 1,
+            components: primvar.components,
         },
         AttributeKind::Bool if type_name == "bool[]" => {
             Data::Bools(primvar.values.iter().map(|&v| v != 0.0).collect())
@@ -675,8 +675,8 @@ fn primvar_data<'g>(
     }
     let components = if flat { 1 } else { attribute.components };
     match attribute.kind {
-        // Int and bool tuples have no USD type of their own here: they go as floats.
-        AttributeKind::Int if type_name == "int[]" => {
+        // Bool tuples have no USD type: they go as floats (see `usd_type`).
+        AttributeKind::Int if type_name.starts_with("int") => {
             Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
         }
         AttributeKind::Bool if type_name == "bool[]" => {
@@ -693,6 +693,11 @@ pub(crate) fn usd_type(kind: AttributeKind, name: &str, components: usize) -> &'
     let by_size = |types: [&'static str; 4]| types[components.clamp(1, 4) - 1];
     match kind {
         AttributeKind::Int if components == 1 => "int[]",
+        // A file's int pairs to quadruples stay ints. coif's guide binding goes as `float3[]`
+        // whatever came in: Blender and Unreal's USD importers drop `int3[]` (README).
+        AttributeKind::Int if name != crate::guides::CLOSEST_GUIDES => {
+            by_size(["int[]", "int2[]", "int3[]", "int4[]"])
+        }
         AttributeKind::Bool if components == 1 => "bool[]",
         AttributeKind::Point if components == 3 => "point3f[]",
         AttributeKind::Normal if components == 3 => "normal3f[]",

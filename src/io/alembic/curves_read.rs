@@ -915,7 +915,7 @@ fn param_kind(property: &Property<'_>, extent: u8) -> AttributeKind {
     };
     let kind = match (pod, interpretation.as_deref(), extent) {
         (Pod::Bool, _, 1) => AttributeKind::Bool,
-        (Pod::I8 | Pod::U8 | Pod::I16 | Pod::U16 | Pod::I32 | Pod::U32 | Pod::I64 | Pod::U64, _, 1) => {
+        (Pod::I8 | Pod::U8 | Pod::I16 | Pod::U16 | Pod::I32 | Pod::U32 | Pod::I64 | Pod::U64, _, _) => {
             AttributeKind::Int
         }
         (Pod::F16 | Pod::F32 | Pod::F64, Some("point"), 3) => AttributeKind::Point,

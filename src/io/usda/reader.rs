@@ -687,7 +687,7 @@ fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<Mesh
 /// coif's writer would choose for that name anyway, so what coif writes reads back unchanged.
 fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKind {
     let kind = match type_name {
-        "int" | "uint" | "int64" | "uint64" | "uchar" => AttributeKind::Int,
+        "int" | "int2" | "int3" | "int4" | "uint" | "int64" | "uint64" | "uchar" => AttributeKind::Int,
         "bool" => AttributeKind::Bool,
         t if t.starts_with("point3") => AttributeKind::Point,
         t if t.starts_with("normal3") => AttributeKind::Normal,
