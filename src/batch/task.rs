@@ -131,9 +131,9 @@ fn with_overrides(task: &Task, manifest: &Path, error: Error) -> Error {
 /// A task's outputs against the files its groom's stage composes (layers it references or
 /// sublayers), which the manifest's own check cannot see: writing over one would change what
 /// the groom reads, for this task's re-run and for every task reading that stage.
-fn refuse_writing_a_layer(task: &Task, files: &[PathBuf]) -> Result<()> {
+fn refuse_writing_a_layer(task: &Task, layers: &[PathBuf]) -> Result<()> {
     let what = format!("a layer its groom {} composes", task.groom.display());
-    let layers: Vec<(String, &Path)> = files.iter().skip(1).map(|f| (what.clone(), f.as_path())).collect();
+    let layers: Vec<(String, &Path)> = layers.iter().map(|f| (what.clone(), f.as_path())).collect();
     let outputs = all_outputs(task);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
     crate::io::refuse_writing_inputs(&outputs, &layers)
@@ -166,7 +166,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     }
     let selection = crate::io::usda::Selection { time: None, variants: task.variants.clone() };
     let loaded = crate::io::read_groom_selected(&task.groom, &task.import, &selection)?;
-    refuse_writing_a_layer(task, &loaded.files)?;
+    refuse_writing_a_layer(task, loaded.composed_layers())?;
     let groom = &loaded.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
@@ -191,8 +191,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     if let Some(failure) = unsettled.filter(|_| task.require_converged) {
         return Err(Error::NotConverged(format!("task '{}': {failure}", task.name)));
     }
-    Sidecar::record(&task.name, inputs, &outputs, loaded.files.get(1..).unwrap_or_default())?
-        .write(&sidecar)?;
+    Sidecar::record(&task.name, inputs, &outputs, loaded.composed_layers())?.write(&sidecar)?;
     Ok(Outcome::Done { seconds: start.elapsed().as_secs_f64() })
 }
 

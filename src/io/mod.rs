@@ -121,6 +121,13 @@ pub struct Loaded {
     pub files: Vec<std::path::PathBuf>,
 }
 
+impl Loaded {
+    /// The layers a USD stage composes besides the groom's own file (none for other formats).
+    pub fn composed_layers(&self) -> &[std::path::PathBuf] {
+        self.files.get(1..).unwrap_or_default()
+    }
+}
+
 /// Reads a groom file, converts it to metres and Y up, and validates it.
 pub fn read_groom(path: &Path, options: &ImportOptions) -> Result<Loaded> {
     read_groom_selected(path, options, &usda::Selection::default())
