@@ -24,6 +24,9 @@ pub struct SurfaceMesh {
     /// `visible = 0`), as scalp and head meshes often are: still a collider, written back hidden,
     /// left out of previews.
     pub invisible: bool,
+    /// Faces the file made holes (USD `holeIndices`: faces not drawn). Kept and written back to
+    /// USD, left out of previews; they still collide, as hidden meshes do.
+    pub holes: Vec<u32>,
 }
 
 /// Where a mesh primvar's values sit (USD interpolation; Alembic `geoScope`).
@@ -220,6 +223,13 @@ impl SurfaceMesh {
                 self.points.len()
             ));
         }
+        if let Some(i) = self.holes.iter().position(|&face| face as usize >= self.face_counts.len()) {
+            return Err(format!(
+                "hole index {i} is face {}, but the mesh has {} faces",
+                self.holes[i],
+                self.face_counts.len()
+            ));
+        }
         self.primvars.iter().try_for_each(|primvar| primvar.check(self))
     }
 
@@ -244,12 +254,29 @@ impl SurfaceMesh {
 
     /// The faces as triangle fans, in face order.
     pub fn triangles(&self) -> Vec<[u32; 3]> {
+        self.triangles_of(|_| true)
+    }
+
+    /// The faces that are drawn (not [`holes`](Self::holes)) as triangle fans, in face order.
+    pub fn shown_triangles(&self) -> Vec<[u32; 3]> {
+        let mut hole = vec![false; self.face_counts.len()];
+        for &face in &self.holes {
+            if let Some(h) = hole.get_mut(face as usize) {
+                *h = true;
+            }
+        }
+        self.triangles_of(|face| !hole[face])
+    }
+
+    fn triangles_of(&self, keep: impl Fn(usize) -> bool) -> Vec<[u32; 3]> {
         let mut triangles = Vec::with_capacity(self.face_indices.len());
         let mut at = 0usize;
-        for &count in &self.face_counts {
+        for (index, &count) in self.face_counts.iter().enumerate() {
             let face = self.face_indices.get(at..at + count as usize).unwrap_or(&[]);
-            for k in 1..face.len().saturating_sub(1) {
-                triangles.push([face[0], face[k], face[k + 1]]);
+            if keep(index) {
+                for k in 1..face.len().saturating_sub(1) {
+                    triangles.push([face[0], face[k], face[k + 1]]);
+                }
             }
             at += count as usize;
         }
@@ -371,6 +398,7 @@ mod tests {
             face_indices: faces.iter().flatten().copied().collect(),
             primvars: Vec::new(),
             invisible: false,
+            holes: Vec::new(),
         }
     }
 

@@ -1459,3 +1459,49 @@ fn int_tuple_primvars_stay_int_tuples() {
     assert!(converted.status.success(), "{}", stderr(&converted));
     assert_eq!(primvars(&unreal)["groom_cell"]["type"], "float3[]");
 }
+
+/// A mesh's `holeIndices` (faces USD does not draw) were dropped, so a scalp with holes came out
+/// whole and previews drew the holes. They are now written back (pxr reads the same faces as
+/// holes through `.usda` and `.usdc`; `.abc`, whose PolyMesh has none, warns) and previews leave
+/// them out: a render equals the stage without those faces, and differs from it without holes.
+#[test]
+fn mesh_holes_are_kept_and_not_drawn() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two quads side by side behind the hair; the second is a hole.
+    let mesh = |faces: &str, indices: &str, holes: &str| {
+        format!(
+            "def Mesh \"scalp\"\n{{\n int[] faceVertexCounts = [{faces}]\n int[] faceVertexIndices = [{indices}]\n\
+             point3f[] points = [(-10, -1, -5), (0, -1, -5), (0, 9, -5), (-10, 9, -5), (10, -1, -5), (10, 9, -5)]\n{holes}}}\n"
+        )
+    };
+    let stage = |body: &str| {
+        format!(
+            "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\n\
+             def Xform \"groom\"\n{{\n def BasisCurves \"hair\"\n{{\n{}}}\n{body}}}\n",
+            two_curves(0.0)
+        )
+    };
+    let holed = stage(&mesh("4, 4", "0, 1, 2, 3, 1, 4, 5, 2", " int[] holeIndices = [1]\n"));
+    let source = dir.path().join("source.usda");
+    std::fs::write(&source, &holed).unwrap();
+    let holes = |path: &Path| pxr_dump(path, None)["meshes"][0]["holeIndices"].clone();
+    assert_eq!(holes(&source), serde_json::json!([1]), "pxr reads the source's hole");
+    for name in ["out.usda", "out.usdc"] {
+        let to = dir.path().join(name);
+        let converted = coif(&["convert", path_str(&source), path_str(&to)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        assert_eq!(holes(&to), serde_json::json!([1]), "{name}");
+    }
+    let abc = dir.path().join("out.abc");
+    let converted = coif(&["convert", path_str(&source), path_str(&abc)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    assert!(stderr(&converted).contains("1 hole faces are written as faces"), "{}", stderr(&converted));
+
+    let render = |text: &str, name: &str| render_stage(dir.path(), text, name);
+    let with_hole = render(&holed, "holed");
+    assert!(with_hole == render(&stage(&mesh("4", "0, 1, 2, 3", "")), "cut"), "the hole was drawn");
+    assert!(
+        with_hole != render(&stage(&mesh("4, 4", "0, 1, 2, 3, 1, 4, 5, 2", "")), "whole"),
+        "a face is drawn"
+    );
+}

@@ -306,6 +306,7 @@ fn the_grooms_own_mesh_is_drawn_unless_the_head_is_off() {
         face_indices: vec![0, 1, 2, 3],
         primvars: Vec::new(),
         invisible: false,
+        holes: Vec::new(),
     });
     let camera = coif::render::camera::CameraSpec {
         position: Vec3::new(0.0, 0.0, 1.0),

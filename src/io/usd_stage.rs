@@ -494,6 +494,9 @@ fn mesh_prim<'g>(mesh: &'g SurfaceMesh, index: usize, animation: Option<&Animati
         Property::new("faceVertexCounts", "int[]", Value::Default(ints(&mesh.face_counts))),
         Property::new("faceVertexIndices", "int[]", Value::Default(ints(&mesh.face_indices))),
     ];
+    if !mesh.holes.is_empty() {
+        properties.push(Property::new("holeIndices", "int[]", Value::Default(ints(&mesh.holes))));
+    }
     let positions = match animation.filter(|a| !a.meshes.is_empty()) {
         Some(a) => Positions::Frames(a, a.meshes.iter().map(|f| Cow::Borrowed(f[index])).collect()),
         None => Positions::Still(Cow::Borrowed(&mesh.points)),

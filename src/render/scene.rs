@@ -389,7 +389,7 @@ impl<'d> RenderScene<'d> {
                 lo = lo.min(*p);
                 hi = hi.max(*p);
             }
-            mesh_geometries.push(embree.add_triangle_mesh(&mesh.points, &mesh.triangles())?);
+            mesh_geometries.push(embree.add_triangle_mesh(&mesh.points, &mesh.shown_triangles())?);
         }
         if !lo.is_finite() {
             return Err(Error::Usage("render: the groom has no strands to render".into()));

@@ -98,6 +98,7 @@ def dump(path, time=None):
             "path": str(prim.GetPath()),
             "counts": list(mesh.GetFaceVertexCountsAttr().Get(code) or []),
             "indices": list(mesh.GetFaceVertexIndicesAttr().Get(code) or []),
+            "holeIndices": list(mesh.GetHoleIndicesAttr().Get(code) or []),
             "points": floats(points or []),
             "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points or []),
             "orientation": mesh.GetOrientationAttr().Get(),

@@ -273,6 +273,7 @@ impl<'a> CurvesArchive<'a> {
             face_indices,
             primvars: Vec::new(),
             invisible: false,
+            holes: Vec::new(),
         };
         mesh.invisible = self.hidden(path, time)?;
         let arb = object.geom.compound(".arbGeomParams");

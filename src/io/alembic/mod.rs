@@ -89,6 +89,13 @@ pub fn unsupported(groom: &Groom) -> Vec<String> {
             ));
         }
     }
+    for mesh in groom.meshes.iter().filter(|m| !m.holes.is_empty()) {
+        warnings.push(format!(
+            "mesh '{}': Alembic's PolyMesh has no holes; its {} hole faces are written as faces",
+            mesh.path,
+            mesh.holes.len()
+        ));
+    }
     warnings
 }
 

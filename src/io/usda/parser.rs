@@ -1117,6 +1117,7 @@ pub fn wanted(name: &str) -> bool {
             // Meshes (a scalp or head beside the curves).
             | "faceVertexCounts"
             | "faceVertexIndices"
+            | "holeIndices"
             | "orientation"
             | "normals"
             // Cameras (the render's shot).

@@ -379,6 +379,7 @@ impl Walker<'_> {
             face_indices,
             primvars: Vec::new(),
             invisible: false,
+            holes: ints("holeIndices")?.unwrap_or_default(),
         };
         mesh.primvars = mesh_primvars(prim, time).map_err(|(site, m)| at_prim(site, m))?;
         let left_handed = match prim.attribute("orientation").and_then(|a| value_at(a, time)) {
