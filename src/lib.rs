@@ -17,6 +17,7 @@ pub mod info;
 pub mod interact;
 pub mod io;
 pub mod limits;
+pub mod point_attributes;
 pub mod primvar_rates;
 pub mod progress;
 pub mod render;

@@ -189,3 +189,35 @@ fn ogawa_rs_reads_coif_polymesh_as_blenders() {
     let back = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
     assert_eq!(back.meshes, groom.meshes, "coif reads back the mesh it wrote");
 }
+
+/// A groom's `normals` and `velocities` (read from USD curves' own attributes, or Houdini's `N`
+/// and `v`) are written where AbcGeom's curves schema keeps them, `N` and `.velocities` in the
+/// geometry compound, not among the parameters; ogawa-rs reads the velocities back through its
+/// curves schema. (ogawa-rs 0.4.0 looks normals up as `n`, so for them only the name is checked.)
+#[test]
+fn ogawa_rs_finds_normals_and_velocities_where_abcgeom_keeps_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("moving.abc");
+    let mut g = groom(CurveBasis::Linear);
+    let n = g.vertex_count();
+    let velocities: Vec<[f32; 3]> = (0..n).map(|i| [0.1, -0.01 * i as f32, 0.5]).collect();
+    g.set_attribute(Attribute::new("normals", AttributeRate::Vertex, 3, [0.0, 0.0, 1.0].repeat(n)));
+    g.set_attribute(Attribute::new("velocities", AttributeRate::Vertex, 3, velocities.concat()));
+    write_groom(&path, &g).unwrap();
+
+    let mut reader = FileReader::new(std::fs::File::open(&path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let root = archive.load_root_object(&mut reader).unwrap();
+    let curves =
+        root.load_child(0, &mut reader, &archive.indexed_meta_data, &archive.time_samplings).unwrap();
+    let geom = curves.properties().unwrap().load_sub_property(0, &mut reader, &archive).unwrap();
+    let listed = listing(&geom, &mut reader, &archive);
+    let names: Vec<&str> = listed.iter().map(|(name, _)| name.as_str()).collect();
+    assert!(names.contains(&"N") && names.contains(&".velocities"), "{names:?}");
+    let arb = listed.iter().find(|(name, _)| name == ".arbGeomParams").and_then(|(_, c)| c.clone());
+    assert_eq!(arb, Some(vec![attr::COLOR.to_string(), "wetness".to_string()]));
+    let Schema::Curves(schema) = Schema::parse(&curves, &mut reader, &archive).unwrap() else {
+        panic!("ogawa-rs does not see a curves schema");
+    };
+    assert_eq!(schema.load_velocities_sample(0, &mut reader).unwrap(), Some(velocities));
+}

@@ -3,7 +3,7 @@
 mod common;
 use common::*;
 
-use coif::groom::{attr, Attribute, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use coif::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use coif::io::alembic::archive_read::{Archive, Property};
 use coif::io::alembic::{self, AlembicWriteOptions, AnimationWriter, CurvesArchive};
 use coif::io::{read_groom, write_groom, ImportOptions};
@@ -101,6 +101,25 @@ fn animated_round_trip_every_frame_and_one_frame() {
     }
     writer.finish().unwrap();
 
+    // Each frame reads back with the `.velocities` the writer gave it: central differences of
+    // its neighbours at 24 fps (one-sided at the ends).
+    let fps = 24.0f32;
+    let frames: Vec<Groom> = (0..frames.len())
+        .map(|f| {
+            let at = |k: usize| &frames[k].points;
+            let (before, after, scale) = match f {
+                0 => (at(0), at(1), fps),
+                f if f + 1 == frames.len() => (at(f - 1), at(f), fps),
+                f => (at(f - 1), at(f + 1), 0.5 * fps),
+            };
+            let data = before.iter().zip(after).flat_map(|(a, b)| ((*b - *a) * scale).to_array()).collect();
+            let mut expected = frames[f].clone();
+            expected.set_attribute(
+                Attribute::new("velocities", AttributeRate::Vertex, 3, data).with_kind(AttributeKind::Vector),
+            );
+            expected
+        })
+        .collect();
     let bytes = std::fs::read(&path).unwrap();
     let all = alembic::read_all_frames(&bytes, &path, false).unwrap();
     assert_eq!(all, frames);

@@ -1505,3 +1505,185 @@ fn mesh_holes_are_kept_and_not_drawn() {
         "a face is drawn"
     );
 }
+
+/// Linear curves with their own `normals`, `velocities` and `accelerations` (not primvars: where
+/// Houdini's USD export puts `N`, `v` and `accel`): two horizontal strands of five points along
+/// x, whose normals point up, across the strands.
+fn stage_with_point_attributes() -> String {
+    let points: Vec<String> =
+        (0..10).map(|k| format!("({}, 0, {})", 0.02 * (k % 5) as f32, 0.01 * (k / 5) as f32)).collect();
+    let list = |each: &dyn Fn(f32) -> String| (0..10).map(|i| each(i as f32)).collect::<Vec<_>>().join(", ");
+    let normals = list(&|_| "(0, 1, 0)".to_string());
+    let velocities = list(&|i| format!("(0.1, {}, 0)", -0.01 * i));
+    let accelerations = list(&|i| format!("(0, -9.8, {})", 0.5 * i));
+    format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"hair\"\n{{\n\
+         uniform token type = \"linear\"\n int[] curveVertexCounts = [5, 5]\n\
+         point3f[] points = [{}]\n float[] widths = [0.0001] (\n interpolation = \"constant\"\n )\n\
+         normal3f[] normals = [{normals}] (\n interpolation = \"vertex\"\n )\n\
+         vector3f[] velocities = [{velocities}]\n vector3f[] accelerations = [{accelerations}]\n}}\n",
+        points.join(", ")
+    )
+}
+
+/// The curves' own normals, velocities and accelerations were dropped by every conversion with
+/// no warning. They now round-trip through `.usda`, `.usdc` and `.abc` (Alembic `N` and
+/// `.velocities`, accelerations as a parameter) as pxr reads them: values, type, interpolation.
+#[test]
+fn curves_normals_velocities_and_accelerations_survive_conversion() {
+    let dir = tempfile::tempdir().unwrap();
+    // Per-vertex normals with motion, and a normal per curve (`uniform`) alone.
+    let per_curve =
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"guides\"\n{\n\
+         uniform token type = \"linear\"\n int[] curveVertexCounts = [2, 2]\n\
+         point3f[] points = [(0, 0, 0.1), (0.05, 0, 0.1), (0, 0, 0.2), (0.05, 0, 0.2)]\n\
+         normal3f[] normals = [(0, 0.6, 0.8), (0, 1, 0)] (\n interpolation = \"uniform\"\n )\n}\n";
+    for (name, text) in [("moving", stage_with_point_attributes()), ("per_curve", per_curve.to_string())] {
+        let source = dir.path().join(format!("{name}.usda"));
+        std::fs::write(&source, text).unwrap();
+        let expected = pxr_dump(&source, None);
+        assert!(expected["curves"][0]["normals"].is_object(), "the probe reads the source's normals");
+        let (abc, back) =
+            (dir.path().join(format!("{name}.abc")), dir.path().join(format!("{name}_back.usda")));
+        let runs = [
+            (source.clone(), dir.path().join(format!("{name}_out.usda"))),
+            (source.clone(), dir.path().join(format!("{name}_out.usdc"))),
+            (source.clone(), abc.clone()),
+            (abc, back),
+        ];
+        for (from, to) in runs {
+            let converted = coif(&["convert", path_str(&from), path_str(&to)]);
+            assert!(converted.status.success(), "{}", stderr(&converted));
+            if to.extension().unwrap() == "abc" {
+                continue;
+            }
+            let written = pxr_dump(&to, None);
+            let pairs = curves_by_path(&expected).into_iter().zip(curves_by_path(&written));
+            for ((path, source), (written_path, written)) in pairs {
+                let label = format!("{} {path}", to.display());
+                assert_eq!(path, written_path, "{label}");
+                for key in ["velocities", "accelerations"] {
+                    assert_eq!(written[key].is_null(), source[key].is_null(), "{label}: {key}");
+                    if !source[key].is_null() {
+                        assert_eq!(f32s(&written[key]), f32s(&source[key]), "{label}: {key}");
+                    }
+                }
+                assert_eq!(written["normals"]["type"], "normal3f[]", "{label}");
+                assert_eq!(
+                    written["normals"]["interpolation"], source["normals"]["interpolation"],
+                    "{label}"
+                );
+                assert_eq!(
+                    f32s(&written["normals"]["values"]),
+                    f32s(&source["normals"]["values"]),
+                    "{label}"
+                );
+                assert!(written["primvars"].get("normals").is_none(), "{label}: normals also as a primvar");
+            }
+        }
+    }
+    // An empty array is none (pxr reads no velocities from it); a count that fits no point is
+    // bad input naming the prim and the attribute, as for primvars.
+    let one_curve = |extra: &str| {
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\ndef BasisCurves \"c\"\n{{\n\
+             uniform token type = \"linear\"\n int[] curveVertexCounts = [2]\n\
+             point3f[] points = [(0, 0, 0), (0.1, 0, 0)]\n {extra}\n}}\n"
+        )
+    };
+    let (source, out) = (dir.path().join("odd.usda"), dir.path().join("odd_out.usda"));
+    std::fs::write(&source, one_curve("vector3f[] velocities = []")).unwrap();
+    let converted = coif(&["convert", path_str(&source), path_str(&out)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    assert!(pxr_dump(&out, None)["curves"][0]["velocities"].is_null());
+    std::fs::write(&source, one_curve("vector3f[] velocities = [(1, 2, 3)]")).unwrap();
+    let converted = coif(&["convert", path_str(&source), path_str(&out)]);
+    assert_eq!(converted.status.code(), Some(2), "{}", stderr(&converted));
+    assert!(
+        stderr(&converted).contains("prim </c>: velocities: vertex interpolation needs 2 values, found 1"),
+        "{}",
+        stderr(&converted)
+    );
+}
+
+/// Tangent at each vertex of a dump's curves (central differences, one-sided at the ends).
+fn tangents(curves: &Value) -> Vec<glam::Vec3> {
+    let points: Vec<glam::Vec3> = f32s(&curves["points"]).chunks(3).map(glam::Vec3::from_slice).collect();
+    let mut out = Vec::new();
+    let mut start = 0;
+    for count in curves["counts"].as_array().unwrap().iter().map(|c| c.as_u64().unwrap() as usize) {
+        for i in 0..count {
+            let (a, b) = (start + i.saturating_sub(1), start + (i + 1).min(count - 1));
+            out.push((points[b] - points[a]).normalize());
+        }
+        start += count;
+    }
+    out
+}
+
+/// Styling bends the strands: their normals turn with them (still across the curve, the same
+/// length), and the file's velocities and accelerations, the motion of the hair before styling,
+/// are left out with a warning. Control: the file's normals are no longer across the styled
+/// strands. `coif simulate` writes the simulation's own velocities in their place.
+#[test]
+fn moved_strands_carry_their_normals_and_drop_or_renew_their_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("moving.usda");
+    std::fs::write(&source, stage_with_point_attributes()).unwrap();
+    let recipe = dir.path().join("fall.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.3\n").unwrap();
+    let styled = dir.path().join("styled.usda");
+    let run =
+        coif(&["style", path_str(&recipe), "--groom", path_str(&source), "-o", path_str(&styled), "--quiet"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let warnings = stderr(&run);
+    assert!(
+        warnings.contains("'velocities' are left out") && warnings.contains("'accelerations' are left out"),
+        "{warnings}"
+    );
+    let before = pxr_dump(&source, None);
+    let after = pxr_dump(&styled, None);
+    let hair =
+        |dump: &Value| curves_by_path(dump).into_iter().find(|(p, _)| p.ends_with("hair")).unwrap().1.clone();
+    let (before, after) = (hair(&before), hair(&after));
+    assert!(after["velocities"].is_null() && after["accelerations"].is_null());
+    let normals = |c: &Value| -> Vec<glam::Vec3> {
+        f32s(&c["normals"]["values"]).chunks(3).map(glam::Vec3::from_slice).collect()
+    };
+    let (old, new, styled_tangents) = (normals(&before), normals(&after), tangents(&after));
+    let across =
+        |n: &[glam::Vec3]| n.iter().zip(&styled_tangents).map(|(n, t)| n.dot(*t).abs()).fold(0.0, f32::max);
+    eprintln!(
+        "largest |n·t| on the styled strands: carried {:.2e}, the file's {:.3}",
+        across(&new),
+        across(&old)
+    );
+    assert!(
+        across(&old) > 0.1,
+        "the strands should bend enough for the file's normals to stop being across them"
+    );
+    assert!(across(&new) < 1e-3, "carried normals are not across the styled strands");
+    for (a, b) in old.iter().zip(&new) {
+        assert!((a.length() - b.length()).abs() < 1e-5, "a normal changed length: {a} → {b}");
+    }
+
+    // A simulation's output carries its own velocities: close to the motion over the next step.
+    let simulated = |seconds: &str, name: &str| {
+        let out = dir.path().join(name);
+        let run =
+            coif(&["simulate", path_str(&source), path_str(&out), "--seconds", seconds, "--dt", "1/360"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        hair(&pxr_dump(&out, None))
+    };
+    let (now, next) = (simulated("0.1", "a.usda"), simulated(&(0.1 + 1.0 / 360.0).to_string(), "b.usda"));
+    assert!(now["accelerations"].is_null());
+    let points =
+        |c: &Value| -> Vec<glam::Vec3> { f32s(&c["points"]).chunks(3).map(glam::Vec3::from_slice).collect() };
+    let velocities: Vec<glam::Vec3> =
+        f32s(&now["velocities"]).chunks(3).map(glam::Vec3::from_slice).collect();
+    let tip = 4;
+    let stepped = (points(&next)[tip] - points(&now)[tip]) * 360.0;
+    eprintln!("tip velocity written {}, over the next step {stepped}", velocities[tip]);
+    assert!(stepped.length() > 0.01, "the strand falls");
+    assert!(velocities[tip].distance(stepped) < 0.1 * stepped.length(), "{} vs {stepped}", velocities[tip]);
+}

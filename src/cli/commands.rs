@@ -233,6 +233,9 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     };
     let (groom, summary) = simulate(&loaded.groom, &options).map_err(|e| e.in_file(&args.input))?;
     let unsettled = summary.settle.and_then(|settle| settle.shortfall());
+    for warning in &summary.warnings {
+        eprintln!("coif: warning: {warning}");
+    }
     if let Some(shortfall) = unsettled.as_ref().filter(|_| !args.require_converged) {
         eprintln!("coif: warning: {shortfall}");
     }

@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::{Interpolation, Strands};
 use crate::io::usda::names;
-use crate::primvar_rates;
+use crate::{point_attributes, primvar_rates};
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 
 /// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
@@ -651,8 +651,18 @@ fn primvars<'g>(
             None => Value::Default(data(attribute)),
         };
         used.push(name.clone());
-        let property =
-            Property::new(format!("primvars:{name}"), type_name, value).interpolated(interpolation);
+        // The curves' own normals, velocities and accelerations go back where USD keeps them;
+        // velocities and accelerations are per point and take no interpolation.
+        let property = if point_attributes::is_schema_attribute(&name, attribute.rate, attribute.components) {
+            match name.as_str() {
+                point_attributes::NORMALS => {
+                    Property::new(name.clone(), "normal3f[]", value).interpolated(interpolation)
+                }
+                _ => Property::new(name.clone(), "vector3f[]", value),
+            }
+        } else {
+            Property::new(format!("primvars:{name}"), type_name, value).interpolated(interpolation)
+        };
         primvars.push(Property { element_size, ..property });
     }
     (primvars, warnings)

@@ -49,6 +49,8 @@ pub struct SimulateSummary {
     pub rest: &'static str,
     pub max_speed: f32,
     pub energy: Energy,
+    /// The file's point attributes the simulation could not carry (`point_attributes`).
+    pub warnings: Vec<String>,
 }
 
 /// Parses a time step given as seconds (`0.0027`) or a fraction (`1/360`).
@@ -102,6 +104,8 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
     sim.check_finite(None)?;
     let mut out = groom.clone();
     sim.write_to_groom(&mut out);
+    // The simulation's own velocities replace the file's; its accelerations are not kept.
+    let warnings = crate::point_attributes::follow_new_shape(groom, &mut out, Some(sim.rods().velocities()));
     let summary = SimulateSummary {
         steps: sim.steps_taken(),
         seconds: steps as f32 * options.params.dt,
@@ -109,6 +113,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
         rest,
         max_speed: sim.max_speed(),
         energy: sim.energy(),
+        warnings,
     };
     Ok((out, summary))
 }

@@ -181,6 +181,8 @@ pub fn style_part(whole: &Groom, part: &Groom, recipe: &Recipe, options: &StyleO
         style_strands(groom, recipe, options, frame, WaterSnapshots::Drop)?
     };
     styled.groom.meshes.clone_from(&groom.meshes);
+    let warnings = crate::point_attributes::follow_new_shape(groom, &mut styled.groom, None);
+    styled.report.warnings.extend(warnings);
     Ok(styled)
 }
 

@@ -77,6 +77,16 @@ def dump(path, time=None):
             "extent": floats(curves.GetExtentAttr().Get(code) or []),
             "computedExtent": floats(UsdGeom.Boundable.ComputeExtentFromPlugins(curves, code) or []),
             "primvars": {},
+            # The curves' own normals (an orientation), velocities and accelerations (motion).
+            "normals": {
+                "interpolation": curves.GetNormalsInterpolation(),
+                "type": str(curves.GetNormalsAttr().GetTypeName()),
+                "values": floats(curves.GetNormalsAttr().Get(code) or []),
+            } if curves.GetNormalsAttr().HasAuthoredValue() else None,
+            "velocities": floats(curves.GetVelocitiesAttr().Get(code) or [])
+            if curves.GetVelocitiesAttr().HasAuthoredValue() else None,
+            "accelerations": floats(curves.GetAccelerationsAttr().Get(code) or [])
+            if curves.GetAccelerationsAttr().HasAuthoredValue() else None,
         }
         for primvar in UsdGeom.PrimvarsAPI(prim).GetAuthoredPrimvars():
             value = primvar.ComputeFlattened(code)

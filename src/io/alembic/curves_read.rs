@@ -11,8 +11,8 @@ use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::Interpolation;
-use crate::primvar_rates;
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
+use crate::{point_attributes, primvar_rates};
 
 /// Alembic's polygon-mesh schema (a scalp or head beside the curves).
 pub const POLYMESH_SCHEMA: &str = "AbcGeom_PolyMesh_v1";
@@ -525,8 +525,12 @@ impl<'a> CurvesArchive<'a> {
             groom.root_uvs =
                 Some(param.to_strand_roots(&strands).chunks_exact(2).map(|c| [c[0], c[1]]).collect());
         }
-        for member in arb.map(|c| c.members.as_slice()).unwrap_or(&[]) {
-            let name = member.name();
+        // The curves' own normals and velocities (Houdini's `N` and `v`), then the parameters.
+        let own = [("N", point_attributes::NORMALS), (".velocities", point_attributes::VELOCITIES)]
+            .into_iter()
+            .filter_map(|(property, name)| object.geom.get(property).map(|p| (p, name)));
+        let members = arb.map(|c| c.members.as_slice()).unwrap_or(&[]);
+        for (member, name) in own.chain(members.iter().map(|m| (m, m.name()))) {
             if name == epic::WIDTH || name == epic::ROOT_UV {
                 continue;
             }

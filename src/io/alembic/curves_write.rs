@@ -16,8 +16,8 @@ use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
 use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::{Interpolation, Strands};
-use crate::primvar_rates;
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
+use crate::{point_attributes, primvar_rates};
 
 pub const CURVE_SCHEMA: &str = "AbcGeom_Curve_v2";
 pub const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
@@ -622,29 +622,63 @@ fn add_curves<W: Write + Seek>(
     for (attribute, _) in &part.attributes {
         sources.push((param_name(unreal, &attribute.name), ParamSource::Attribute(attribute.name.clone())));
     }
-    let mut params = Vec::new();
-    if !sources.is_empty() {
-        let arb = archive.add_compound(geom, ".arbGeomParams", MetaData::new());
-        for (name, source) in sources {
-            let (pod, extent, rate, interp) = match &source {
-                ParamSource::Widths => (Pod::F32, 1, AttributeRate::Vertex, ""),
-                ParamSource::StrandIds | ParamSource::Guides | ParamSource::GroupId(_) => {
-                    (Pod::I32, 1, AttributeRate::Strand, "")
-                }
-                ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
-                ParamSource::Attribute(a) => {
-                    let (a, _) = part.attribute(a).expect("listed from the group");
-                    let pod = pod(a.kind, &a.name);
-                    (pod, a.components as u8, a.rate, interpretation(a.kind, &a.name, a.components))
-                }
-            };
-            let scope = match source {
-                ParamSource::Widths => width_scope,
-                _ => scope(rate),
-            };
-            let metadata = geom_param_metadata(scope, pod, extent, interp);
-            params.push((archive.add_array(arb, &name, metadata, pod, extent, ts), source));
+    // The curves' own normals and velocities go where AbcGeom keeps them, `N` and `.velocities`
+    // (animated output's `.velocities` come from the frames instead).
+    let own_property = |source: &ParamSource| -> Option<&'static str> {
+        let ParamSource::Attribute(name) = source else { return None };
+        let (a, _) = part.attribute(name)?;
+        match name.as_str() {
+            point_attributes::NORMALS if a.components == 3 => Some("N"),
+            point_attributes::VELOCITIES if a.components == 3 && a.rate == AttributeRate::Vertex => {
+                Some(".velocities")
+            }
+            _ => None,
         }
+    };
+    sources.retain(|(_, source)| !(with_velocities && own_property(source) == Some(".velocities")));
+    let mut params = Vec::new();
+    let mut arb = None;
+    for (name, source) in sources {
+        let own = own_property(&source);
+        let (pod, extent, rate, interp) = match &source {
+            ParamSource::Widths => (Pod::F32, 1, AttributeRate::Vertex, ""),
+            ParamSource::StrandIds | ParamSource::Guides | ParamSource::GroupId(_) => {
+                (Pod::I32, 1, AttributeRate::Strand, "")
+            }
+            ParamSource::RootUvs => (Pod::F32, 2, AttributeRate::Strand, "vector"),
+            ParamSource::Attribute(a) => {
+                let (a, _) = part.attribute(a).expect("listed from the group");
+                let pod = pod(a.kind, &a.name);
+                (pod, a.components as u8, a.rate, interpretation(a.kind, &a.name, a.components))
+            }
+        };
+        let scope = match source {
+            ParamSource::Widths => width_scope,
+            _ => scope(rate),
+        };
+        let id = match own {
+            Some(".velocities") => {
+                let metadata = MetaData::new().with("interpretation", "vector");
+                archive.add_array(geom, ".velocities", metadata, pod, extent, ts)
+            }
+            Some(own) => {
+                let metadata = geom_param_metadata(scope, pod, extent, "normal");
+                archive.add_array(geom, own, metadata, pod, extent, ts)
+            }
+            None => {
+                let arb =
+                    *arb.get_or_insert_with(|| archive.add_compound(geom, ".arbGeomParams", MetaData::new()));
+                archive.add_array(
+                    arb,
+                    &name,
+                    geom_param_metadata(scope, pod, extent, interp),
+                    pod,
+                    extent,
+                    ts,
+                )
+            }
+        };
+        params.push((id, source));
     }
     let velocities = with_velocities.then(|| {
         archive.add_array(

@@ -1113,6 +1113,8 @@ pub fn wanted(name: &str) -> bool {
             | "wrap"
             | "purpose"
             | "visibility"
+            | "velocities"
+            | "accelerations"
             | "xformOpOrder"
             // Meshes (a scalp or head beside the curves).
             | "faceVertexCounts"

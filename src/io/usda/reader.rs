@@ -13,8 +13,8 @@ use crate::groom::{
 };
 use crate::groups::Interpolation;
 use crate::io::{ImportOptions, UpAxis};
-use crate::primvar_rates;
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
+use crate::{point_attributes, primvar_rates};
 
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
 const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
@@ -541,26 +541,37 @@ impl Walker<'_> {
             element_sized: Vec::new(),
             width_interpolation,
         };
-        let primvar_names: Vec<String> = prim
+        // Primvars, and the curves' own `normals`, `velocities` and `accelerations` read as the
+        // attributes of those names (`primvars:normals` wins over `normals`, as in USD).
+        let mut primvar_names: Vec<(String, String)> = prim
             .attributes
             .iter()
             .filter_map(|a| a.name.strip_prefix("primvars:"))
             .filter(|n| !n.ends_with(":indices"))
-            .map(str::to_string)
+            .map(|n| (format!("primvars:{n}"), n.to_string()))
             .collect();
-        for name in primvar_names {
+        for name in point_attributes::SCHEMA_NAMES {
+            if prim.attribute(name).is_some() && primvar_names.iter().all(|(_, n)| n != name) {
+                primvar_names.push((name.to_string(), name.to_string()));
+            }
+        }
+        for (full_name, name) in primvar_names {
+            let is_primvar = full_name.starts_with("primvars:");
             let indices = prim
                 .attribute(&format!("primvars:{name}:indices"))
+                .filter(|_| is_primvar)
                 .and_then(|a| value_at(a, time))
                 .map(|v| v.to_f64());
-            let attr = prim.attributes.iter_mut().find(|a| a.name == format!("primvars:{name}")).unwrap();
+            let attr = prim.attributes.iter_mut().find(|a| a.name == full_name).unwrap();
             let site = attr.site;
             let type_name = attr.type_name.trim_end_matches("[]").to_string();
-            let interpolation = attr.interpolation.clone().unwrap_or_else(|| "constant".into());
+            // USD's fallbacks: `constant` for primvars; the others are per point.
+            let fallback = if is_primvar { "constant" } else { "vertex" };
+            let interpolation = attr.interpolation.clone().unwrap_or_else(|| fallback.into());
             let (kind_components, element_size) =
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
             let Some(value) = take_value(attr, time) else { continue };
-            let value = self.read(value).map_err(|m| at_prim(site, format!("primvars:{name}: {m}")))?;
+            let value = self.read(value).map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
             // Strand ids one per curve, as integers: through `f32` ids past 2^24 would round.
             if let (names::GROOM_ID, "uniform", None, Value::Int(ids)) =
                 (name.as_str(), interpolation.as_str(), &indices, &value)
@@ -574,6 +585,9 @@ impl Walker<'_> {
                 }
             }
             let Some(mut values) = value.into_f32() else { continue }; // strings, tokens: not groom data
+            if !is_primvar && values.is_empty() {
+                continue; // an empty `velocities` or `normals`: none, as pxr reads it
+            }
             let components = kind_components * element_size.max(1) as usize;
             if components > 4 {
                 continue; // the groom model carries at most 4 components per element
@@ -586,7 +600,7 @@ impl Walker<'_> {
             }
             let (rate, data) = layout
                 .resolve(values, components, &interpolation)
-                .map_err(|m| at_prim(site, format!("primvars:{name}: {m}")))?;
+                .map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
             match (name.as_str(), rate, components) {
                 (names::ST, AttributeRate::Strand, 2) => {
                     curves.root_uvs = Some(data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());

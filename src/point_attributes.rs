@@ -1,0 +1,98 @@
+//! The curves' own per-point attributes beside their primvars: `normals` (which way a ribbon or
+//! flat hair faces: USD `normals`, Alembic `N`), `velocities` (motion blur: USD `velocities`,
+//! Alembic `.velocities`) and `accelerations` (USD `accelerations`). Files keep them as
+//! attributes of the points, not as primvars; a groom keeps them as attributes of these names,
+//! and the writers put them back where they came from.
+//!
+//! They describe the points they were read with. When styling or a simulation moves the points,
+//! [`follow_new_shape`] carries them onto the new shape: each normal turns with its curve, by the
+//! smallest rotation taking the old tangent at its vertex to the new one (so a normal across the
+//! curve stays across it, and a twisted ribbon keeps its twist), and motion that no longer holds
+//! is left out.
+use glam::{Quat, Vec3};
+
+use crate::groom::{AttributeRate, Groom};
+
+pub const NORMALS: &str = "normals";
+pub const VELOCITIES: &str = "velocities";
+pub const ACCELERATIONS: &str = "accelerations";
+
+/// The point attributes of USD curves that a groom carries under the same names.
+pub const SCHEMA_NAMES: [&str; 3] = [NORMALS, VELOCITIES, ACCELERATIONS];
+
+/// Whether a groom attribute is written as the curves' own attribute of its name rather than as
+/// a primvar: three components, one per point (normals may also be one per curve).
+pub fn is_schema_attribute(name: &str, rate: AttributeRate, components: usize) -> bool {
+    components == 3
+        && match name {
+            NORMALS => true,
+            VELOCITIES | ACCELERATIONS => rate == AttributeRate::Vertex,
+            _ => false,
+        }
+}
+
+/// What a moved groom's point attributes become once its points are `after.points`: normals
+/// turn with their curves (`before` is the groom as it was, with the same strands; where its
+/// vertices differ, a resampled groom, each normal is made perpendicular to its new tangent
+/// instead); `velocities` are replaced by `motion` (the simulation's, one per point) or, with
+/// none, left out, as are `accelerations`. Returns a warning for each attribute left out.
+pub fn follow_new_shape(before: &Groom, after: &mut Groom, motion: Option<&[Vec3]>) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let same_vertices = before.strand_offsets == after.strand_offsets;
+    let normals = after.attribute(NORMALS).is_some_and(|a| a.components == 3);
+    if let Some(mut normals) = normals.then(|| after.remove_attribute(NORMALS)).flatten() {
+        let tangent = |groom: &Groom, strand: usize, vertex: usize| {
+            let points = groom.strand_points(strand);
+            let (a, b) = (vertex.saturating_sub(1), (vertex + 1).min(points.len().saturating_sub(1)));
+            (points[b] - points[a]).normalize_or_zero()
+        };
+        for strand in 0..after.strand_count() {
+            let range = after.strand_range(strand);
+            let elements: Vec<(usize, usize)> = match normals.rate {
+                AttributeRate::Vertex => range.clone().map(|i| (i, i - range.start)).collect(),
+                AttributeRate::Strand => vec![(strand, 0)],
+            };
+            for (element, vertex) in elements {
+                let new = tangent(after, strand, vertex);
+                let value = &mut normals.data[3 * element..3 * element + 3];
+                let n = Vec3::from_slice(value);
+                let turned = if same_vertices {
+                    let old = tangent(before, strand, vertex);
+                    if old == Vec3::ZERO || new == Vec3::ZERO {
+                        n
+                    } else {
+                        Quat::from_rotation_arc(old, new) * n
+                    }
+                } else {
+                    let across = n - new * n.dot(new);
+                    across.normalize_or(n) * n.length()
+                };
+                value.copy_from_slice(&turned.to_array());
+            }
+        }
+        after.set_attribute(normals);
+    }
+    match (motion, after.attribute(VELOCITIES).is_some()) {
+        (Some(velocities), true) => {
+            let data = velocities.iter().flat_map(|v| v.to_array()).collect();
+            after.set_attribute(
+                crate::groom::Attribute::new(VELOCITIES, AttributeRate::Vertex, 3, data)
+                    .with_kind(crate::groom::AttributeKind::Vector),
+            );
+        }
+        (None, true) => {
+            after.remove_attribute(VELOCITIES);
+            warnings.push(format!(
+                "the file's '{VELOCITIES}' are left out: they were the motion of the hair before styling, \
+                 and the styled hair is at rest"
+            ));
+        }
+        _ => {}
+    }
+    if after.remove_attribute(ACCELERATIONS).is_some() {
+        warnings.push(format!(
+            "the file's '{ACCELERATIONS}' are left out: they were the motion of the hair before it moved"
+        ));
+    }
+    warnings
+}
