@@ -562,6 +562,11 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
                                 data.extend_from_slice(&a.data[run.start * components..run.end * components])
                             }
                             (AttributeRate::Strand, AttributeRate::Vertex) => {
+                                // Writers give it back one per curve while the values allow.
+                                let group = &mut out.groups[map[group_index] as usize];
+                                if group.interpolation(name).is_none() {
+                                    group.interpolations.push((name.to_string(), Interpolation::Uniform));
+                                }
                                 for s in run {
                                     let value = &a.data[s * components..(s + 1) * components];
                                     (0..groom.strand_range(s).len())

@@ -1460,52 +1460,6 @@ fn int_tuple_primvars_stay_int_tuples() {
     assert_eq!(primvars(&unreal)["groom_cell"]["type"], "float3[]");
 }
 
-/// A mesh's `holeIndices` (faces USD does not draw) were dropped, so a scalp with holes came out
-/// whole and previews drew the holes. They are now written back (pxr reads the same faces as
-/// holes through `.usda` and `.usdc`; `.abc`, whose PolyMesh has none, warns) and previews leave
-/// them out: a render equals the stage without those faces, and differs from it without holes.
-#[test]
-fn mesh_holes_are_kept_and_not_drawn() {
-    let dir = tempfile::tempdir().unwrap();
-    // Two quads side by side behind the hair; the second is a hole.
-    let mesh = |faces: &str, indices: &str, holes: &str| {
-        format!(
-            "def Mesh \"scalp\"\n{{\n int[] faceVertexCounts = [{faces}]\n int[] faceVertexIndices = [{indices}]\n\
-             point3f[] points = [(-10, -1, -5), (0, -1, -5), (0, 9, -5), (-10, 9, -5), (10, -1, -5), (10, 9, -5)]\n{holes}}}\n"
-        )
-    };
-    let stage = |body: &str| {
-        format!(
-            "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\n\
-             def Xform \"groom\"\n{{\n def BasisCurves \"hair\"\n{{\n{}}}\n{body}}}\n",
-            two_curves(0.0)
-        )
-    };
-    let holed = stage(&mesh("4, 4", "0, 1, 2, 3, 1, 4, 5, 2", " int[] holeIndices = [1]\n"));
-    let source = dir.path().join("source.usda");
-    std::fs::write(&source, &holed).unwrap();
-    let holes = |path: &Path| pxr_dump(path, None)["meshes"][0]["holeIndices"].clone();
-    assert_eq!(holes(&source), serde_json::json!([1]), "pxr reads the source's hole");
-    for name in ["out.usda", "out.usdc"] {
-        let to = dir.path().join(name);
-        let converted = coif(&["convert", path_str(&source), path_str(&to)]);
-        assert!(converted.status.success(), "{}", stderr(&converted));
-        assert_eq!(holes(&to), serde_json::json!([1]), "{name}");
-    }
-    let abc = dir.path().join("out.abc");
-    let converted = coif(&["convert", path_str(&source), path_str(&abc)]);
-    assert!(converted.status.success(), "{}", stderr(&converted));
-    assert!(stderr(&converted).contains("1 hole faces are written as faces"), "{}", stderr(&converted));
-
-    let render = |text: &str, name: &str| render_stage(dir.path(), text, name);
-    let with_hole = render(&holed, "holed");
-    assert!(with_hole == render(&stage(&mesh("4", "0, 1, 2, 3", "")), "cut"), "the hole was drawn");
-    assert!(
-        with_hole != render(&stage(&mesh("4, 4", "0, 1, 2, 3, 1, 4, 5, 2", "")), "whole"),
-        "a face is drawn"
-    );
-}
-
 /// Linear curves with their own `normals`, `velocities` and `accelerations` (not primvars: where
 /// Houdini's USD export puts `N`, `v` and `accel`): two horizontal strands of five points along
 /// x, whose normals point up, across the strands.
@@ -1686,4 +1640,91 @@ fn moved_strands_carry_their_normals_and_drop_or_renew_their_motion() {
     eprintln!("tip velocity written {}, over the next step {stepped}", velocities[tip]);
     assert!(stepped.length() > 0.01, "the strand falls");
     assert!(velocities[tip].distance(stepped) < 0.1 * stepped.length(), "{} vs {stepped}", velocities[tip]);
+}
+
+/// A mesh's `holeIndices` (faces USD does not draw) were dropped, so a scalp with holes came out
+/// whole and previews drew the holes. They are now written back (pxr reads the same faces as
+/// holes through `.usda` and `.usdc`; `.abc`, whose PolyMesh has none, warns) and previews leave
+/// them out: a render equals the stage without those faces, and differs from it without holes.
+#[test]
+fn mesh_holes_are_kept_and_not_drawn() {
+    let dir = tempfile::tempdir().unwrap();
+    // Two quads side by side behind the hair; the second is a hole.
+    let mesh = |faces: &str, indices: &str, holes: &str| {
+        format!(
+            "def Mesh \"scalp\"\n{{\n int[] faceVertexCounts = [{faces}]\n int[] faceVertexIndices = [{indices}]\n\
+             point3f[] points = [(-10, -1, -5), (0, -1, -5), (0, 9, -5), (-10, 9, -5), (10, -1, -5), (10, 9, -5)]\n{holes}}}\n"
+        )
+    };
+    let stage = |body: &str| {
+        format!(
+            "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\n\
+             def Xform \"groom\"\n{{\n def BasisCurves \"hair\"\n{{\n{}}}\n{body}}}\n",
+            two_curves(0.0)
+        )
+    };
+    let holed = stage(&mesh("4, 4", "0, 1, 2, 3, 1, 4, 5, 2", " int[] holeIndices = [1]\n"));
+    let source = dir.path().join("source.usda");
+    std::fs::write(&source, &holed).unwrap();
+    let holes = |path: &Path| pxr_dump(path, None)["meshes"][0]["holeIndices"].clone();
+    assert_eq!(holes(&source), serde_json::json!([1]), "pxr reads the source's hole");
+    for name in ["out.usda", "out.usdc"] {
+        let to = dir.path().join(name);
+        let converted = coif(&["convert", path_str(&source), path_str(&to)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        assert_eq!(holes(&to), serde_json::json!([1]), "{name}");
+    }
+    let abc = dir.path().join("out.abc");
+    let converted = coif(&["convert", path_str(&source), path_str(&abc)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    assert!(stderr(&converted).contains("1 hole faces are written as faces"), "{}", stderr(&converted));
+
+    let render = |text: &str, name: &str| render_stage(dir.path(), text, name);
+    let with_hole = render(&holed, "holed");
+    assert!(with_hole == render(&stage(&mesh("4", "0, 1, 2, 3", "")), "cut"), "the hole was drawn");
+    assert!(
+        with_hole != render(&stage(&mesh("4, 4", "0, 1, 2, 3, 1, 4, 5, 2", "")), "whole"),
+        "a face is drawn"
+    );
+}
+
+/// An attribute one prim gives per curve (or once) and another per vertex is kept per vertex in
+/// the merged groom; it was written back per vertex on every prim. Each prim now gets its own
+/// interpolation back while its values allow it (pxr: type, interpolation, flattened values),
+/// through `.usda` and `.usdc`.
+#[test]
+fn per_curve_and_constant_primvars_merged_with_per_vertex_ones_keep_their_interpolation() {
+    let dir = tempfile::tempdir().unwrap();
+    let prim = |name: &str, z: f32, primvar: &str| {
+        format!(
+            "def BasisCurves \"{name}\"\n{{\n uniform token type = \"linear\"\n int[] curveVertexCounts = [2, 3]\n\
+             point3f[] points = [(0, 0, {z}), (0.1, 0, {z}), (0, 0.1, {z}), (0.1, 0.1, {z}), (0.2, 0.1, {z})]\n{primvar}}}\n"
+        )
+    };
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n{}{}{}",
+        prim("vertex", 0.0, " float3[] primvars:foo = [(1,2,3), (4,5,6), (7,8,9), (1,1,1), (2,2,2)] (\n interpolation = \"vertex\"\n )\n"),
+        prim("uniform", 0.1, " float3[] primvars:foo = [(7,8,9), (3,2,1)] (\n interpolation = \"uniform\"\n )\n"),
+        prim("constant", 0.2, " float3[] primvars:foo = [(5,5,5)] (\n interpolation = \"constant\"\n )\n"),
+    );
+    let source = dir.path().join("mixed.usda");
+    std::fs::write(&source, text).unwrap();
+    let foo = |path: &Path| -> Vec<(String, Value)> {
+        curves_by_path(&pxr_dump(path, None))
+            .into_iter()
+            .map(|(p, c)| (p, c["primvars"]["foo"].clone()))
+            .collect()
+    };
+    let expected = foo(&source);
+    for name in ["out.usda", "out.usdc"] {
+        let to = dir.path().join(name);
+        let converted = coif(&["convert", path_str(&source), path_str(&to)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        for ((path, source), (_, written)) in expected.iter().zip(foo(&to)) {
+            for key in ["type", "interpolation"] {
+                assert_eq!(written[key], source[key], "{name} {path}: {key}");
+            }
+            assert_eq!(f32s(&written["values"]), f32s(&source["values"]), "{name} {path}");
+        }
+    }
 }

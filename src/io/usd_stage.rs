@@ -28,8 +28,8 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::{Interpolation, Strands};
 use crate::io::usda::names;
-use crate::{point_attributes, primvar_rates};
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
+use crate::{point_attributes, primvar_rates};
 
 /// Where a groom without a group table goes: `/Groom` (Xform) holding the `Strands` curves.
 pub const DEFAULT_PRIM_PATH: &str = "/Groom/Strands";
@@ -620,11 +620,25 @@ fn primvars<'g>(
         let sampled = animation.filter(|a| a.attribute(0, &attribute.name).is_some());
         // The file's own interpolation where the values still fit it (one value for the prim;
         // varying = vertex on linear and pinned curves); else the rate's.
+        // (Per-curve and constant values made per vertex to merge with another group's
+        // per-vertex ones go back as they came while every strand's vertices still agree.)
+        let components = attribute.components;
+        let all_equal = |values: &[f32]| values.chunks_exact(components).all(|v| v == &values[..v.len()]);
         let fits = |interpolation| match (interpolation, attribute.rate) {
             (Interpolation::Constant, AttributeRate::Strand) => {
-                let values = strands.per_strand(&attribute.data, attribute.components);
-                sampled.is_none()
-                    && values.chunks_exact(attribute.components).all(|v| v == &values[..v.len()])
+                sampled.is_none() && all_equal(&strands.per_strand(&attribute.data, components))
+            }
+            (Interpolation::Constant, AttributeRate::Vertex) => {
+                sampled.is_none() && all_equal(&strands.per_vertex(groom, &attribute.data, components))
+            }
+            (Interpolation::Uniform, AttributeRate::Vertex) => {
+                let values = strands.per_vertex(groom, &attribute.data, components);
+                let mut runs = strands.counts(groom).into_iter().scan(0, |at, count| {
+                    let run = *at..*at + count as usize * components;
+                    *at = run.end;
+                    Some(run)
+                });
+                sampled.is_none() && runs.all(|run| all_equal(&values[run]))
             }
             (Interpolation::Varying, AttributeRate::Vertex) => {
                 group.basis == CurveBasis::Linear
@@ -638,10 +652,13 @@ fn primvars<'g>(
             (None, AttributeRate::Vertex) => "vertex",
             (None, AttributeRate::Strand) => "uniform",
         };
-        let one_value = interpolation == "constant";
+        let take = match (interpolation, attribute.rate) {
+            ("constant", _) => Take::First,
+            ("uniform", AttributeRate::Vertex) => Take::EachStrandsFirst,
+            _ => Take::Every,
+        };
         let flat = element_size.is_some();
-        let data =
-            |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name, one_value, flat);
+        let data = |attribute: &'g Attribute| primvar_data(groom, strands, attribute, type_name, take, flat);
         let value = match sampled {
             Some(a) => Value::TimeSamples(
                 (0..a.points.len())
@@ -668,25 +685,45 @@ fn primvars<'g>(
     (primvars, warnings)
 }
 
-/// A group's values of an attribute, as `type_name` holds them.
-/// `one_value`: only the first strand's (a `constant` primvar). `flat`: as a scalar array (its
+/// Which of a group's values of an attribute a primvar holds.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Take {
+    Every,
+    /// The first element's (a `constant` primvar).
+    First,
+    /// Each strand's first vertex's (a `uniform` primvar of per-vertex values).
+    EachStrandsFirst,
+}
+
+/// A group's values of an attribute, as `type_name` holds them. `flat`: as a scalar array (its
 /// components are the `elementSize`).
 fn primvar_data<'g>(
     groom: &Groom,
     strands: &Strands,
     attribute: &'g Attribute,
     type_name: &str,
-    one_value: bool,
+    take: Take,
     flat: bool,
 ) -> Data<'g> {
+    let components = attribute.components;
     let mut values = match attribute.rate {
-        AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, attribute.components),
-        AttributeRate::Strand => strands.per_strand(&attribute.data, attribute.components),
+        AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, components),
+        AttributeRate::Strand => strands.per_strand(&attribute.data, components),
     };
-    if one_value {
-        values.to_mut().truncate(attribute.components);
+    match take {
+        Take::Every => {}
+        Take::First => values.to_mut().truncate(components),
+        Take::EachStrandsFirst => {
+            let mut at = 0;
+            let firsts = strands.counts(groom).into_iter().flat_map(|count| {
+                let first = at;
+                at += count as usize * components;
+                values[first..first + components].to_vec()
+            });
+            values = Cow::Owned(firsts.collect());
+        }
     }
-    let components = if flat { 1 } else { attribute.components };
+    let components = if flat { 1 } else { components };
     match attribute.kind {
         // Bool tuples have no USD type: they go as floats (see `usd_type`).
         AttributeKind::Int if type_name.starts_with("int") => {
