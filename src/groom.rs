@@ -314,12 +314,14 @@ impl Groom {
         }
     }
 
-    /// Scales all positions and widths (unit conversion at import/export).
+    /// Scales all positions and widths (unit conversion at import/export), and the attributes
+    /// that are positions or vectors (`rest`, velocities) with them.
     pub fn scale(&mut self, factor: f32) {
         self.points.iter_mut().for_each(|p| *p *= factor);
         self.widths.iter_mut().for_each(|w| *w *= factor);
         let scale = glam::DMat4::from_scale(glam::DVec3::splat(factor as f64));
         self.meshes.iter_mut().for_each(|m| m.transform(scale));
+        crate::io::transform_attributes(&mut self.attributes, scale);
     }
 
     /// Checks every invariant of the model; the first violation is returned.

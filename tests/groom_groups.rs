@@ -1728,3 +1728,32 @@ fn per_curve_and_constant_primvars_merged_with_per_vertex_ones_keep_their_interp
         }
     }
 }
+
+/// Velocities follow the points' units: `--unreal` Alembic (centimetres) held them in metres per
+/// second beside points in centimetres, and a file read with `--units` kept them unscaled. In
+/// the file they are now 100× the stage's, as the points are, and read back as the stage's.
+#[test]
+fn velocities_follow_the_points_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("moving.usda");
+    std::fs::write(&source, stage_with_point_attributes()).unwrap();
+    let (unreal, raw, back) =
+        (dir.path().join("unreal.abc"), dir.path().join("raw.usda"), dir.path().join("back.usda"));
+    for args in [
+        vec!["convert", "--unreal", path_str(&source), path_str(&unreal)],
+        vec!["convert", "--units", "1", path_str(&unreal), path_str(&raw)],
+        vec!["convert", path_str(&unreal), path_str(&back)],
+    ] {
+        let converted = coif(&args);
+        assert!(converted.status.success(), "{args:?}: {}", stderr(&converted));
+    }
+    let hair = |path: &Path| pxr_dump(path, None)["curves"][0].clone();
+    let (source, raw, back) = (hair(&source), hair(&raw), hair(&back));
+    for key in ["points", "velocities", "accelerations"] {
+        let (s, r, b) = (f32s(&source[key]), f32s(&raw[key]), f32s(&back[key]));
+        for ((s, r), b) in s.iter().zip(&r).zip(&b) {
+            assert!((r - 100.0 * s).abs() <= 1e-4 * (1.0 + r.abs()), "{key}: {r} in the file for {s}");
+            assert!((b - s).abs() <= 1e-6 * (1.0 + s.abs()), "{key}: {b} read back for {s}");
+        }
+    }
+}

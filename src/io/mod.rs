@@ -301,7 +301,10 @@ pub(crate) fn transform_values(
 
 /// How 3-vector data follows the points from file space to coif's: by its kind, or for plain
 /// float3 data by its name; `None`: not at all.
-fn direction_kind(kind: crate::groom::AttributeKind, name: &str) -> Option<crate::groom::AttributeKind> {
+pub(crate) fn direction_kind(
+    kind: crate::groom::AttributeKind,
+    name: &str,
+) -> Option<crate::groom::AttributeKind> {
     use crate::groom::AttributeKind;
     match kind {
         AttributeKind::Point | AttributeKind::Normal | AttributeKind::Vector => Some(kind),

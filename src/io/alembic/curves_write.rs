@@ -1003,8 +1003,11 @@ fn param_bytes<'g>(
         }
         ParamSource::Attribute(name) => {
             let (a, data) = part.attribute(name).expect("layout is fixed by the first frame");
-            // Rest positions are positions: they follow the unit change.
-            let factor = if name == "rest" { scale } else { 1.0 };
+            // Positions (`rest`) and vectors (velocities) follow the unit change.
+            let factor = match crate::io::direction_kind(a.kind, name) {
+                Some(AttributeKind::Point | AttributeKind::Vector) if a.components == 3 => scale,
+                _ => 1.0,
+            };
             let elements = (data.len() / a.components.max(1)) as u64;
             match pod(a.kind, name) {
                 Pod::I32 => {

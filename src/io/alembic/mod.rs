@@ -38,11 +38,7 @@ fn format_error(path: &Path) -> impl Fn(ogawa::OgawaError) -> Error + '_ {
 
 /// Converts a groom read from a file in Epic's centimetres to metres.
 fn centimetres_to_metres(groom: &mut Groom) {
-    let factor = 1.0 / curves_write::epic::UNITS_PER_METRE;
-    groom.scale(factor);
-    if let Some(rest) = groom.attribute_mut("rest") {
-        rest.data.iter_mut().for_each(|v| *v *= factor);
-    }
+    groom.scale(1.0 / curves_write::epic::UNITS_PER_METRE);
 }
 
 /// Reads an Alembic file's curves at frame number `frame` of the file's own timeline (time
