@@ -627,12 +627,13 @@ fn add_curves<W: Write + Seek>(
     let own_property = |source: &ParamSource| -> Option<&'static str> {
         let ParamSource::Attribute(name) = source else { return None };
         let (a, _) = part.attribute(name)?;
+        if !point_attributes::is_schema_attribute(name, a.rate, a.components) {
+            return None;
+        }
         match name.as_str() {
-            point_attributes::NORMALS if a.components == 3 => Some("N"),
-            point_attributes::VELOCITIES if a.components == 3 && a.rate == AttributeRate::Vertex => {
-                Some(".velocities")
-            }
-            _ => None,
+            point_attributes::NORMALS => Some("N"),
+            point_attributes::VELOCITIES => Some(".velocities"),
+            _ => None, // accelerations: AbcGeom's curves have no place of their own for them
         }
     };
     sources.retain(|(_, source)| !(with_velocities && own_property(source) == Some(".velocities")));
