@@ -1203,6 +1203,40 @@ fn render_stage(dir: &Path, text: &str, name: &str) -> Vec<u8> {
     std::fs::read(&png).unwrap()
 }
 
+/// Guides in a prim of `purpose = "guide"` (as Houdini writes them) are not drawn by a preview,
+/// as Hydra and render delegates do not draw them; a file of guides alone still shows them.
+/// Previews drew every curves prim whatever its purpose.
+#[test]
+fn previews_leave_out_guide_prims_as_renderers_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let header =
+        "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\n";
+    let stage = |guide_purpose: &str, hair: bool| {
+        let hair = if hair {
+            format!("def BasisCurves \"hair\"\n{{\n{}}}\n", two_curves(0.0))
+        } else {
+            String::new()
+        };
+        format!(
+            "{header}def Xform \"groom\"\n{{\n{hair}\
+             def BasisCurves \"guides\"\n{{\n uniform token purpose = \"{guide_purpose}\"\n{}}}\n}}\n",
+            two_curves(3.0)
+        )
+    };
+    let render = |text: &str, name: &str| render_stage(dir.path(), text, name);
+    let hair_alone =
+        format!("{header}def Xform \"groom\"\n{{\ndef BasisCurves \"hair\"\n{{\n{}}}\n}}\n", two_curves(0.0));
+    let with_guides = render(&stage("guide", true), "with_guides");
+    assert!(with_guides == render(&hair_alone, "hair_alone"), "guide-purpose curves were drawn");
+    assert!(
+        with_guides != render(&stage("default", true), "guides_as_hair"),
+        "default-purpose curves are drawn"
+    );
+    // Guides alone: drawn rather than an empty image or an error.
+    let guides_alone = render(&stage("guide", false), "guides_alone");
+    assert!(guides_alone == render(&stage("default", false), "guides_alone_default"));
+}
+
 /// Two linear curves of three points at `x` (centimetres), as a prim body.
 fn two_curves(x: f32) -> String {
     let points: Vec<String> = [0.0, 1.0]

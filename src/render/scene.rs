@@ -239,12 +239,24 @@ pub fn transparency_coin(ray_id: u32, strand: u32) -> f32 {
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
 
-/// The strands a render draws: curves of invisible prims stay in the groom but are not drawn,
-/// as a renderer would not draw them. An error when there are none.
+/// The strands a render draws, as a renderer would: curves of invisible prims stay in the groom
+/// but are not drawn, and neither are those of `purpose = "guide"` prims (Houdini's guides), which
+/// Hydra and render delegates leave out — unless guides are all there is to see (a guides-only
+/// file), which a preview then shows. An error when nothing is visible.
 pub fn shown_strands(groom: &Groom) -> Result<Vec<usize>> {
-    let invisible: Vec<bool> = (0..groom.group_count()).map(|g| groom.group(g).invisible).collect();
-    let shown: Vec<usize> =
-        (0..groom.strand_count()).filter(|&strand| !invisible[groom.group_of(strand)]).collect();
+    let visible = |guides: bool| -> Vec<usize> {
+        let shown: Vec<bool> = (0..groom.group_count())
+            .map(|g| {
+                let group = groom.group(g);
+                !group.invisible && (guides || group.purpose.as_deref() != Some("guide"))
+            })
+            .collect();
+        (0..groom.strand_count()).filter(|&strand| shown[groom.group_of(strand)]).collect()
+    };
+    let mut shown = visible(false);
+    if shown.is_empty() {
+        shown = visible(true);
+    }
     if shown.is_empty() {
         let why = if groom.strand_count() == 0 { "has no strands" } else { "is all in invisible prims" };
         return Err(Error::Usage(format!("render: the groom {why}; there is nothing to render")));
