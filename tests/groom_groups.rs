@@ -202,26 +202,90 @@ fn a_periodic_prim_exits_2_naming_it() {
     assert!(message.contains("</Ring>") && message.contains("periodic"), "{message}");
 }
 
-/// Maya's USD export writes nurbsCurves as `NurbsCurves` prims: beside BasisCurves hair they
-/// used to be left out without a word. In `.usda` and in pxr's `.usdc` of the same stage, exit 2
-/// names the prim and its type, and nothing is written.
+/// Maya's USD export writes nurbsCurves as `NurbsCurves` prims (they used to exit 2, and before
+/// that to be left out without a word). Read as Maya's Alembic curves are: degree 3 as a cubic
+/// B-spline (`pinned` where the knots are clamped, as Maya writes them: the curve starts at its
+/// root), degree 1 as a polyline, beside BasisCurves hair; in `.usda` and in pxr's `.usdc` of the
+/// same stage, pxr finds the control points (in metres), counts and widths it reads in the file,
+/// as BasisCurves at the same paths. Other degrees, rational curves and knots that do not fit
+/// exit 2 naming the prim, and nothing is written.
 #[test]
-fn nurbs_curves_prims_exit_2_naming_them() {
+fn nurbs_curves_are_read_as_b_splines_and_polylines() {
     let dir = tempfile::tempdir().unwrap();
-    let usda = dir.path().join("maya.usda");
-    std::fs::write(
-        &usda,
-        "#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef Xform \"groom\"\n{\n    def BasisCurves \"hair\"\n    {\n        uniform token type = \"linear\"\n        int[] curveVertexCounts = [2]\n        point3f[] points = [(0, 0, 0), (0, 1, 0)]\n    }\n    def NurbsCurves \"guides\"\n    {\n        int[] curveVertexCounts = [4]\n        point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)]\n        int[] order = [4]\n        double[] knots = [0, 0, 0, 0, 1, 1, 1, 1]\n    }\n}\n",
-    )
-    .unwrap();
+    let stage = |guides_order: &str, guides_knots: &str, extra: &str| {
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 0.01\n    upAxis = \"Y\"\n)\ndef Xform \"groom\"\n{{\n\
+             def BasisCurves \"hair\"\n{{\n uniform token type = \"linear\"\n int[] curveVertexCounts = [2]\n\
+             point3f[] points = [(0, 0, 0), (0, 1, 0)]\n}}\n\
+             def NurbsCurves \"guides\"\n{{\n int[] curveVertexCounts = [4, 5]\n\
+             point3f[] points = [(1, 0, 0), (1, 1, 0.5), (1, 2, 0), (1, 3, 0.25), (2, 0, 0), (2, 1, 0), (2, 2, 1), (2.5, 3, 0), (2, 4, 0)]\n\
+             float[] widths = [0.008, 0.007, 0.006, 0.005, 0.008, 0.0075, 0.007, 0.0065, 0.006] (interpolation = \"vertex\")\n\
+             int[] order = [{guides_order}]\n double[] knots = [{guides_knots}]\n{extra}}}\n\
+             def NurbsCurves \"strays\"\n{{\n int[] curveVertexCounts = [3]\n\
+             point3f[] points = [(3, 0, 0), (3, 1, 1), (3, 2, 1)]\n int[] order = [2]\n double[] knots = [0, 0, 1, 2, 2]\n}}\n}}\n"
+        )
+    };
+    let clamped = "0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 1, 2, 2, 2, 2";
+    let source = dir.path().join("maya.usda");
+    std::fs::write(&source, stage("4, 4", clamped, "")).unwrap();
     let usdc = dir.path().join("maya.usdc");
-    common::usd::probe(&["export", path_str(&usda), path_str(&usdc)]);
-    for source in [&usda, &usdc] {
+    common::usd::probe(&["export", path_str(&source), path_str(&usdc)]);
+    let maya = pxr_dump(&source, None);
+    let nurbs: Vec<&Value> = maya["nurbs"].as_array().unwrap().iter().collect();
+    assert_eq!(nurbs.len(), 2, "pxr reads both NurbsCurves prims");
+    for input in [&source, &usdc] {
         let out = dir.path().join("out.usda");
-        let result = coif(&["convert", path_str(source), path_str(&out)]);
-        assert_eq!(result.status.code(), Some(2), "{}", stderr(&result));
+        let converted = coif(&["convert", path_str(input), path_str(&out)]);
+        assert!(converted.status.success(), "{}", stderr(&converted));
+        let dump = pxr_dump(&out, None);
+        let curves = curves_by_path(&dump);
+        for (source, (kind, wrap)) in nurbs.iter().zip([("cubic", "pinned"), ("linear", "nonperiodic")]) {
+            let path = source["path"].as_str().unwrap();
+            let (_, written) =
+                curves.iter().find(|(p, _)| p == path).unwrap_or_else(|| panic!("{path} written"));
+            assert_eq!(written["type"], kind, "{path}");
+            if kind == "cubic" {
+                assert_eq!(written["basis"], "bspline", "{path}");
+            }
+            assert_eq!(written["wrap"], wrap, "{path}");
+            assert_eq!(written["counts"], source["counts"], "{path}");
+            let expected: Vec<f32> = f32s(&source["world_points"]).iter().map(|x| x * 0.01).collect();
+            let got = f32s(&written["world_points"]);
+            assert_eq!(got.len(), expected.len(), "{path}");
+            assert!(
+                got.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-7),
+                "{path}: {got:?} vs {expected:?}"
+            );
+            if !source["widths"].as_array().unwrap().is_empty() {
+                let expected: Vec<f32> = f32s(&source["widths"]).iter().map(|x| x * 0.01).collect();
+                let got = vertex_widths(written);
+                assert!(got.iter().zip(&expected).all(|(a, b)| (a - b).abs() < 1e-9), "{path} widths");
+            }
+        }
+        assert!(curves.iter().any(|(p, _)| p == "/groom/hair"), "the BasisCurves hair beside them");
+    }
+    // Unclamped (uniform) knots: a B-spline that does not start at its first control point.
+    std::fs::write(&source, stage("4, 4", "0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 8", "")).unwrap();
+    let out = dir.path().join("uniform.usda");
+    let converted = coif(&["convert", path_str(&source), path_str(&out)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let dump = pxr_dump(&out, None);
+    let guides = curves_by_path(&dump).into_iter().find(|(p, _)| p == "/groom/guides").unwrap().1.clone();
+    assert_eq!((guides["basis"].as_str(), guides["wrap"].as_str()), (Some("bspline"), Some("nonperiodic")));
+
+    for (order, knots, extra, expected) in [
+        ("3, 3", "0, 0, 0, 1, 1, 1, 0, 0, 0, 1, 2, 2, 2", "", "order 3 (degree 2)"),
+        ("4, 2", "0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 1, 2, 3, 4, 4", "", "orders 4 and 2 mixed"),
+        ("4, 4", "0, 0, 0, 0, 1, 1, 1, 1", "", "8 knots where its curves need 17"),
+        ("4, 4", "0, 0, 0, 0, 1, 1, 1, 1, 0, 1, 2, 3, 4, 5, 6, 7, 8", "", "clamped and not clamped mixed"),
+        ("4, 4", clamped, " double[] pointWeights = [1, 1, 2, 1, 1, 1, 1, 1, 1]\n", "point weight of 2"),
+    ] {
+        std::fs::write(&source, stage(order, knots, extra)).unwrap();
+        let out = dir.path().join("refused.usda");
+        let result = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert_eq!(result.status.code(), Some(2), "{expected}: {}", stderr(&result));
         let message = stderr(&result);
-        assert!(message.contains("</groom/guides>") && message.contains("NurbsCurves"), "{message}");
+        assert!(message.contains("</groom/guides>") && message.contains(expected), "{expected}: {message}");
         assert!(!out.exists());
     }
 }

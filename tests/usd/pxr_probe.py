@@ -98,6 +98,21 @@ def dump(path, time=None):
                 "values": floats(value) if value is not None else None,
             }
         result["curves"].append(entry)
+    result["nurbs"] = []
+    for prim in stage.Traverse():
+        if not prim.IsA(UsdGeom.NurbsCurves):
+            continue
+        nurbs = UsdGeom.NurbsCurves(prim)
+        points = nurbs.GetPointsAttr().Get(code)
+        world = cache.GetLocalToWorldTransform(prim)
+        result["nurbs"].append({
+            "path": str(prim.GetPath()),
+            "order": list(nurbs.GetOrderAttr().Get(code) or []),
+            "knots": floats(nurbs.GetKnotsAttr().Get(code) or []),
+            "counts": list(nurbs.GetCurveVertexCountsAttr().Get(code)),
+            "world_points": floats(world.Transform(Gf.Vec3d(p)) for p in points),
+            "widths": floats(nurbs.GetWidthsAttr().Get(code) or []),
+        })
     for prim in stage.Traverse():
         if not prim.IsA(UsdGeom.Mesh):
             continue

@@ -1111,6 +1111,10 @@ pub fn wanted(name: &str) -> bool {
             | "type"
             | "basis"
             | "wrap"
+            // NurbsCurves (Maya's USD export of nurbsCurves).
+            | "order"
+            | "knots"
+            | "pointWeights"
             | "purpose"
             | "visibility"
             | "velocities"

@@ -265,24 +265,18 @@ impl Walker<'_> {
             points.map_or(chain_first.clone(), |p| FirstSample::earlier(chain_first.clone(), &prim_path, p))
         };
         let mut first_here = None;
-        if prim.type_name == "BasisCurves" {
+        if matches!(prim.type_name.as_str(), "BasisCurves" | "NurbsCurves") {
             first_here = placed(&prim);
             if let Some(curves) = self.curves(&mut prim, &prim_path, world, &imageable)? {
                 self.found.push(curves);
             }
-        } else if matches!(prim.type_name.as_str(), "NurbsCurves" | "HermiteCurves")
-            && prim.attribute("points").is_some()
-        {
-            // Curves coif would otherwise leave out without a word (Maya's USD export writes
-            // nurbsCurves so).
+        } else if prim.type_name == "HermiteCurves" && prim.attribute("points").is_some() {
+            // Curves coif would otherwise leave out without a word.
             return Err(self.error(
                 &prim_path,
                 prim.site,
-                format!(
-                    "a {} prim: coif reads hair from BasisCurves (linear, Bézier, B-spline, Catmull-Rom); \
-                     export these curves as BasisCurves",
-                    prim.type_name
-                ),
+                "a HermiteCurves prim: coif reads hair from BasisCurves (linear, Bézier, B-spline, \
+                 Catmull-Rom) and NurbsCurves of degree 1 or 3; export these curves as one of those",
             ));
         } else if prim.type_name == "Mesh" {
             first_here = placed(&prim);
@@ -395,7 +389,97 @@ impl Walker<'_> {
         Ok(Some(mesh))
     }
 
-    /// Reads one `BasisCurves` prim; `None` when it has no points (an empty placeholder).
+    /// The BasisCurves type, basis and wrap that draw a `NurbsCurves` prim's curves (Maya's USD
+    /// export writes every nurbsCurve so), as for Maya's Alembic curves: degree 1 (order 2) is a
+    /// polyline, degree 3 (order 4) a cubic B-spline, `pinned` where every curve's knots are
+    /// clamped (as Maya writes them: the curve starts at its first control point, the root) and
+    /// `nonperiodic` where none is. Interior knot spacing is not kept (a uniform B-spline takes
+    /// its place). Other degrees, mixed degrees, mixed clamping and rational curves (weights other
+    /// than 1) exit 2 naming the prim.
+    fn nurbs_as_basis_curves(&self, prim: &Prim, prim_path: &str) -> Result<(String, String, String)> {
+        let time = self.time;
+        let fail = |name: &str, message: String| {
+            let site = prim.attribute(name).map_or(prim.site, |a| a.site);
+            self.error(prim_path, site, format!("NurbsCurves {message}"))
+        };
+        let ints = |name: &str| match prim.attribute(name).and_then(|a| value_at(a, time)) {
+            Some(Value::Int(values)) => Some(values),
+            _ => None,
+        };
+        let Some(orders) = ints("order") else {
+            return Err(fail("order", "without an int[] 'order' (the degree of each curve + 1)".into()));
+        };
+        let Some(&order) = orders.first() else {
+            return Err(fail("order", "with an empty 'order'".into()));
+        };
+        if let Some(other) = orders.iter().find(|&&o| o != order) {
+            return Err(fail(
+                "order",
+                format!("of orders {order} and {other} mixed: coif needs one degree per prim"),
+            ));
+        }
+        if order != 2 && order != 4 {
+            return Err(fail(
+                "order",
+                format!("of order {order} (degree {}): coif reads degree 1 and 3", order - 1),
+            ));
+        }
+        let doubles = |name: &str| -> Result<Option<Vec<f64>>> {
+            match prim.attribute(name).and_then(|a| value_at(a, time)) {
+                None => Ok(None),
+                Some(value) => match self.read(value).map(|v| v.to_f64()) {
+                    Ok(Some(values)) => Ok(Some(values)),
+                    _ => Err(fail(name, format!("'{name}' must be a double[] array"))),
+                },
+            }
+        };
+        if let Some(weights) = doubles("pointWeights")? {
+            if let Some(w) = weights.iter().find(|&&w| w != 1.0) {
+                return Err(fail(
+                    "pointWeights",
+                    format!("with a point weight of {w}: rational curves are not hair"),
+                ));
+            }
+        }
+        if order == 2 {
+            return Ok(("linear".into(), "bspline".into(), "nonperiodic".into()));
+        }
+        let counts = ints("curveVertexCounts").unwrap_or_default();
+        let knots = doubles("knots")?.unwrap_or_default();
+        let needed = counts.iter().fold(0i64, |sum, &c| sum.saturating_add(c.max(0).saturating_add(order)));
+        let clamped = if knots.is_empty() {
+            // No knots: USD's fallback is a uniform knot vector.
+            false
+        } else if knots.len() as i64 != needed {
+            return Err(fail(
+                "knots",
+                format!("with {} knots where its curves need {needed} (vertices + order each)", knots.len()),
+            ));
+        } else {
+            let order = order as usize;
+            let mut ends = Vec::with_capacity(counts.len());
+            let mut at = 0;
+            for &count in &counts {
+                let curve = &knots[at..at + count.max(0) as usize + order];
+                at += curve.len();
+                let first = curve[..order].iter().all(|&k| k == curve[0]);
+                let last = curve[curve.len() - order..].iter().all(|&k| k == curve[curve.len() - 1]);
+                ends.push(first && last);
+            }
+            match (ends.iter().all(|&c| c), ends.iter().any(|&c| c)) {
+                (true, _) => true,
+                (false, false) => false,
+                (false, true) => {
+                    return Err(fail("knots", "whose curves are clamped and not clamped mixed".into()));
+                }
+            }
+        };
+        let wrap = if clamped { "pinned" } else { "nonperiodic" };
+        Ok(("cubic".into(), "bspline".into(), wrap.into()))
+    }
+
+    /// Reads one `BasisCurves` or `NurbsCurves` prim; `None` when it has no points (an empty
+    /// placeholder).
     fn curves(
         &self,
         prim: &mut Prim,
@@ -408,9 +492,15 @@ impl Walker<'_> {
         let token = |prim: &Prim, name: &str, fallback: &str| -> Result<String> {
             Ok(self.token(prim, prim_path, name)?.unwrap_or_else(|| fallback.to_string()))
         };
-        let curve_type = token(prim, "type", "cubic")?;
-        let basis_name = token(prim, "basis", "bezier")?;
-        let wrap = token(prim, "wrap", "nonperiodic")?;
+        let (curve_type, basis_name, wrap) = if prim.type_name == "NurbsCurves" {
+            self.nurbs_as_basis_curves(prim, prim_path)?
+        } else {
+            (
+                token(prim, "type", "cubic")?,
+                token(prim, "basis", "bezier")?,
+                token(prim, "wrap", "nonperiodic")?,
+            )
+        };
         let basis = match (curve_type.as_str(), basis_name.as_str()) {
             ("linear", _) => CurveBasis::Linear,
             ("cubic", "bezier") => CurveBasis::Bezier,
