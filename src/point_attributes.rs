@@ -11,7 +11,7 @@
 //! is left out.
 use glam::{Quat, Vec3};
 
-use crate::groom::{AttributeRate, Groom};
+use crate::groom::{Attribute, AttributeRate, Groom};
 
 pub const NORMALS: &str = "normals";
 pub const VELOCITIES: &str = "velocities";
@@ -38,45 +38,17 @@ pub fn is_schema_attribute(name: &str, rate: AttributeRate, components: usize) -
 /// none, left out, as are `accelerations`. Returns a warning for each attribute left out.
 pub fn follow_new_shape(before: &Groom, after: &mut Groom, motion: Option<&[Vec3]>) -> Vec<String> {
     let mut warnings = Vec::new();
-    let same_vertices = before.strand_offsets == after.strand_offsets;
     let normals = after.attribute(NORMALS).is_some_and(|a| a.components == 3);
     if let Some(mut normals) = normals.then(|| after.remove_attribute(NORMALS)).flatten() {
-        let tangent = |groom: &Groom, strand: usize, vertex: usize| {
-            let points = groom.strand_points(strand);
-            let (a, b) = (vertex.saturating_sub(1), (vertex + 1).min(points.len().saturating_sub(1)));
-            (points[b] - points[a]).normalize_or_zero()
-        };
-        for strand in 0..after.strand_count() {
-            let range = after.strand_range(strand);
-            let elements: Vec<(usize, usize)> = match normals.rate {
-                AttributeRate::Vertex => range.clone().map(|i| (i, i - range.start)).collect(),
-                AttributeRate::Strand => vec![(strand, 0)],
-            };
-            for (element, vertex) in elements {
-                let new = tangent(after, strand, vertex);
-                let value = &mut normals.data[3 * element..3 * element + 3];
-                let n = Vec3::from_slice(value);
-                let turned = if same_vertices {
-                    let old = tangent(before, strand, vertex);
-                    if old == Vec3::ZERO || new == Vec3::ZERO {
-                        n
-                    } else {
-                        Quat::from_rotation_arc(old, new) * n
-                    }
-                } else {
-                    let across = n - new * n.dot(new);
-                    across.normalize_or(n) * n.length()
-                };
-                value.copy_from_slice(&turned.to_array());
-            }
-        }
+        let from = (before.strand_offsets == after.strand_offsets).then_some(&before.points[..]);
+        turn_normals(&mut normals, &after.strand_offsets, from, &after.points);
         after.set_attribute(normals);
     }
     match (motion, after.attribute(VELOCITIES).is_some()) {
         (Some(velocities), true) => {
             let data = velocities.iter().flat_map(|v| v.to_array()).collect();
             after.set_attribute(
-                crate::groom::Attribute::new(VELOCITIES, AttributeRate::Vertex, 3, data)
+                Attribute::new(VELOCITIES, AttributeRate::Vertex, 3, data)
                     .with_kind(crate::groom::AttributeKind::Vector),
             );
         }
@@ -95,4 +67,63 @@ pub fn follow_new_shape(before: &Groom, after: &mut Groom, motion: Option<&[Vec3
         ));
     }
     warnings
+}
+
+/// The normals of a moved groom (`after`, as [`follow_new_shape`] left it) at each of its
+/// captured `frames` (points in `after`'s layout): each turned from the shape it was read with
+/// (`before`, or `after`'s own where the groom was resampled) onto the frame's, so that an
+/// animation's normals follow its points. `None` without normals.
+pub fn normals_in_frames(before: &Groom, after: &Groom, frames: &[Vec<Vec3>]) -> Option<Vec<Attribute>> {
+    let (source, from) = if before.strand_offsets == after.strand_offsets {
+        (before.attribute(NORMALS)?, &before.points)
+    } else {
+        (after.attribute(NORMALS)?, &after.points)
+    };
+    (source.components == 3).then(|| {
+        frames
+            .iter()
+            .map(|points| {
+                let mut normals = source.clone();
+                turn_normals(&mut normals, &after.strand_offsets, Some(from), points);
+                normals
+            })
+            .collect()
+    })
+}
+
+/// Turns `normals` (per vertex or per strand of the curves `offsets` delimits) from the curves
+/// at `from` onto the same curves at `to`: by the smallest rotation taking each old tangent to the
+/// new one, or, with no old shape (other vertices), by making each normal perpendicular to its new
+/// tangent.
+fn turn_normals(normals: &mut Attribute, offsets: &[u32], from: Option<&[Vec3]>, to: &[Vec3]) {
+    let tangent = |points: &[Vec3], vertex: usize| {
+        let (a, b) = (vertex.saturating_sub(1), (vertex + 1).min(points.len().saturating_sub(1)));
+        (points[b] - points[a]).normalize_or_zero()
+    };
+    for (strand, range) in offsets.windows(2).map(|w| w[0] as usize..w[1] as usize).enumerate() {
+        let elements: Vec<(usize, usize)> = match normals.rate {
+            AttributeRate::Vertex => range.clone().map(|i| (i, i - range.start)).collect(),
+            AttributeRate::Strand => vec![(strand, 0)],
+        };
+        for (element, vertex) in elements {
+            let new = tangent(&to[range.clone()], vertex);
+            let value = &mut normals.data[3 * element..3 * element + 3];
+            let n = Vec3::from_slice(value);
+            let turned = match from {
+                Some(from) => {
+                    let old = tangent(&from[range.clone()], vertex);
+                    if old == Vec3::ZERO || new == Vec3::ZERO {
+                        n
+                    } else {
+                        Quat::from_rotation_arc(old, new) * n
+                    }
+                }
+                None => {
+                    let across = n - new * n.dot(new);
+                    across.normalize_or(n) * n.length()
+                }
+            };
+            value.copy_from_slice(&turned.to_array());
+        }
+    }
 }

@@ -1569,6 +1569,16 @@ fn stage_with_point_attributes() -> String {
     )
 }
 
+/// [`stage_with_point_attributes`] and a recipe that lets its strands fall for 0.3 s, written in
+/// `dir`: (stage, recipe).
+fn falling_strands_with_point_attributes(dir: &Path) -> (PathBuf, PathBuf) {
+    let source = dir.join("moving.usda");
+    std::fs::write(&source, stage_with_point_attributes()).unwrap();
+    let recipe = dir.join("fall.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.3\n").unwrap();
+    (source, recipe)
+}
+
 /// The curves' own normals, velocities and accelerations were dropped by every conversion with
 /// no warning. They now round-trip through `.usda`, `.usdc` and `.abc` (Alembic `N` and
 /// `.velocities`, accelerations as a parameter) as pxr reads them: values, type, interpolation.
@@ -1658,10 +1668,7 @@ fn tangents(curves: &Value) -> Vec<glam::Vec3> {
 #[test]
 fn moved_strands_carry_their_normals_and_drop_or_renew_their_motion() {
     let dir = tempfile::tempdir().unwrap();
-    let source = dir.path().join("moving.usda");
-    std::fs::write(&source, stage_with_point_attributes()).unwrap();
-    let recipe = dir.path().join("fall.toml");
-    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.3\n").unwrap();
+    let (source, recipe) = falling_strands_with_point_attributes(dir.path());
     let styled = dir.path().join("styled.usda");
     let run =
         coif(&["style", path_str(&recipe), "--groom", path_str(&source), "-o", path_str(&styled), "--quiet"]);
@@ -1716,6 +1723,43 @@ fn moved_strands_carry_their_normals_and_drop_or_renew_their_motion() {
     eprintln!("tip velocity written {}, over the next step {stepped}", velocities[tip]);
     assert!(stepped.length() > 0.01, "the strand falls");
     assert!(velocities[tip].distance(stepped) < 0.1 * stepped.length(), "{} vs {stepped}", velocities[tip]);
+}
+
+/// `coif style --frames` writes every frame's points: the normals follow each frame's shape
+/// (time-sampled, across the strands at every frame), not only the final one's. They were
+/// written once, for the final shape, under points that moved.
+#[test]
+fn normals_follow_the_strands_in_every_styled_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let (source, recipe) = falling_strands_with_point_attributes(dir.path());
+    let styled = dir.path().join("frames.usda");
+    let run = coif(&[
+        "style",
+        path_str(&recipe),
+        "--groom",
+        path_str(&source),
+        "-o",
+        path_str(&styled),
+        "--frames",
+        "30",
+        "--quiet",
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let end = pxr_dump(&styled, Some(1.0))["endTimeCode"].as_f64().unwrap();
+    assert!(end >= 8.0, "frames written: {end}");
+    let mut seen = Vec::new();
+    for time in [1.0, (end / 2.0).round(), end] {
+        let dump = pxr_dump(&styled, Some(time));
+        let hair = curves_by_path(&dump).into_iter().find(|(p, _)| p.ends_with("hair")).unwrap().1.clone();
+        let normals: Vec<glam::Vec3> =
+            f32s(&hair["normals"]["values"]).chunks(3).map(glam::Vec3::from_slice).collect();
+        let across = normals.iter().zip(tangents(&hair)).map(|(n, t)| n.dot(t).abs()).fold(0.0, f32::max);
+        eprintln!("time {time}: largest |n·t| {across:.2e}");
+        assert!(across < 1e-3, "time {time}: normals are not across the strands ({across})");
+        assert!(normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-5), "time {time}");
+        seen.push(normals);
+    }
+    assert!(seen[0] != seen[2], "the normals should turn as the strands fall");
 }
 
 /// A mesh's `holeIndices` (faces USD does not draw) were dropped, so a scalp with holes came out

@@ -183,6 +183,14 @@ pub fn style_part(whole: &Groom, part: &Groom, recipe: &Recipe, options: &StyleO
     styled.groom.meshes.clone_from(&groom.meshes);
     let warnings = crate::point_attributes::follow_new_shape(groom, &mut styled.groom, None);
     styled.report.warnings.extend(warnings);
+    // Captured frames hold the state attributes of each moment; normals follow each frame's shape.
+    if styled.frame_attributes.len() == styled.frames.len() {
+        if let Some(normals) =
+            crate::point_attributes::normals_in_frames(groom, &styled.groom, &styled.frames)
+        {
+            styled.frame_attributes.iter_mut().zip(normals).for_each(|(frame, n)| frame.push(n));
+        }
+    }
     Ok(styled)
 }
 
