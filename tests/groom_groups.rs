@@ -264,6 +264,24 @@ fn nurbs_curves_are_read_as_b_splines_and_polylines() {
         }
         assert!(curves.iter().any(|(p, _)| p == "/groom/hair"), "the BasisCurves hair beside them");
     }
+    // Animated NurbsCurves (nHair's output cached to USD) stay animated.
+    let animated = dir.path().join("animated.usda");
+    std::fs::write(
+        &animated,
+        "#usda 1.0\n(\n    startTimeCode = 1\n    endTimeCode = 2\n    metersPerUnit = 1\n)\n\
+         def NurbsCurves \"guides\"\n{\n int[] curveVertexCounts = [4]\n int[] order = [4]\n\
+         double[] knots = [0, 0, 0, 0, 1, 1, 1, 1]\n point3f[] points.timeSamples = {\n\
+         1: [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0)],\n 2: [(0, 0, 0), (0.1, 1, 0), (0.2, 2, 0), (0.3, 3, 0)],\n}\n}\n",
+    )
+    .unwrap();
+    let out = dir.path().join("animated_out.usda");
+    let converted = coif(&["convert", path_str(&animated), path_str(&out)]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    let at_two = pxr_dump(&out, Some(2.0));
+    let (_, guides) = curves_by_path(&at_two).into_iter().find(|(p, _)| p == "/guides").unwrap();
+    assert_eq!(guides["pointsTimeSamples"], serde_json::json!([1.0, 2.0]), "time samples kept");
+    assert_eq!(f32s(&guides["points"])[9], 0.3, "the second sample's tip");
+
     // Unclamped (uniform) knots: a B-spline that does not start at its first control point.
     std::fs::write(&source, stage("4, 4", "0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 8", "")).unwrap();
     let out = dir.path().join("uniform.usda");

@@ -98,7 +98,7 @@ pub fn places_with_time_samples(layer: &Layer) -> bool {
         let sampled = |a: &Attribute| !a.samples.is_empty();
         let transforms = prim.attributes.iter().filter(|a| a.name.starts_with("xformOp"));
         let moved = sampled_above || transforms.into_iter().any(sampled);
-        let placed = matches!(prim.type_name.as_str(), "BasisCurves" | "Mesh")
+        let placed = matches!(prim.type_name.as_str(), "BasisCurves" | "NurbsCurves" | "Mesh")
             && (moved || prim.attribute("points").is_some_and(sampled));
         placed || prim.children.iter().any(|child| visit(child, moved))
     }
