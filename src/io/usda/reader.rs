@@ -389,14 +389,14 @@ impl Walker<'_> {
         Ok(Some(mesh))
     }
 
-    /// The BasisCurves type, basis and wrap that draw a `NurbsCurves` prim's curves (Maya's USD
+    /// The basis and wrap that draw a `NurbsCurves` prim's curves (Maya's USD
     /// export writes every nurbsCurve so), as for Maya's Alembic curves: degree 1 (order 2) is a
     /// polyline, degree 3 (order 4) a cubic B-spline, `pinned` where every curve's knots are
     /// clamped (as Maya writes them: the curve starts at its first control point, the root) and
     /// `nonperiodic` where none is. Interior knot spacing is not kept (a uniform B-spline takes
     /// its place). Other degrees, mixed degrees, mixed clamping and rational curves (weights other
     /// than 1) exit 2 naming the prim.
-    fn nurbs_as_basis_curves(&self, prim: &Prim, prim_path: &str) -> Result<(String, String, String)> {
+    fn nurbs_shape(&self, prim: &Prim, prim_path: &str) -> Result<(CurveBasis, CurveWrap)> {
         let time = self.time;
         let fail = |name: &str, message: String| {
             let site = prim.attribute(name).map_or(prim.site, |a| a.site);
@@ -442,7 +442,7 @@ impl Walker<'_> {
             }
         }
         if order == 2 {
-            return Ok(("linear".into(), "bspline".into(), "nonperiodic".into()));
+            return Ok((CurveBasis::Linear, CurveWrap::Nonperiodic));
         }
         let counts = ints("curveVertexCounts").unwrap_or_default();
         let knots = doubles("knots")?.unwrap_or_default();
@@ -457,25 +457,25 @@ impl Walker<'_> {
             ));
         } else {
             let order = order as usize;
-            let mut ends = Vec::with_capacity(counts.len());
             let mut at = 0;
-            for &count in &counts {
-                let curve = &knots[at..at + count.max(0) as usize + order];
-                at += curve.len();
-                let first = curve[..order].iter().all(|&k| k == curve[0]);
-                let last = curve[curve.len() - order..].iter().all(|&k| k == curve[curve.len() - 1]);
-                ends.push(first && last);
-            }
-            match (ends.iter().all(|&c| c), ends.iter().any(|&c| c)) {
-                (true, _) => true,
-                (false, false) => false,
-                (false, true) => {
-                    return Err(fail("knots", "whose curves are clamped and not clamped mixed".into()));
-                }
+            let clamped_curves = counts
+                .iter()
+                .filter(|&&count| {
+                    let curve = &knots[at..at + count.max(0) as usize + order];
+                    at += curve.len();
+                    let (first, last) = (curve[0], curve[curve.len() - 1]);
+                    curve[..order].iter().all(|&k| k == first)
+                        && curve[curve.len() - order..].iter().all(|&k| k == last)
+                })
+                .count();
+            match clamped_curves {
+                0 => false,
+                n if n == counts.len() => true,
+                _ => return Err(fail("knots", "whose curves are clamped and not clamped mixed".into())),
             }
         };
-        let wrap = if clamped { "pinned" } else { "nonperiodic" };
-        Ok(("cubic".into(), "bspline".into(), wrap.into()))
+        let wrap = if clamped { CurveWrap::Pinned } else { CurveWrap::Nonperiodic };
+        Ok((CurveBasis::BSpline, wrap))
     }
 
     /// Reads one `BasisCurves` or `NurbsCurves` prim; `None` when it has no points (an empty
@@ -492,36 +492,36 @@ impl Walker<'_> {
         let token = |prim: &Prim, name: &str, fallback: &str| -> Result<String> {
             Ok(self.token(prim, prim_path, name)?.unwrap_or_else(|| fallback.to_string()))
         };
-        let (curve_type, basis_name, wrap) = if prim.type_name == "NurbsCurves" {
-            self.nurbs_as_basis_curves(prim, prim_path)?
+        let (basis, wrap) = if prim.type_name == "NurbsCurves" {
+            self.nurbs_shape(prim, prim_path)?
         } else {
-            (
-                token(prim, "type", "cubic")?,
-                token(prim, "basis", "bezier")?,
-                token(prim, "wrap", "nonperiodic")?,
-            )
-        };
-        let basis = match (curve_type.as_str(), basis_name.as_str()) {
-            ("linear", _) => CurveBasis::Linear,
-            ("cubic", "bezier") => CurveBasis::Bezier,
-            ("cubic", "bspline") => CurveBasis::BSpline,
-            ("cubic", "catmullRom") => CurveBasis::CatmullRom,
-            ("cubic", other) => {
-                return Err(at_prim(prim.site, format!("unsupported cubic basis \"{other}\"")))
-            }
-            (other, _) => return Err(at_prim(prim.site, format!("unknown curve type \"{other}\""))),
-        };
-        let wrap =
-            match wrap.as_str() {
-                "nonperiodic" => CurveWrap::Nonperiodic,
-                "pinned" => CurveWrap::Pinned,
-                "periodic" => return Err(at_prim(
-                    prim.site,
-                    "wrap \"periodic\" (closed curves) is not supported: coif cannot simulate closed strands"
-                        .into(),
-                )),
-                other => return Err(at_prim(prim.site, format!("unknown wrap \"{other}\""))),
+            let curve_type = token(prim, "type", "cubic")?;
+            let basis_name = token(prim, "basis", "bezier")?;
+            let wrap = token(prim, "wrap", "nonperiodic")?;
+            let basis = match (curve_type.as_str(), basis_name.as_str()) {
+                ("linear", _) => CurveBasis::Linear,
+                ("cubic", "bezier") => CurveBasis::Bezier,
+                ("cubic", "bspline") => CurveBasis::BSpline,
+                ("cubic", "catmullRom") => CurveBasis::CatmullRom,
+                ("cubic", other) => {
+                    return Err(at_prim(prim.site, format!("unsupported cubic basis \"{other}\"")))
+                }
+                (other, _) => return Err(at_prim(prim.site, format!("unknown curve type \"{other}\""))),
             };
+            let wrap =
+                match wrap.as_str() {
+                    "nonperiodic" => CurveWrap::Nonperiodic,
+                    "pinned" => CurveWrap::Pinned,
+                    "periodic" => return Err(at_prim(
+                        prim.site,
+                        "wrap \"periodic\" (closed curves) is not supported: coif cannot simulate closed \
+                         strands"
+                            .into(),
+                    )),
+                    other => return Err(at_prim(prim.site, format!("unknown wrap \"{other}\""))),
+                };
+            (basis, wrap)
+        };
         let purpose = imageable.purpose.clone().filter(|p| p != "default");
 
         let Some(points_attr) = prim.attributes.iter_mut().find(|a| a.name == "points") else {
