@@ -297,10 +297,11 @@ fn split_at_bounds<'a, T>(mut slice: &'a mut [T], bounds: &[usize]) -> Vec<&'a m
 #[derive(Clone, Debug, Default)]
 pub struct Occupancy {
     inv_cell_size: f32,
-    /// Per bucket: whether a cell of it holds a chosen point, and whether such a cell or a
-    /// neighbour of one does.
-    holds: Vec<bool>,
-    near: Vec<bool>,
+    /// One bit per bucket: whether a cell of it holds a chosen point, and whether such a cell or
+    /// a neighbour of one does. Bits, not bytes: the table (32 KB) stays in cache where bytes
+    /// (256 KB) did not, and `near` is asked once per vertex of a groom.
+    holds: Vec<u64>,
+    near: Vec<u64>,
     /// Scratch: the cells holding a chosen point, each once (one per bucket).
     held: Vec<[i32; 3]>,
 }
@@ -312,18 +313,18 @@ impl Occupancy {
     /// Marks the neighbourhoods (`cell_size` wide cells) of the points `include` selects.
     pub fn mark(&mut self, cell_size: f32, points: &[Vec3], include: impl Fn(usize) -> bool) {
         self.inv_cell_size = 1.0 / cell_size;
-        let table = 1 << (3 * Self::BITS);
+        let words = (1 << (3 * Self::BITS)) / 64;
         for marks in [&mut self.holds, &mut self.near] {
             marks.clear();
-            marks.resize(table, false);
+            marks.resize(words, 0);
         }
         self.held.clear();
         for (i, &p) in points.iter().enumerate() {
             if include(i) {
                 let cell = cell_of(p, self.inv_cell_size);
                 let b = bucket_of_cell(cell, Self::BITS) as usize;
-                if !self.holds[b] {
-                    self.holds[b] = true;
+                if self.holds[b / 64] >> (b % 64) & 1 == 0 {
+                    self.holds[b / 64] |= 1 << (b % 64);
                     self.held.push(cell);
                 }
             }
@@ -334,7 +335,8 @@ impl Occupancy {
             for dz in -1..=1 {
                 for dy in -1..=1 {
                     for dx in -1..=1 {
-                        self.near[bucket_of_cell([x + dx, y + dy, z + dz], Self::BITS) as usize] = true;
+                        let b = bucket_of_cell([x + dx, y + dy, z + dz], Self::BITS) as usize;
+                        self.near[b / 64] |= 1 << (b % 64);
                     }
                 }
             }
@@ -343,8 +345,10 @@ impl Occupancy {
 
     /// Whether a marked point may lie within `cell_size` of `p` along every axis: true whenever
     /// one does (cells whose indices differ by at most one hold them).
+    #[inline]
     pub fn near(&self, p: Vec3) -> bool {
-        self.near[bucket_of_cell(cell_of(p, self.inv_cell_size), Self::BITS) as usize]
+        let b = bucket_of_cell(cell_of(p, self.inv_cell_size), Self::BITS) as usize;
+        self.near[b / 64] >> (b % 64) & 1 != 0
     }
 }
 
