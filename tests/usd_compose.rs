@@ -738,3 +738,83 @@ fn a_stage_range_that_starts_before_the_first_sample_holds_the_first_sample() {
     assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
     assert!(stderr(&refused).contains("frame 100 is before the first time sample"), "{}", stderr(&refused));
 }
+
+/// A stage whose curves are time-sampled but which authors no frame range (`startTimeCode` <
+/// `endTimeCode`) has no timeline to convert, and pxr reads no points at its default time; coif
+/// reads one moment, each value's earliest sample — without a word until now — `convert` wrote a static file, `info` said "not
+/// animated". Now every command that reads it warns, naming the file and the sampled attribute
+/// and how to read the animation, through a plain layer, a composed one and pxr's `.usdc` of it;
+/// a stage with a range, the frames asked for, or nothing sampled get no warning.
+#[test]
+fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    std::fs::write(path("cache.usda"), timed_curves_layer("metersPerUnit = 1")).unwrap();
+    std::fs::write(
+        path("shot.usda"),
+        "#usda 1.0\n(\n    metersPerUnit = 1\n)\n\ndef \"Groom\" (\n    references = @cache.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+    let jobs = path("jobs.json");
+    let (cache, cache_pxr) = (path("cache.usda"), path("cache_pxr.usdc"));
+    let flatten = [["flatten", path_str(&cache), path_str(&cache_pxr)]];
+    std::fs::write(&jobs, serde_json::to_string(&flatten).unwrap()).unwrap();
+    probe(&["batch", path_str(&jobs)]);
+    let warned = |text: &str, file: &str| {
+        text.contains(&format!("{file}: '/"))
+            && text.contains(".points' is time-sampled but the stage authors no frame range")
+            && text.contains("--frame-range FIRST:LAST")
+    };
+    for input in ["cache.usda", "shot.usda", "cache_pxr.usdc"] {
+        let stage = path(input);
+        let info = coif(&["info", path_str(&stage)]);
+        assert!(info.status.success(), "{input}: {}", stderr(&info));
+        assert!(warned(&stderr(&info), input), "{input}: info gave no warning: {}", stderr(&info));
+        let text = String::from_utf8_lossy(&info.stdout).to_string();
+        assert!(text.contains("one moment (see the warning)") && !text.contains("not animated"), "{text}");
+        let info = stdout_json(&coif(&["info", path_str(&stage), "--json"]));
+        assert!(info["frames"].is_null(), "{input}: {info}");
+        assert!(warned(info["warnings"][0].as_str().unwrap_or(""), input), "{input}: {info}");
+
+        // The moment written is the earliest sample (pxr reads no value at its default time).
+        let out = path(&format!("{input}.moment.usda"));
+        let converted = coif(&["convert", path_str(&stage), path_str(&out), "--json"]);
+        assert!(converted.status.success(), "{input}: {}", stderr(&converted));
+        assert!(
+            warned(&stderr(&converted), input),
+            "{input}: convert gave no warning: {}",
+            stderr(&converted)
+        );
+        let report: serde_json::Value = serde_json::from_slice(&converted.stdout).unwrap();
+        assert!(warned(report["warnings"][0].as_str().unwrap_or(""), input), "{input}: {report}");
+        let points = |dump: &serde_json::Value| f32s(&dump["curves"][0]["points"]);
+        assert_eq!(points(&pxr_dump(&out, None)), points(&pxr_dump(&stage, Some(0.0))), "{input}");
+        assert_eq!(points(&pxr_dump(&out, None)), vec![0.0, 0.0, 0.0, 0.0, 1.0, 0.0], "{input}");
+
+        // The animation, when asked for: no warning, and pxr finds the samples.
+        let animated = path(&format!("{input}.anim.usda"));
+        let converted = coif(&["convert", path_str(&stage), path_str(&animated), "--frame-range", "0:24"]);
+        assert!(converted.status.success(), "{input}: {}", stderr(&converted));
+        assert!(!stderr(&converted).contains("time-sampled"), "{input}: {}", stderr(&converted));
+        assert_eq!(points(&pxr_dump(&animated, Some(24.0)))[0], 2.0, "{input}");
+    }
+    // Controls: a range makes the stage animated (converted whole, no warning); a static stage
+    // is silent.
+    std::fs::write(
+        path("ranged.usda"),
+        timed_curves_layer("metersPerUnit = 1\n    startTimeCode = 0\n    endTimeCode = 24"),
+    )
+    .unwrap();
+    let converted = coif(&["convert", path_str(&path("ranged.usda")), path_str(&path("ranged_out.usda"))]);
+    assert!(converted.status.success(), "{}", stderr(&converted));
+    assert!(!stderr(&converted).contains("warning"), "{}", stderr(&converted));
+    assert_eq!(f32s(&pxr_dump(&path("ranged_out.usda"), Some(24.0))["curves"][0]["points"])[0], 2.0);
+    let still = path("still.usda");
+    let sampled = "point3f[] points.timeSamples = {\n        0: [(0, 0, 0), (0, 1, 0)],\n        24: [(2, 0, 0), (2, 1, 0)],\n    }";
+    let layer = timed_curves_layer("metersPerUnit = 1");
+    assert!(layer.contains(sampled));
+    std::fs::write(&still, layer.replace(sampled, "point3f[] points = [(0, 0, 0), (0, 1, 0)]")).unwrap();
+    let info = coif(&["info", path_str(&still)]);
+    assert!(info.status.success() && !stderr(&info).contains("warning"), "{}", stderr(&info));
+    assert!(String::from_utf8_lossy(&info.stdout).contains("not animated"));
+}

@@ -75,7 +75,7 @@ fn a_truncated_file_fails_at_every_cut_with_its_line() {
                 assert!(message.starts_with(&format!("line {line}:")), "cut at {cut}: {message}");
             }
             Err(other) => panic!("cut at {cut}: not a format error: {other}"),
-            Ok(ReadOutcome::Groom(_)) => panic!("cut at {cut}: a truncated file read as a groom"),
+            Ok(ReadOutcome::Groom(..)) => panic!("cut at {cut}: a truncated file read as a groom"),
             Ok(ReadOutcome::NeedsComposition(_)) => panic!("cut at {cut}: composition?"),
         }
     }

@@ -175,7 +175,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     let unsettled = styled.report.unconverged_settle();
     // Required, an unconverged settle is the task's error instead.
     let unsettled_warning = unsettled.as_ref().filter(|_| !task.require_converged);
-    for warning in styled.report.warnings.iter().chain(unsettled_warning) {
+    for warning in loaded.warnings.iter().chain(&styled.report.warnings).chain(unsettled_warning) {
         eprintln!("coif: warning: {}: {warning}", task.name);
     }
     for output in &task.outputs {

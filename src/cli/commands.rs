@@ -24,9 +24,15 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
             let loaded = io::read_groom_selected(&file, &import.options(&file)?, &import.selection())?;
             let info = GroomInfo::of(&loaded.groom);
             let timeline = io::timeline::read_timeline(&file)?;
+            for warning in &loaded.warnings {
+                eprintln!("coif: warning: {warning}");
+            }
             if json {
                 let frames = timeline.map(|t| frames_json(&t));
-                print_json(json!({ "path": file, "format": loaded.format, "frames": frames, "groom": info }));
+                let warnings = &loaded.warnings;
+                print_json(
+                    json!({ "path": file, "format": loaded.format, "frames": frames, "groom": info, "warnings": warnings }),
+                );
             } else {
                 let frames = match timeline {
                     Some(t) => format!(
@@ -36,7 +42,11 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
                         t.frame_count(),
                         t.frames_per_second
                     ),
-                    None => "frames       one moment (not animated)\n".to_string(),
+                    // A moving stage without a frame range is one moment too: its warning says so.
+                    None if loaded.warnings.is_empty() => {
+                        "frames       one moment (not animated)\n".to_string()
+                    }
+                    None => "frames       one moment (see the warning)\n".to_string(),
                 };
                 print_stdout(&format!("{} ({})\n{frames}{info}", file.display(), loaded.format.name()));
             }
@@ -100,7 +110,8 @@ fn run_style(args: StyleArgs) -> Result<()> {
         &export,
     )?;
     let meshes_output = io::meshes_output(&args.output, groom, &export);
-    let warnings: Vec<String> = report.warnings.iter().cloned().chain(warnings).collect();
+    let warnings: Vec<String> =
+        loaded.warnings.iter().chain(&report.warnings).cloned().chain(warnings).collect();
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
@@ -233,14 +244,15 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     };
     let (groom, summary) = simulate(&loaded.groom, &options).map_err(|e| e.in_file(&args.input))?;
     let unsettled = summary.settle.and_then(|settle| settle.shortfall());
-    for warning in &summary.warnings {
+    for warning in loaded.warnings.iter().chain(&summary.warnings) {
         eprintln!("coif: warning: {warning}");
     }
     if let Some(shortfall) = unsettled.as_ref().filter(|_| !args.require_converged) {
         eprintln!("coif: warning: {shortfall}");
     }
     if args.json {
-        let warnings = io::write_groom(&args.output, &groom)?;
+        let warnings: Vec<String> =
+            loaded.warnings.iter().cloned().chain(io::write_groom(&args.output, &groom)?).collect();
         print_json(
             json!({ "output": args.output, "simulation": summary, "groom": GroomInfo::of(&groom), "warnings": warnings }),
         );
@@ -255,7 +267,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
                 settle.torque_residual
             );
         }
-        write_and_report(&args.output, &groom, false, &io::ExportOptions::default())?;
+        write_and_report(&args.output, &groom, &[], false, &io::ExportOptions::default())?;
     }
     match unsettled {
         Some(shortfall) if args.require_converged => Err(Error::NotConverged(shortfall)),
@@ -352,6 +364,9 @@ fn run_render(args: RenderArgs) -> Result<()> {
 
     let loaded =
         io::read_groom_selected(&args.input, &args.import.options(&args.input)?, &args.import.selection())?;
+    for warning in &loaded.warnings {
+        eprintln!("coif: warning: {warning}");
+    }
     let progress = Progress::new(args.progress.mode(false, false), "render", 1);
     let report = |done: u64, total: u64| {
         progress.set_total(total);
@@ -507,7 +522,7 @@ fn run_generate(args: GenerateArgs) -> Result<()> {
     // Fail on an unwritable extension or directory before spending time generating.
     io::check_output(&args.output, &io::ExportOptions::default())?;
     let groom = generate(&params)?;
-    write_and_report(&args.output, &groom, args.json, &io::ExportOptions::default())
+    write_and_report(&args.output, &groom, &[], args.json, &io::ExportOptions::default())
 }
 
 /// One frame, or the frames of a `--frame-range` or of an animated input's whole timeline.
@@ -541,7 +556,7 @@ fn run_convert(
     let Some(timeline) = timeline else {
         let loaded = io::read_groom_selected(input, &options, &import.selection())?;
         super::checks::nothing_read_is_written(output, &loaded, export, &[])?;
-        return write_and_report(output, &loaded.groom, json, export);
+        return write_and_report(output, &loaded.groom, &loaded.warnings, json, export);
     };
     // A file's own range is as unchecked as its samples (an `endTimeCode = 1e15` typo): bounded
     // like a `--frame-range`, before anything is read or written.
@@ -566,9 +581,10 @@ fn run_convert(
     };
     let loaded = read(timeline.first)?;
     super::checks::nothing_read_is_written(output, &loaded, export, &[])?;
-    let first = loaded.groom;
+    let (first, read_warnings) = (loaded.groom, loaded.warnings);
     let rest = timeline.frames().skip(1).map(|frame| read(frame).map(|loaded| loaded.groom));
-    let warnings = io::write_frames(output, input, &first, rest, &timeline, export)?;
+    let written = io::write_frames(output, input, &first, rest, &timeline, export)?;
+    let warnings: Vec<String> = read_warnings.into_iter().chain(written).collect();
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }
@@ -600,13 +616,16 @@ fn frames_json(timeline: &io::timeline::Timeline) -> serde_json::Value {
         "count": timeline.frame_count(), "frames_per_second": timeline.frames_per_second })
 }
 
+/// Writes `groom` and reports it, with the warnings of reading it (`read_warnings`) and writing it.
 fn write_and_report(
     output: &Path,
     groom: &coif::Groom,
+    read_warnings: &[String],
     json: bool,
     options: &io::ExportOptions,
 ) -> Result<()> {
-    let warnings = io::write_groom_with(output, groom, options)?;
+    let written = io::write_groom_with(output, groom, options)?;
+    let warnings: Vec<String> = read_warnings.iter().cloned().chain(written).collect();
     for warning in &warnings {
         eprintln!("coif: warning: {warning}");
     }

@@ -119,6 +119,8 @@ pub struct Loaded {
     pub format: Format,
     /// The files read: the groom's, then the layers a USD stage composes. No output may be one.
     pub files: Vec<std::path::PathBuf>,
+    /// What the reading left out that the user should hear about (commands print them).
+    pub warnings: Vec<String>,
 }
 
 impl Loaded {
@@ -144,6 +146,7 @@ pub fn read_groom_selected(
     let selection =
         &usda::Selection { time: selection.time.or(options.frame), variants: selection.variants.clone() };
     let mut files = vec![path.to_path_buf()];
+    let mut warnings = Vec::new();
     let groom = match format {
         Format::Hair | Format::Alembic => {
             if !selection.variants.is_empty() || (format == Format::Hair && selection.time.is_some()) {
@@ -166,9 +169,9 @@ pub fn read_groom_selected(
         // Composition (sublayers, references, payloads, inherits, variants) is native for
         // both formats: no Python is started. A layer without arcs is read in one pass.
         Format::Usda | Format::Usdc if !selection.variants.is_empty() => {
-            let (groom, layers) = usd_compose::read_groom(path, options, selection)?;
-            files = layers;
-            groom
+            let composed = usd_compose::read_groom(path, options, selection)?;
+            (files, warnings) = (composed.layers, composed.warnings);
+            composed.groom
         }
         Format::Usda | Format::Usdc => {
             let outcome = if format == Format::Usda {
@@ -178,12 +181,15 @@ pub fn read_groom_selected(
                 usdc::read_file(path, options, selection.time)?
             };
             match outcome {
-                usda::ReadOutcome::Groom(groom) => groom,
-                usda::ReadOutcome::NeedsComposition(layer) => {
-                    let (groom, layers) =
-                        usd_compose::groom_and_layers_from_composed(*layer, path, options, selection)?;
-                    files = layers;
+                usda::ReadOutcome::Groom(groom, read_warnings) => {
+                    warnings = read_warnings;
                     groom
+                }
+                usda::ReadOutcome::NeedsComposition(layer) => {
+                    let composed =
+                        usd_compose::groom_and_layers_from_composed(*layer, path, options, selection)?;
+                    (files, warnings) = (composed.layers, composed.warnings);
+                    composed.groom
                 }
             }
         }
@@ -191,7 +197,7 @@ pub fn read_groom_selected(
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;
-    Ok(Loaded { groom, format, files })
+    Ok(Loaded { groom, format, files, warnings })
 }
 
 /// The format of an existing groom file: its magic bytes, else its extension.

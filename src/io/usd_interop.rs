@@ -101,7 +101,7 @@ pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &
         other => other,
     };
     match usda::read(file, path, options, time).map_err(rename)? {
-        usda::ReadOutcome::Groom(groom) => Ok(groom),
+        usda::ReadOutcome::Groom(groom, _) => Ok(groom),
         usda::ReadOutcome::NeedsComposition(_) => {
             Err(Error::External("usd-core left composition arcs in a flattened stage".into()))
         }

@@ -60,26 +60,29 @@ pub fn groom_from_composed(
     options: &ImportOptions,
     selection: &Selection,
 ) -> Result<Groom> {
-    groom_and_layers(compose(root, path, selection)?, path, options, selection).map(|(groom, _)| groom)
+    groom_and_layers(compose(root, path, selection)?, path, options, selection).map(|read| read.groom)
 }
 
-/// Reads a `.usda` or `.usdc` stage, composed, into a groom, with the layer files it was composed
-/// from ([`layers_of`]).
-pub fn read_groom(
-    path: &Path,
-    options: &ImportOptions,
-    selection: &Selection,
-) -> Result<(Groom, Vec<PathBuf>)> {
+/// A composed stage's groom, the layer files it was composed from ([`layers_of`]) and warnings
+/// about what reading it left out.
+pub struct ComposedGroom {
+    pub groom: Groom,
+    pub layers: Vec<PathBuf>,
+    pub warnings: Vec<String>,
+}
+
+/// Reads a `.usda` or `.usdc` stage, composed, into a groom.
+pub fn read_groom(path: &Path, options: &ImportOptions, selection: &Selection) -> Result<ComposedGroom> {
     groom_and_layers(read_stage(path, selection)?, path, options, selection)
 }
 
-/// [`groom_from_composed`], with the layer files the stage was composed from ([`layers_of`]).
+/// [`groom_from_composed`], with the layer files and warnings.
 pub fn groom_and_layers_from_composed(
     root: Layer,
     path: &Path,
     options: &ImportOptions,
     selection: &Selection,
-) -> Result<(Groom, Vec<PathBuf>)> {
+) -> Result<ComposedGroom> {
     groom_and_layers(compose(root, path, selection)?, path, options, selection)
 }
 
@@ -88,10 +91,11 @@ fn groom_and_layers(
     path: &Path,
     options: &ImportOptions,
     selection: &Selection,
-) -> Result<(Groom, Vec<PathBuf>)> {
+) -> Result<ComposedGroom> {
     let layers = layers_of(&composed, path);
-    let groom = usda::groom_from_layer(composed, path, options, selection.time).map_err(usdc::unline)?;
-    Ok((groom, layers))
+    let (groom, warnings) =
+        usda::groom_from_layer(composed, path, options, selection.time).map_err(usdc::unline)?;
+    Ok(ComposedGroom { groom, layers, warnings })
 }
 
 /// The files a stage was read from: the root layer's, then those of the layers it composes.

@@ -104,7 +104,8 @@ pub struct Selection {
 // Returned once per file: boxing the groom would buy nothing.
 #[allow(clippy::large_enum_variant)]
 pub enum ReadOutcome {
-    Groom(Groom),
+    /// The groom, and warnings about what reading it left out.
+    Groom(Groom, Vec<String>),
     /// The layer composes other layers or variants: the parsed layer, for `io::usd_compose`.
     NeedsComposition(Box<Layer>),
 }
@@ -122,7 +123,8 @@ pub fn read(
     if layer.composes() {
         return Ok(ReadOutcome::NeedsComposition(Box::new(layer)));
     }
-    reader::groom_from_layer(layer, path, options, time).map(ReadOutcome::Groom)
+    reader::groom_from_layer(layer, path, options, time)
+        .map(|(groom, warnings)| ReadOutcome::Groom(groom, warnings))
 }
 
 fn parse(input: impl Read, path: &Path, time: Option<f64>) -> Result<Layer> {
@@ -158,7 +160,7 @@ pub fn is_animated(path: &Path) -> Result<Option<bool>> {
 pub fn read_file(path: &Path, options: &ImportOptions, time: Option<f64>) -> Result<Groom> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     match read(file, path, options, time)? {
-        ReadOutcome::Groom(groom) => Ok(groom),
+        ReadOutcome::Groom(groom, _) => Ok(groom),
         ReadOutcome::NeedsComposition(layer) => crate::io::usd_compose::groom_from_composed(
             *layer,
             path,

@@ -105,13 +105,14 @@ pub fn places_with_time_samples(layer: &Layer) -> bool {
     layer.prims.iter().any(|prim| visit(prim, false))
 }
 
-/// Builds the groom a layer describes, at `time` (see [`value_at`]).
+/// Builds the groom a layer describes, at `time` (see [`value_at`]), with warnings about what the
+/// reading left out.
 pub fn groom_from_layer(
     layer: Layer,
     path: &Path,
     options: &ImportOptions,
     time: Option<f64>,
-) -> Result<Groom> {
+) -> Result<(Groom, Vec<String>)> {
     groom_from_layer_in(layer, None, path, options, time)
 }
 
@@ -122,10 +123,12 @@ pub fn groom_from_layer_in(
     path: &Path,
     options: &ImportOptions,
     time: Option<f64>,
-) -> Result<Groom> {
+) -> Result<(Groom, Vec<String>)> {
     let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
     let authored_start = layer.timeline.start;
+    let ranged =
+        matches!((layer.timeline.start, layer.timeline.end), (Some(start), Some(end)) if start < end);
     let sources = std::mem::take(&mut layer.sources);
     let files = SiteFiles::new(path, &sources);
     let mut walker =
@@ -151,9 +154,21 @@ pub fn groom_from_layer_in(
             ));
         }
     }
+    // Time samples without a frame range: every reader sees one moment (`coif convert` writes a
+    // static file, `info` finds no frames), which the user should hear about.
+    let mut warnings = Vec::new();
+    if let (None, false, Some(first)) = (time, ranged, &walker.first_sample) {
+        warnings.push(format!(
+            "{}: '{}' is time-sampled but the stage authors no frame range (startTimeCode < \
+             endTimeCode): read as one moment, each value's default or else its earliest sample; \
+             --frame N reads another, and `coif convert --frame-range FIRST:LAST` the animation",
+            path.display(),
+            first.attribute
+        ));
+    }
     let mut groom = merge(walker.found, arrays, files, path, layer_lines)?;
     groom.meshes = walker.meshes;
-    Ok(groom)
+    Ok((groom, warnings))
 }
 
 struct Walker<'a> {
@@ -1235,7 +1250,7 @@ mod tests {
 
     fn read_text(text: &str) -> Groom {
         match read(text.as_bytes(), Path::new("t.usda"), &ImportOptions::default(), None).unwrap() {
-            ReadOutcome::Groom(groom) => groom,
+            ReadOutcome::Groom(groom, _) => groom,
             ReadOutcome::NeedsComposition(_) => panic!("no composition here"),
         }
     }
@@ -1335,7 +1350,7 @@ mod tests {
         let bits = |values: &[f32]| values.iter().map(|v| v.to_bits()).collect::<Vec<u32>>();
         let mut reads = Vec::new();
         for threads in [1, 3] {
-            let Ok(ReadOutcome::Groom(groom)) = read_on_threads(&text, threads) else {
+            let Ok(ReadOutcome::Groom(groom, _)) = read_on_threads(&text, threads) else {
                 panic!("a groom on {threads} threads");
             };
             let attribute = |name: &str| bits(&groom.attribute(name).expect(name).data);

@@ -44,7 +44,7 @@ pub fn read(
         return Ok(ReadOutcome::NeedsComposition(Box::new(crate_file.layer(time).map_err(bad)?)));
     }
     usda::groom_from_layer_in(layer, Some(&crate_file), path, options, time)
-        .map(ReadOutcome::Groom)
+        .map(|(groom, warnings)| ReadOutcome::Groom(groom, warnings))
         .map_err(unline)
 }
 

@@ -175,7 +175,7 @@ mod tests {
         let mut text = Vec::new();
         usda::write(&groom, &mut text).unwrap();
         let groom_of = |outcome: ReadOutcome| match outcome {
-            ReadOutcome::Groom(groom) => groom,
+            ReadOutcome::Groom(groom, _) => groom,
             ReadOutcome::NeedsComposition(_) => panic!("nothing to compose"),
         };
         let options = ImportOptions::default();
