@@ -196,8 +196,7 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(7);
         let params = WaterParams::default();
-        // A cloud of vertices over 30 cm (most far from every droplet; the occupancy table wraps
-        // every 38 cm at r_max 6 mm, so aliased cells are met too), droplets among some of them.
+        // A cloud of vertices over 30 cm, most far from every droplet, droplets among some of them.
         let mut hair: Vec<Vec3> =
             (0..20_000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 0.3).collect();
         let droplets: Vec<Vec3> = (0..60)
