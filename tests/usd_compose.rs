@@ -741,10 +741,11 @@ fn a_stage_range_that_starts_before_the_first_sample_holds_the_first_sample() {
 
 /// A stage whose curves are time-sampled but which authors no frame range (`startTimeCode` <
 /// `endTimeCode`) has no timeline to convert, and pxr reads no points at its default time; coif
-/// reads one moment, each value's earliest sample — without a word until now — `convert` wrote a static file, `info` said "not
-/// animated". Now every command that reads it warns, naming the file and the sampled attribute
-/// and how to read the animation, through a plain layer, a composed one and pxr's `.usdc` of it;
-/// a stage with a range, the frames asked for, or nothing sampled get no warning.
+/// reads one moment, each value's earliest sample. It did so without a word (`convert` wrote a
+/// static file, `info` said "not animated"); now every command that reads it warns, naming the
+/// file, the sampled attribute and how to read the animation — through a plain layer, a composed
+/// one and pxr's `.usdc` of it. A stage with a range, the frames asked for, or nothing sampled get
+/// no warning.
 #[test]
 fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();
