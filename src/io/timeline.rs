@@ -84,9 +84,9 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
                 }
                 Some(bytes) => usdc::read_timeline(bytes, path)?,
             };
-            let (Some(first), Some(last)) = (layer.start, layer.end) else { return Ok(None) };
+            let Some((first, last)) = layer.frame_range() else { return Ok(None) };
             let rate = layer.per_second.unwrap_or(USD_DEFAULT_TIME_CODES_PER_SECOND);
-            if !(first.is_finite() && last.is_finite() && first < last && rate.is_finite() && rate > 0.0) {
+            if !(rate.is_finite() && rate > 0.0) {
                 return Ok(None);
             }
             // The range alone may be the scene's; only time samples make the groom move (on the

@@ -246,6 +246,17 @@ impl LayerTimeline {
         }
     }
 
+    /// The authored frame range, when both ends are finite and `startTimeCode` < `endTimeCode`:
+    /// without one a stage has no timeline to play, whatever its time samples.
+    pub fn frame_range(&self) -> Option<(f64, f64)> {
+        match (self.start, self.end) {
+            (Some(start), Some(end)) if start.is_finite() && end.is_finite() && start < end => {
+                Some((start, end))
+            }
+            _ => None,
+        }
+    }
+
     /// Time codes per second as USD resolves them: `timeCodesPerSecond`, else `framesPerSecond`,
     /// else 24 (a rate that is not a positive number counts as not authored).
     pub fn codes_per_second(&self) -> f64 {

@@ -127,8 +127,7 @@ pub fn groom_from_layer_in(
     let stage = stage_transform(&layer, path, options)?;
     let layer_lines = layer.lines;
     let authored_start = layer.timeline.start;
-    let ranged =
-        matches!((layer.timeline.start, layer.timeline.end), (Some(start), Some(end)) if start < end);
+    let ranged = layer.timeline.frame_range().is_some();
     let sources = std::mem::take(&mut layer.sources);
     let files = SiteFiles::new(path, &sources);
     let mut walker =
