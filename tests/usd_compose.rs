@@ -819,3 +819,97 @@ fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
     assert!(info.status.success() && !stderr(&info).contains("warning"), "{}", stderr(&info));
     assert!(String::from_utf8_lossy(&info.stdout).contains("not animated"));
 }
+
+/// A stage that authors `framesPerSecond` but no `timeCodesPerSecond` (as some exporters write)
+/// counts its time codes at `framesPerSecond` in pxr; coif read it at 24, so `convert` wrote its
+/// animation a quarter slower and `--time` picked the wrong frame. Each stage below, as text and
+/// as pxr's own `.usdc`, must play at the rate pxr gives it: in `info`, in the `.usda` and `.abc`
+/// that `convert` writes, and for `--time`.
+#[test]
+fn a_stage_plays_at_the_time_code_rate_pxr_gives_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let range = "metersPerUnit = 1\n    startTimeCode = 0\n    endTimeCode = 24";
+    let stages = [
+        ("frames.usda", format!("{range}\n    framesPerSecond = 30"), 30.0),
+        ("both.usda", format!("{range}\n    framesPerSecond = 30\n    timeCodesPerSecond = 12"), 12.0),
+        ("none.usda", range.to_string(), 24.0),
+    ];
+    let mut flatten = Vec::new();
+    for (name, metadata, _) in &stages {
+        std::fs::write(path(name), timed_curves_layer(metadata)).unwrap();
+        let binary = path(&name.replace(".usda", "_pxr.usdc"));
+        flatten.push([
+            "flatten".to_string(),
+            path_str(&path(name)).to_string(),
+            path_str(&binary).to_string(),
+        ]);
+    }
+    let jobs = path("jobs.json");
+    std::fs::write(&jobs, serde_json::to_string(&flatten).unwrap()).unwrap();
+    probe(&["batch", path_str(&jobs)]);
+    for (name, _, rate) in &stages {
+        for input in [name.to_string(), name.replace(".usda", "_pxr.usdc")] {
+            let stage = path(&input);
+            // The independent expectation: pxr's rate for this stage (and the one named above).
+            let pxr_rate = pxr_dump(&stage, Some(0.0))["timeCodesPerSecond"].as_f64().unwrap();
+            assert_eq!(pxr_rate, *rate, "{input}: pxr");
+            let info = stdout_json(&coif(&["info", path_str(&stage), "--json"]));
+            assert_eq!(info["frames"]["frames_per_second"].as_f64(), Some(pxr_rate), "{input}: {info}");
+            assert_eq!(
+                (info["frames"]["first"].as_f64(), info["frames"]["last"].as_f64()),
+                (Some(0.0), Some(24.0))
+            );
+
+            // The converted animation keeps the frames and their rate.
+            let usda = path(&format!("{input}.out.usda"));
+            let converted = coif(&["convert", path_str(&stage), path_str(&usda)]);
+            assert!(converted.status.success(), "{input}: {}", stderr(&converted));
+            let dump = pxr_dump(&usda, Some(12.0));
+            assert_eq!(dump["timeCodesPerSecond"].as_f64(), Some(pxr_rate), "{input}: converted .usda");
+            assert_eq!(
+                f32s(&dump["curves"][0]["points"]),
+                f32s(&pxr_dump(&stage, Some(12.0))["curves"][0]["points"])
+            );
+            let abc = path(&format!("{input}.out.abc"));
+            let converted = coif(&["convert", path_str(&stage), path_str(&abc)]);
+            assert!(converted.status.success(), "{input}: {}", stderr(&converted));
+            let bytes = std::fs::read(&abc).unwrap();
+            let archive = coif::io::alembic::CurvesArchive::open(&bytes).unwrap();
+            assert_eq!(
+                (archive.frames_per_second(), archive.frame_range()),
+                (pxr_rate, (0.0, 24.0)),
+                "{input}"
+            );
+            // Frame 0 is printed as 0, not the -0 that rounding a sample time gave.
+            let text = String::from_utf8_lossy(&coif(&["info", path_str(&abc)]).stdout).to_string();
+            let frames = format!("frames       0 to 24 (25 frames at {pxr_rate} fps)");
+            assert!(text.contains(&frames), "{input}: {frames:?} not in\n{text}");
+
+            // Half a second is frame 0.5 × rate, where pxr finds the points.
+            let moment = path(&format!("{input}.half.usda"));
+            let converted = coif(&["convert", path_str(&stage), path_str(&moment), "--time", "0.5"]);
+            assert!(converted.status.success(), "{input}: {}", stderr(&converted));
+            assert_eq!(
+                f32s(&pxr_dump(&moment, None)["curves"][0]["points"]),
+                f32s(&pxr_dump(&stage, Some(0.5 * pxr_rate))["curves"][0]["points"]),
+                "{input}: --time 0.5"
+            );
+        }
+    }
+    // A rate that is not a positive number cannot turn seconds into frames: exit 2, naming the
+    // file and the key that authors it.
+    for (metadata, key) in
+        [("timeCodesPerSecond = 0", "timeCodesPerSecond 0"), ("framesPerSecond = -2", "framesPerSecond -2")]
+    {
+        let stage = path("bad_rate.usda");
+        std::fs::write(&stage, timed_curves_layer(&format!("{range}\n    {metadata}"))).unwrap();
+        let out = coif(&["info", path_str(&stage), "--time", "0.5"]);
+        assert_eq!(out.status.code(), Some(2), "{metadata}: {}", stderr(&out));
+        let message = stderr(&out);
+        assert!(
+            message.contains("bad_rate.usda") && message.contains(&format!("{key} is not a frame rate")),
+            "{message}"
+        );
+    }
+}

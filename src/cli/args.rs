@@ -407,8 +407,8 @@ pub(crate) struct ImportArgs {
     #[arg(long, value_name = "FRAME", allow_negative_numbers = true)]
     pub(crate) frame: Option<f64>,
     /// Animated input: the moment to read, in seconds on the file's own timeline (frame =
-    /// seconds × the file's frame rate: USD `timeCodesPerSecond`, Alembic's), the same moment
-    /// in either format.
+    /// seconds × the file's frame rate: USD `timeCodesPerSecond`, else `framesPerSecond`;
+    /// Alembic's), the same moment in either format.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, conflicts_with = "frame")]
     pub(crate) time: Option<f64>,
     /// USD input: a variant to select before reading, SET=NAME or /Prim/Path:SET=NAME (repeatable).

@@ -1,14 +1,13 @@
 //! The frames of a groom file's own timeline, as DCC exporters count them: whole frame numbers
-//! at the file's frame rate (USD: `startTimeCode`…`endTimeCode` at `timeCodesPerSecond`; Alembic:
-//! the first to the last sample time of what moves the curves or meshes, at the archive's frame
-//! rate). `coif convert` writes these frames of an animated input (or a `--frame-range`).
+//! at the file's frame rate (USD: `startTimeCode`…`endTimeCode` at `timeCodesPerSecond`, or at
+//! `framesPerSecond` where a layer authors only that, as pxr counts them; Alembic: the first to
+//! the last sample time of what moves the curves or meshes, at the archive's frame rate).
+//! `coif convert` writes these frames of an animated input (or a `--frame-range`).
 use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::io::{alembic, input, usda, usdc, Format};
 
-/// USD's `timeCodesPerSecond` when a layer authors none (the UsdStage fallback).
-const USD_DEFAULT_TIME_CODES_PER_SECOND: f64 = 24.0;
 /// Frames a range may hold (11.5 hours at 24 fps): beyond is a typo, refused before reading.
 pub const MAX_FRAMES: u64 = 1_000_000;
 /// Largest frame number accepted (as `--frame`).
@@ -85,10 +84,7 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
                 Some(bytes) => usdc::read_timeline(bytes, path)?,
             };
             let Some((first, last)) = layer.frame_range() else { return Ok(None) };
-            let rate = layer.per_second.unwrap_or(USD_DEFAULT_TIME_CODES_PER_SECOND);
-            if !(rate.is_finite() && rate > 0.0) {
-                return Ok(None);
-            }
+            let Ok(rate) = layer.checked_codes_per_second() else { return Ok(None) };
             // The range alone may be the scene's; only time samples make the groom move (on the
             // composed stage, for a layer with composition arcs).
             let animated = match &bytes {
@@ -101,7 +97,8 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
 }
 
 /// The frames per second of a groom file's own timeline, whether or not it moves: USD's
-/// `timeCodesPerSecond` (24 when unauthored), Alembic's frame rate; `None` for `.hair` and
+/// time codes per second (`timeCodesPerSecond`, else `framesPerSecond`, else 24, as pxr
+/// resolves them), Alembic's frame rate; `None` for `.hair` and
 /// `.usdz` (read through usd-core), which say none coif can read.
 pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
     match super::format_of(path)? {
@@ -117,10 +114,9 @@ pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
             } else {
                 usda::read_header(std::fs::File::open(path).map_err(|e| Error::io(path, e))?, path)?
             };
-            let rate = layer.per_second.unwrap_or(USD_DEFAULT_TIME_CODES_PER_SECOND);
-            if !(rate.is_finite() && rate > 0.0) {
-                return Err(Error::format(path, format!("timeCodesPerSecond {rate} is not a frame rate")));
-            }
+            let rate = layer
+                .checked_codes_per_second()
+                .map_err(|(key, rate)| Error::format(path, format!("{key} {rate} is not a frame rate")))?;
             Ok(Some(rate))
         }
     }

@@ -173,7 +173,8 @@ impl<'a> CurvesArchive<'a> {
         let (whole_first, whole_last) =
             ((first - SAME_TIME_IN_FRAMES).ceil(), (last + SAME_TIME_IN_FRAMES).floor());
         if whole_first <= whole_last {
-            (whole_first, whole_last)
+            // `+ 0.0` turns the -0 that rounding up a hair below zero gives into frame 0.
+            (whole_first + 0.0, whole_last + 0.0)
         } else {
             (first, last)
         }

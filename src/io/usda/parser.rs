@@ -234,6 +234,9 @@ pub struct LayerTimeline {
     pub frames_per_second: Option<f64>,
 }
 
+/// Time codes per second of a stage that authors no rate (pxr's fallback).
+const USD_DEFAULT_TIME_CODES_PER_SECOND: f64 = 24.0;
+
 impl LayerTimeline {
     /// Records one layer metadata field, if it is a timeline field.
     pub fn set(&mut self, key: &str, value: f64) {
@@ -258,10 +261,25 @@ impl LayerTimeline {
     }
 
     /// Time codes per second as USD resolves them: `timeCodesPerSecond`, else `framesPerSecond`,
-    /// else 24 (a rate that is not a positive number counts as not authored).
+    /// else 24; or, when the authored rate that applies is not a positive number, its key and
+    /// value.
+    pub fn checked_codes_per_second(&self) -> Result<f64, (&'static str, f64)> {
+        let authored = match (self.per_second, self.frames_per_second) {
+            (Some(rate), _) => ("timeCodesPerSecond", rate),
+            (None, Some(rate)) => ("framesPerSecond", rate),
+            (None, None) => return Ok(USD_DEFAULT_TIME_CODES_PER_SECOND),
+        };
+        if authored.1.is_finite() && authored.1 > 0.0 {
+            Ok(authored.1)
+        } else {
+            Err(authored)
+        }
+    }
+
+    /// [`checked_codes_per_second`](Self::checked_codes_per_second), with 24 where the authored
+    /// rate is not a positive number (composition retimes by it, and pxr would divide by it).
     pub fn codes_per_second(&self) -> f64 {
-        let valid = |rate: &f64| rate.is_finite() && *rate > 0.0;
-        self.per_second.filter(valid).or(self.frames_per_second.filter(valid)).unwrap_or(24.0)
+        self.checked_codes_per_second().unwrap_or(USD_DEFAULT_TIME_CODES_PER_SECOND)
     }
 }
 
