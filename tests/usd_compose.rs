@@ -744,8 +744,9 @@ fn a_stage_range_that_starts_before_the_first_sample_holds_the_first_sample() {
 /// reads one moment, each value's earliest sample. It did so without a word (`convert` wrote a
 /// static file, `info` said "not animated"); now every command that reads it warns, naming the
 /// file, the sampled attribute and how to read the animation — through a plain layer, a composed
-/// one and pxr's `.usdc` of it. A stage with a range, the frames asked for, or nothing sampled get
-/// no warning.
+/// one, pxr's `.usdc` of it and a `.usdz` package of it (read through usd-core's flattening, which
+/// dropped the warning). A stage with a range, the frames asked for, or nothing sampled get no
+/// warning.
 #[test]
 fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();
@@ -761,12 +762,13 @@ fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
     let flatten = [["flatten", path_str(&cache), path_str(&cache_pxr)]];
     std::fs::write(&jobs, serde_json::to_string(&flatten).unwrap()).unwrap();
     probe(&["batch", path_str(&jobs)]);
+    usdz_package(&cache, &path("cache.usdz"));
     let warned = |text: &str, file: &str| {
         text.contains(&format!("{file}: '/"))
             && text.contains(".points' is time-sampled but the stage authors no frame range")
             && text.contains("--frame-range FIRST:LAST")
     };
-    for input in ["cache.usda", "shot.usda", "cache_pxr.usdc"] {
+    for input in ["cache.usda", "shot.usda", "cache_pxr.usdc", "cache.usdz"] {
         let stage = path(input);
         let info = coif(&["info", path_str(&stage)]);
         assert!(info.status.success(), "{input}: {}", stderr(&info));
@@ -822,9 +824,10 @@ fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
 
 /// A stage that authors `framesPerSecond` but no `timeCodesPerSecond` (as some exporters write)
 /// counts its time codes at `framesPerSecond` in pxr; coif read it at 24, so `convert` wrote its
-/// animation a quarter slower and `--time` picked the wrong frame. Each stage below, as text and
-/// as pxr's own `.usdc`, must play at the rate pxr gives it: in `info`, in the `.usda` and `.abc`
-/// that `convert` writes, and for `--time`.
+/// animation a quarter slower and `--time` picked the wrong frame. Each stage below, as text, as
+/// pxr's own `.usdc` and as a `.usdz` package (whose timeline coif did not read at all: "not
+/// animated"), must play at the rate pxr gives it: in `info`, in the `.usda` and `.abc` that
+/// `convert` writes, and for `--time`.
 #[test]
 fn a_stage_plays_at_the_time_code_rate_pxr_gives_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -849,7 +852,9 @@ fn a_stage_plays_at_the_time_code_rate_pxr_gives_it() {
     std::fs::write(&jobs, serde_json::to_string(&flatten).unwrap()).unwrap();
     probe(&["batch", path_str(&jobs)]);
     for (name, _, rate) in &stages {
-        for input in [name.to_string(), name.replace(".usda", "_pxr.usdc")] {
+        usdz_package(&path(name), &path(&name.replace(".usda", ".usdz")));
+        let inputs = [name.to_string(), name.replace(".usda", "_pxr.usdc"), name.replace(".usda", ".usdz")];
+        for input in inputs {
             let stage = path(&input);
             // The independent expectation: pxr's rate for this stage (and the one named above).
             let pxr_rate = pxr_dump(&stage, Some(0.0))["timeCodesPerSecond"].as_f64().unwrap();

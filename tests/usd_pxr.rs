@@ -170,7 +170,7 @@ fn animated_points_are_time_samples_pxr_interpolates_like_coif() {
         pxr_dump(&binary, Some(3.0))["curves"][0]["pointsTimeSamples"],
         serde_json::json!([1.0, 2.0, 3.0])
     );
-    let from_binary = coif::io::usd_interop::read(&binary, &options, Some(3.0), &[]).unwrap();
+    let (from_binary, _) = coif::io::usd_interop::read(&binary, &options, Some(3.0), &[]).unwrap();
     assert_eq!(from_binary.points, frame(3.0));
 }
 
@@ -335,7 +335,7 @@ fn composed_stages_are_flattened_by_usd_core_with_the_chosen_variant() {
     // The native reader sees the reference and hands the stage to usd-core.
     let info = stdout_json(&coif(&["info", "--json", path_str(&stage)]));
     assert_eq!(info["groom"]["strand_length"]["max"], 1.0, "the default variant 'short'");
-    let long =
+    let (long, _) =
         coif::io::usd_interop::read(&stage, &Default::default(), None, &["length=long".into()]).unwrap();
     assert_eq!(long.points, vec![Vec3::ZERO, Vec3::new(0.0, 3.0, 0.0)]);
     let error =
@@ -409,13 +409,7 @@ fn a_usdz_of_instanced_prims_reads_as_its_composed_stage() {
     )
     .unwrap();
     let package = dir.path().join("pkg.usdz");
-    let made = std::process::Command::new(python())
-        .arg("-c")
-        .arg("import sys; from pxr import Sdf, UsdUtils; sys.exit(0 if UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(sys.argv[1]), sys.argv[2]) else 1)")
-        .args([path_str(&root), path_str(&package)])
-        .output()
-        .unwrap();
-    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    usdz_package(&root, &package);
     let out = dir.path().join("out.usda");
     let read = coif(&["convert", path_str(&package), path_str(&out)]);
     assert!(read.status.success(), "{}", stderr(&read));

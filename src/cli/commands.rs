@@ -574,11 +574,8 @@ fn run_convert(
             ),
         ));
     }
-    let read = |frame: f64| -> Result<io::Loaded> {
-        let options = io::ImportOptions { frame: Some(frame), ..options };
-        let selection = io::usda::Selection { time: Some(frame), ..import.selection() };
-        io::read_groom_selected(input, &options, &selection)
-    };
+    let reader = io::FrameReader::new(input, options, import.selection().variants)?;
+    let read = |frame: f64| reader.read(frame);
     let loaded = read(timeline.first)?;
     super::checks::nothing_read_is_written(output, &loaded, export, &[])?;
     let (first, read_warnings) = (loaded.groom, loaded.warnings);

@@ -141,6 +141,41 @@ pub fn read_groom_selected(
     options: &ImportOptions,
     selection: &usda::Selection,
 ) -> Result<Loaded> {
+    read_groom_from(path, options, selection, None)
+}
+
+/// Reads frames of one groom file, each as [`read_groom_selected`] reads it at that frame; a
+/// `.usdz` package is flattened by usd-core once for all of them, not once a frame.
+pub struct FrameReader<'a> {
+    path: &'a Path,
+    options: ImportOptions,
+    variants: Vec<String>,
+    flattened: Option<usd_interop::Flattened>,
+}
+
+impl<'a> FrameReader<'a> {
+    pub fn new(path: &'a Path, options: ImportOptions, variants: Vec<String>) -> Result<Self> {
+        let flattened = match format_of(path)? {
+            Format::Usdz => Some(usd_interop::flatten(path, &variants)?),
+            _ => None,
+        };
+        Ok(FrameReader { path, options, variants, flattened })
+    }
+
+    pub fn read(&self, frame: f64) -> Result<Loaded> {
+        let options = ImportOptions { frame: Some(frame), ..self.options };
+        let selection = usda::Selection { time: Some(frame), variants: self.variants.clone() };
+        read_groom_from(self.path, &options, &selection, self.flattened.as_ref())
+    }
+}
+
+/// [`read_groom_selected`], reading a `.usdz` from `flattened` when given.
+fn read_groom_from(
+    path: &Path,
+    options: &ImportOptions,
+    selection: &usda::Selection,
+    flattened: Option<&usd_interop::Flattened>,
+) -> Result<Loaded> {
     let format = format_of(path)?;
     // One frame for every format: a USD time code is the frame number on the stage's timeline.
     let selection =
@@ -193,7 +228,14 @@ pub fn read_groom_selected(
                 }
             }
         }
-        Format::Usdz => usd_interop::read(path, options, selection.time, &selection.variants)?,
+        Format::Usdz => {
+            let groom;
+            (groom, warnings) = match flattened {
+                Some(flattened) => usd_interop::read_flattened(flattened, path, options, selection.time)?,
+                None => usd_interop::read(path, options, selection.time, &selection.variants)?,
+            };
+            groom
+        }
     };
     groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
     check_contents(&groom, path)?;

@@ -3,10 +3,11 @@
 //! `framesPerSecond` where a layer authors only that, as pxr counts them; Alembic: the first to
 //! the last sample time of what moves the curves or meshes, at the archive's frame rate).
 //! `coif convert` writes these frames of an animated input (or a `--frame-range`).
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::io::{alembic, input, usda, usdc, Format};
+use crate::io::usda::LayerTimeline;
+use crate::io::{alembic, input, usd_interop, usda, usdc, Format};
 
 /// Frames a range may hold (11.5 hours at 24 fps): beyond is a typo, refused before reading.
 pub const MAX_FRAMES: u64 = 1_000_000;
@@ -60,11 +61,11 @@ pub fn parse_range(text: &str, flag: &str) -> Result<(f64, f64)> {
 }
 
 /// The timeline of an animated groom file, `None` when it holds one moment (a static file, a
-/// `.hair` file, a `.usdz` package, a USD layer without `startTimeCode` < `endTimeCode` or whose
-/// curves, meshes and the transforms above them have no time samples).
+/// `.hair` file, a USD stage without `startTimeCode` < `endTimeCode` or whose curves, meshes and
+/// the transforms above them have no time samples).
 pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
     match super::format_of(path)? {
-        Format::Hair | Format::Usdz => Ok(None),
+        Format::Hair => Ok(None),
         Format::Alembic => {
             let bytes = input::map_file(path)?;
             let archive = alembic::CurvesArchive::open(&bytes).map_err(|e| Error::format(path, e.0))?;
@@ -75,22 +76,13 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
             Ok(Some(Timeline { first, last, frames_per_second: archive.frames_per_second() }))
         }
         format => {
-            let bytes = (format == Format::Usdc).then(|| input::map_file(path)).transpose()?;
-            let layer = match &bytes {
-                None => {
-                    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-                    usda::read_header(file, path)?
-                }
-                Some(bytes) => usdc::read_timeline(bytes, path)?,
-            };
+            let stage = UsdStageFile::open(path, format)?;
+            let layer = stage.layer_timeline(path)?;
             let Some((first, last)) = layer.frame_range() else { return Ok(None) };
             let Ok(rate) = layer.checked_codes_per_second() else { return Ok(None) };
             // The range alone may be the scene's; only time samples make the groom move (on the
             // composed stage, for a layer with composition arcs).
-            let animated = match &bytes {
-                None => usda::is_animated(path)?,
-                Some(bytes) => usdc::is_animated(bytes, path)?,
-            };
+            let animated = stage.is_animated(path)?;
             Ok(animated.unwrap_or(true).then_some(Timeline { first, last, frames_per_second: rate }))
         }
     }
@@ -98,26 +90,59 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
 
 /// The frames per second of a groom file's own timeline, whether or not it moves: USD's
 /// time codes per second (`timeCodesPerSecond`, else `framesPerSecond`, else 24, as pxr
-/// resolves them), Alembic's frame rate; `None` for `.hair` and
-/// `.usdz` (read through usd-core), which say none coif can read.
+/// resolves them), Alembic's frame rate; `None` for `.hair`, which has none.
 pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
     match super::format_of(path)? {
-        Format::Hair | Format::Usdz => Ok(None),
+        Format::Hair => Ok(None),
         Format::Alembic => {
             let bytes = input::map_file(path)?;
             let archive = alembic::CurvesArchive::open(&bytes).map_err(|e| Error::format(path, e.0))?;
             Ok(Some(archive.frames_per_second()))
         }
         format => {
-            let layer = if format == Format::Usdc {
-                usdc::read_timeline(&input::map_file(path)?, path)?
-            } else {
-                usda::read_header(std::fs::File::open(path).map_err(|e| Error::io(path, e))?, path)?
-            };
+            let layer = UsdStageFile::open(path, format)?.layer_timeline(path)?;
             let rate = layer
                 .checked_codes_per_second()
                 .map_err(|(key, rate)| Error::format(path, format!("{key} {rate} is not a frame rate")))?;
             Ok(Some(rate))
+        }
+    }
+}
+
+/// A USD stage as its timeline is read: a crate file's bytes, or a `.usda` — the user's, or
+/// usd-core's flattening of a `.usdz` package (kept while this lives). Errors name the user's file.
+enum UsdStageFile {
+    Crate(input::Input),
+    Text { path: PathBuf, _flattened: Option<usd_interop::Flattened> },
+}
+
+impl UsdStageFile {
+    fn open(path: &Path, format: Format) -> Result<Self> {
+        Ok(match format {
+            Format::Usdc => UsdStageFile::Crate(input::map_file(path)?),
+            Format::Usdz => {
+                let flattened = usd_interop::flatten(path, &[])?;
+                UsdStageFile::Text { path: flattened.path(), _flattened: Some(flattened) }
+            }
+            _ => UsdStageFile::Text { path: path.to_path_buf(), _flattened: None },
+        })
+    }
+
+    /// The root layer's timeline metadata.
+    fn layer_timeline(&self, path: &Path) -> Result<LayerTimeline> {
+        match self {
+            UsdStageFile::Crate(bytes) => usdc::read_timeline(bytes, path),
+            UsdStageFile::Text { path: text, .. } => {
+                usda::read_header(std::fs::File::open(text).map_err(|e| Error::io(path, e))?, path)
+            }
+        }
+    }
+
+    /// Whether the (composed) stage time-samples what places its curves or meshes.
+    fn is_animated(&self, path: &Path) -> Result<Option<bool>> {
+        match self {
+            UsdStageFile::Crate(bytes) => usdc::is_animated(bytes, path),
+            UsdStageFile::Text { path: text, .. } => usda::is_animated(text),
         }
     }
 }
@@ -128,7 +153,7 @@ pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
 pub fn frame_at_time(path: &Path, seconds: f64, flag: &str) -> Result<f64> {
     let Some(rate) = frame_rate(path)? else {
         return Err(Error::Usage(format!(
-            "{}: {flag} needs the file's frame rate: it applies to .usda, .usdc and .abc input",
+            "{}: {flag} needs the file's frame rate: it applies to USD and Alembic input",
             path.display()
         )));
     };

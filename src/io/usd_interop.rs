@@ -83,15 +83,52 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     })
 }
 
-/// Reads any USD stage usd-core can open, flattened through a temporary `.usda`.
-pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &[String]) -> Result<Groom> {
+/// A stage usd-core flattened into a temporary `.usda`, removed when this is dropped (or when
+/// coif is interrupted).
+pub struct Flattened {
+    _tracked: super::cleanup::Tracked,
+    folder: tempfile::TempDir,
+}
+
+impl Flattened {
+    /// The flattened `.usda`.
+    pub fn path(&self) -> PathBuf {
+        self.folder.path().join("flattened.usda")
+    }
+}
+
+/// Flattens any USD stage usd-core can open (with `variants` selected) into a temporary `.usda`.
+pub fn flatten(path: &Path, variants: &[String]) -> Result<Flattened> {
     let folder = tempfile::tempdir().map_err(|e| Error::io(Path::new("temporary folder"), e))?;
-    let _interrupted = super::cleanup::Tracked::new(folder.path());
-    let flat = folder.path().join("flattened.usda");
+    let flattened = Flattened { _tracked: super::cleanup::Tracked::new(folder.path()), folder };
+    let flat = flattened.path();
     let variant_args: Vec<OsString> = variants.iter().map(|v| format!("--variant={v}").into()).collect();
     let mut args: Vec<&OsStr> = vec![path.as_os_str(), flat.as_os_str()];
     args.extend(variant_args.iter().map(OsString::as_os_str));
     run(&args, "flatten", path)?;
+    Ok(flattened)
+}
+
+/// Reads any USD stage usd-core can open, flattened through a temporary `.usda`, with the
+/// warnings of reading it (see `usda::ReadOutcome`).
+pub fn read(
+    path: &Path,
+    options: &ImportOptions,
+    time: Option<f64>,
+    variants: &[String],
+) -> Result<(Groom, Vec<String>)> {
+    read_flattened(&flatten(path, variants)?, path, options, time)
+}
+
+/// Reads `path`'s stage from its flattening at `time` (so that the frames of a package are read
+/// from one flattening). Errors and warnings name `path`.
+pub fn read_flattened(
+    flattened: &Flattened,
+    path: &Path,
+    options: &ImportOptions,
+    time: Option<f64>,
+) -> Result<(Groom, Vec<String>)> {
+    let flat = flattened.path();
     let file = std::fs::File::open(&flat).map_err(|e| Error::io(&flat, e))?;
     // Errors name the user's file; line numbers refer to the flattened text.
     let rename = |error: Error| match error {
@@ -101,7 +138,7 @@ pub fn read(path: &Path, options: &ImportOptions, time: Option<f64>, variants: &
         other => other,
     };
     match usda::read(file, path, options, time).map_err(rename)? {
-        usda::ReadOutcome::Groom(groom, _) => Ok(groom),
+        usda::ReadOutcome::Groom(groom, warnings) => Ok((groom, warnings)),
         usda::ReadOutcome::NeedsComposition(_) => {
             Err(Error::External("usd-core left composition arcs in a flattened stage".into()))
         }

@@ -25,6 +25,17 @@ pub fn probe(args: &[&str]) -> String {
     String::from_utf8(output.stdout).unwrap()
 }
 
+/// Packages the stage `root` (and what it references) as the `.usdz` `package`, with usd-core.
+pub fn usdz_package(root: &Path, package: &Path) {
+    let made = Command::new(python())
+        .arg("-c")
+        .arg("import sys; from pxr import Sdf, UsdUtils; sys.exit(0 if UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(sys.argv[1]), sys.argv[2]) else 1)")
+        .args([root, package])
+        .output()
+        .expect("the project's Python runs");
+    assert!(made.status.success(), "usdz packaging of {root:?}: {}", String::from_utf8_lossy(&made.stderr));
+}
+
 /// What pxr sees in a stage (at a time, or the default time).
 pub fn pxr_dump(path: &Path, time: Option<f64>) -> serde_json::Value {
     let path = path.to_str().unwrap();
