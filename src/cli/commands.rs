@@ -574,7 +574,8 @@ fn run_convert(
             ),
         ));
     }
-    let reader = io::FrameReader::new(input, options, import.selection().variants)?;
+    let reader =
+        io::FrameReader::new(input, options, import.selection().variants, timeline.first, timeline.last)?;
     let read = |frame: f64| reader.read(frame);
     let loaded = read(timeline.first)?;
     super::checks::nothing_read_is_written(output, &loaded, export, &[])?;

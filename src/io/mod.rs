@@ -141,40 +141,79 @@ pub fn read_groom_selected(
     options: &ImportOptions,
     selection: &usda::Selection,
 ) -> Result<Loaded> {
-    read_groom_from(path, options, selection, None)
+    read_groom_from(path, options, selection, &FrameSource::File)
 }
 
-/// Reads frames of one groom file, each as [`read_groom_selected`] reads it at that frame; a
-/// `.usdz` package is flattened by usd-core once for all of them, not once a frame.
+/// Reads frames of one groom file, each as [`read_groom_selected`] reads it at that frame, from
+/// one reading of the file where it can: a `.usdz` package is flattened by usd-core once, and a
+/// `.usda` layer without composition arcs is parsed once, keeping the time samples of the frames
+/// asked for (parsing it again for each frame made a long text cache's convert quadratic).
 pub struct FrameReader<'a> {
     path: &'a Path,
     options: ImportOptions,
     variants: Vec<String>,
-    flattened: Option<usd_interop::Flattened>,
+    source: FrameSource,
+}
+
+/// What a [`FrameReader`] reads each frame from.
+enum FrameSource {
+    /// The file, again for each frame.
+    File,
+    /// usd-core's flattening of a `.usdz`.
+    Flattened(usd_interop::Flattened),
+    /// A `.usda` layer parsed with the samples from the first frame to the last.
+    Parsed { layer: Box<usda::Layer>, first: f64, last: f64 },
 }
 
 impl<'a> FrameReader<'a> {
-    pub fn new(path: &'a Path, options: ImportOptions, variants: Vec<String>) -> Result<Self> {
-        let flattened = match format_of(path)? {
-            Format::Usdz => Some(usd_interop::flatten(path, &variants)?),
-            _ => None,
+    /// A reader of frames `first` to `last` of `path` (others are read from the file).
+    pub fn new(
+        path: &'a Path,
+        options: ImportOptions,
+        variants: Vec<String>,
+        first: f64,
+        last: f64,
+    ) -> Result<Self> {
+        let source = match format_of(path)? {
+            Format::Usdz => FrameSource::Flattened(usd_interop::flatten(path, &variants)?),
+            // Kept samples take at most about twice the text's size ("0" is one character, four
+            // bytes): past the memory limit, frames are parsed one at a time.
+            Format::Usda if variants.is_empty() && text_fits_in_memory(path) => {
+                let layer = usda::read_layer_between(path, first, last)?;
+                if layer.composes() {
+                    FrameSource::File
+                } else {
+                    FrameSource::Parsed { layer: Box::new(layer), first, last }
+                }
+            }
+            _ => FrameSource::File,
         };
-        Ok(FrameReader { path, options, variants, flattened })
+        Ok(FrameReader { path, options, variants, source })
     }
 
     pub fn read(&self, frame: f64) -> Result<Loaded> {
         let options = ImportOptions { frame: Some(frame), ..self.options };
         let selection = usda::Selection { time: Some(frame), variants: self.variants.clone() };
-        read_groom_from(self.path, &options, &selection, self.flattened.as_ref())
+        let source = match &self.source {
+            FrameSource::Parsed { first, last, .. } if !(*first <= frame && frame <= *last) => {
+                &FrameSource::File
+            }
+            source => source,
+        };
+        read_groom_from(self.path, &options, &selection, source)
     }
 }
 
-/// [`read_groom_selected`], reading a `.usdz` from `flattened` when given.
+fn text_fits_in_memory(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.len().saturating_mul(2) <= crate::limits::max_memory())
+}
+
+/// [`read_groom_selected`], from what `source` kept of the file.
 fn read_groom_from(
     path: &Path,
     options: &ImportOptions,
     selection: &usda::Selection,
-    flattened: Option<&usd_interop::Flattened>,
+    source: &FrameSource,
 ) -> Result<Loaded> {
     let format = format_of(path)?;
     // One frame for every format: a USD time code is the frame number on the stage's timeline.
@@ -209,7 +248,9 @@ fn read_groom_from(
             composed.groom
         }
         Format::Usda | Format::Usdc => {
-            let outcome = if format == Format::Usda {
+            let outcome = if let (FrameSource::Parsed { layer, .. }, Some(time)) = (source, selection.time) {
+                usda::groom_at(layer, path, options, time)?
+            } else if format == Format::Usda {
                 let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
                 usda::read(file, path, options, selection.time)?
             } else {
@@ -230,9 +271,11 @@ fn read_groom_from(
         }
         Format::Usdz => {
             let groom;
-            (groom, warnings) = match flattened {
-                Some(flattened) => usd_interop::read_flattened(flattened, path, options, selection.time)?,
-                None => usd_interop::read(path, options, selection.time, &selection.variants)?,
+            (groom, warnings) = match source {
+                FrameSource::Flattened(flattened) => {
+                    usd_interop::read_flattened(flattened, path, options, selection.time)?
+                }
+                _ => usd_interop::read(path, options, selection.time, &selection.variants)?,
             };
             groom
         }

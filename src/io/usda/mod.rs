@@ -128,10 +128,35 @@ pub fn read(
 }
 
 fn parse(input: impl Read, path: &Path, time: Option<f64>) -> Result<Layer> {
-    parser::parse(input, time).map_err(|error| match error {
+    parser::parse(input, time).map_err(|error| parse_error(error, path))
+}
+
+/// A parse error as the error of reading `path`.
+fn parse_error(error: parser::ParseError, path: &Path) -> Error {
+    match error {
         parser::ParseError::Syntax(e) => Error::format(path, format!("line {}: {}", e.line, e.message)),
         parser::ParseError::Io(e) => Error::io(path, e),
-    })
+    }
+}
+
+/// Parses a `.usda` file keeping the time samples from `first` to `last` (and those around
+/// them), for [`groom_at`] to read any time between from it.
+pub(crate) fn read_layer_between(path: &Path, first: f64, last: f64) -> Result<Layer> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    parser::parse_keeping(file, parser::KeptSamples::Between(first, last))
+        .map_err(|error| parse_error(error, path))
+}
+
+/// The groom a layer without composition arcs (from [`read_layer_between`]) holds at `time`,
+/// as [`read`] gives it for that time.
+pub(crate) fn groom_at(
+    layer: &Layer,
+    path: &Path,
+    options: &ImportOptions,
+    time: f64,
+) -> Result<ReadOutcome> {
+    reader::groom_from_layer(layer.at_time(time), path, options, Some(time))
+        .map(|(groom, warnings)| ReadOutcome::Groom(groom, warnings))
 }
 
 /// Parses a `.usda` file into the layer model, composition arcs recorded, not resolved.
@@ -143,10 +168,7 @@ pub(crate) fn read_layer_file(path: &Path, time: Option<f64>) -> Result<Layer> {
 /// The timeline metadata of a `.usda` layer (its header only; no prim is parsed). The stage's
 /// timeline is its root layer's, so sublayers are not read.
 pub fn read_header(input: impl Read, path: &Path) -> Result<parser::LayerTimeline> {
-    parser::parse_header(input).map(|layer| layer.timeline).map_err(|error| match error {
-        parser::ParseError::Syntax(e) => Error::format(path, format!("line {}: {}", e.line, e.message)),
-        parser::ParseError::Io(e) => Error::io(path, e),
-    })
+    parser::parse_header(input).map(|layer| layer.timeline).map_err(|error| parse_error(error, path))
 }
 
 /// Whether a `.usda` stage (composed, if it needs composition) time-samples anything that

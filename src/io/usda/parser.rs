@@ -151,8 +151,8 @@ pub struct Attribute {
     /// The declaration.
     pub site: Site,
     pub default: Option<Value>,
-    /// The time samples kept (see [`Parser::offer_sample`]): at most the two around the
-    /// requested time, or the earliest one when no time was requested.
+    /// The time samples kept (see [`KeptSamples`]): at most the two around the requested
+    /// time, or the earliest one when no time was requested, or those of a span of time.
     pub samples: Vec<(f64, Value)>,
     pub interpolation: Option<String>,
     pub element_size: Option<i64>,
@@ -318,7 +318,7 @@ enum Meta {
 
 pub struct Parser<'a> {
     lexer: Lexer<'a>,
-    time: Option<f64>,
+    kept: KeptSamples,
     /// Prims and bracketed values open around the current position: bounded by
     /// [`MAX_NESTING`], so no file can overflow the stack of this recursive-descent parser.
     depth: usize,
@@ -332,19 +332,34 @@ pub struct Parser<'a> {
 /// Nesting of prims and of bracketed values a layer may have (real stages nest a few dozen).
 pub const MAX_NESTING: usize = 1000;
 
+/// Which time samples a parse keeps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KeptSamples {
+    /// The ones value resolution at a time needs (`None`: the earliest; see [`offer_sample`]).
+    At(Option<f64>),
+    /// Every one from the first time to the last, with the latest before them and the earliest
+    /// after: what resolution at any time between needs (see [`Layer::at_time`]).
+    Between(f64, f64),
+}
+
 /// Parses a whole layer. `time` selects which time samples are kept.
 pub fn parse<'a>(input: impl Read + 'a, time: Option<f64>) -> ParseResult<Layer> {
-    parse_layer(input, time, false)
+    parse_layer(input, KeptSamples::At(time), false)
+}
+
+/// Parses a whole layer, keeping the time samples `kept` selects.
+pub fn parse_keeping<'a>(input: impl Read + 'a, kept: KeptSamples) -> ParseResult<Layer> {
+    parse_layer(input, kept, false)
 }
 
 /// Parses only the layer's metadata (units, up axis, timeline, sublayers), not its prims.
 pub fn parse_header<'a>(input: impl Read + 'a) -> ParseResult<Layer> {
-    parse_layer(input, None, true)
+    parse_layer(input, KeptSamples::At(None), true)
 }
 
-fn parse_layer<'a>(input: impl Read + 'a, time: Option<f64>, header_only: bool) -> ParseResult<Layer> {
+fn parse_layer<'a>(input: impl Read + 'a, kept: KeptSamples, header_only: bool) -> ParseResult<Layer> {
     let mut parser =
-        Parser { lexer: Lexer::new(input), time, depth: 0, arcs: None, sub_layers: None, refused: None };
+        Parser { lexer: Lexer::new(input), kept, depth: 0, arcs: None, sub_layers: None, refused: None };
     let result = parser.layer(header_only);
     if let Some(error) = parser.lexer.take_read_error() {
         return Err(ParseError::Io(error));
@@ -905,7 +920,12 @@ impl Parser<'_> {
                     self.lexer.expect(b':', "':' after the sample time")?;
                     let value = self.typed_value(kind, components, array, keep, reserve)?;
                     if keep {
-                        offer_sample(&mut attribute.samples, self.time, time, value);
+                        match self.kept {
+                            KeptSamples::At(at) => offer_sample(&mut attribute.samples, at, time, value),
+                            KeptSamples::Between(first, last) => {
+                                offer_sample_between(&mut attribute.samples, first, last, time, value)
+                            }
+                        }
                     }
                 }
             }
@@ -1169,10 +1189,12 @@ pub fn wanted(name: &str) -> bool {
 
 /// Keeps, among all samples offered, the ones value resolution at `requested` needs: with no
 /// requested time the earliest sample; otherwise the latest at or before it and the earliest after.
+/// Of samples at equal times the last offered is kept, as in pxr (a later key replaces an
+/// earlier one).
 pub fn offer_sample(kept: &mut Vec<(f64, Value)>, requested: Option<f64>, time: f64, value: Value) {
     match requested {
         None => {
-            if kept.first().is_none_or(|(t, _)| time < *t) {
+            if kept.first().is_none_or(|(t, _)| time <= *t) {
                 kept.clear();
                 kept.push((time, value));
             }
@@ -1183,13 +1205,93 @@ pub fn offer_sample(kept: &mut Vec<(f64, Value)>, requested: Option<f64>, time: 
             match slot {
                 None => kept.push((time, value)),
                 Some(i) => {
-                    let better = if before(time) { time > kept[i].0 } else { time < kept[i].0 };
+                    let better = if before(time) { time >= kept[i].0 } else { time <= kept[i].0 };
                     if better {
                         kept[i] = (time, value);
                     }
                 }
             }
             kept.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+    }
+}
+
+/// Keeps, among all samples offered, every one from `first` to `last` (in the order offered),
+/// the latest before `first` and the earliest after `last` (the last offered of equal times).
+fn offer_sample_between(kept: &mut Vec<(f64, Value)>, first: f64, last: f64, time: f64, value: Value) {
+    if first <= time && time <= last {
+        kept.push((time, value));
+        return;
+    }
+    let before = time < first;
+    match kept.iter().position(|(t, _)| if before { *t < first } else { *t > last || t.is_nan() }) {
+        None => kept.push((time, value)),
+        Some(i) => {
+            let better = if before { time >= kept[i].0 } else { time <= kept[i].0 };
+            if better {
+                kept[i] = (time, value);
+            }
+        }
+    }
+}
+
+impl Attribute {
+    /// This attribute with the samples value resolution at `time` needs, as [`offer_sample`]
+    /// keeps them: the latest at or before it and the earliest after (the last offered of
+    /// equal times). Only those are cloned.
+    fn at_time(&self, time: f64) -> Attribute {
+        let (mut before, mut after): (Option<usize>, Option<usize>) = (None, None);
+        for (i, (t, _)) in self.samples.iter().enumerate() {
+            if *t <= time {
+                if before.is_none_or(|b| *t >= self.samples[b].0) {
+                    before = Some(i);
+                }
+            } else if after.is_none_or(|a| *t <= self.samples[a].0) {
+                after = Some(i);
+            }
+        }
+        Attribute {
+            name: self.name.clone(),
+            type_name: self.type_name.clone(),
+            site: self.site,
+            default: self.default.clone(),
+            samples: [before, after].into_iter().flatten().map(|i| self.samples[i].clone()).collect(),
+            interpolation: self.interpolation.clone(),
+            element_size: self.element_size,
+        }
+    }
+}
+
+impl Prim {
+    fn at_time(&self, time: f64) -> Prim {
+        Prim {
+            type_name: self.type_name.clone(),
+            name: self.name.clone(),
+            site: self.site,
+            specifier: self.specifier,
+            active: self.active,
+            attributes: self.attributes.iter().map(|a| a.at_time(time)).collect(),
+            children: self.children.iter().map(|c| c.at_time(time)).collect(),
+            arcs: self.arcs.clone(),
+        }
+    }
+}
+
+impl Layer {
+    /// This layer as a parse for `time` would give it, from one that kept the samples of a span
+    /// holding `time` ([`KeptSamples::Between`]): the frames of an animation are read from one
+    /// parse of the file, not one each.
+    pub fn at_time(&self, time: f64) -> Layer {
+        Layer {
+            lines: self.lines,
+            sources: self.sources.clone(),
+            meters_per_unit: self.meters_per_unit,
+            up_axis: self.up_axis.clone(),
+            default_prim: self.default_prim.clone(),
+            sub_layers: self.sub_layers.clone(),
+            refused: self.refused.clone(),
+            timeline: self.timeline,
+            prims: self.prims.iter().map(|p| p.at_time(time)).collect(),
         }
     }
 }
@@ -1257,5 +1359,39 @@ mod tests {
             offer_sample(&mut earliest, None, t, Value::F32(vec![t as f32]));
         }
         assert_eq!(earliest.iter().map(|(t, _)| *t).collect::<Vec<_>>(), vec![1.0]);
+    }
+
+    /// A layer parsed once for a span of time, read at a time within it, is the layer a parse for
+    /// that time gives (the control): samples out of order, at equal times, before and after the
+    /// span, on points, widths and a transform; times on, between and at the ends of samples.
+    #[test]
+    fn a_layer_kept_for_a_span_reads_at_each_time_as_a_parse_for_that_time() {
+        let points = |x: f32| format!("[({x}, 0, 0), ({x}, 1, 0)]");
+        let text = format!(
+            "#usda 1.0\n(\n    startTimeCode = 1\n    endTimeCode = 9\n)\n\n\
+             def Xform \"G\"\n{{\n    double3 xformOp:translate.timeSamples = {{ 8: (0, 2, 0), -1: (0, 1, 0) }}\n    \
+             uniform token[] xformOpOrder = [\"xformOp:translate\"]\n    \
+             def BasisCurves \"C\"\n    {{\n        int[] curveVertexCounts = [2]\n        \
+             point3f[] points.timeSamples = {{ 7: {}, -3: {}, 2.5: {}, 2.5: {}, 12: {}, 4: {}, 20: {}, 0.5: {}, 9: {} }}\n        \
+             float[] widths = [0.1, 0.1]\n        float[] widths.timeSamples = {{ 5: [0.2, 0.3] }}\n    }}\n}}\n",
+            points(7.0),
+            points(-3.0),
+            points(2.5),
+            points(2.6),
+            points(12.0),
+            points(4.0),
+            points(20.0),
+            points(0.5),
+            points(9.0)
+        );
+        let span = parse_keeping(text.as_bytes(), KeptSamples::Between(1.0, 9.0)).unwrap();
+        let kept = &span.prims[0].children[0].attribute("points").unwrap().samples;
+        let mut times: Vec<f64> = kept.iter().map(|(t, _)| *t).collect();
+        times.sort_by(f64::total_cmp);
+        assert_eq!(times, [0.5, 2.5, 2.5, 4.0, 7.0, 9.0, 12.0], "the span's samples, and one on each side");
+        for time in [1.0, 1.5, 2.5, 3.0, 4.0, 5.0, 6.9, 7.0, 8.0, 8.99, 9.0] {
+            let at = parse(text.as_bytes(), Some(time)).unwrap();
+            assert_eq!(format!("{:?}", span.at_time(time)), format!("{at:?}"), "time {time}");
+        }
     }
 }
