@@ -902,20 +902,29 @@ fn a_stage_plays_at_the_time_code_rate_pxr_gives_it() {
             );
         }
     }
-    // A rate that is not a positive number cannot turn seconds into frames: exit 2, naming the
-    // file and the key that authors it.
+    // A rate that is not a positive number cannot turn seconds into frames, nor frames into an
+    // animation (such a stage was read as one moment without a word): exit 2, naming the file
+    // and the key that authors it.
     for (metadata, key) in
         [("timeCodesPerSecond = 0", "timeCodesPerSecond 0"), ("framesPerSecond = -2", "framesPerSecond -2")]
     {
         let stage = path("bad_rate.usda");
         std::fs::write(&stage, timed_curves_layer(&format!("{range}\n    {metadata}"))).unwrap();
-        let out = coif(&["info", path_str(&stage), "--time", "0.5"]);
-        assert_eq!(out.status.code(), Some(2), "{metadata}: {}", stderr(&out));
-        let message = stderr(&out);
-        assert!(
-            message.contains("bad_rate.usda") && message.contains(&format!("{key} is not a frame rate")),
-            "{message}"
-        );
+        let converted = path("bad_rate_out.usda");
+        for args in [
+            vec!["info", path_str(&stage), "--time", "0.5"],
+            vec!["info", path_str(&stage)],
+            vec!["convert", path_str(&stage), path_str(&converted)],
+        ] {
+            let out = coif(&args);
+            assert_eq!(out.status.code(), Some(2), "{metadata} {args:?}: {}", stderr(&out));
+            let message = stderr(&out);
+            assert!(
+                message.contains("bad_rate.usda") && message.contains(&format!("{key} is not a frame rate")),
+                "{args:?}: {message}"
+            );
+            assert!(!converted.exists());
+        }
     }
 }
 

@@ -62,7 +62,8 @@ pub fn parse_range(text: &str, flag: &str) -> Result<(f64, f64)> {
 
 /// The timeline of an animated groom file, `None` when it holds one moment (a static file, a
 /// `.hair` file, a USD stage without `startTimeCode` < `endTimeCode` or whose curves, meshes and
-/// the transforms above them have no time samples).
+/// the transforms above them have no time samples). An animated USD stage whose rate is not a
+/// positive number is refused (it was read as one moment without a word).
 pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
     match super::format_of(path)? {
         Format::Hair => Ok(None),
@@ -79,11 +80,12 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
             let stage = UsdStageFile::open(path, format)?;
             let layer = stage.layer_timeline(path)?;
             let Some((first, last)) = layer.frame_range() else { return Ok(None) };
-            let Ok(rate) = layer.checked_codes_per_second() else { return Ok(None) };
             // The range alone may be the scene's; only time samples make the groom move (on the
             // composed stage, for a layer with composition arcs).
-            let animated = stage.is_animated(path)?;
-            Ok(animated.unwrap_or(true).then_some(Timeline { first, last, frames_per_second: rate }))
+            if !stage.is_animated(path)?.unwrap_or(true) {
+                return Ok(None);
+            }
+            Ok(Some(Timeline { first, last, frames_per_second: codes_per_second(&layer, path)? }))
         }
     }
 }
@@ -101,12 +103,16 @@ pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
         }
         format => {
             let layer = UsdStageFile::open(path, format)?.layer_timeline(path)?;
-            let rate = layer
-                .checked_codes_per_second()
-                .map_err(|(key, rate)| Error::format(path, format!("{key} {rate} is not a frame rate")))?;
-            Ok(Some(rate))
+            Ok(Some(codes_per_second(&layer, path)?))
         }
     }
+}
+
+/// A USD stage's time codes per second; one that is not a positive number is bad input.
+fn codes_per_second(layer: &LayerTimeline, path: &Path) -> Result<f64> {
+    layer
+        .checked_codes_per_second()
+        .map_err(|(key, rate)| Error::format(path, format!("{key} {rate} is not a frame rate")))
 }
 
 /// A USD stage as its timeline is read: a crate file's bytes, or a `.usda` — the user's, or
