@@ -85,7 +85,7 @@ pub fn read_timeline(path: &Path) -> Result<Option<Timeline>> {
             if !stage.is_animated(path)?.unwrap_or(true) {
                 return Ok(None);
             }
-            Ok(Some(Timeline { first, last, frames_per_second: codes_per_second(&layer, path)? }))
+            Ok(Some(Timeline { first, last, frames_per_second: frame_rate_of(&layer, path)? }))
         }
     }
 }
@@ -103,13 +103,13 @@ pub fn frame_rate(path: &Path) -> Result<Option<f64>> {
         }
         format => {
             let layer = UsdStageFile::open(path, format)?.layer_timeline(path)?;
-            Ok(Some(codes_per_second(&layer, path)?))
+            Ok(Some(frame_rate_of(&layer, path)?))
         }
     }
 }
 
 /// A USD stage's time codes per second; one that is not a positive number is bad input.
-fn codes_per_second(layer: &LayerTimeline, path: &Path) -> Result<f64> {
+fn frame_rate_of(layer: &LayerTimeline, path: &Path) -> Result<f64> {
     layer
         .checked_codes_per_second()
         .map_err(|(key, rate)| Error::format(path, format!("{key} {rate} is not a frame rate")))

@@ -1236,26 +1236,26 @@ fn offer_sample_between(kept: &mut Vec<(f64, Value)>, first: f64, last: f64, tim
 }
 
 impl Attribute {
-    /// This attribute with the samples value resolution at `time` needs, as [`offer_sample`]
-    /// keeps them: the latest at or before it and the earliest after (the last offered of
-    /// equal times). Only those are cloned.
+    /// This attribute with the samples value resolution at `time` needs, chosen by
+    /// [`offer_sample`] (offered their indices, so only the chosen values are cloned).
     fn at_time(&self, time: f64) -> Attribute {
-        let (mut before, mut after): (Option<usize>, Option<usize>) = (None, None);
-        for (i, (t, _)) in self.samples.iter().enumerate() {
-            if *t <= time {
-                if before.is_none_or(|b| *t >= self.samples[b].0) {
-                    before = Some(i);
-                }
-            } else if after.is_none_or(|a| *t <= self.samples[a].0) {
-                after = Some(i);
-            }
+        let mut chosen = Vec::new();
+        for (k, (t, _)) in self.samples.iter().enumerate() {
+            offer_sample(&mut chosen, Some(time), *t, Value::Int(vec![k as i64]));
         }
+        let samples = chosen
+            .into_iter()
+            .map(|(_, index)| {
+                let Value::Int(k) = index else { unreachable!("placeholders are indices") };
+                self.samples[k[0] as usize].clone()
+            })
+            .collect();
         Attribute {
             name: self.name.clone(),
             type_name: self.type_name.clone(),
             site: self.site,
             default: self.default.clone(),
-            samples: [before, after].into_iter().flatten().map(|i| self.samples[i].clone()).collect(),
+            samples,
             interpolation: self.interpolation.clone(),
             element_size: self.element_size,
         }
