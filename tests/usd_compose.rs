@@ -997,3 +997,95 @@ fn an_animated_usda_converts_every_frame_from_one_reading() {
         assert_eq!(written.points, alone.points, "frame {frame} of whole.abc");
     }
 }
+
+/// A shot layer composing animated `.usda` caches — referenced with an offset, one of another
+/// time code rate, one a sublayer scaled in time, one chosen by a variant, with samples of the
+/// shot's own over them — converts every frame as pxr composes it, and as coif reads each frame
+/// alone (`--frame N`, where each layer is parsed for that frame): the layers parsed once for all
+/// frames must give what a parse for each frame gives.
+#[test]
+fn a_shot_composing_animated_usda_caches_converts_every_frame_as_pxr_composes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let points = |x: f32, z: f32| format!("[(0, 0, {z}), ({x}, 0.1, {z}), ({x}, 0.2, 0.01), (0.05, 0, {z})]");
+    // Samples out of order, at equal times, between frames and beyond every range.
+    let cache = |name: &str, rate: &str, z: f32| {
+        let samples: Vec<String> =
+            [(7.0, 0.07), (-3.0, -0.03), (2.5, 0.025), (2.5, 0.026), (30.0, 0.3), (4.0, 0.04)]
+                .iter()
+                .map(|&(t, x)| format!("{t}: {}", points(x, z)))
+                .collect();
+        std::fs::write(
+            path(name),
+            format!(
+                "#usda 1.0\n(\n    metersPerUnit = 1\n    startTimeCode = 1\n    endTimeCode = 9\n{rate})\n\n\
+                 def Xform \"G\"\n{{\n    def BasisCurves \"C\"\n    {{\n        uniform token type = \"linear\"\n        \
+                 int[] curveVertexCounts = [2, 2]\n        point3f[] points.timeSamples = {{ {} }}\n        \
+                 float[] widths = [0.001] (interpolation = \"constant\")\n    }}\n}}\n",
+                samples.join(", ")
+            ),
+        )
+        .unwrap();
+    };
+    cache("a.usda", "", 0.0);
+    cache("b48.usda", "    timeCodesPerSecond = 48\n", 0.1);
+    cache("c.usda", "", 0.2);
+    cache("d.usda", "", 0.3);
+    std::fs::write(
+        path("layout.usda"),
+        "#usda 1.0\n(\n    subLayers = [@c.usda@ (offset = 2; scale = 0.5)]\n)\n",
+    )
+    .unwrap();
+    let shot = path("shot.usda");
+    std::fs::write(
+        &shot,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    startTimeCode = 101\n    endTimeCode = 112\n    \
+         subLayers = [@layout.usda@ (offset = 100)]\n)\n\n\
+         def Xform \"Shot\" (\n    variants = { string cache = \"d\" }\n    prepend variantSets = \"cache\"\n)\n{\n    \
+         def \"A\" (references = @a.usda@</G> (offset = 100))\n    {\n        \
+         double3 xformOp:translate.timeSamples = { 104: (0, 0.1, 0), 109.5: (0, 0.3, 0) }\n        \
+         uniform token[] xformOpOrder = [\"xformOp:translate\"]\n    }\n    \
+         def \"B\" (references = @b48.usda@</G> (offset = 99))\n    {\n    }\n    \
+         variantSet \"cache\" = {\n        \"d\" {\n            \
+         def \"V\" (references = @d.usda@</G> (offset = 100))\n            {\n            }\n        }\n        \
+         \"a\" {\n            def \"V\" (references = @a.usda@</G> (offset = 101))\n            {\n            }\n        }\n    }\n}\n",
+    )
+    .unwrap();
+    let pxr_points = |file: &Path| -> Vec<Vec<f32>> {
+        let dump: serde_json::Value =
+            serde_json::from_str(&probe(&["frames", path_str(file), "101", "112"])).unwrap();
+        dump["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|frame| frame["curves"].as_object().unwrap().values().flat_map(f32s).collect())
+            .collect()
+    };
+    let converted = path("converted.usda");
+    let abc = path("converted.abc");
+    let abc_variant = path("variant.abc");
+    for (out, variant) in [(&converted, None), (&abc, None), (&abc_variant, Some("cache=a"))] {
+        let mut args = vec!["convert", path_str(&shot), path_str(out)];
+        args.extend(variant.iter().flat_map(|v| ["--variant", *v]));
+        let run = coif(&args);
+        assert!(run.status.success(), "{out:?}: {}", stderr(&run));
+    }
+    let (got, want) = (pxr_points(&converted), pxr_points(&shot));
+    assert_eq!(got.len(), 12, "frames converted");
+    for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert_eq!(g.len(), w.len(), "frame {}: vertices", 101 + k);
+        let worst = g.iter().zip(w).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(worst < 1e-6, "frame {}: {worst} m from pxr's composition", 101 + k);
+    }
+    // The frames differ (the test would not see a frame read at the wrong time otherwise).
+    assert!(want.windows(2).filter(|w| w[0] != w[1]).count() >= 6, "the shot barely moves");
+    for frame in 101..=112 {
+        for (out, variants) in [(&abc, vec![]), (&abc_variant, vec!["cache=a".to_string()])] {
+            let options = coif::io::ImportOptions { frame: Some(frame as f64), ..Default::default() };
+            let selection = Selection { time: Some(frame as f64), variants };
+            let alone = coif::io::read_groom_selected(&shot, &options, &selection).unwrap().groom;
+            let written = coif::io::read_groom(out, &options).unwrap().groom;
+            assert_eq!(written.points, alone.points, "frame {frame} of {out:?}");
+        }
+    }
+}

@@ -146,8 +146,9 @@ pub fn read_groom_selected(
 
 /// Reads frames of one groom file, each as [`read_groom_selected`] reads it at that frame, from
 /// one reading of the file where it can: a `.usdz` package is flattened by usd-core once, and a
-/// `.usda` layer without composition arcs is parsed once, keeping the time samples of the frames
-/// asked for (parsing it again for each frame made a long text cache's convert quadratic).
+/// `.usda` layer is parsed once, keeping the time samples of the frames asked for (parsing it
+/// again for each frame made a long text cache's convert quadratic), as is each `.usda` layer a
+/// `.usda` stage composes (a shot layer referencing a cache).
 pub struct FrameReader<'a> {
     path: &'a Path,
     options: ImportOptions,
@@ -163,6 +164,9 @@ enum FrameSource {
     Flattened(usd_interop::Flattened),
     /// A `.usda` layer parsed with the samples from the first frame to the last.
     Parsed { layer: Box<usda::Layer>, first: f64, last: f64 },
+    /// A `.usda` root layer that composes others, parsed as `Parsed`, and the `.usda` layers it
+    /// composes, each parsed once with all its samples (arcs may retime them anywhere).
+    Composed { root: Box<usda::Layer>, layers: usd_compose::SampledLayers, first: f64, last: f64 },
 }
 
 impl<'a> FrameReader<'a> {
@@ -177,13 +181,20 @@ impl<'a> FrameReader<'a> {
         let source = match format_of(path)? {
             Format::Usdz => FrameSource::Flattened(usd_interop::flatten(path, &variants)?),
             // Kept samples take at most about twice the text's size ("0" is one character, four
-            // bytes): past the memory limit, frames are parsed one at a time.
-            Format::Usda if variants.is_empty() && text_fits_in_memory(path) => {
-                let layer = usda::read_layer_between(path, first, last)?;
-                if layer.composes() {
-                    FrameSource::File
+            // bytes): past the memory limit, frames are parsed one at a time (and layers the
+            // stage composes, past what the limit leaves).
+            Format::Usda if text_fits_in_memory(path) => {
+                let layer = Box::new(usda::read_layer_between(path, first, last)?);
+                if layer.composes() || !variants.is_empty() {
+                    let left = crate::limits::max_memory().saturating_sub(text_size(path));
+                    FrameSource::Composed {
+                        root: layer,
+                        layers: usd_compose::SampledLayers::new(left),
+                        first,
+                        last,
+                    }
                 } else {
-                    FrameSource::Parsed { layer: Box::new(layer), first, last }
+                    FrameSource::Parsed { layer, first, last }
                 }
             }
             _ => FrameSource::File,
@@ -195,7 +206,9 @@ impl<'a> FrameReader<'a> {
         let options = ImportOptions { frame: Some(frame), ..self.options };
         let selection = usda::Selection { time: Some(frame), variants: self.variants.clone() };
         let source = match &self.source {
-            FrameSource::Parsed { first, last, .. } if !(*first <= frame && frame <= *last) => {
+            FrameSource::Parsed { first, last, .. } | FrameSource::Composed { first, last, .. }
+                if !(*first <= frame && frame <= *last) =>
+            {
                 &FrameSource::File
             }
             source => source,
@@ -205,7 +218,12 @@ impl<'a> FrameReader<'a> {
 }
 
 fn text_fits_in_memory(path: &Path) -> bool {
-    std::fs::metadata(path).is_ok_and(|m| m.len().saturating_mul(2) <= crate::limits::max_memory())
+    text_size(path) <= crate::limits::max_memory()
+}
+
+/// About what a `.usda` file's samples take in memory: twice its text.
+fn text_size(path: &Path) -> u64 {
+    std::fs::metadata(path).map_or(u64::MAX, |m| m.len().saturating_mul(2))
 }
 
 /// [`read_groom_selected`], from what `source` kept of the file.
@@ -242,8 +260,21 @@ fn read_groom_from(
         // USD stages say their own units and up axis; the options only fill in what they omit.
         // Composition (sublayers, references, payloads, inherits, variants) is native for
         // both formats: no Python is started. A layer without arcs is read in one pass.
-        Format::Usda | Format::Usdc if !selection.variants.is_empty() => {
-            let composed = usd_compose::read_groom(path, options, selection)?;
+        Format::Usda | Format::Usdc
+            if !selection.variants.is_empty() || matches!(source, FrameSource::Composed { .. }) =>
+        {
+            let composed = match (source, selection.time) {
+                (FrameSource::Composed { root, layers, .. }, Some(time)) => {
+                    usd_compose::groom_and_layers_from_sampled(
+                        root.at_time(time),
+                        path,
+                        options,
+                        selection,
+                        layers,
+                    )?
+                }
+                _ => usd_compose::read_groom(path, options, selection)?,
+            };
             (files, warnings) = (composed.layers, composed.warnings);
             composed.groom
         }

@@ -86,6 +86,55 @@ pub fn groom_and_layers_from_composed(
     groom_and_layers(compose(root, path, selection)?, path, options, selection)
 }
 
+/// [`groom_and_layers_from_composed`] at the selection's time, reading the `.usda` layers the
+/// stage composes from `sampled` (each parsed once for every time it is read at).
+pub fn groom_and_layers_from_sampled(
+    root: Layer,
+    path: &Path,
+    options: &ImportOptions,
+    selection: &Selection,
+    sampled: &SampledLayers,
+) -> Result<ComposedGroom> {
+    let composed = compose_with(root, path, selection, Some(sampled))?;
+    groom_and_layers(composed, path, options, selection)
+}
+
+/// `.usda` layers parsed once with all their time samples, each read at any time from memory:
+/// the frames of an animated stage that composes a `.usda` cache (a shot layer referencing it)
+/// are composed from one parse of each layer, not one a frame. A layer that does not fit in what
+/// is left of the budget (its samples take about twice its text) is read from its file each time,
+/// as are `.usdc` layers (those read only one time's samples from the mapped file).
+pub struct SampledLayers {
+    /// By canonical path: the layer with all its samples, or `None` when it is read each time.
+    layers: RefCell<HashMap<PathBuf, Option<Rc<Layer>>>>,
+    budget: std::cell::Cell<u64>,
+}
+
+impl SampledLayers {
+    /// Layers whose samples together take at most `budget` bytes.
+    pub fn new(budget: u64) -> Self {
+        SampledLayers { layers: RefCell::new(HashMap::new()), budget: std::cell::Cell::new(budget) }
+    }
+
+    /// The layer at `path` as read at `time`, or `None` when it is to be read from its file.
+    fn at(&self, path: &Path, canonical: &Path, time: f64) -> Result<Option<Layer>> {
+        if let Some(kept) = self.layers.borrow().get(canonical) {
+            return Ok(kept.as_ref().map(|layer| layer.at_time(time)));
+        }
+        crate::io::input::check_regular(path)?;
+        let size = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len().saturating_mul(2);
+        let kept = if is_usda(path)? && size <= self.budget.get() {
+            self.budget.set(self.budget.get() - size);
+            Some(Rc::new(usda::read_layer_between(path, f64::NEG_INFINITY, f64::INFINITY)?))
+        } else {
+            None
+        };
+        let layer = kept.as_ref().map(|layer| layer.at_time(time));
+        self.layers.borrow_mut().insert(canonical.to_path_buf(), kept);
+        Ok(layer)
+    }
+}
+
 fn groom_and_layers(
     composed: Layer,
     path: &Path,
@@ -119,9 +168,20 @@ pub fn read_stage(path: &Path, selection: &Selection) -> Result<Layer> {
 
 /// Composes the stage whose root layer (at `path`) is `root`.
 pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer> {
+    compose_with(root, path, selection, None)
+}
+
+/// [`compose`], reading `.usda` layers from `sampled` when given (and composing at a time).
+fn compose_with(
+    root: Layer,
+    path: &Path,
+    selection: &Selection,
+    sampled: Option<&SampledLayers>,
+) -> Result<Layer> {
     let overrides =
         selection.variants.iter().map(|spec| VariantOverride::parse(spec)).collect::<Result<Vec<_>>>()?;
     let mut composer = Composer {
+        sampled,
         time: selection.time,
         layers: Vec::new(),
         layer_ids: HashMap::new(),
@@ -189,6 +249,15 @@ pub fn compose(root: Layer, path: &Path, selection: &Selection) -> Result<Layer>
 
 /// Reads one layer file (`.usda` or `.usdc`, told by its first bytes), arcs unresolved.
 fn load(path: &Path, time: Option<f64>) -> Result<Layer> {
+    if is_usda(path)? {
+        usda::read_layer_file(path, time)
+    } else {
+        usdc::read_layer_file(path, time)
+    }
+}
+
+/// Whether a layer file is `.usda` (else `.usdc`), told by its first bytes; neither is an error.
+fn is_usda(path: &Path) -> Result<bool> {
     // A device or a pipe named by an arc could block or never end.
     crate::io::input::check_regular(path)?;
     let mut head = [0u8; 8];
@@ -196,10 +265,10 @@ fn load(path: &Path, time: Option<f64>) -> Result<Layer> {
         .and_then(|mut f| std::io::Read::read(&mut f, &mut head))
         .map_err(|e| Error::io(path, e))?;
     let head = &head[..read];
-    if head.starts_with(usdc::MAGIC) {
-        usdc::read_layer_file(path, time)
-    } else if head.starts_with(usda::MAGIC) {
-        usda::read_layer_file(path, time)
+    if head.starts_with(usda::MAGIC) {
+        Ok(true)
+    } else if head.starts_with(usdc::MAGIC) {
+        Ok(false)
     } else {
         Err(Error::format(path, "not a .usda or .usdc layer (coif composes those two formats, not .usdz)"))
     }
@@ -298,7 +367,8 @@ impl Opinion<'_> {
     }
 }
 
-struct Composer {
+struct Composer<'s> {
+    sampled: Option<&'s SampledLayers>,
     time: Option<f64>,
     layers: Vec<LoadedLayer>,
     layer_ids: HashMap<(PathBuf, Option<u64>), usize>,
@@ -375,7 +445,7 @@ fn time_key(time: Option<f64>) -> Option<u64> {
     time.map(f64::to_bits)
 }
 
-impl Composer {
+impl Composer<'_> {
     fn add_layer(
         &mut self,
         canonical: PathBuf,
@@ -402,7 +472,14 @@ impl Composer {
         if let Some(&id) = self.layer_ids.get(&(canonical.clone(), time_key(time))) {
             return Ok(id);
         }
-        let layer = load(path, time)?;
+        let sampled = match (self.sampled, time) {
+            (Some(sampled), Some(time)) => sampled.at(path, &canonical, time)?,
+            _ => None,
+        };
+        let layer = match sampled {
+            Some(layer) => layer,
+            None => load(path, time)?,
+        };
         self.add_layer(canonical, path.to_path_buf(), time, layer)
     }
 
