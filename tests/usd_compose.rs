@@ -1089,3 +1089,83 @@ fn a_shot_composing_animated_usda_caches_converts_every_frame_as_pxr_composes_it
         }
     }
 }
+
+/// Points with a default (a rest pose, as exporters write it) and time samples over it, reached
+/// through a sublayer or a reference, are an animation as pxr plays it: `info` gives its frames
+/// and `convert` writes every frame as pxr composes it. Samples authored over a weaker default
+/// animate too; a stronger default over weaker samples holds the stage still, in pxr and in coif.
+#[test]
+fn points_with_a_default_and_time_samples_animate_through_sublayers_and_references() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let points = |x: f32| format!("[(0, 0, 0), ({x}, 0.1, 0), (0.02, 0, 0), ({x}, 0.1, 0.02)]");
+    let header = "#usda 1.0\n(\n    metersPerUnit = 1\n    startTimeCode = 1\n    endTimeCode = 4\n";
+    let curves = |points: &str| {
+        format!(
+            "def BasisCurves \"C\"\n{{\n    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2, 2]\n    \
+             {points}\n    float[] widths = [0.001] (interpolation = \"constant\")\n}}\n"
+        )
+    };
+    let samples = format!("1: {}, 2.5: {}, 4: {}", points(0.1), points(0.25), points(0.4));
+    let animated =
+        format!("point3f[] points = {}\n    point3f[] points.timeSamples = {{ {samples} }}", points(0.0));
+    std::fs::write(path("cache.usda"), format!("{header})\n\n{}", curves(&animated))).unwrap();
+    std::fs::write(
+        path("rest.usda"),
+        format!("{header})\n\n{}", curves(&format!("point3f[] points = {}", points(0.0)))),
+    )
+    .unwrap();
+    let over = |points: &str| format!("over \"C\"\n{{\n    {points}\n}}\n");
+    let stages = [
+        ("sublayer.usda", format!("{header}    subLayers = [@cache.usda@]\n)\n"), true),
+        (
+            "reference.usda",
+            format!("{header})\n\ndef \"Shot\" (references = @cache.usda@</C>)\n{{\n}}\n"),
+            true,
+        ),
+        (
+            "samples_over_rest.usda",
+            format!(
+                "{header}    subLayers = [@rest.usda@]\n)\n\n{}",
+                over(&format!("point3f[] points.timeSamples = {{ {samples} }}"))
+            ),
+            true,
+        ),
+        (
+            "rest_over_samples.usda",
+            format!(
+                "{header}    subLayers = [@cache.usda@]\n)\n\n{}",
+                over(&format!("point3f[] points = {}", points(0.3)))
+            ),
+            false,
+        ),
+    ];
+    for (name, text, moves) in stages {
+        let stage = path(name);
+        std::fs::write(&stage, text).unwrap();
+        let info = coif(&["info", "--json", path_str(&stage)]);
+        assert!(info.status.success(), "{name}: {}", stderr(&info));
+        let info: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+        assert_eq!(info["frames"]["count"].as_u64(), if moves { Some(4) } else { None }, "{name}: {info}");
+        let converted = path(&format!("{name}.converted.usda"));
+        let run = coif(&["convert", path_str(&stage), path_str(&converted)]);
+        assert!(run.status.success(), "{name}: {}", stderr(&run));
+        let frames = |file: &Path| -> Vec<Vec<f32>> {
+            let dump: serde_json::Value =
+                serde_json::from_str(&probe(&["frames", path_str(file), "1", "4"])).unwrap();
+            dump["frames"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|f| f["curves"].as_object().unwrap().values().flat_map(f32s).collect())
+                .collect()
+        };
+        let (got, want) = (frames(&converted), frames(&stage));
+        assert_eq!(want.windows(2).any(|w| w[0] != w[1]), moves, "{name}: pxr's frames");
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert_eq!(g.len(), w.len(), "{name}: frame {}", k + 1);
+            let worst = g.iter().zip(w).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            assert!(worst < 1e-6, "{name}: frame {} is {worst} m from pxr's", k + 1);
+        }
+    }
+}

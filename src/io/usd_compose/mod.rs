@@ -1044,12 +1044,12 @@ fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>) -> Prim {
             .iter()
             .filter_map(|o| o.prim.attributes.iter().find(|a| a.name == attribute_name).map(|a| (a, o)))
             .collect();
+        // At a time, the strongest opinion with a value (samples before a default within it); at
+        // the default time, the strongest default, else that opinion's earliest sample.
+        let timed = specs.iter().find(|(a, _)| a.default.is_some() || !a.samples.is_empty());
         let source = match time {
-            None => specs
-                .iter()
-                .find(|(a, _)| a.default.is_some())
-                .or_else(|| specs.iter().find(|(a, _)| !a.samples.is_empty())),
-            Some(_) => specs.iter().find(|(a, _)| a.default.is_some() || !a.samples.is_empty()),
+            None => specs.iter().find(|(a, _)| a.default.is_some()).or(timed),
+            Some(_) => timed,
         };
         let mut attribute = Attribute {
             name: attribute_name.to_string(),
@@ -1063,16 +1063,18 @@ fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>) -> Prim {
             element_size: specs.iter().find_map(|(a, _)| a.element_size),
             ..Default::default()
         };
-        if let Some((spec, opinion)) = source {
+        if let Some((spec, opinion)) = source.or(specs.first()) {
             attribute.site = opinion.site(spec.site);
+        }
+        if let Some((spec, _)) = source {
             attribute.default = spec.default.clone();
+        }
+        // Kept at the default time too, where the default is read before them: they tell that
+        // the attribute is animated (a cache with a rest pose as its default and the motion as
+        // samples, reached through a sublayer or reference, read as still when they were dropped).
+        if let Some((spec, opinion)) = timed {
             attribute.samples =
                 spec.samples.iter().map(|(t, v)| (opinion.offset.apply(*t), v.clone())).collect();
-            if time.is_none() && attribute.default.is_some() {
-                attribute.samples.clear();
-            }
-        } else if let Some((spec, opinion)) = specs.first() {
-            attribute.site = opinion.site(spec.site);
         }
         prim.attributes.push(attribute);
     }
