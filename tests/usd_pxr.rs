@@ -419,3 +419,69 @@ fn a_usdz_of_instanced_prims_reads_as_its_composed_stage() {
     assert_eq!(from_package.strand_count(), 2 * single.strand_count());
     assert_eq!(from_package.points, composed.points);
 }
+
+/// `primvars:widths` is the curves' widths, before `widths` (USD: "the latter has precedence"),
+/// indexed or not, with a primvar's `constant` fallback interpolation: as pxr flattens it, in a
+/// text stage and in pxr's crate file, and carried into every output format.
+#[test]
+fn primvars_widths_are_the_curves_widths_before_widths() {
+    let dir = tempfile::tempdir().unwrap();
+    let stage = |name: &str, widths: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "#usda 1.0\n(\n    metersPerUnit = 1\n)\n\ndef BasisCurves \"C\"\n{{\n    uniform token type = \"linear\"\n    \
+                 int[] curveVertexCounts = [2, 3]\n    \
+                 point3f[] points = [(0, 0, 0), (0, 0.1, 0), (0.01, 0, 0), (0.01, 0.1, 0), (0.01, 0.2, 0)]\n    \
+                 {widths}\n}}\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let cases = [
+        // Beside `widths`, which it overrides; per curve, indexed.
+        stage(
+            "indexed.usda",
+            "float[] widths = [0.002] (interpolation = \"constant\")\n    \
+             float[] primvars:widths = [0.0005, 0.0003] (interpolation = \"uniform\")\n    \
+             int[] primvars:widths:indices = [1, 0]",
+        ),
+        // No interpolation authored: a primvar's fallback, constant.
+        stage("fallback.usda", "float[] primvars:widths = [0.0004]"),
+        // Per vertex.
+        stage(
+            "vertex.usda",
+            "float[] primvars:widths = [0.0001, 0.0002, 0.0003, 0.0004, 0.0005] (interpolation = \"vertex\")",
+        ),
+    ];
+    for text in &cases {
+        let crate_file = text.with_extension("usdc");
+        probe_export(text, &crate_file);
+        for path in [text, &crate_file] {
+            let dump = pxr_dump(path, None);
+            let primvar = primvar(&dump["curves"][0], "widths");
+            let values = f32s(&primvar["values"]);
+            // pxr's flattened values, per vertex by the primvar's interpolation.
+            let per_vertex: Vec<f32> = match primvar["interpolation"].as_str().unwrap() {
+                "constant" => vec![values[0]; 5],
+                "uniform" => [values[0], values[0], values[1], values[1], values[1]].to_vec(),
+                "vertex" => values.clone(),
+                other => panic!("{other}"),
+            };
+            let groom = coif::io::read_groom(path, &Default::default()).unwrap().groom;
+            assert_eq!(groom.widths, per_vertex, "{path:?}");
+            assert!(groom.attribute("widths").is_none(), "{path:?}: also kept as an attribute named widths");
+            // Through every output format, the widths stay.
+            for ext in ["usda", "abc", "hair"] {
+                let out =
+                    dir.path().join(format!("{}.out.{ext}", path.file_name().unwrap().to_str().unwrap()));
+                let run = coif(&["convert", path_str(path), path_str(&out)]);
+                assert!(run.status.success(), "{}", stderr(&run));
+                let back = coif::io::read_groom(&out, &Default::default()).unwrap().groom;
+                assert_eq!(back.widths, per_vertex, "{out:?}");
+            }
+        }
+    }
+}

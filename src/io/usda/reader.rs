@@ -16,6 +16,9 @@ use crate::io::{ImportOptions, UpAxis};
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 use crate::{point_attributes, primvar_rates};
 
+/// The curves' widths as a primvar: read as their widths, before `widths`.
+const WIDTHS_PRIMVAR: &str = "primvars:widths";
+
 /// USD's fallback when a stage does not author `metersPerUnit` (UsdGeom: centimetres).
 const FALLBACK_METERS_PER_UNIT: f64 = 0.01;
 
@@ -590,29 +593,47 @@ impl Walker<'_> {
         let layout = Layout { counts: &counts, points: points.len(), basis, wrap };
 
         let mut width_interpolation = None;
-        let widths = match prim.attributes.iter_mut().find(|a| a.name == "widths") {
+        // `primvars:widths` wins over `widths`, as in USD; as a primvar it may be indexed, and its
+        // fallback interpolation is `constant`.
+        let width_name = if prim.attribute(WIDTHS_PRIMVAR).is_some() { WIDTHS_PRIMVAR } else { "widths" };
+        let width_indices = prim
+            .attribute(&format!("{WIDTHS_PRIMVAR}:indices"))
+            .filter(|_| width_name == WIDTHS_PRIMVAR)
+            .and_then(|a| value_at(a, time))
+            .map(|v| v.to_f64());
+        let widths = match prim.attributes.iter_mut().find(|a| a.name == width_name) {
             None => None,
             Some(attr) => {
                 let site = attr.site;
-                let interpolation = attr.interpolation.clone().unwrap_or_else(|| "vertex".into());
+                let fallback = if width_name == WIDTHS_PRIMVAR { "constant" } else { "vertex" };
+                let interpolation = attr.interpolation.clone().unwrap_or_else(|| fallback.into());
                 match take_value(attr, time) {
                     None => None,
                     // Per-vertex widths in a crate file: read by `merge`, straight into place.
                     Some(Value::InFile(array))
                         if interpolation == "vertex"
+                            && width_indices.is_none()
                             && array.components == 1
                             && array.elements() == points.len() =>
                     {
                         Some(Bulk::InFile(array))
                     }
                     Some(value) => {
-                        let value = self.read(value).map_err(|m| at_prim(site, format!("widths: {m}")))?;
-                        let values = value
-                            .into_f32()
-                            .ok_or_else(|| at_prim(site, "'widths' must be a float[] array".into()))?;
+                        let value =
+                            self.read(value).map_err(|m| at_prim(site, format!("{width_name}: {m}")))?;
+                        let mut values = value.into_f32().ok_or_else(|| {
+                            at_prim(site, format!("'{width_name}' must be a float[] array"))
+                        })?;
+                        if let Some(indices) = width_indices {
+                            let indices = indices.ok_or_else(|| {
+                                at_prim(site, format!("{WIDTHS_PRIMVAR}:indices must be int[]"))
+                            })?;
+                            values = expand_indices(&values, &indices, 1)
+                                .map_err(|m| at_prim(site, format!("{WIDTHS_PRIMVAR}:indices: {m}")))?;
+                        }
                         let (rate, data) = layout
                             .resolve(values, 1, &interpolation)
-                            .map_err(|m| at_prim(site, format!("widths: {m}")))?;
+                            .map_err(|m| at_prim(site, format!("{width_name}: {m}")))?;
                         // Kept per vertex; the file's rate goes back out with them.
                         width_interpolation = match interpolation.as_str() {
                             "constant" => Some(Interpolation::Constant),
@@ -650,6 +671,7 @@ impl Walker<'_> {
         let mut primvar_names: Vec<(String, String)> = prim
             .attributes
             .iter()
+            .filter(|a| a.name != WIDTHS_PRIMVAR)
             .filter_map(|a| a.name.strip_prefix("primvars:"))
             .filter(|n| !n.ends_with(":indices"))
             .map(|n| (format!("primvars:{n}"), n.to_string()))
