@@ -83,6 +83,27 @@ fn an_output_in_a_missing_directory_exits_2_before_any_work() {
     assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
 }
 
+/// A directory that exists but where no file can be made (procfs) is the environment's refusal:
+/// exit 1 naming the output, nothing written.
+#[test]
+fn an_output_where_the_file_system_makes_no_files_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.hair");
+    assert!(coif(&["generate", "-o", path_str(&input), "--strands", "5"]).status.success());
+    for output in ["/proc/self/x.usda", "/proc/self/x.abc", "/proc/self/x.hair"] {
+        let result = coif(&["convert", path_str(&input), output]);
+        let message = stderr(&result);
+        assert_eq!(result.status.code(), Some(1), "{output}: {message}");
+        assert!(
+            message.contains(output) && message.contains("cannot create files in /proc/self"),
+            "{message}"
+        );
+    }
+    let result = coif(&["render", path_str(&input), "-o", "/proc/self/x.png", "--res", "8x8", "--spp", "1"]);
+    assert_eq!(result.status.code(), Some(1), "{}", stderr(&result));
+    assert_eq!(dir_listing(dir.path()), vec!["in.hair".to_string()]);
+}
+
 #[test]
 fn the_readme_influences_comma_form_parses() {
     let dir = tempfile::tempdir().unwrap();

@@ -82,7 +82,17 @@ pub fn create_beside(path: &Path) -> Result<BufWriter<TempFile>> {
     // Temporary files are private (0600) by default; an output should get the usual 0666 & !umask.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let temp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
+    let temp = builder.tempfile_in(dir).map_err(|e| {
+        // A directory that exists but makes no files (procfs answers "not found") is the
+        // environment refusing, not a path mistyped: exit 1, not 2.
+        let e = match e.kind() {
+            std::io::ErrorKind::NotFound if dir.is_dir() => {
+                std::io::Error::other(format!("cannot create files in {}: {e}", dir.display()))
+            }
+            _ => e,
+        };
+        Error::io(path, e)
+    })?;
     // Removed by the signal handler if the process is interrupted before `commit`.
     super::cleanup::track(temp.path());
     Ok(BufWriter::with_capacity(1 << 20, TempFile { file: temp, since_writeback: 0 }))
