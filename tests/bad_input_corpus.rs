@@ -977,6 +977,14 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
     // A task writing over an input: a re-run would style its own output again (the batch did).
     for (label, outputs, culprit) in [
         ("its groom", "[\"g.hair\"]", "task 'a''s groom"),
+        // Spelled otherwise, the same file (the batch wrote over its groom).
+        ("its groom as ./g.hair", "[\"./g.hair\"]", "task 'a''s groom"),
+        // Two tasks writing one file spelled two ways: the second replaced the first.
+        (
+            "another task's output spelled otherwise",
+            "[\"{name}.usda\"]\n[[tasks]]\nname = \"b\"\noutputs = [\"./a.usda\"]",
+            "two tasks write",
+        ),
         // Tasks run in any order, on any node: b would read a's output while it is written.
         (
             "another task's groom",

@@ -259,25 +259,33 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
     if let Some(pair) = names.windows(2).find(|w| w[0] == w[1]) {
         return Err(bad(format!("two tasks are named '{}'", pair[0])));
     }
-    let mut outputs: Vec<&PathBuf> =
-        tasks.iter().flat_map(|t| t.outputs.iter().chain(t.preview.iter())).collect();
+    // Files are compared by identity, not by spelling: `./a.usda`, `a.usda`, its absolute path
+    // and a path through a symbolic link name one file.
+    let mut outputs: Vec<(PathBuf, &PathBuf)> = tasks
+        .iter()
+        .flat_map(|t| t.outputs.iter().chain(t.preview.iter()))
+        .map(|p| (file_identity(p), p))
+        .collect();
     outputs.sort_unstable();
-    if let Some(pair) = outputs.windows(2).find(|w| w[0] == w[1]) {
-        return Err(bad(format!(
-            "two tasks write {}; put {{name}} in the output templates",
-            pair[0].display()
-        )));
+    if let Some(pair) = outputs.windows(2).find(|w| w[0].0 == w[1].0) {
+        let spelled = if pair[0].1 == pair[1].1 {
+            pair[0].1.display().to_string()
+        } else {
+            format!("{} (as {} and {})", pair[0].0.display(), pair[0].1.display(), pair[1].1.display())
+        };
+        return Err(bad(format!("two tasks write {spelled}; put {{name}} in the output templates")));
     }
     // A task writing over a groom or recipe (its own or another's) would change the inputs the
     // next run reads: a re-run would style its own output again, and tasks on other nodes would
     // read a file while it is replaced.
-    let inputs: std::collections::HashMap<&PathBuf, (&str, &str)> = tasks
+    let inputs: std::collections::HashMap<PathBuf, (&str, &str)> = tasks
         .iter()
         .flat_map(|t| [(&t.groom, (t.name.as_str(), "groom")), (&t.recipe, (t.name.as_str(), "recipe"))])
+        .map(|(path, owner)| (file_identity(path), owner))
         .collect();
     for task in &tasks {
         for output in task.outputs.iter().chain(task.preview.iter()) {
-            if let Some((owner, what)) = inputs.get(output) {
+            if let Some((owner, what)) = inputs.get(&file_identity(output)) {
                 return Err(bad(format!(
                     "task '{}' writes {}, task '{owner}''s {what}: a batch does not overwrite its inputs \
                      (a re-run would style its own output)",
@@ -395,6 +403,29 @@ fn list_entry<'a>(
 
 fn not_a_container(path: &str, keys: &[&str]) -> String {
     format!("override '{path}': '{}' is a value, not a table or list", keys.join("."))
+}
+
+/// What names a file whatever the spelling of its path: absolute, without `.` and `..`, and
+/// through symbolic links where the file or its folder exists (outputs usually do not yet).
+fn file_identity(path: &Path) -> PathBuf {
+    if let Ok(canonical) = std::fs::canonicalize(path) {
+        return canonical;
+    }
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut lexical = PathBuf::new();
+    for component in absolute.components() {
+        match component {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                lexical.pop();
+            }
+            other => lexical.push(other),
+        }
+    }
+    match (lexical.parent().map(std::fs::canonicalize), lexical.file_name()) {
+        (Some(Ok(folder)), Some(name)) => folder.join(name),
+        _ => lexical,
+    }
 }
 
 #[cfg(test)]

@@ -128,15 +128,21 @@ fn with_overrides(task: &Task, manifest: &Path, error: Error) -> Error {
     )
 }
 
-/// A task's outputs against the files its groom's stage composes (layers it references or
-/// sublayers), which the manifest's own check cannot see: writing over one would change what
-/// the groom reads, for this task's re-run and for every task reading that stage.
-fn refuse_writing_a_layer(task: &Task, layers: &[PathBuf]) -> Result<()> {
-    let what = format!("a layer its groom {} composes", task.groom.display());
-    let layers: Vec<(String, &Path)> = layers.iter().map(|f| (what.clone(), f.as_path())).collect();
+/// A task's outputs against every file it reads: its recipe, its groom and the layers the
+/// groom's stage composes (references, sublayers), which the manifest's own check cannot see:
+/// writing over one would change what the task reads, for its re-run and for every task
+/// reading that file.
+fn refuse_writing_what_it_reads(task: &Task, files: &[PathBuf]) -> Result<()> {
+    let layer = format!("a layer its groom {} composes", task.groom.display());
+    let mut read: Vec<(String, &Path)> = files
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (if i == 0 { "its groom".to_string() } else { layer.clone() }, f.as_path()))
+        .collect();
+    read.push(("its recipe".to_string(), &task.recipe));
     let outputs = all_outputs(task);
     let outputs: Vec<&Path> = outputs.iter().map(PathBuf::as_path).collect();
-    crate::io::refuse_writing_inputs(&outputs, &layers)
+    crate::io::refuse_writing_inputs(&outputs, &read)
         .map_err(|e| Error::Usage(format!("task '{}': {e}", task.name)))
 }
 
@@ -166,7 +172,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     }
     let selection = crate::io::usda::Selection { time: None, variants: task.variants.clone() };
     let loaded = crate::io::read_groom_selected(&task.groom, &task.import, &selection)?;
-    refuse_writing_a_layer(task, loaded.composed_layers())?;
+    refuse_writing_what_it_reads(task, &loaded.files)?;
     let groom = &loaded.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
