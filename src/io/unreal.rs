@@ -33,6 +33,15 @@ pub fn with_root_uvs(groom: &Groom) -> Option<Groom> {
 /// An attribute under the name Unreal's USD importer reads: `color` as `groom_color`, every other
 /// name prefixed `groom_` unless it has the prefix.
 pub fn renamed_for_usd(mut attribute: Attribute) -> Attribute {
+    // The roles coif's own names give their USD types (`rest` is `point3f[]`, `color`
+    // `color3f[]`) go with them, so a renamed `groom_rest` still moves with the points.
+    if attribute.kind == AttributeKind::Float && attribute.components == 3 {
+        match attribute.name.as_str() {
+            crate::io::usda::names::REST => attribute.kind = AttributeKind::Point,
+            attr::COLOR => attribute.kind = AttributeKind::Color,
+            _ => {}
+        }
+    }
     attribute.name = name_for_usd(&attribute.name);
     attribute
 }
@@ -42,6 +51,17 @@ fn name_for_usd(name: &str) -> String {
         attr::COLOR => epic::COLOR.to_string(),
         name if name.starts_with(epic::PREFIX) => name.to_string(),
         name => format!("{}{name}", epic::PREFIX),
+    }
+}
+
+/// The groom attribute a file's attribute of Epic's groom names is, as both readers take it:
+/// `groom_X` is `X` (`groom_color` is `color`), except Unreal's interpolation names, which are
+/// coif's own and keep their prefix. Other names are themselves.
+pub fn attribute_for_epic_name(name: &str) -> String {
+    match name {
+        epic::COLOR => attr::COLOR.to_string(),
+        n if n == crate::guides::CLOSEST_GUIDES || n == crate::guides::GUIDE_WEIGHTS => n.to_string(),
+        n => n.strip_prefix(epic::PREFIX).unwrap_or(n).to_string(),
     }
 }
 

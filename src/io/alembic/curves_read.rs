@@ -9,7 +9,7 @@ use super::archive_read::{Archive, Compound, Object, Property, Sampled};
 use super::curves_write::{epic, CURVE_SCHEMA, VISIBILITY_HIDDEN, VISIBLE, XFORM_SCHEMA};
 use super::ogawa::{OgawaError, OgawaResult};
 use super::types::Pod;
-use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
 use crate::groups::Interpolation;
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 use crate::{point_attributes, primvar_rates};
@@ -555,7 +555,7 @@ impl<'a> CurvesArchive<'a> {
                 // One value for the whole object: the object is the group (coif writes that).
                 epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
-                    let canonical = canonical_name(name);
+                    let canonical = crate::io::unreal::attribute_for_epic_name(name);
                     let (rate, data) = match param.rate {
                         Rate::Vertex => (AttributeRate::Vertex, param.values),
                         _ => (AttributeRate::Strand, param.to_strands(&strands)),
@@ -933,7 +933,7 @@ fn param_kind(property: &Property<'_>, extent: u8) -> AttributeKind {
     };
     // What coif's writer gives a plain float attribute of this name reads back as plain floats.
     let (name, plain) = (property.name(), AttributeKind::Float);
-    let name = canonical_name(name);
+    let name = crate::io::unreal::attribute_for_epic_name(name);
     let written_plain = super::curves_write::pod(plain, &name) == pod
         && super::curves_write::interpretation(plain, &name, extent as usize)
             == interpretation.as_deref().unwrap_or("");
@@ -941,17 +941,6 @@ fn param_kind(property: &Property<'_>, extent: u8) -> AttributeKind {
         AttributeKind::Float
     } else {
         kind
-    }
-}
-
-/// The groom attribute an `.arbGeomParams` member becomes: Epic's `groom_` names without their
-/// prefix (`groom_color` is `color`), Unreal's interpolation names as they are.
-fn canonical_name(name: &str) -> String {
-    match name {
-        epic::COLOR => attr::COLOR.to_string(),
-        // Unreal's interpolation names are coif's own: they keep their prefix.
-        n if n == crate::guides::CLOSEST_GUIDES || n == crate::guides::GUIDE_WEIGHTS => n.to_string(),
-        n => n.strip_prefix(epic::PREFIX).unwrap_or(n).to_string(),
     }
 }
 

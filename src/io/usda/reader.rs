@@ -12,6 +12,7 @@ use crate::groom::{
     Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
 };
 use crate::groups::Interpolation;
+use crate::io::alembic::curves_write::epic;
 use crate::io::{ImportOptions, UpAxis};
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 use crate::{point_attributes, primvar_rates};
@@ -681,6 +682,7 @@ impl Walker<'_> {
                 primvar_names.push((name.to_string(), name.to_string()));
             }
         }
+        let has_st = prim.attribute(&format!("primvars:{}", names::ST)).is_some();
         for (full_name, name) in primvar_names {
             let is_primvar = full_name.starts_with("primvars:");
             let indices = prim
@@ -743,8 +745,18 @@ impl Walker<'_> {
                 (names::GROOM_GUIDE, AttributeRate::Strand, 1) => {
                     curves.guides = Some(data.iter().map(|&v| v != 0.0).collect());
                 }
+                // Unreal's root UVs (`--unreal` writes them beside `st`, which wins).
+                (epic::ROOT_UV, AttributeRate::Strand, 2) => {
+                    if !has_st {
+                        curves.root_uvs = Some(data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+                    }
+                }
+                // One group id for the whole prim: the prim is the group (`--unreal` writes that).
+                (epic::GROUP_ID, AttributeRate::Strand, 1) if data.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
-                    let groom_name = names::attribute_for_primvar(&name);
+                    // Epic's names as in Alembic: a `--unreal` stage reads back as coif wrote it.
+                    let groom_name =
+                        crate::io::unreal::attribute_for_epic_name(&names::attribute_for_primvar(&name));
                     let kind = attribute_kind(&type_name, &groom_name, components);
                     let interpolation = match interpolation.as_str() {
                         "constant" => Some(Interpolation::Constant),
