@@ -141,6 +141,26 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     ] {
         cases.push(style_case(&format!("resolution for a {label}"), &recipe, hair, &[culprit, "max_segment"]));
     }
+    // A layout that could make more rods than a recipe may list: at a spacing of micrometres the
+    // spiral's summed angle stopped growing and rows scanned the roots at 10¹⁰ places, for ever.
+    // In the head frame the recipe's line is named; in metres the head's size is needed first.
+    for (frame, spacing, culprit) in [
+        ("head", "2e-5", "line 4: stage 1 (wrap): spacing = 2e-5 head units could lay out 1.26e10 rods"),
+        ("head", "0.07", "line 4: stage 1 (wrap): spacing = 0.07 head units could lay out 1080 rods"),
+        ("world", "2e-5", "stage 1 (wrap): spacing = 2e-5 m ("),
+    ] {
+        for layout in ["rows", "spiral"] {
+            let recipe = format!(
+                "frame = \"{frame}\"\n[settings]\nmax_segment = 0.004\n{wrap}layout = \"{layout}\"\ndiameter = 1e-5\nspacing = {spacing}\n"
+            );
+            cases.push(style_case(
+                &format!("{layout} layout at spacing {spacing} ({frame} frame)"),
+                &recipe,
+                hair,
+                &[culprit, "more than the 1000 a recipe may have", "the spacing must be at least"],
+            ));
+        }
+    }
     let water: &[(&str, &str)] = &[
         ("r_min", "nan"),
         ("r_min", "-1"),
@@ -245,6 +265,8 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         ("settle max_seconds", "kind = \"settle\"\nmax_seconds = 1e30", "max_seconds"),
         ("settle tolerance", "kind = \"settle\"\ntolerance = nan", "tolerance"),
         ("lotion nan", "kind = \"lotion\"\nduration = 1\nbreak = { ionic = nan }", "ionic"),
+        ("layout spacing 1e30", "kind = \"wrap\"\nduration = 1\nlayout = \"rows\"\ndiameter = 0.02\nspacing = 1e30", "spacing = 1e30"),
+        ("layout diameter inf", "kind = \"wrap\"\nduration = 1\nlayout = \"spiral\"\ndiameter = inf\nspacing = 0.03", "diameter = inf"),
     ];
     for (name, stage, culprit) in stages {
         let recipe = format!("[[stages]]\n{stage}\n");
@@ -289,6 +311,16 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     let rods: String = (0..1001)
         .map(|i| format!("[[rods]]\nname = \"r{i}\"\na = [0, 5, 0]\nb = [0.1, 5, 0]\nradius = 0.01\n"))
         .collect();
+    // A layout's rods count with the listed ones: all are obstacles while the hair is wrapped.
+    let listed = &rods[..rods.match_indices("[[rods]]").nth(1000).unwrap().0];
+    let layout =
+        "[[stages]]\nkind = \"wrap\"\nduration = 0.01\nlayout = \"rows\"\ndiameter = 0.02\nspacing = 0.03\n";
+    cases.push(style_case(
+        "1000 rods and a layout",
+        &format!("{listed}{layout}"),
+        hair,
+        &["stage 1 (wrap): the Rows layout's", "a recipe may have at most 1000"],
+    ));
     for (what, many) in [("obstacles", spheres), ("rods", rods)] {
         cases.push(style_case(
             &format!("1001 {what}"),

@@ -30,9 +30,10 @@
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | `[head]` `size`, `[guides]` `reach` | (0, 1000] m |
+//! | layout `diameter`, `spacing` | (0, 1000]; `spacing` fine enough for at most 1,000 rods (`layout::too_many_rods`) |
 //! | `[guides]` `fraction` (0, 1]; `count` at least 1 (and at most the strands) | |
 //! | stages | at most 10,000 |
-//! | obstacles, rods | at most 1,000 each |
+//! | obstacles, rods | at most 1,000 each (a layout's rods too) |
 use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, ITERATIONS, MODULUS, SECONDS, TIME_STEP};
 
 use super::recipe::{Obstacle, Recipe, Stage};
@@ -231,7 +232,13 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
                 validate::number("amount", *amount, FRACTION).map_err(at)?;
                 mask(m).map_err(at)?;
             }
-            Stage::Wrap { mask: m, .. } | Stage::Lotion { mask: m, .. } => mask(m).map_err(at)?,
+            Stage::Wrap { mask: m, diameter, spacing, .. } => {
+                mask(m).map_err(at)?;
+                // The lower bound of `spacing` is the layout's rod count (`layout::too_many_rods`).
+                diameter.map_or(Ok(()), |d| validate::number("diameter", d, SIZE)).map_err(at)?;
+                spacing.map_or(Ok(()), |s| validate::number("spacing", s, SIZE)).map_err(at)?;
+            }
+            Stage::Lotion { mask: m, .. } => mask(m).map_err(at)?,
             Stage::Dry { dryer, heat, .. } => {
                 validate::number("heat", *heat, Range::closed(0.0, 100.0)).map_err(at)?;
                 if let Some(d) = dryer {

@@ -751,6 +751,10 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                             &[*spacing],
                         )
                         .or_else(fail)?;
+                        // In metres the rods' count waits for the fitted head (placement).
+                        if let Some(why) = super::layout::too_many_rods(*spacing, None) {
+                            return fail(why);
+                        }
                     }
                 }
                 if let Some(missing) =
