@@ -105,6 +105,28 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
             ));
         }
     }
+    // The [head] table's vectors, named with their line: a NaN centre was blamed on the groom's
+    // fitted size, 1e30 was accepted, and up [1, 1, 0] with front [2, 2, 0] made a front
+    // opposite up.
+    for (keys, culprit) in [
+        ("center = [nan, 0.0, 0.0]", "line 3: [head] center = [NaN, 0, 0] must have finite components"),
+        (
+            "center = [1e30, 0, 0]",
+            "line 3: [head] center = [1e30, 0, 0] must have finite components in [-1000, 1000]",
+        ),
+        ("center = [0, -inf, 0]", "line 3: [head] center = [0, -inf, 0]"),
+        ("up = [0, 0, 0]", "line 3: [head] up = [0, 0, 0] is not a direction"),
+        ("up = [nan, 1, 0]", "line 3: [head] up = [NaN, 1, 0]"),
+        ("front = [0, 1e30, 0]", "line 3: [head] front = [0, 1e30, 0]"),
+        (
+            "up = [1, 1, 0]\nfront = [2, 2, 0]",
+            "line 4: [head] front = [2, 2, 0] is parallel to up = [1, 1, 0]",
+        ),
+    ] {
+        let recipe =
+            format!("frame = \"head\"\n[head]\n{keys}\n[[stages]]\nkind = \"wet\"\nduration = 0.01\n");
+        cases.push(style_case(&format!("[head] {keys}"), &recipe, hair, &["r.toml", culprit]));
+    }
     // [guides] with both count and fraction: named with the recipe's line. (With neither, a
     // groom's own guides are used, or the run says the groom has none.)
     let recipe = "[guides]\ncount = 3\nfraction = 0.5\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";

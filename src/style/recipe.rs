@@ -625,13 +625,6 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     if head.size.is_some_and(|s| !positive(s)) {
         return Err("[head] size must be a positive length".into());
     }
-    if [head.up, head.front]
-        .iter()
-        .flatten()
-        .any(|v| Vec3::from(*v).length().is_nan() || Vec3::from(*v).length() <= 1e-6)
-    {
-        return Err("[head] up and front must be non-zero directions".into());
-    }
 
     let mut names: Vec<&str> = Vec::new();
     for obstacle in &recipe.obstacles {
