@@ -103,14 +103,16 @@ pub fn number(key: &str, value: impl Into<f64>, range: Range) -> std::result::Re
     }
 }
 
+/// A vector as written, each component as [`shortest`] writes it: `[1e30, 0, NaN]`.
+pub fn vector_text(value: [f32; 3]) -> String {
+    format!("[{}, {}, {}]", shortest(value[0].into()), shortest(value[1].into()), shortest(value[2].into()))
+}
+
 /// Checks every component of a vector against `range`.
 pub fn vector(key: &str, value: [f32; 3], range: Range) -> std::result::Result<(), String> {
     match value.iter().position(|&c| !range.contains(c as f64)) {
         None => Ok(()),
-        Some(_) => Err(format!(
-            "{key} = [{}, {}, {}] must have finite components in {range}",
-            value[0], value[1], value[2]
-        )),
+        Some(_) => Err(format!("{key} = {} must have finite components in {range}", vector_text(value))),
     }
 }
 
@@ -119,10 +121,7 @@ pub fn direction(key: &str, value: [f32; 3]) -> std::result::Result<(), String> 
     vector(key, value, Range::closed(-1e6, 1e6))?;
     let length = glam::Vec3::from(value).length();
     if length < 1e-6 {
-        return Err(format!(
-            "{key} = [{}, {}, {}] is not a direction (zero length)",
-            value[0], value[1], value[2]
-        ));
+        return Err(format!("{key} = {} is not a direction (zero length)", vector_text(value)));
     }
     Ok(())
 }

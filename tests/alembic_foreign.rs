@@ -316,7 +316,7 @@ fn a_width_count_that_fits_no_scope_names_object_and_property() {
         ("uni", &[0.1, 0.2, 0.3], "3 values, its scope needs 2"),
         ("con", &[0.1, 0.2], "2 values, its scope needs 1"),
         ("vtx", &[0.1; 6], "6 values, its scope needs 7"),
-        ("", &[0.1; 5], "5 values, its scope needs 1"),
+        ("", &[0.1; 5], "5 values and no geoScope: coif reads 7 (one per vertex), 2 (one per curve) or 1"),
     ];
     for (scope, widths, needs) in cases {
         let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
@@ -479,13 +479,15 @@ fn varying_widths_file(
     basis: [u8; 4],
     counts: &[i32],
     widths: &[f32],
+    scope: &str,
 ) -> std::path::PathBuf {
     let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
     let top = w.top();
     let points: Vec<Vec3> =
         counts.iter().enumerate().flat_map(|(i, &n)| line(i as f32, n as usize)).collect();
     let hair = curves(&mut w, top, "hair", counts, &points, basis);
-    let width = w.add_array(hair, "width", param_md("var", Pod::F32, 1), Pod::F32, 1, 0);
+    let metadata = if scope.is_empty() { MetaData::new() } else { param_md(scope, Pod::F32, 1) };
+    let width = w.add_array(hair, "width", metadata, Pod::F32, 1, 0);
     w.set_sample(width, &f32s(widths), widths.len() as u64).unwrap();
     let path = dir.join(name);
     std::fs::write(&path, w.finish().unwrap().into_inner()).unwrap();
@@ -498,19 +500,22 @@ fn varying_widths_on_cubic_curves_are_per_segment_end_or_per_vertex() {
     // nonperiodic B-spline of n points: n - 2; a Bézier: (n - 1)/3 + 1), Houdini one per point.
     // Segment-end widths must reach USD as `varying` with the same values (pxr counts the segment
     // ends itself) and come back in coif's .abc under `var` (ogawa-rs); per-point ones as vertex
-    // widths; any other count exits 2 naming the file, object, property and both counts.
+    // widths; any other count exits 2 naming the file, object, property and both counts. Without
+    // a scope (Blender's Bézier curves) a count of segment ends is read as `var`.
     let dir = tempfile::tempdir().unwrap();
     let bspline = [0, 0, 2, 1];
     let bezier = [0, 0, 1, 3];
-    // (file, basis bytes, counts, widths, USD interpolation, Alembic scope written back)
-    type Case<'a> = (&'a str, [u8; 4], &'a [i32], Vec<f32>, &'a str, &'a str);
-    let cases: [Case; 3] = [
-        ("ends.abc", bspline, &[5, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "varying", "var"),
-        ("bezier.abc", bezier, &[7, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "varying", "var"),
-        ("points.abc", bspline, &[5, 4], (1..=9).map(|i| i as f32 * 0.01).collect(), "vertex", "vtx"),
+    // (file, basis bytes, counts, widths, scope in the file, USD interpolation, Alembic scope
+    // written back)
+    type Case<'a> = (&'a str, [u8; 4], &'a [i32], Vec<f32>, &'a str, &'a str, &'a str);
+    let cases: [Case; 4] = [
+        ("ends.abc", bspline, &[5, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "var", "varying", "var"),
+        ("bezier.abc", bezier, &[7, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "var", "varying", "var"),
+        ("unscoped.abc", bezier, &[7, 4], vec![0.01, 0.02, 0.03, 0.04, 0.05], "", "varying", "var"),
+        ("points.abc", bspline, &[5, 4], (1..=9).map(|i| i as f32 * 0.01).collect(), "var", "vertex", "vtx"),
     ];
-    for (name, basis, counts, widths, usd, scope) in cases {
-        let source = varying_widths_file(dir.path(), name, basis, counts, &widths);
+    for (name, basis, counts, widths, scope_in, usd, scope) in cases {
+        let source = varying_widths_file(dir.path(), name, basis, counts, &widths, scope_in);
         let usda = dir.path().join(format!("{name}.usda"));
         let run = coif(&["convert", path_str(&source), path_str(&usda)]);
         assert!(run.status.success(), "{name}: {}", stderr(&run));
@@ -527,13 +532,15 @@ fn varying_widths_on_cubic_curves_are_per_segment_end_or_per_vertex() {
         let read = curve_widths_via_ogawa_rs(&abc);
         assert_eq!(read, vec![("/hair".to_string(), scope.to_string(), widths.clone())], "{name}");
     }
-    let bad = varying_widths_file(dir.path(), "bad.abc", bspline, &[5, 4], &[0.01; 6]);
-    let out = coif(&["info", path_str(&bad)]);
-    let message = stderr(&out);
-    assert_eq!(out.status.code(), Some(2), "{message}");
-    assert!(message.contains("bad.abc"), "{message}");
-    assert!(
-        message.contains("/hair/.geom/width: 6 values, its scope needs 9 (one per vertex) or 5"),
-        "{message}"
-    );
+    for (scope, needs) in [
+        ("var", "6 values, its scope needs 9 (one per vertex) or 5"),
+        ("", "6 values and no geoScope: coif reads 9 (one per vertex), 5 (one per segment end of the BSpline curves), 2 (one per curve) or 1"),
+    ] {
+        let bad = varying_widths_file(dir.path(), "bad.abc", bspline, &[5, 4], &[0.01; 6], scope);
+        let out = coif(&["info", path_str(&bad)]);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{message}");
+        assert!(message.contains("bad.abc"), "{message}");
+        assert!(message.contains(&format!("/hair/.geom/width: {needs}")), "{scope:?}: {message}");
+    }
 }

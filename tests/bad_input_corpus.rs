@@ -105,6 +105,28 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
             ));
         }
     }
+    // The [head] table's vectors, named with their line: a NaN centre was blamed on the groom's
+    // fitted size, 1e30 was accepted, and up [1, 1, 0] with front [2, 2, 0] made a front
+    // opposite up.
+    for (keys, culprit) in [
+        ("center = [nan, 0.0, 0.0]", "line 3: [head] center = [NaN, 0, 0] must have finite components"),
+        (
+            "center = [1e30, 0, 0]",
+            "line 3: [head] center = [1e30, 0, 0] must have finite components in [-1000, 1000]",
+        ),
+        ("center = [0, -inf, 0]", "line 3: [head] center = [0, -inf, 0]"),
+        ("up = [0, 0, 0]", "line 3: [head] up = [0, 0, 0] is not a direction"),
+        ("up = [nan, 1, 0]", "line 3: [head] up = [NaN, 1, 0]"),
+        ("front = [0, 1e30, 0]", "line 3: [head] front = [0, 1e30, 0]"),
+        (
+            "up = [1, 1, 0]\nfront = [2, 2, 0]",
+            "line 4: [head] front = [2, 2, 0] is parallel to up = [1, 1, 0]",
+        ),
+    ] {
+        let recipe =
+            format!("frame = \"head\"\n[head]\n{keys}\n[[stages]]\nkind = \"wet\"\nduration = 0.01\n");
+        cases.push(style_case(&format!("[head] {keys}"), &recipe, hair, &["r.toml", culprit]));
+    }
     // [guides] with both count and fraction: named with the recipe's line. (With neither, a
     // groom's own guides are used, or the run says the groom has none.)
     let recipe = "[guides]\ncount = 3\nfraction = 0.5\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
@@ -140,6 +162,26 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         ("[head] size = 1e-5", format!("frame = \"head\"\n[head]\nsize = 1e-5\n{wrap}layout = \"rows\"\ndiameter = 0.24\nspacing = 0.4\n"), "[head] size"),
     ] {
         cases.push(style_case(&format!("resolution for a {label}"), &recipe, hair, &[culprit, "max_segment"]));
+    }
+    // A layout that could make more rods than a recipe may list: at a spacing of micrometres the
+    // spiral's summed angle stopped growing and rows scanned the roots at 10¹⁰ places, for ever.
+    // In the head frame the recipe's line is named; in metres the head's size is needed first.
+    for (frame, spacing, culprit) in [
+        ("head", "2e-5", "line 4: stage 1 (wrap): spacing = 2e-5 head units could lay out 1.26e10 rods"),
+        ("head", "0.07", "line 4: stage 1 (wrap): spacing = 0.07 head units could lay out 1080 rods"),
+        ("world", "2e-5", "stage 1 (wrap): spacing = 2e-5 m ("),
+    ] {
+        for layout in ["rows", "spiral"] {
+            let recipe = format!(
+                "frame = \"{frame}\"\n[settings]\nmax_segment = 0.004\n{wrap}layout = \"{layout}\"\ndiameter = 1e-5\nspacing = {spacing}\n"
+            );
+            cases.push(style_case(
+                &format!("{layout} layout at spacing {spacing} ({frame} frame)"),
+                &recipe,
+                hair,
+                &[culprit, "more than the 1000 a recipe may have", "the spacing must be at least"],
+            ));
+        }
     }
     let water: &[(&str, &str)] = &[
         ("r_min", "nan"),
@@ -245,6 +287,8 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         ("settle max_seconds", "kind = \"settle\"\nmax_seconds = 1e30", "max_seconds"),
         ("settle tolerance", "kind = \"settle\"\ntolerance = nan", "tolerance"),
         ("lotion nan", "kind = \"lotion\"\nduration = 1\nbreak = { ionic = nan }", "ionic"),
+        ("layout spacing 1e30", "kind = \"wrap\"\nduration = 1\nlayout = \"rows\"\ndiameter = 0.02\nspacing = 1e30", "spacing = 1e30"),
+        ("layout diameter inf", "kind = \"wrap\"\nduration = 1\nlayout = \"spiral\"\ndiameter = inf\nspacing = 0.03", "diameter = inf"),
     ];
     for (name, stage, culprit) in stages {
         let recipe = format!("[[stages]]\n{stage}\n");
@@ -289,6 +333,16 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     let rods: String = (0..1001)
         .map(|i| format!("[[rods]]\nname = \"r{i}\"\na = [0, 5, 0]\nb = [0.1, 5, 0]\nradius = 0.01\n"))
         .collect();
+    // A layout's rods count with the listed ones: all are obstacles while the hair is wrapped.
+    let listed = &rods[..rods.match_indices("[[rods]]").nth(1000).unwrap().0];
+    let layout =
+        "[[stages]]\nkind = \"wrap\"\nduration = 0.01\nlayout = \"rows\"\ndiameter = 0.02\nspacing = 0.03\n";
+    cases.push(style_case(
+        "1000 rods and a layout",
+        &format!("{listed}{layout}"),
+        hair,
+        &["stage 1 (wrap): the Rows layout's", "a recipe may have at most 1000"],
+    ));
     for (what, many) in [("obstacles", spheres), ("rods", rods)] {
         cases.push(style_case(
             &format!("1001 {what}"),

@@ -18,9 +18,11 @@ use coif::Groom;
 use glam::Vec3;
 
 fn load(file: &str) -> Groom {
-    read_groom(Path::new(&format!("tests/data/{file}")), &ImportOptions::default())
-        .unwrap_or_else(|e| panic!("{file}: {e}"))
-        .groom
+    load_path(Path::new(&format!("tests/data/{file}")))
+}
+
+fn load_path(path: &Path) -> Groom {
+    read_groom(path, &ImportOptions::default()).unwrap_or_else(|e| panic!("{}: {e}", path.display())).groom
 }
 
 fn manifest() -> serde_json::Value {
@@ -561,6 +563,22 @@ fn bpy_reimport(path: &Path) -> Option<serde_json::Value> {
 }
 
 fn bpy_reimport_args(path: &Path, args: &[&str]) -> Option<serde_json::Value> {
+    let python = bpy_python(&format!("Blender's re-import of {}", path.display()))?;
+    let output = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_reimport.py", path.to_str().unwrap()])
+        .args(args)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let json = stdout.lines().find_map(|l| l.strip_prefix("BPY-JSON "));
+    let json =
+        json.unwrap_or_else(|| panic!("bpy failed on {path:?}: {}", String::from_utf8_lossy(&output.stderr)));
+    Some(serde_json::from_str(json).unwrap())
+}
+
+/// The Python that imports bpy, or `None` when there is none and `what` (needing it) is skipped,
+/// as [`bpy_reimport`] says.
+fn bpy_python(what: &str) -> Option<PathBuf> {
     use std::io::Write;
     let python = Path::new(env!("CARGO_MANIFEST_DIR")).join(".deps/bpy-venv/bin/python");
     let has_bpy = std::process::Command::new(&python).args(["-c", "import bpy"]).output();
@@ -573,21 +591,65 @@ fn bpy_reimport_args(path: &Path, args: &[&str]) -> Option<serde_json::Value> {
         // Not `eprintln!`: the harness captures that and shows it only on failure.
         let _ = writeln!(
             std::io::stderr(),
-            "SKIPPED: bpy not installed (make test installs it): Blender's re-import of {} not checked",
-            path.display()
+            "SKIPPED: bpy not installed (make test installs it): {what} not checked"
         );
         return None;
     }
-    let output = std::process::Command::new(&python)
-        .args(["tests/blender/bpy_reimport.py", path.to_str().unwrap()])
-        .args(args)
+    Some(python)
+}
+
+/// Blender's Alembic export of a Bézier curve object (tests/blender/bpy_bezier.py: three curves
+/// of three knots, free handles, a radius per knot) writes the handles into P, 7 points a curve,
+/// and one width per knot with no geoScope: the `varying` count, which coif refused ("9 values,
+/// its scope needs 1"). It reads as three Bézier strands whose points are the knots and handles
+/// Blender reads back from its own file, and whose widths at the knots are twice Blender's radii
+/// (the handles' widths lie between, as `var` values are spread).
+#[test]
+fn blenders_bezier_curves_read_with_their_handles_and_a_width_per_knot() {
+    let dir = tempfile::tempdir().unwrap();
+    let exported = dir.path().join("bezier.abc");
+    let Some(python) = bpy_python("Blender's Bézier curves") else { return };
+    let made = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_bezier.py", exported.to_str().unwrap()])
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let json = stdout.lines().find_map(|l| l.strip_prefix("BPY-JSON "));
-    let json =
-        json.unwrap_or_else(|| panic!("bpy failed on {path:?}: {}", String::from_utf8_lossy(&output.stderr)));
-    Some(serde_json::from_str(json).unwrap())
+    assert!(made.status.success() && exported.exists(), "{}", String::from_utf8_lossy(&made.stderr));
+    let blender = bpy_reimport(&exported).unwrap();
+    let guides = blender_object(&blender, "objects", "Guides");
+    assert_eq!(guides["curve_types"], serde_json::json!([2]), "Blender reads Bézier curves back");
+
+    let groom = load_path(&exported);
+    let curves = guides["curves"].as_u64().unwrap() as usize;
+    assert_eq!(groom.strand_count(), curves);
+    assert_eq!(groom.group(0).basis, coif::groom::CurveBasis::Bezier);
+    let knots = blender_points(&guides["positions"], 1.0);
+    let (left, right) =
+        (blender_points(&guides["handles"]["left"], 1.0), blender_points(&guides["handles"]["right"], 1.0));
+    let radii = common::usd::f32s(&guides["radii"]);
+    assert_eq!((knots.len(), radii.len()), (3 * curves, 3 * curves));
+    let (mut worst_point, mut worst_width) = (0.0f32, 0.0f32);
+    for s in 0..curves {
+        let (points, widths) = (groom.strand_points(s), &groom.widths[groom.strand_range(s)]);
+        assert_eq!(points.len(), 7, "strand {s}: knot, handle, handle, knot, handle, handle, knot");
+        for k in 0..3 {
+            let knot = 3 * s + k;
+            worst_point = worst_point.max(points[3 * k].distance(knots[knot]));
+            worst_width = worst_width.max((widths[3 * k] - 2.0 * radii[knot]).abs());
+            if k < 2 {
+                // Between two knots: the first one's right handle, the next one's left.
+                worst_point = worst_point.max(points[3 * k + 1].distance(right[knot]));
+                worst_point = worst_point.max(points[3 * k + 2].distance(left[knot + 1]));
+                let (a, b) = (widths[3 * k], widths[3 * k + 3]);
+                for (j, w) in widths[3 * k + 1..3 * k + 3].iter().enumerate() {
+                    let t = (j + 1) as f32 / 3.0;
+                    assert!((w - (a + (b - a) * t)).abs() < 1e-9, "strand {s} handle width {w}");
+                }
+            }
+        }
+    }
+    eprintln!("Blender Bézier: points within {worst_point:.1e} m, knot widths within {worst_width:.1e} m");
+    assert!(worst_point < 1e-6, "points {worst_point} m from Blender's reading of its own file");
+    assert!(worst_width < 1e-9, "knot widths {worst_width} m from twice Blender's radii");
 }
 
 /// The object of Blender's import whose name starts with `name` (`Guides` for USD's

@@ -72,14 +72,28 @@ pub struct FrameOverrides {
     pub size: Option<f32>,
 }
 
+/// The sine of the angle under which a front is parallel to up: its part across up would be
+/// f32 rounding, pointing anywhere (up [1, 1, 0] and front [2, 2, 0] made a front opposite up).
+const PARALLEL: f32 = 1e-3;
+
+/// `front` made perpendicular to `up`, unit length; `None` when they are parallel (within
+/// [`PARALLEL`]), or either is zero or not finite.
+pub fn front_across(up: Vec3, front: Vec3) -> Option<Vec3> {
+    let up = up.try_normalize()?;
+    let across = front - up * front.dot(up);
+    if across.length() >= PARALLEL * front.length() {
+        across.try_normalize()
+    } else {
+        None
+    }
+}
+
 impl HeadFrame {
     /// A frame from a centre, an up and a front direction (made perpendicular to up) and a size.
     pub fn new(center: Vec3, up: Vec3, front: Vec3, size: f32) -> Result<HeadFrame, String> {
         let up = up.try_normalize().ok_or("the head's up direction is zero")?;
-        let front = (front - up * front.dot(up))
-            .try_normalize()
-            .filter(|f| f.is_finite())
-            .ok_or("the head's front direction is parallel to its up direction")?;
+        let front =
+            front_across(up, front).ok_or("the head's front direction is parallel to its up direction")?;
         if !(center.is_finite() && size.is_finite() && size > 0.0) {
             return Err(format!("a head frame needs a finite centre and a positive size, not {size}"));
         }
@@ -485,6 +499,7 @@ mod tests {
         assert_eq!(frame.up(), Vec3::Z);
         assert!(frame.front().abs_diff_eq(Vec3::Y, 1e-6));
         assert!(HeadFrame::new(Vec3::ZERO, Vec3::Y, Vec3::Y, 1.0).is_err());
+        assert!(HeadFrame::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(2.0, 2.0, 0.0), 1.0).is_err());
         assert!(HeadFrame::new(Vec3::ZERO, Vec3::Y, Vec3::Z, 0.0).is_err());
         let mut flat = groom();
         flat.points.iter_mut().for_each(|p| p.y = 0.0);

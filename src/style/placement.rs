@@ -10,6 +10,7 @@ use toml::Spanned;
 
 use super::head_frame::{Ellipsoid, FitError, FrameOverrides, HeadFrame};
 use super::layout::lay_out;
+use super::ranges::MAX_OBSTACLES;
 use super::recipe::{bake_mesh, Frame, Layout, Obstacle, Recipe, Rod, Stage};
 use crate::error::{Error, Result};
 use crate::groom::{Groom, GroomError};
@@ -214,11 +215,23 @@ pub fn place(
                     length(recipe.frame, diameter.expect("checked")),
                     length(recipe.frame, spacing.expect("checked")),
                 );
-                let made = lay_out(fr, &roots, *layout, diameter, spacing);
+                let made = lay_out(fr, &roots, *layout, diameter, spacing)
+                    .map_err(|why| Error::Usage(format!("stage {} (wrap): {why}", index + 1)))?;
                 if made.is_empty() {
                     return Err(Error::Usage(format!(
                         "stage {} (wrap): the {layout:?} layout found no scalp to put rods on",
                         index + 1
+                    )));
+                }
+                // Every rod is an obstacle while the hair is wrapped: laid out or listed, a recipe
+                // has at most as many as it may list.
+                let total = recipe.rods.len() + laid.len() + made.len();
+                if total > MAX_OBSTACLES {
+                    return Err(Error::Usage(format!(
+                        "stage {} (wrap): the {layout:?} layout's {} rods make the recipe's rods {total}; \
+                         a recipe may have at most {MAX_OBSTACLES}",
+                        index + 1,
+                        made.len()
                     )));
                 }
                 for (k, rod) in made.into_iter().enumerate() {

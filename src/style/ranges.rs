@@ -30,9 +30,11 @@
 //! | dryer `strength` | [0, 1e5] m/s²; `falloff` (0, 1000] m; `cone_degrees` (0, 180] |
 //! | dry `heat` | [0, 100]; press `travel` [0, 1000] m |
 //! | `[head]` `size`, `[guides]` `reach` | (0, 1000] m |
+//! | `[head]` `center` | components in [-1000, 1000] m; `up`, `front` finite, not zero, not parallel |
+//! | layout `diameter`, `spacing` | (0, 1000]; `spacing` fine enough for at most 1,000 rods (`layout::too_many_rods`) |
 //! | `[guides]` `fraction` (0, 1]; `count` at least 1 (and at most the strands) | |
 //! | stages | at most 10,000 |
-//! | obstacles, rods | at most 1,000 each |
+//! | obstacles, rods | at most 1,000 each (a layout's rods too) |
 use crate::validate::{self, Range, COORDINATE, DENSITY, FRACTION, ITERATIONS, MODULUS, SECONDS, TIME_STEP};
 
 use super::recipe::{Obstacle, Recipe, Stage};
@@ -84,19 +86,20 @@ fn line_of_key(text: &str, section: &str, key: &str) -> Option<usize> {
 pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
     let lines = Lines::new(text);
     let line_of = |span: std::ops::Range<usize>| lines.line_column(text, span.start).0;
-    // A number in a table without spans: "line N: [section] key = …".
-    let table = |section: &str, key: &str, value: f64, range: Range| {
-        validate::number(&format!("[{section}] {key}"), value, range).map_err(|message| {
-            match line_of_key(text, section, key) {
-                Some(line) => format!("line {line}: {message}"),
-                None => message,
-            }
+    // A refusal of a key in a table without spans: "line N: [section] key = …".
+    let in_table = |section: &str, key: &str, check: Result<(), String>| {
+        check.map_err(|message| match line_of_key(text, section, key) {
+            Some(line) => format!("line {line}: {message}"),
+            None => message,
         })
+    };
+    let table = |section: &str, key: &str, value: f64, range: Range| {
+        in_table(section, key, validate::number(&format!("[{section}] {key}"), value, range))
     };
     let s = &recipe.settings;
     table("settings", "dt", s.dt.into(), TIME_STEP)?;
     table("settings", "iterations", s.iterations.into(), ITERATIONS)?;
-    validate::vector("[settings] gravity", s.gravity, COORDINATE)?;
+    in_table("settings", "gravity", validate::vector("[settings] gravity", s.gravity, COORDINATE))?;
     table("settings", "youngs_modulus", s.youngs_modulus.into(), MODULUS)?;
     table("settings", "shear_modulus", s.shear_modulus.into(), MODULUS)?;
     table("settings", "density", s.density.into(), DENSITY)?;
@@ -136,7 +139,23 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
         table("water", "uptake", p.uptake.into(), Range::closed(0.0, 1e3))?;
     }
 
-    if let Some(size) = recipe.head.size {
+    let head = &recipe.head;
+    if let Some(center) = head.center {
+        in_table("head", "center", validate::vector("[head] center", center, COORDINATE))?;
+    }
+    for (key, direction) in [("up", head.up), ("front", head.front)] {
+        if let Some(d) = direction {
+            in_table("head", key, validate::direction(&format!("[head] {key}"), d))?;
+        }
+    }
+    if let (Some(up), Some(front)) = (head.up, head.front) {
+        if super::head_frame::front_across(up.into(), front.into()).is_none() {
+            let (front, up) = (validate::vector_text(front), validate::vector_text(up));
+            let message = format!("[head] front = {front} is parallel to up = {up}");
+            return in_table("head", "front", Err(message));
+        }
+    }
+    if let Some(size) = head.size {
         table("head", "size", size.into(), SIZE)?;
     }
     if let Some(guides) = recipe.guides {
@@ -231,7 +250,13 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
                 validate::number("amount", *amount, FRACTION).map_err(at)?;
                 mask(m).map_err(at)?;
             }
-            Stage::Wrap { mask: m, .. } | Stage::Lotion { mask: m, .. } => mask(m).map_err(at)?,
+            Stage::Wrap { mask: m, diameter, spacing, .. } => {
+                mask(m).map_err(at)?;
+                // The lower bound of `spacing` is the layout's rod count (`layout::too_many_rods`).
+                diameter.map_or(Ok(()), |d| validate::number("diameter", d, SIZE)).map_err(at)?;
+                spacing.map_or(Ok(()), |s| validate::number("spacing", s, SIZE)).map_err(at)?;
+            }
+            Stage::Lotion { mask: m, .. } => mask(m).map_err(at)?,
             Stage::Dry { dryer, heat, .. } => {
                 validate::number("heat", *heat, Range::closed(0.0, 100.0)).map_err(at)?;
                 if let Some(d) = dryer {

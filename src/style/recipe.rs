@@ -625,13 +625,6 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     if head.size.is_some_and(|s| !positive(s)) {
         return Err("[head] size must be a positive length".into());
     }
-    if [head.up, head.front]
-        .iter()
-        .flatten()
-        .any(|v| Vec3::from(*v).length().is_nan() || Vec3::from(*v).length() <= 1e-6)
-    {
-        return Err("[head] up and front must be non-zero directions".into());
-    }
 
     let mut names: Vec<&str> = Vec::new();
     for obstacle in &recipe.obstacles {
@@ -751,6 +744,10 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                             &[*spacing],
                         )
                         .or_else(fail)?;
+                        // In metres the rods' count waits for the fitted head (placement).
+                        if let Some(why) = super::layout::too_many_rods(*spacing, None) {
+                            return fail(why);
+                        }
                     }
                 }
                 if let Some(missing) =

@@ -11,7 +11,8 @@ For every curves object ("objects"): its name, curve and point counts, the set o
 2 Bézier, 3 NURBS), whether any curve is cyclic, the radius of every point, the world positions
 of its points (evaluated: object transforms, cache modifiers) and each attribute whose name
 starts with "groom_" (domain, data type, values flattened) -- the guide flag and Unreal's
-interpolation attributes a DCC needs to re-interpolate children from guides. For every mesh
+interpolation attributes a DCC needs to re-interpolate children from guides -- and, for Bézier
+curves, the world positions of each point's left and right handles ("handles"). For every mesh
 object ("meshes"): its name, vertex and face counts, world vertex positions, UV map names, the
 UVs of each map and the world-space normal of every face corner, and whether it has custom normals. With --frames, also the world positions of every curves and mesh
 object at each scene frame FIRST..LAST. All in Blender's space (Z up, metres, or the file's
@@ -38,12 +39,12 @@ def evaluated(obj):
     return obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
 
 
-def world_points(obj):
+def world_points(obj, attribute="position"):
     data = evaluated(obj)
     matrix = data.matrix_world
     if obj.type == "MESH":
         return [x for v in data.data.vertices for x in matrix @ v.co]
-    return [x for p in data.data.attributes["position"].data for x in matrix @ p.vector]
+    return [x for p in data.data.attributes[attribute].data for x in matrix @ p.vector]
 
 
 def curves_object(obj):
@@ -59,6 +60,11 @@ def curves_object(obj):
         "cyclic": cyclic,
         "radii": [a.value for a in attributes["radius"].data] if "radius" in attributes else [],
         "positions": world_points(obj),
+        "handles": {
+            side: world_points(obj, f"handle_{side}")
+            for side in ("left", "right")
+            if f"handle_{side}" in attributes
+        },
         "attributes": {
             a.name: {"domain": a.domain, "type": a.data_type, "values": flatten(a)}
             for a in attributes

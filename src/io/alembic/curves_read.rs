@@ -725,9 +725,24 @@ impl<'a> CurvesArchive<'a> {
             Some("vtx") | Some("var") | Some("fvr") => (Rate::Vertex, None),
             Some("uni") => (Rate::Strand, Some(Interpolation::Uniform)),
             Some("con") => (Rate::Constant, Some(Interpolation::Constant)),
+            // No scope (Blender writes none; or "unk"): the rate whose count it has. A Bézier
+            // curve's widths from Blender are one per knot, i.e. per segment end.
             _ if count == vertices => (Rate::Vertex, None),
+            _ if count == varying => (Rate::Vertex, Some(Interpolation::Varying)),
             _ if count == strand_count => (Rate::Strand, Some(Interpolation::Uniform)),
-            _ => (Rate::Constant, Some(Interpolation::Constant)),
+            _ if count == 1 => (Rate::Constant, Some(Interpolation::Constant)),
+            _ => {
+                let varying = if varying == vertices {
+                    String::new()
+                } else {
+                    format!(", {varying} (one per segment end of the {:?} curves)", strands.basis)
+                };
+                let scope = metadata_scope.map_or("no geoScope".into(), |s| format!("geoScope \"{s}\""));
+                return fail(format!(
+                    "{name}: {count} values and {scope}: coif reads {vertices} (one per vertex){varying}, \
+                     {strand_count} (one per curve) or 1 (one for all)"
+                ));
+            }
         };
         let expected = match (rate, interpolation) {
             (Rate::Vertex, Some(Interpolation::Varying)) => varying,
