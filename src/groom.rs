@@ -116,12 +116,12 @@ pub enum GroomError {
     )]
     TooThin { strand: usize, vertex: usize, width: f32, min: f32 },
     #[error(
-        "the simulation diverged{} (positions no longer finite) by {seconds:.3} s of simulated time: \
+        "the simulation diverged{} ({how}) by {seconds:.3} s of simulated time: \
          the groom's widths, lengths or rest shape, or the settings (dt, iterations, moduli, \
          gravity), are beyond what the solver holds",
         stage.as_ref().map_or(String::new(), |s| format!(" in {s}"))
     )]
-    Diverged { seconds: f64, stage: Option<String> },
+    Diverged { seconds: f64, stage: Option<String>, how: String },
     #[error(
         "the recipe is written in the head frame, but {reason}; give the head in the recipe's [head] \
          table (center, up, front, size)"

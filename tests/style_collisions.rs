@@ -99,3 +99,55 @@ fn rods_that_trap_wound_hair_are_reported() {
     }
     assert_eq!(warnings.len(), 2, "only the two rods that cross: {warnings:?}");
 }
+
+/// Two strands ten times the others' length, most of them deep beyond a pressing plane: pushed
+/// out at once, they ran away to 19 m and more, and `style` wrote that with exit 0. Such a state
+/// is refused as diverged (exit 2 naming the stage and the strand), nothing written; the same
+/// press on the groom without them styles.
+#[test]
+fn a_strand_running_away_from_a_deep_press_is_refused_as_diverged() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut groom =
+        generate(&GenerateParams { strands: 50, vertices_per_strand: 12, seed: 3, ..Default::default() })
+            .unwrap();
+    let plain = dir.path().join("plain.usda");
+    coif::io::write_groom(&plain, &groom).unwrap();
+    for strand in [3, 17] {
+        let range = groom.strand_range(strand);
+        let root = groom.points[range.start];
+        for p in &mut groom.points[range] {
+            *p = root + (*p - root) * 10.0;
+        }
+    }
+    let long = dir.path().join("long.usda");
+    coif::io::write_groom(&long, &groom).unwrap();
+    let recipe = dir.path().join("press.toml");
+    std::fs::write(
+        &recipe,
+        "frame = \"head\"\n[settings]\ndt = 0.0027777778\n[[obstacles]]\nname = \"head\"\nshape = \"scalp\"\n\
+         [[obstacles]]\nname = \"pillow\"\nshape = \"plane\"\npoint = [3.53, 0.0, 0.0]\nnormal = [-1.0, 0.0, 0.0]\n\
+         [[stages]]\nkind = \"press\"\nobstacle = \"pillow\"\ntravel = 2.47\nduration = 0.1\n",
+    )
+    .unwrap();
+    let run = |groom: &Path, out: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args([
+                "style",
+                recipe.to_str().unwrap(),
+                "--groom",
+                groom.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap()
+    };
+    let out = dir.path().join("long_styled.usda");
+    let refused = run(&long, &out);
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{message}");
+    assert!(message.contains("diverged in stage 1 (press)") && message.contains("stretched to"), "{message}");
+    assert!(!out.exists());
+    let control = run(&plain, &dir.path().join("plain_styled.usda"));
+    assert!(control.status.success(), "{}", String::from_utf8_lossy(&control.stderr));
+}

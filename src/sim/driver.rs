@@ -101,7 +101,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
         settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, Stepper::touched, settle, || {})
     });
     let sim = stepper.sim;
-    sim.check_finite(None)?;
+    sim.check_diverged(None)?;
     let mut out = groom.clone();
     sim.write_to_groom(&mut out);
     // The simulation's own velocities replace the file's; its accelerations are not kept.

@@ -97,6 +97,7 @@ pub mod solver;
 mod strand_solve;
 
 use glam::{Quat, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use bonds::{BondInfluences, BondKind, Bonds};
@@ -522,19 +523,41 @@ impl Simulation {
         }
     }
 
-    /// Refuses a state that has diverged (a position or frame no longer finite): a groom and
-    /// settings beyond what the solver holds, said as such rather than blamed later on the
-    /// output's "coordinate not finite". Cheap beside a step: one pass over the state. `stage`
-    /// names the styling stage for the message.
-    pub fn check_finite(&self, stage: Option<String>) -> Result<(), crate::groom::GroomError> {
+    /// How long a strand may grow against its rest length before the state counts as diverged:
+    /// the stretch constraints hold hair within a few percent, so twice is a runaway, not a pull.
+    pub const DIVERGED_STRETCH: f32 = 2.0;
+
+    /// Refuses a state that has diverged: a position or frame no longer finite, or a strand
+    /// stretched past [`Self::DIVERGED_STRETCH`] times its rest length (a finite runaway, e.g. a
+    /// long strand pushed out from deep inside an obstacle at once). Said as such rather than
+    /// written out as garbage or blamed later on the output's "coordinate not finite". Cheap beside
+    /// a step: one pass over the state. `stage` names the styling stage for the message.
+    pub fn check_diverged(&self, stage: Option<String>) -> Result<(), crate::groom::GroomError> {
         let r = &self.rods;
-        let finite = r.positions().iter().all(|p| p.is_finite()) && r.frames().iter().all(|q| q.is_finite());
-        match finite {
-            true => Ok(()),
-            false => Err(crate::groom::GroomError::Diverged {
-                seconds: self.steps_taken() as f64 * self.params.dt as f64,
-                stage,
-            }),
+        let diverged = |how: String| crate::groom::GroomError::Diverged {
+            seconds: self.steps_taken() as f64 * self.params.dt as f64,
+            stage: stage.clone(),
+            how,
+        };
+        if !(r.positions().iter().all(|p| p.is_finite()) && r.frames().iter().all(|q| q.is_finite())) {
+            return Err(diverged("positions no longer finite".into()));
+        }
+        let stretched = (0..r.strand_count()).into_par_iter().find_first(|&strand| {
+            let range = r.strand_range(strand);
+            let length: f32 = r.positions()[range.clone()].windows(2).map(|e| e[0].distance(e[1])).sum();
+            length > Self::DIVERGED_STRETCH * r.rest_length(strand)
+        });
+        match stretched {
+            Some(strand) => {
+                let range = r.strand_range(strand);
+                let length: f32 = r.positions()[range].windows(2).map(|e| e[0].distance(e[1])).sum();
+                Err(diverged(format!(
+                    "simulated strand {strand} stretched to {} m, {:.1} times its rest length",
+                    crate::validate::shortest(f64::from(length)),
+                    length / r.rest_length(strand)
+                )))
+            }
+            None => Ok(()),
         }
     }
 

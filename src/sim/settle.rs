@@ -614,12 +614,12 @@ mod tests {
         // A NaN position made every residual read 0 ("converged, residual 0"); it reads infinite,
         // the settle stops at once, and the simulation refuses the state.
         let mut sim = hanging_strands(2, 6);
-        assert!(sim.check_finite(None).is_ok());
+        assert!(sim.check_diverged(None).is_ok());
         sim.rods.positions_mut()[3] = Vec3::NAN;
         let report = sim.settle(&SettleOptions::default(), &crate::sim::NoHooks);
         assert!(!report.converged && report.force_residual.is_infinite(), "{report:?}");
         assert!(report.seconds < 1.0, "ran on for {} s", report.seconds);
-        let e = sim.check_finite(Some("stage 2 (dry)".into())).unwrap_err().to_string();
+        let e = sim.check_diverged(Some("stage 2 (dry)".into())).unwrap_err().to_string();
         assert!(e.contains("diverged in stage 2 (dry)"), "{e}");
     }
 }

@@ -224,7 +224,7 @@ pub(crate) fn style_strands(
         session.penetration = 0.0;
         let steps_before = session.sim.steps_taken();
         let settle = session.run_stage(index, stage, &progress)?;
-        session.sim.check_finite(Some(format!("stage {} ({})", index + 1, stage.kind())))?;
+        session.sim.check_diverged(Some(format!("stage {} ({})", index + 1, stage.kind())))?;
         let steps = session.sim.steps_taken() - steps_before;
         stages.push(session.stage_report(index, stage, steps, start.elapsed().as_secs_f64(), settle));
     }
