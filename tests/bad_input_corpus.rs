@@ -1033,6 +1033,8 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         ("its groom", "[\"g.hair\"]", "task 'a''s groom"),
         // Spelled otherwise, the same file (the batch wrote over its groom).
         ("its groom as ./g.hair", "[\"./g.hair\"]", "task 'a''s groom"),
+        // One task writing one file twice.
+        ("its own other output", "[\"{name}.usda\", \"./{name}.usda\"]", "task 'a' writes"),
         // Two tasks writing one file spelled two ways: the second replaced the first.
         (
             "another task's output spelled otherwise",

@@ -261,19 +261,24 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
     }
     // Files are compared by identity, not by spelling: `./a.usda`, `a.usda`, its absolute path
     // and a path through a symbolic link name one file.
-    let mut outputs: Vec<(PathBuf, &PathBuf)> = tasks
+    let mut outputs: Vec<(PathBuf, &PathBuf, &str)> = tasks
         .iter()
-        .flat_map(|t| t.outputs.iter().chain(t.preview.iter()))
-        .map(|p| (file_identity(p), p))
+        .flat_map(|t| t.outputs.iter().chain(t.preview.iter()).map(|p| (p, t.name.as_str())))
+        .map(|(p, task)| (file_identity(p), p, task))
         .collect();
     outputs.sort_unstable();
     if let Some(pair) = outputs.windows(2).find(|w| w[0].0 == w[1].0) {
-        let spelled = if pair[0].1 == pair[1].1 {
-            pair[0].1.display().to_string()
+        let ((identity, first, a), (_, second, b)) = (&pair[0], &pair[1]);
+        let spelled = if first == second {
+            first.display().to_string()
         } else {
-            format!("{} (as {} and {})", pair[0].0.display(), pair[0].1.display(), pair[1].1.display())
+            format!("{} (as {} and {})", identity.display(), first.display(), second.display())
         };
-        return Err(bad(format!("two tasks write {spelled}; put {{name}} in the output templates")));
+        return Err(bad(if a == b {
+            format!("task '{a}' writes {spelled} twice: give each output its own file")
+        } else {
+            format!("two tasks write {spelled}; put {{name}} in the output templates")
+        }));
     }
     // A task writing over a groom or recipe (its own or another's) would change the inputs the
     // next run reads: a re-run would style its own output again, and tasks on other nodes would
