@@ -598,6 +598,28 @@ fn bpy_python(what: &str) -> Option<PathBuf> {
     Some(python)
 }
 
+/// A curve object mixing cyclic and non-cyclic splines, which Blender's Alembic exporter writes
+/// with no sample (it warns), is refused naming the object and why, not with the archive's
+/// "sample 0 needs slot 0, the property stores 0".
+#[test]
+fn blenders_empty_export_of_mixed_cyclic_curves_is_refused_saying_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let exported = dir.path().join("mixed.abc");
+    let Some(python) = bpy_python("Blender's mixed cyclic curves") else { return };
+    let made = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_mixed_cyclic.py", exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(made.status.success() && exported.exists(), "{}", String::from_utf8_lossy(&made.stderr));
+    let info = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(["info", exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let message = String::from_utf8_lossy(&info.stderr);
+    assert_eq!(info.status.code(), Some(2), "{message}");
+    assert!(message.contains("/Hair") && message.contains("holds no sample"), "{message}");
+}
+
 /// Blender's Alembic export of a Bézier curve object (tests/blender/bpy_bezier.py: three curves
 /// of three knots, free handles, a radius per knot) writes the handles into P, 7 points a curve,
 /// and one width per knot with no geoScope: the `varying` count, which coif refused ("9 values,

@@ -327,6 +327,14 @@ impl<'a> Sampled<'a> {
         }
         let slot = self.slot(index) as usize;
         let child = if self.kind == PropertyKind::Array { slot * 2 } else { slot };
+        if self.group.is_empty() {
+            // Blender, asked to export a Curves object that mixes cyclic and non-cyclic curves,
+            // writes its properties with no sample at all.
+            return fail(format!(
+                "{}: the property holds no sample: its writer left the object empty",
+                self.name
+            ));
+        }
         if child >= self.group.len() {
             return fail(format!(
                 "{}: sample {index} needs slot {slot}, the property stores {}",
