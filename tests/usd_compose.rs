@@ -960,17 +960,6 @@ fn an_animated_usda_converts_every_frame_from_one_reading() {
         ),
     )
     .unwrap();
-    let pxr_points = |file: &Path, first: f64, last: f64| -> Vec<Vec<f32>> {
-        let dump: serde_json::Value =
-            serde_json::from_str(&probe(&["frames", path_str(file), &first.to_string(), &last.to_string()]))
-                .unwrap();
-        dump["frames"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|frame| frame["curves"].as_object().unwrap().values().flat_map(f32s).collect())
-            .collect()
-    };
     let close = |got: &[Vec<f32>], want: &[Vec<f32>], what: &str| {
         assert_eq!(got.len(), want.len(), "{what}: frames");
         for (k, (g, w)) in got.iter().zip(want).enumerate() {
@@ -988,8 +977,8 @@ fn an_animated_usda_converts_every_frame_from_one_reading() {
         let converted = coif(&args);
         assert!(converted.status.success(), "{out:?}: {}", stderr(&converted));
     }
-    close(&pxr_points(&whole, 1.0, 9.0), &pxr_points(&stage, 1.0, 9.0), "whole.usda");
-    close(&pxr_points(&part, 3.0, 6.0), &pxr_points(&stage, 3.0, 6.0), "part.usda");
+    close(&pxr_frames(&whole, 1.0, 9.0), &pxr_frames(&stage, 1.0, 9.0), "whole.usda");
+    close(&pxr_frames(&part, 3.0, 6.0), &pxr_frames(&stage, 3.0, 6.0), "part.usda");
     for frame in 1..=9 {
         let options = coif::io::ImportOptions { frame: Some(frame as f64), ..Default::default() };
         let alone = coif::io::read_groom(&stage, &options).unwrap().groom;
@@ -1051,16 +1040,6 @@ fn a_shot_composing_animated_usda_caches_converts_every_frame_as_pxr_composes_it
          \"a\" {\n            def \"V\" (references = @a.usda@</G> (offset = 101))\n            {\n            }\n        }\n    }\n}\n",
     )
     .unwrap();
-    let pxr_points = |file: &Path| -> Vec<Vec<f32>> {
-        let dump: serde_json::Value =
-            serde_json::from_str(&probe(&["frames", path_str(file), "101", "112"])).unwrap();
-        dump["frames"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|frame| frame["curves"].as_object().unwrap().values().flat_map(f32s).collect())
-            .collect()
-    };
     let converted = path("converted.usda");
     let abc = path("converted.abc");
     let abc_variant = path("variant.abc");
@@ -1070,7 +1049,7 @@ fn a_shot_composing_animated_usda_caches_converts_every_frame_as_pxr_composes_it
         let run = coif(&args);
         assert!(run.status.success(), "{out:?}: {}", stderr(&run));
     }
-    let (got, want) = (pxr_points(&converted), pxr_points(&shot));
+    let (got, want) = (pxr_frames(&converted, 101.0, 112.0), pxr_frames(&shot, 101.0, 112.0));
     assert_eq!(got.len(), 12, "frames converted");
     for (k, (g, w)) in got.iter().zip(&want).enumerate() {
         assert_eq!(g.len(), w.len(), "frame {}: vertices", 101 + k);
@@ -1150,17 +1129,7 @@ fn points_with_a_default_and_time_samples_animate_through_sublayers_and_referenc
         let converted = path(&format!("{name}.converted.usda"));
         let run = coif(&["convert", path_str(&stage), path_str(&converted)]);
         assert!(run.status.success(), "{name}: {}", stderr(&run));
-        let frames = |file: &Path| -> Vec<Vec<f32>> {
-            let dump: serde_json::Value =
-                serde_json::from_str(&probe(&["frames", path_str(file), "1", "4"])).unwrap();
-            dump["frames"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|f| f["curves"].as_object().unwrap().values().flat_map(f32s).collect())
-                .collect()
-        };
-        let (got, want) = (frames(&converted), frames(&stage));
+        let (got, want) = (pxr_frames(&converted, 1.0, 4.0), pxr_frames(&stage, 1.0, 4.0));
         assert_eq!(want.windows(2).any(|w| w[0] != w[1]), moves, "{name}: pxr's frames");
         for (k, (g, w)) in got.iter().zip(&want).enumerate() {
             assert_eq!(g.len(), w.len(), "{name}: frame {}", k + 1);

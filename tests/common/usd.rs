@@ -48,6 +48,19 @@ pub fn pxr_dump(path: &Path, time: Option<f64>) -> serde_json::Value {
 }
 
 /// A JSON array of numbers as f32 (pxr's floats widened to double convert back exactly).
+/// pxr's world points of every curve prim (metres, Y up), one list per frame `first..=last`,
+/// the prims in path order.
+pub fn pxr_frames(path: &Path, first: f64, last: f64) -> Vec<Vec<f32>> {
+    let text = probe(&["frames", path.to_str().unwrap(), &first.to_string(), &last.to_string()]);
+    let dump: serde_json::Value = serde_json::from_str(&text).unwrap();
+    dump["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|frame| frame["curves"].as_object().unwrap().values().flat_map(f32s).collect())
+        .collect()
+}
+
 pub fn f32s(value: &serde_json::Value) -> Vec<f32> {
     value.as_array().expect("an array").iter().map(|v| v.as_f64().expect("a number") as f32).collect()
 }
