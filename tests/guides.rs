@@ -479,3 +479,37 @@ fn children_hold_their_shape_when_simulated_again() {
     assert!(guides(0.5) < 0.1 && guides(1.0) < 1.0, "guides move when simulated again");
     assert!(children(0.5) < 0.01 && children(0.9) < 1.0, "children sag when simulated again");
 }
+
+/// A groom coif styled through 20 guides, styled again through fewer that coif chooses: the
+/// file's bindings name guides no longer simulated, and are dropped for new ones (they were
+/// checked against the new guides and refused, blaming the valid file); through more, as before.
+#[test]
+fn a_guided_groom_restyles_through_fewer_guides_bound_again() {
+    let groom =
+        generate(&GenerateParams { strands: 400, vertices_per_strand: 12, seed: 5, ..Default::default() })
+            .unwrap();
+    let text = "[settings]\nseed = 1\n[[stages]]\nkind = \"wet\"\nduration = 0.05\n";
+    let with_guides = |count: usize| {
+        recipe::parse(&format!("[guides]\ncount = {count}\n{text}"), Path::new("r.toml")).unwrap()
+    };
+    let first = style(&groom, &with_guides(20), &StyleOptions::default()).unwrap().groom;
+    for count in [10, 19, 40] {
+        let again = style(&first, &with_guides(count), &StyleOptions::default())
+            .unwrap_or_else(|e| panic!("{count} guides: {e}"))
+            .groom;
+        let guides = flags(&again).iter().filter(|&&g| g).count();
+        assert_eq!(guides, count);
+        // Every child's binding names one of the new guides.
+        let ids: std::collections::HashSet<u32> =
+            (0..again.strand_count()).filter(|&s| flags(&again)[s]).map(|s| again.strand_ids[s]).collect();
+        let closest = again.attribute(CLOSEST_GUIDES).unwrap();
+        let weights = again.attribute(GUIDE_WEIGHTS).unwrap();
+        for s in (0..again.strand_count()).filter(|&s| !flags(&again)[s]) {
+            for k in 0..3 {
+                if weights.data[3 * s + k] > 0.0 {
+                    assert!(ids.contains(&(closest.data[3 * s + k] as u32)), "{count} guides: strand {s}");
+                }
+            }
+        }
+    }
+}

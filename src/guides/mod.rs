@@ -139,7 +139,13 @@ pub fn style(
         let child_roots: Vec<Vec3> = which.iter().map(|&c| roots[c]).collect();
         binding::bind(&child_roots, &child_shapes, which, &guide_roots, &guide_shapes, reach)
     };
-    let bindings = match (&recipe.guides, file_bindings(&groom, &guide_ids, &child_ids)?) {
+    // A file's bindings name its own guides: when coif chooses others (restyling a guided groom
+    // with fewer guides), they are dropped, not checked against guides they never named.
+    let file = match recipe.guides {
+        None => file_bindings(&groom, &guide_ids, &child_ids)?,
+        Some(_) => None,
+    };
+    let bindings = match (&recipe.guides, file) {
         (None, Some(file)) => {
             // Children the file binds to no guide (all weights 0: a curve prim or object without
             // the binding attributes, merged with ones that have them) are bound here.
