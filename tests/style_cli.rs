@@ -379,3 +379,33 @@ fn strands_of_one_segment_report_intact_bonds() {
         assert_eq!(rates[kind].as_f64(), Some(1.0), "{kind}: {rates}");
     }
 }
+
+/// `--frames FPS` captures frame k at the first step at or past its time k/FPS, so the animation plays at
+/// the rate it is labelled with for any FPS: a fixed, rounded number of steps a frame played 25
+/// fps at 25.7 and 1,000 fps at 360 (1 s of styling written as 0.36 s).
+#[test]
+fn frames_are_captured_at_their_times_at_any_rate() {
+    use coif::generate::{generate, GenerateParams};
+    use coif::style::{recipe, style, StyleOptions};
+    let groom =
+        generate(&GenerateParams { strands: 20, vertices_per_strand: 8, seed: 2, ..Default::default() })
+            .unwrap();
+    let text = "[settings]\ndt = 0.0027777778\n[[stages]]\nkind = \"wet\"\nduration = 0.5\n\
+                [[stages]]\nkind = \"process\"\nduration = 0.5\n";
+    let recipe = recipe::parse(text, Path::new("r.toml")).unwrap();
+    let every_step =
+        style(&groom, &recipe, &StyleOptions { frames_per_second: 360.0, ..Default::default() }).unwrap();
+    assert_eq!(every_step.frames.len(), 361, "a frame per step, the first before styling");
+    for fps in [24.0f32, 25.0, 48.0, 100.0, 1000.0] {
+        let styled =
+            style(&groom, &recipe, &StyleOptions { frames_per_second: fps, ..Default::default() }).unwrap();
+        // One second: frames 0 to fps, the last the end state.
+        assert_eq!(styled.frames.len(), fps as usize + 1, "{fps} fps");
+        assert_eq!(styled.frames.last(), Some(&styled.groom.points), "{fps} fps: the last frame is the end");
+        // Frame k is the state of the first step at or past k/fps.
+        for (k, frame) in styled.frames.iter().enumerate() {
+            let step = (k as f64 * 360.0 / f64::from(fps)).ceil() as usize;
+            assert_eq!(frame, &every_step.frames[step], "{fps} fps: frame {k} is step {step}'s");
+        }
+    }
+}

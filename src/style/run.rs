@@ -243,7 +243,7 @@ pub(crate) fn style_strands(
         stages,
         warnings: std::mem::take(&mut session.warnings),
     };
-    if session.frame_interval.is_some()
+    if session.steps_per_frame.is_some()
         && session.frames.last().map(Vec::as_slice) != Some(session.sim.rods().positions())
     {
         session.capture_frame();
@@ -369,7 +369,8 @@ struct Session {
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_attributes: Vec<Vec<Attribute>>,
-    frame_interval: Option<u64>,
+    /// Steps between `--frames` frames (any real number), when frames are asked for.
+    steps_per_frame: Option<f64>,
     /// Deepest penetration of the current stage so far (metres).
     penetration: f32,
     /// What the report warns of (rods that trap wound hair).
@@ -423,8 +424,8 @@ impl Session {
             let c = &recipe.contacts;
             HairContacts::new(&groom.strand_offsets, &radii, c.sample_spacing, c.hair_stiffness)
         });
-        let frame_interval = (options.frames_per_second > 0.0)
-            .then(|| ((1.0 / (options.frames_per_second * settings.dt)).round() as u64).max(1));
+        let steps_per_frame = (options.frames_per_second > 0.0)
+            .then(|| 1.0 / (f64::from(options.frames_per_second) * f64::from(settings.dt)));
         let offsets = vec![Vec3::ZERO; obstacles.len()];
         let friction = Friction {
             static_friction: recipe.contacts.static_friction,
@@ -461,7 +462,7 @@ impl Session {
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
             frame_attributes: Vec::new(),
-            frame_interval,
+            steps_per_frame,
             penetration: 0.0,
             head_frame: placed.frame,
             warnings: Vec::new(),
@@ -472,7 +473,7 @@ impl Session {
         if session.wetness.iter().any(|&w| w > 0.0) {
             session.apply_mass();
         }
-        if frame_interval.is_some() {
+        if steps_per_frame.is_some() {
             session.capture_frame();
         }
         Ok(session)
@@ -544,8 +545,13 @@ impl Session {
         if chemistry {
             self.update_wetness(dt);
         }
-        if let Some(every) = self.frame_interval {
-            if self.sim.steps_taken() % every == 0 {
+        // Frame k is the state at the first step at or past its time k/fps (a fixed, rounded
+        // number of steps a frame played 25 fps at 25.7 and anything past 1/dt at 1/dt); above one
+        // frame a step, a step's state fills the frames up to it. The slack absorbs `dt`'s f32
+        // rounding, so a frame that falls on a step is that step's.
+        if let Some(per) = self.steps_per_frame {
+            let reached = self.sim.steps_taken() as f64;
+            while self.frames.len() as f64 * per <= reached * (1.0 + 1e-6) + 1e-3 {
                 self.capture_frame();
             }
         }
