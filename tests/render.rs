@@ -267,6 +267,16 @@ fn cli_rejects_bad_requests_without_writing() {
         assert_eq!(out.status.code(), Some(2), "{extra:?}: {}", stderr(&out));
         assert!(stderr(&out).contains(needle), "{extra:?}: message should name {needle}: {}", stderr(&out));
     }
+    // An image whose buffers would pass the memory limit is refused before they are made (a
+    // 16384² render grew past 7 GB under --max-memory 1G).
+    let out =
+        coif(&["render", groom, "-o", path_str(&out_path), "--res", "4096x4096", "--max-memory", "100M"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("rendering 4096x4096") && stderr(&out).contains("--max-memory"),
+        "{}",
+        stderr(&out)
+    );
     let jpg = dir.path().join("x.jpg");
     let out = coif(&["render", groom, "-o", path_str(&jpg)]);
     assert_eq!(out.status.code(), Some(2));
@@ -327,4 +337,29 @@ fn the_grooms_own_mesh_is_drawn_unless_the_head_is_off() {
     settings.scene.head = HeadMode::Off;
     let hidden = render(&groom, &settings, &|_, _| {}).unwrap();
     assert!(hidden.image.aovs[0].data[centre].is_infinite(), "nothing to hit without the wall");
+}
+
+/// A budget bounds a render however many samples are asked for: passes are sized by the time
+/// taken (fixed sixteenths of a million samples a pixel ran for hours past a one-second budget),
+/// and the image is the render of the samples reached, as a render of that many without a budget
+/// (with independent samples: Sobol's are shuffled over the count asked for).
+#[test]
+fn a_tight_time_budget_bounds_a_huge_render_and_keeps_its_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    let base = ["render", "grooms/sample_wavy.hair", "--res", "48x32", "--sampler", "independent"];
+    let start = std::time::Instant::now();
+    let out = coif(
+        &[&base[..], &["--spp", "1000000", "--time-budget", "1", "--json", "-o", path_str(&a)]].concat(),
+    );
+    let took = start.elapsed().as_secs_f64();
+    assert!(out.status.success(), "{}", stderr(&out));
+    // Generous for a loaded machine, hours short of the old behaviour.
+    assert!(took < 60.0, "a 1 s budget took {took} s");
+    let report = common::stdout_json(&out);
+    let spp = report["spp"].as_u64().or_else(|| report["stats"]["spp"].as_u64()).expect("spp reported");
+    assert!((1..1_000_000).contains(&spp), "{report}");
+    let out = coif(&[&base[..], &["--spp", &spp.to_string(), "-o", path_str(&b)]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "the budgeted image at {spp} spp");
 }

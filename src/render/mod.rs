@@ -233,7 +233,8 @@ fn groom_bounds(groom: &Groom, options: &SceneOptions) -> Result<(Vec3, Vec3)> {
     Ok((lo, hi))
 }
 
-/// Renders a groom. `progress(done, total)` is called as rows finish (in any order).
+/// Renders a groom. `progress(done, total)` is called as rows finish a pass (in any order), in
+/// samples of rows.
 pub fn render(
     groom: &Groom,
     settings: &RenderSettings,
@@ -323,37 +324,38 @@ pub fn render(
     // Per pixel: summed first-hit distance, hit count, summed tangent.
     let mut firsts = vec![(0f32, 0u32, Vec3::ZERO); pixels];
     let rays = AtomicU64::new(0);
-    let passes: Vec<(u32, u32)> = match settings.time_budget {
-        None => vec![(0, settings.spp)],
-        Some(_) => {
-            let step = (settings.spp / 16).max(1);
-            (0..settings.spp).step_by(step as usize).map(|s| (s, (s + step).min(settings.spp))).collect()
-        }
-    };
-    let total_work = (passes.len() * h as usize) as u64;
+    // Under a time budget the samples go in passes sized by the time the ones before took: the
+    // first one sample a pixel, each next about half of what the time left holds (a sixteenth of
+    // the samples at most, for progress), so the budget is overrun by one small pass at most
+    // (fixed sixteenths of a million-sample render ran for hours past a one-second budget). The
+    // image at the samples reached is the same as without a budget: each row adds its samples in
+    // order, whatever the passes.
+    let total_work = u64::from(settings.spp) * u64::from(h);
     let done = AtomicU64::new(0);
     let render_start = Instant::now();
     let mut spp_done = 0;
-    for &(first_sample, end_sample) in &passes {
+    while spp_done < settings.spp {
+        let pass = match settings.time_budget {
+            None => settings.spp,
+            Some(_) if spp_done == 0 => 1,
+            Some(budget) => {
+                let per_sample = render_start.elapsed().as_secs_f64() / f64::from(spp_done);
+                let left = budget.saturating_sub(start.elapsed()).as_secs_f64();
+                ((0.5 * left / per_sample.max(1e-9)) as u32).clamp(1, (settings.spp / 16).max(1))
+            }
+        }
+        .min(settings.spp - spp_done);
+        let samples = spp_done..spp_done + pass;
         sums.par_chunks_mut(w as usize).zip(firsts.par_chunks_mut(w as usize)).enumerate().for_each(
             |(row, (sum_row, first_row))| {
                 let y = y0 + row as u32;
-                let mut count = RayCount::default();
-                render_row(
-                    &integrator,
-                    settings,
-                    x0,
-                    y,
-                    first_sample..end_sample,
-                    sum_row,
-                    first_row,
-                    &mut count,
-                );
-                rays.fetch_add(count.0, Ordering::Relaxed);
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, total_work);
+                let mut row_rays = RayCount::default();
+                render_row(&integrator, settings, x0, y, samples.clone(), sum_row, first_row, &mut row_rays);
+                rays.fetch_add(row_rays.0, Ordering::Relaxed);
+                progress(done.fetch_add(u64::from(pass), Ordering::Relaxed) + u64::from(pass), total_work);
             },
         );
-        spp_done = end_sample;
+        spp_done = samples.end;
         if settings.time_budget.is_some_and(|budget| start.elapsed() >= budget) {
             break;
         }
