@@ -178,15 +178,15 @@ impl<'a> FrameReader<'a> {
         first: f64,
         last: f64,
     ) -> Result<Self> {
-        let source = match format_of(path)? {
-            Format::Usdz => FrameSource::Flattened(usd_interop::flatten(path, &variants)?),
-            // Kept samples take at most about twice the text's size ("0" is one character, four
-            // bytes): past the memory limit, frames are parsed one at a time (and layers the
-            // stage composes, past what the limit leaves).
-            Format::Usda if text_fits_in_memory(path) => {
+        // Kept samples take at most about twice the text's size ("0" is one character, four
+        // bytes): past the memory limit, frames are parsed one at a time (and layers the stage
+        // composes, past what the limit leaves).
+        let memory_left = crate::limits::max_memory().checked_sub(kept_samples_size(path));
+        let source = match (format_of(path)?, memory_left) {
+            (Format::Usdz, _) => FrameSource::Flattened(usd_interop::flatten(path, &variants)?),
+            (Format::Usda, Some(left)) => {
                 let layer = Box::new(usda::read_layer_between(path, first, last)?);
                 if layer.composes() || !variants.is_empty() {
-                    let left = crate::limits::max_memory().saturating_sub(text_size(path));
                     FrameSource::Composed {
                         root: layer,
                         layers: usd_compose::SampledLayers::new(left),
@@ -217,12 +217,9 @@ impl<'a> FrameReader<'a> {
     }
 }
 
-fn text_fits_in_memory(path: &Path) -> bool {
-    text_size(path) <= crate::limits::max_memory()
-}
-
-/// About what a `.usda` file's samples take in memory: twice its text.
-fn text_size(path: &Path) -> u64 {
+/// About what a `.usda` file's samples take in memory once parsed: twice its text (the most when
+/// the file cannot be measured).
+pub(crate) fn kept_samples_size(path: &Path) -> u64 {
     std::fs::metadata(path).map_or(u64::MAX, |m| m.len().saturating_mul(2))
 }
 

@@ -542,21 +542,17 @@ impl Simulation {
         if !(r.positions().iter().all(|p| p.is_finite()) && r.frames().iter().all(|q| q.is_finite())) {
             return Err(diverged("positions no longer finite".into()));
         }
-        let stretched = (0..r.strand_count()).into_par_iter().find_first(|&strand| {
-            let range = r.strand_range(strand);
-            let length: f32 = r.positions()[range.clone()].windows(2).map(|e| e[0].distance(e[1])).sum();
-            length > Self::DIVERGED_STRETCH * r.rest_length(strand)
+        let stretched = (0..r.strand_count()).into_par_iter().find_map_first(|strand| {
+            let length: f32 =
+                r.positions()[r.strand_range(strand)].windows(2).map(|e| e[0].distance(e[1])).sum();
+            (length > Self::DIVERGED_STRETCH * r.rest_length(strand)).then_some((strand, length))
         });
         match stretched {
-            Some(strand) => {
-                let range = r.strand_range(strand);
-                let length: f32 = r.positions()[range].windows(2).map(|e| e[0].distance(e[1])).sum();
-                Err(diverged(format!(
-                    "simulated strand {strand} stretched to {} m, {:.1} times its rest length",
-                    crate::validate::shortest(f64::from(length)),
-                    length / r.rest_length(strand)
-                )))
-            }
+            Some((strand, length)) => Err(diverged(format!(
+                "simulated strand {strand} stretched to {} m, {:.1} times its rest length",
+                crate::validate::shortest(f64::from(length)),
+                length / r.rest_length(strand)
+            ))),
             None => Ok(()),
         }
     }

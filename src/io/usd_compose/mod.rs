@@ -121,8 +121,7 @@ impl SampledLayers {
         if let Some(kept) = self.layers.borrow().get(canonical) {
             return Ok(kept.as_ref().map(|layer| layer.at_time(time)));
         }
-        crate::io::input::check_regular(path)?;
-        let size = std::fs::metadata(path).map_err(|e| Error::io(path, e))?.len().saturating_mul(2);
+        let size = crate::io::kept_samples_size(path);
         let kept = if is_usda(path)? && size <= self.budget.get() {
             self.budget.set(self.budget.get() - size);
             Some(Rc::new(usda::read_layer_between(path, f64::NEG_INFINITY, f64::INFINITY)?))
