@@ -86,8 +86,15 @@ pub fn parse_size(text: &str) -> Result<u64> {
     Ok(bytes as u64)
 }
 
-fn gigabytes(bytes: f64) -> String {
-    format!("{:.3} GB", bytes / 1e9)
+/// A memory size in the unit that shows it with a few significant digits ("0.000 GB" hid a
+/// one-byte limit).
+fn memory_text(bytes: f64) -> String {
+    match bytes {
+        b if b >= 1e9 => format!("{:.3} GB", b / 1e9),
+        b if b >= 1e6 => format!("{:.3} MB", b / 1e6),
+        b if b >= 1e3 => format!("{:.3} kB", b / 1e3),
+        b => format!("{b:.0} bytes"),
+    }
 }
 
 /// Refuses `bytes` of `what` over the memory limit.
@@ -96,8 +103,8 @@ pub fn check_memory(what: &str, bytes: f64) -> Result<()> {
     if bytes.is_nan() || bytes > limit {
         return Err(Error::Usage(format!(
             "{what} needs about {} of memory, over the limit of {} (--max-memory)",
-            gigabytes(bytes),
-            gigabytes(limit)
+            memory_text(bytes),
+            memory_text(limit)
         )));
     }
     Ok(())

@@ -421,6 +421,20 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         args.extend(flags.iter());
         cases.push(case(&format!("simulate {flags:?}"), g(), &args, 2, &[culprit]));
     }
+    // Values the flag's reading used to blur: `--dt 0` without the flag's name, 1e40 shown as the
+    // infinity f32 made of it, a one-byte memory limit as "0.000 GB", and two ranges for one
+    // field of view (`--fov 0` was told (0, 180), `--fov 175` and `--camera` (0.5, 170)).
+    let as_written: &[(&[&str], &[&str])] = &[
+        (&["simulate", "g.hair", "out.hair", "--dt", "0"], &["--dt", "'0'"]),
+        (&["simulate", "g.hair", "out.hair", "--youngs-modulus", "1e40"], &["--youngs-modulus", "1e40"]),
+        (&["simulate", "g.hair", "out.hair", "--max-memory", "1"], &["over the limit of 1 bytes"]),
+        (&["render", "g.hair", "-o", "out.png", "--fov", "0"], &["--fov", "(0.5, 170)"]),
+        (&["render", "g.hair", "-o", "out.png", "--fov", "175"], &["--fov", "(0.5, 170)"]),
+        (&["render", "g.hair", "-o", "out.png", "--camera", "0,0,1,0,0,0,175"], &["--camera", "(0.5, 170)"]),
+    ];
+    for (args, culprits) in as_written {
+        cases.push(case(&format!("{args:?}"), g(), args, 2, culprits));
+    }
     let render: &[(&[&str], &str)] = &[
         (&["--exposure", "nan"], "--exposure"),
         (&["--time-budget", "1e30"], "--time-budget"),

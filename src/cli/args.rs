@@ -184,7 +184,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) camera: Option<String>,
     /// Vertical field of view, degrees.
-    #[arg(long, default_value_t = coif::render::camera::DEFAULT_FOV)]
+    #[arg(value_parser = number, long, default_value_t = coif::render::camera::DEFAULT_FOV)]
     pub(crate) fov: f32,
     /// Stop after the sample pass during which this many seconds have passed.
     #[arg(long, value_name = "SECONDS")]
@@ -214,25 +214,25 @@ pub(crate) struct RenderArgs {
     pub(crate) lobe: LobeArg,
     /// Eumelanin concentration, 0 (white) .. 8 (black), 10 at most (chiang lobe; overrides the
     /// groom's colour and `melanin` attribute).
-    #[arg(long)]
+    #[arg(value_parser = number, long)]
     pub(crate) melanin: Option<f32>,
     /// Pheomelanin concentration, 0..10 (red; chiang lobe).
-    #[arg(long)]
+    #[arg(value_parser = number, long)]
     pub(crate) pheomelanin: Option<f32>,
     /// Longitudinal roughness β_m of the chiang lobe, 0.02..1.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(value_parser = number, long, default_value_t = 0.3)]
     pub(crate) roughness: f32,
     /// Azimuthal roughness β_n of the chiang lobe, 0.02..1.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(value_parser = number, long, default_value_t = 0.3)]
     pub(crate) azimuthal_roughness: f32,
     /// Cuticle scale tilt of the chiang lobe, degrees (-10..10).
-    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    #[arg(value_parser = number, long, default_value_t = 2.0, allow_hyphen_values = true)]
     pub(crate) cuticle_tilt: f32,
     /// Multiply strand widths (draws hair thicker than it is; 1 = true width).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(value_parser = number, long, default_value_t = 1.0)]
     pub(crate) width_scale: f32,
     /// Widen strands to at least this many pixels, fading them so average coverage is unchanged.
-    #[arg(long, default_value_t = 0.0, value_name = "PIXELS")]
+    #[arg(value_parser = number, long, default_value_t = 0.0, value_name = "PIXELS")]
     pub(crate) min_pixel_width: f32,
     /// Show a head under the hair: the groom's own meshes, else coif's analytic head.
     #[arg(long, value_enum, default_value_t = HeadArg::Auto)]
@@ -241,10 +241,10 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) no_floor: bool,
     /// Floor height (world Y, metres; default: just below the hair and head).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(value_parser = number, long, allow_hyphen_values = true)]
     pub(crate) floor_height: Option<f32>,
     /// Floor edge length, metres (default: a horizon for any view).
-    #[arg(long)]
+    #[arg(value_parser = number, long)]
     pub(crate) floor_size: Option<f32>,
     /// Floor albedo, linear r,g,b in [0, 1].
     #[arg(long)]
@@ -261,16 +261,16 @@ pub(crate) struct RenderArgs {
     #[arg(long, default_value_t = 8)]
     pub(crate) max_depth: u32,
     /// Exposure, stops.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(value_parser = number, long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub(crate) exposure: f32,
     /// Direction towards the key light, x,y,z in world space (default: above-left of the camera).
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) light_dir: Option<String>,
     /// Key light irradiance multiplier.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(value_parser = number, long, default_value_t = 1.0)]
     pub(crate) light_intensity: f32,
     /// Uniform environment radiance instead of the sky (1 = white furnace).
-    #[arg(long)]
+    #[arg(value_parser = number, long)]
     pub(crate) environment: Option<f32>,
     #[arg(long, value_enum, default_value_t = SamplerName::Sobol)]
     pub(crate) sampler: SamplerName,
@@ -304,7 +304,7 @@ pub(crate) struct StyleArgs {
     pub(crate) progress: ProgressArg,
     /// Also write the whole process as time samples, this many frames per simulated second
     /// (USD or Alembic output).
-    #[arg(long, value_name = "FPS")]
+    #[arg(value_parser = number, long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
     /// Style only this curve group (a prim or object path, or its last name); repeatable. The
     /// other groups pass through untouched.
@@ -335,10 +335,10 @@ pub(crate) struct SimulateArgs {
     #[command(flatten)]
     pub(crate) import: ImportArgs,
     /// Simulated time, seconds.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(value_parser = number, long, default_value_t = 1.0)]
     pub(crate) seconds: f32,
     /// Gravity, m/s² downwards (−Y).
-    #[arg(long, default_value_t = 9.8)]
+    #[arg(value_parser = number, long, default_value_t = 9.8)]
     pub(crate) gravity: f32,
     /// Solver iterations per step.
     #[arg(long, default_value_t = 5)]
@@ -349,16 +349,16 @@ pub(crate) struct SimulateArgs {
     #[arg(long, value_enum, default_value = "gauss-seidel")]
     pub(crate) solver: SolverArg,
     /// Time step, seconds or a fraction.
-    #[arg(long, default_value = "1/360")]
-    pub(crate) dt: String,
+    #[arg(long, default_value = "1/360", value_parser = time_step)]
+    pub(crate) dt: f32,
     /// Velocity damping rate, 1/s.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(value_parser = number, long, default_value_t = 2.0)]
     pub(crate) damping: f32,
     /// Bond influences hydrogen,ionic,disulfide,peptide (only ratios matter).
-    #[arg(long, value_delimiter = ',', num_args = 1..=4, default_values_t = coif::sim::BondInfluences::SCENE_3.0)]
+    #[arg(value_parser = number, long, value_delimiter = ',', num_args = 1..=4, default_values_t = coif::sim::BondInfluences::SCENE_3.0)]
     pub(crate) influences: Vec<f32>,
     /// Young's modulus of hair, Pa.
-    #[arg(long, default_value_t = 3.9e9)]
+    #[arg(value_parser = number, long, default_value_t = 3.9e9)]
     pub(crate) youngs_modulus: f32,
     /// Solve for static equilibrium after the run (elasticity, gravity, contacts), to
     /// --settle-tolerance or until --settle-seconds of simulated time; the report gives the
@@ -367,9 +367,9 @@ pub(crate) struct SimulateArgs {
     pub(crate) settle: bool,
     /// Largest accepted net force on a strand (relative to its weight) and net torque over the
     /// groom (relative to gravity's moments), 1e-5 to 0.5.
-    #[arg(long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
+    #[arg(value_parser = number, long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
     pub(crate) settle_tolerance: f32,
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(value_parser = number, long, default_value_t = 30.0)]
     pub(crate) settle_seconds: f32,
     /// Solve for the rest shape that holds the groom's current shape under gravity (for grooms
     /// fresh from a DCC tool), instead of taking the shape, or a styled groom's exported
@@ -396,7 +396,7 @@ pub(crate) struct SimulateArgs {
 #[derive(Args)]
 pub(crate) struct ImportArgs {
     /// Metres per unit of the input file, for formats that do not say (0.01 = centimetres).
-    #[arg(long, value_name = "METRES")]
+    #[arg(value_parser = number, long, value_name = "METRES")]
     pub(crate) units: Option<f32>,
     /// Up axis of the input file, for formats that do not say.
     #[arg(long, value_enum)]
@@ -453,10 +453,10 @@ pub(crate) struct GenerateArgs {
     #[arg(long, default_value_t = 1000)]
     pub(crate) strands: usize,
     /// Mean strand length, metres.
-    #[arg(long, default_value_t = 0.24)]
+    #[arg(value_parser = number, long, default_value_t = 0.24)]
     pub(crate) length: f32,
     /// Relative spread of strand lengths, in [0, 1).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(value_parser = number, long, default_value_t = 0.0)]
     pub(crate) length_variation: f32,
     /// Vertices per strand.
     #[arg(long, default_value_t = 16)]
@@ -464,22 +464,22 @@ pub(crate) struct GenerateArgs {
     #[arg(long, value_enum, default_value_t = HairStyle::Straight)]
     pub(crate) style: HairStyle,
     /// Curl (helix) radius for --style curly, metres.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(value_parser = number, long, default_value_t = 0.01)]
     pub(crate) curl_radius: f32,
     /// Axial advance per curl turn for --style curly, metres.
-    #[arg(long, default_value_t = 0.03)]
+    #[arg(value_parser = number, long, default_value_t = 0.03)]
     pub(crate) curl_pitch: f32,
     /// Wave amplitude for --style wavy, metres.
-    #[arg(long, default_value_t = 0.008)]
+    #[arg(value_parser = number, long, default_value_t = 0.008)]
     pub(crate) wave_amplitude: f32,
     /// Wavelength for --style wavy, metres.
-    #[arg(long, default_value_t = 0.06)]
+    #[arg(value_parser = number, long, default_value_t = 0.06)]
     pub(crate) wavelength: f32,
     /// Root diameter, metres (strands taper to half at the tip).
-    #[arg(long, default_value_t = 80e-6)]
+    #[arg(value_parser = number, long, default_value_t = 80e-6)]
     pub(crate) width: f32,
     /// How fast strands turn downwards, radians per metre.
-    #[arg(long, default_value_t = 14.0)]
+    #[arg(value_parser = number, long, default_value_t = 14.0)]
     pub(crate) droop: f32,
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
@@ -566,4 +566,20 @@ impl From<SolverArg> for coif::sim::StrandSolver {
             SolverArg::Direct => coif::sim::StrandSolver::Direct,
         }
     }
+}
+
+/// A number flag as `f32` reads it, except that a value beyond `f32`'s range is refused as
+/// written rather than read as infinity (`--youngs-modulus 1e40` was refused as "inf").
+fn number(text: &str) -> Result<f32, String> {
+    let value: f32 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    let written_infinite = text.trim().trim_start_matches(['+', '-']).to_ascii_lowercase().starts_with("inf");
+    if value.is_infinite() && !written_infinite {
+        return Err(format!("{text} is beyond the largest number coif reads ({:e})", f32::MAX));
+    }
+    Ok(value)
+}
+
+/// `--dt`: seconds or a fraction like 1/360.
+fn time_step(text: &str) -> Result<f32, String> {
+    coif::sim::driver::parse_time_step(text).map_err(|e| e.to_string())
 }

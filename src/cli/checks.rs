@@ -84,7 +84,7 @@ pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
     not_an_input(&args.output, &[("the input", Some(&args.input))])?;
     flag("--seconds", args.seconds, SECONDS)?;
     flag("--gravity", args.gravity, COORDINATE)?;
-    flag("--dt", coif::sim::driver::parse_time_step(&args.dt)?, TIME_STEP)?;
+    flag("--dt", args.dt, TIME_STEP)?;
     flag("--iterations", args.iterations, ITERATIONS)?;
     flag("--damping", args.damping, RATE)?;
     if args.influences.len() != 4 {
@@ -108,7 +108,7 @@ pub(crate) fn simulate(args: &SimulateArgs) -> Result<()> {
 
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     flag("--spp", args.spp, Range::closed(1.0, 1e6))?;
-    flag("--fov", args.fov, Range::open(0.0, 180.0))?;
+    flag("--fov", args.fov, coif::render::camera::FOV_DEGREES)?;
     flag("--width-scale", args.width_scale, Range::above(0.0, 1e4))?;
     flag("--min-pixel-width", args.min_pixel_width, Range::closed(0.0, 1e3))?;
     flag("--max-depth", args.max_depth, Range::closed(0.0, 1e3))?;

@@ -187,7 +187,7 @@ fn style_groups(
 }
 
 fn run_simulate(args: SimulateArgs) -> Result<()> {
-    use coif::sim::driver::{parse_time_step, simulate, SimulateOptions};
+    use coif::sim::driver::{simulate, SimulateOptions};
     use coif::sim::{BondInfluences, SettleOptions, SimParams};
     super::checks::simulate(&args)?;
     io::check_output(&args.output, &io::ExportOptions::default())?;
@@ -196,7 +196,7 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     super::checks::nothing_read_is_written(&args.output, &loaded, &io::ExportOptions::default(), &[])?;
     let defaults = SimParams::for_solver(args.solver.into());
     let params = SimParams {
-        dt: parse_time_step(&args.dt)?,
+        dt: args.dt,
         iterations: args.iterations,
         gravity: glam::Vec3::new(0.0, -args.gravity, 0.0),
         damping: args.damping,

@@ -66,11 +66,8 @@ impl FromStr for CameraSpec {
         }
         let fov_degrees = values.get(6).copied();
         if let Some(fov) = fov_degrees {
-            if !(fov > 0.5 && fov < 170.0) {
-                return Err(Error::Usage(format!(
-                    "--camera '{text}': field of view must be in (0.5, 170) degrees"
-                )));
-            }
+            crate::validate::number("field of view", fov, FOV_DEGREES)
+                .map_err(|m| Error::Usage(format!("--camera '{text}': {m} degrees")))?;
         }
         Ok(CameraSpec { position, target, up: None, fov_degrees })
     }
@@ -78,6 +75,10 @@ impl FromStr for CameraSpec {
 
 /// Default vertical field of view, degrees.
 pub const DEFAULT_FOV: f32 = 30.0;
+
+/// The vertical fields of view a camera may have, degrees, wherever it is given (`--fov`,
+/// `--camera`, a shot's camera): a pinhole wider than 170° maps most of the image to a sliver.
+pub const FOV_DEGREES: crate::validate::Range = crate::validate::Range::open(0.5, 170.0);
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {

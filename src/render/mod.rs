@@ -155,9 +155,7 @@ impl RenderSettings {
         if self.max_depth == 0 {
             return bad("--max-depth must be at least 1");
         }
-        if !(self.fov_degrees > 0.5 && self.fov_degrees < 170.0) {
-            return bad("--fov must be in (0.5, 170) degrees");
-        }
+        crate::validate::number("--fov", self.fov_degrees, camera::FOV_DEGREES).map_err(Error::Usage)?;
         self.chiang.check().map_err(|m| Error::Usage(format!("render: {m}")))?;
         if let Some(c) = self.scene.color {
             if !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {

@@ -108,9 +108,6 @@ fn check_light_count(count: usize) -> std::result::Result<(), String> {
     Ok(())
 }
 
-/// Vertical field of view, degrees.
-const FOV: Range = Range::open(0.5, 170.0);
-
 impl Shot {
     /// Reads a scene file (`.toml`) or a USD stage (`.usda`, `.usdc`, `.usd`). `camera_prim`
     /// picks a camera by path on a stage with several; `aspect` (width / height) conforms a USD
@@ -238,7 +235,7 @@ fn from_toml(text: &str) -> std::result::Result<Shot, String> {
             validate::direction("[camera] up", up)?;
         }
         if let Some(fov) = c.fov {
-            validate::number("[camera] fov", fov, FOV)?;
+            validate::number("[camera] fov", fov, super::camera::FOV_DEGREES)?;
         }
         let (position, target) = (Vec3::from(c.position), Vec3::from(c.target));
         if position.distance(target) < 1e-6 {
@@ -617,7 +614,8 @@ fn usd_camera(values: &PrimValues, stage: DMat4, aspect: f32) -> Result<CameraSp
         0.5 * horizontal / focal / aspect as f64
     };
     let fov = (2.0 * half_tan_y.atan()).to_degrees() as f32;
-    validate::number("the camera's vertical field of view", fov, FOV).map_err(|m| values.error(m))?;
+    validate::number("the camera's vertical field of view", fov, super::camera::FOV_DEGREES)
+        .map_err(|m| values.error(m))?;
     let world = stage * values.found.world;
     let position = world.transform_point3(DVec3::ZERO);
     let forward = world.transform_vector3(DVec3::NEG_Z).normalize();

@@ -55,8 +55,11 @@ pub struct SimulateSummary {
 
 /// Parses a time step given as seconds (`0.0027`) or a fraction (`1/360`).
 pub fn parse_time_step(text: &str) -> Result<f32> {
-    let bad =
-        || Error::Usage(format!("time step '{text}' is not a number of seconds or a fraction like 1/360"));
+    let bad = || {
+        Error::Usage(format!(
+            "time step '{text}' is not a positive number of seconds or a fraction like 1/360"
+        ))
+    };
     let value = match text.split_once('/') {
         Some((a, b)) => {
             let a: f32 = a.trim().parse().map_err(|_| bad())?;
