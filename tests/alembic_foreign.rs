@@ -130,7 +130,9 @@ fn xform_hierarchies_are_applied_and_curves_objects_merged() {
     for (got, p) in groom.points[7..].iter().zip(&b_points) {
         assert!((*got - (*p + Vec3::new(10.0, 0.0, 0.0))).length() < 1e-6);
     }
-    let expected_widths = [vec![0.01; 7], vec![0.02; 2], vec![0.03; 5]].concat();
+    // Widths are lengths in their object's space, as points are: /rig/head's scale 2 doubles
+    // hairA's (Blender draws them so, and the USD reader scales them alike).
+    let expected_widths = [vec![0.02; 7], vec![0.02; 2], vec![0.03; 5]].concat();
     assert_eq!(groom.widths, expected_widths);
     assert_eq!(groom.strand_ids, vec![0, 1, 2, 3]);
 }

@@ -674,6 +674,54 @@ fn blenders_bezier_curves_read_with_their_handles_and_a_width_per_knot() {
     assert!(worst_width < 1e-9, "knot widths {worst_width} m from twice Blender's radii");
 }
 
+/// A hair object of 30 µm radius scaled ×2 under an empty scaled ×1.5
+/// (tests/blender/bpy_scaled_hair.py), exported by Blender to Alembic and to USD: both read as
+/// 180 µm wide strands, its world width (the USD reader scaled widths by the transforms; the
+/// Alembic reader read 60 µm, the radius in the object's own space), and coif's `.abc` of the
+/// Alembic file, its transforms baked, re-imports in Blender at the world radius of 90 µm.
+#[test]
+fn widths_scale_with_the_transforms_above_them_in_alembic_as_in_usd() {
+    let dir = tempfile::tempdir().unwrap();
+    let (abc, usda) = (dir.path().join("hair.abc"), dir.path().join("hair.usda"));
+    let Some(python) = bpy_python("Blender's scaled hair") else { return };
+    let made = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_scaled_hair.py", abc.to_str().unwrap(), usda.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success() && abc.exists() && usda.exists(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let world_width = 2.0 * 30e-6 * 3.0;
+    let (from_abc, from_usda) = (load_path(&abc), load_path(&usda));
+    for (name, groom) in [("Alembic", &from_abc), ("USD", &from_usda)] {
+        assert_eq!(groom.strand_count(), 2, "{name}");
+        for &w in &groom.widths {
+            assert!(
+                (w / world_width - 1.0).abs() < 1e-5,
+                "{name}: width {w} m, the world's is {world_width} m"
+            );
+        }
+    }
+    let apart =
+        from_abc.points.iter().zip(&from_usda.points).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+    assert!(apart < 1e-6, "the two exports' points {apart} m apart");
+
+    let converted = dir.path().join("converted.abc");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+        .args(["convert", abc.to_str().unwrap(), converted.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let blender = bpy_reimport(&converted).unwrap();
+    let radii = common::usd::f32s(&blender_object(&blender, "objects", "Hair")["radii"]);
+    assert_eq!(radii.len(), 8);
+    for r in radii {
+        assert!((r / (world_width / 2.0) - 1.0).abs() < 1e-5, "Blender's radius {r} m of coif's baked file");
+    }
+}
+
 /// The object of Blender's import whose name starts with `name` (`Guides` for USD's
 /// `GuidesData`, `Head` for `HeadMesh`), among `kind` ("objects": curves, "meshes").
 fn blender_object<'a>(scene: &'a serde_json::Value, kind: &str, name: &str) -> &'a serde_json::Value {

@@ -377,6 +377,13 @@ fn apply_import_options(groom: &mut Groom, options: &ImportOptions) {
     }
 }
 
+/// How a transform scales a curve's width: the cube root of its volume change, so a uniform scale
+/// scales widths by itself (as Blender and pxr's hair procedurals do). Every reader uses it on the
+/// widths a file authors (coif's default width is not scaled).
+pub(crate) fn width_scale(to_coif: glam::DMat4) -> f32 {
+    to_coif.determinant().abs().cbrt() as f32
+}
+
 /// Moves the attributes that are positions or directions with the points, from a file's space to
 /// coif's by `to_coif` (see [`transform_values`]). Every reader uses it.
 pub(crate) fn transform_attributes(attributes: &mut [crate::groom::Attribute], to_coif: glam::DMat4) {

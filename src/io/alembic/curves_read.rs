@@ -510,6 +510,11 @@ impl<'a> CurvesArchive<'a> {
                     let param = Param { values, extent: 1, rate };
                     placed.widths.extend(param.into_vertices(&strands));
                 }
+                // Widths are lengths in the object's space, as its points are.
+                if matrix != DMat4::IDENTITY {
+                    let scale = crate::io::width_scale(matrix);
+                    placed.widths[first..].iter_mut().for_each(|w| *w *= scale);
+                }
             }
             None => placed.widths.extend(std::iter::repeat_n(
                 DEFAULT_WIDTH * if self.epic_groom { epic::UNITS_PER_METRE } else { 1.0 },

@@ -1201,7 +1201,7 @@ fn to_coif_space(to_coif: DMat4, points: &mut [Vec3], widths: &mut [f32], author
         let transform = |p: Vec3| to_coif.transform_point3(p.as_dvec3()).as_vec3();
         points.iter_mut().for_each(|p| *p = transform(*p));
         if authored {
-            let width_scale = to_coif.determinant().abs().cbrt() as f32;
+            let width_scale = crate::io::width_scale(to_coif);
             widths.iter_mut().for_each(|w| *w *= width_scale);
         }
     }
