@@ -12,12 +12,14 @@ pub enum Error {
     #[error("{path}: {message}")]
     Format { path: PathBuf, message: String },
 
-    /// The groom read fine but breaks an invariant of the groom model.
-    #[error("{path}: {source}")]
+    /// The groom read fine but breaks an invariant of the groom model; `origin` says which curve
+    /// of which prim or object the strand at fault is ([`crate::Groom::strand_origin`]).
+    #[error("{path}: {source}{}", origin.as_ref().map_or(String::new(), |o| format!(" ({o})")))]
     InvalidGroom {
         path: PathBuf,
         #[source]
         source: GroomError,
+        origin: Option<String>,
     },
 
     /// A groom built in memory (generated, simulated) breaks an invariant.
@@ -58,7 +60,7 @@ impl Error {
     /// file's (every other error already says where it comes from).
     pub fn in_file(self, path: &Path) -> Self {
         match self {
-            Error::Groom(source) => Error::InvalidGroom { path: path.to_path_buf(), source },
+            Error::Groom(source) => Error::InvalidGroom { path: path.to_path_buf(), source, origin: None },
             other => other,
         }
     }

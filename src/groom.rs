@@ -155,6 +155,22 @@ pub enum GroomError {
     Mesh { path: String, problem: String },
 }
 
+impl GroomError {
+    /// The strand at fault, for the errors that name one.
+    pub fn strand(&self) -> Option<usize> {
+        match *self {
+            GroomError::TooFewVertices { strand, .. }
+            | GroomError::NonFinite { strand, .. }
+            | GroomError::ZeroLengthSegment { strand, .. }
+            | GroomError::BadWidth { strand, .. }
+            | GroomError::TooWide { strand, .. }
+            | GroomError::TooThin { strand, .. }
+            | GroomError::TooFar { strand, .. } => Some(strand),
+            _ => None,
+        }
+    }
+}
+
 /// Strand ids of curve objects (prims) merged into one groom, in object order: `parts` gives each
 /// object's strand count and its ids from the file, `None` when it has none. A file's ids are what
 /// its guide bindings (`groom_closest_guides`) name, so they are kept; only an object whose ids
@@ -388,6 +404,16 @@ impl Groom {
             mesh.check().map_err(|problem| GroomError::Mesh { path: mesh.path.clone(), problem })?;
         }
         Ok(())
+    }
+
+    /// Where strand `strand` came from in a file of several curve prims or objects: "curve 1 of
+    /// </groom/b>" (the groom's strand index counts across all of them, which alone does not find
+    /// the curve in a file of many prims). `None` for a groom of one unnamed group.
+    pub fn strand_origin(&self, strand: usize) -> Option<String> {
+        let group = *self.group_ids.get(strand)?;
+        let name = &self.groups.get(group as usize)?.name;
+        let curve = self.group_ids[..strand].iter().filter(|&&g| g == group).count();
+        Some(format!("curve {curve} of <{name}>"))
     }
 
     /// The first bad strand: too few vertices, a point not finite, a zero-length segment or a

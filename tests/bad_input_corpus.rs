@@ -553,6 +553,31 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
     cases.push(convert(".hair NaN point".into(), "in.hair", nan_point, &["in.hair", "strand 0"]));
     cases.push(convert(".hair is text".into(), "in.hair", b"HAIR but not really".to_vec(), &["in.hair"]));
 
+    // A bad curve in the second of two prims: the groom's strand index counts across both, so the
+    // message also names the prim and the curve's index in it.
+    let two_prims = |counts: &str, b_points: &str| {
+        format!(
+            "#usda 1.0\ndef Xform \"groom\"\n{{\n    def BasisCurves \"a\"\n    {{\n        uniform token type = \"linear\"\n        \
+             int[] curveVertexCounts = [3, 3]\n        point3f[] points = [(0,0,0),(0,0.1,0),(0,0.2,0),(1,0,0),(1,0.1,0),(1,0.2,0)]\n    }}\n    \
+             def BasisCurves \"b\"\n    {{\n        uniform token type = \"linear\"\n        int[] curveVertexCounts = {counts}\n        \
+             point3f[] points = {b_points}\n    }}\n}}\n"
+        )
+        .into_bytes()
+    };
+    let b_points = "[(0,0,0),(0,0.1,0),(0,0.2,0),(1,0,0),(1,0.1,0),(1,0.2,0)]";
+    cases.push(convert(
+        ".usda one-point curve in the second prim".into(),
+        "in.usda",
+        two_prims("[3, 1, 2]", b_points),
+        &["in.usda", "strand 3 has 1 vertices", "curve 1 of </groom/b>"],
+    ));
+    cases.push(convert(
+        ".usda NaN in the second prim".into(),
+        "in.usda",
+        two_prims("[3, 3]", &b_points.replace("(1,0.1,0)", "(1,nan,0)")),
+        &["in.usda", "strand 3, vertex 1", "curve 1 of </groom/b>"],
+    ));
+
     let usda = &inputs.usda;
     for cut in [9, usda.len() / 4, usda.len() / 2, usda.len() * 3 / 4, usda.len() - 3] {
         cases.push(convert(format!(".usda cut at {cut}"), "in.usda", usda[..cut].to_vec(), &["in.usda"]));

@@ -308,7 +308,11 @@ fn read_groom_from(
             groom
         }
     };
-    groom.validate().map_err(|source| Error::InvalidGroom { path: path.to_path_buf(), source })?;
+    groom.validate().map_err(|source| Error::InvalidGroom {
+        path: path.to_path_buf(),
+        origin: source.strand().and_then(|strand| groom.strand_origin(strand)),
+        source,
+    })?;
     check_contents(&groom, path)?;
     Ok(Loaded { groom, format, files, warnings })
 }
