@@ -542,8 +542,13 @@ impl Composer<'_> {
             let (stack, offset) = self
                 .stack_in_time(&target, sub.offset, rate, time, chain)
                 .map_err(|e| in_arc(e, &display, &arc()))?;
+            // A layer already in the stack is stronger there and shadows every opinion of its
+            // weaker repeat (the same specs; list ops compose to the same list): it is taken
+            // once, so layers listing their sublayers twice do not double the stack per level.
             for &(layer, inner) in &self.stacks[stack].layers {
-                layers.push((layer, offset.then(inner)));
+                if !layers.iter().any(|&(seen, _)| seen == layer) {
+                    layers.push((layer, offset.then(inner)));
+                }
             }
         }
         chain.pop();
