@@ -294,6 +294,10 @@ fn a_wedge_through_a_real_slurm_matches_a_local_batch() {
 
     let farm = job(MANIFEST);
     let manifest = farm.path().join("m.toml");
+    // Logs under a folder name sbatch's directive parser splits or expands unless coif quotes it:
+    // a space, an apostrophe, a `%j` pattern.
+    let logs = "slurm logs/Kim's shot%j";
+    std::fs::write(&manifest, format!("logs = \"{logs}\"\n{MANIFEST}")).unwrap();
     let start = Instant::now();
     let out = Command::new(env!("CARGO_BIN_EXE_coif"))
         .args(["farm", "submit", path_str(&manifest), "--cpus", "1", "--json"])
@@ -311,6 +315,15 @@ fn a_wedge_through_a_real_slurm_matches_a_local_batch() {
         std::thread::sleep(Duration::from_millis(500));
     }
     eprintln!("wedge of 8 tasks through Slurm: {:.1} s", start.elapsed().as_secs_f64());
+    let job_id = report["job_id"].as_str().unwrap();
+    let mut slurm_logs: Vec<String> = std::fs::read_dir(farm.path().join(logs))
+        .unwrap_or_else(|e| panic!("no Slurm logs in {logs:?}: {e}"))
+        .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with("slurm-"))
+        .collect();
+    slurm_logs.sort();
+    let expected: Vec<String> = (0..8).map(|k| format!("slurm-{job_id}_{k}.out")).collect();
+    assert_eq!(slurm_logs, expected, "Slurm's task logs in {logs:?}");
     let local = job(MANIFEST);
     let local_start = Instant::now();
     batch(local.path(), "2");

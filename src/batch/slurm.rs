@@ -82,7 +82,10 @@ pub fn script(
         format!("#SBATCH --job-name=coif-{job_name}"),
         format!("#SBATCH --array={array}"),
         format!("#SBATCH --cpus-per-task={}", options.cpus_per_task),
-        format!("#SBATCH --output={}/slurm-%A_%a.out", logs.to_string_lossy()),
+        format!(
+            "#SBATCH --output={}",
+            sbatch_quote(&format!("{}/", logs.to_string_lossy()), "slurm-%A_%a.out")
+        ),
     ];
     if let Some(partition) = &options.partition {
         lines.push(format!("#SBATCH --partition={partition}"));
@@ -94,6 +97,15 @@ pub fn script(
         String::new(),
     ]);
     Ok(lines.join("\n"))
+}
+
+/// An `#SBATCH` value: `literal` (a path, taken as written) then `pattern` (with Slurm's `%A`-style
+/// file-name patterns), in double quotes, which sbatch's directive parser reads as one argument
+/// whatever spaces or apostrophes the path has (`\` escapes `"` and `\` there), and with the
+/// path's `%` doubled so that Slurm does not expand a folder named `shot%j`.
+fn sbatch_quote(literal: &str, pattern: &str) -> String {
+    let escaped = literal.replace('\\', "\\\\").replace('"', "\\\"").replace('%', "%%");
+    format!("\"{escaped}{pattern}\"")
 }
 
 fn shell_quote(text: &str) -> String {
