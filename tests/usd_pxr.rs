@@ -103,6 +103,20 @@ fn every_groom_coif_writes_opens_in_pxr_with_the_same_data_and_validates() {
     }
 }
 
+/// `-o groom.usd` writes USD's binary encoding, as pxr does for `.usd` (it was refused as an
+/// unknown extension, while `.usd` input was read): pxr opens it with the groom's data.
+#[test]
+fn a_usd_output_is_a_crate_file_pxr_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = rich_groom(CurveBasis::CatmullRom);
+    let path = dir.path().join("groom.usd");
+    let warnings = coif::io::write_groom(&path, &groom).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(std::fs::read(&path).unwrap().starts_with(b"PXR-USDC"), "a crate file");
+    assert_pxr_sees(&pxr_dump(&path, None), &groom);
+    assert_eq!(coif::io::read_groom(&path, &Default::default()).unwrap().groom, groom);
+}
+
 #[test]
 fn attribute_names_usd_cannot_hold_are_renamed_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();

@@ -44,6 +44,8 @@ impl Format {
         (Format::Hair, "hair"),
         (Format::Usda, "usda"),
         (Format::Usdc, "usdc"),
+        // A `.usd` file may hold either encoding; written, it is a crate, as pxr writes it.
+        (Format::Usdc, "usd"),
         (Format::Usdz, "usdz"),
         (Format::Alembic, "abc"),
     ];
