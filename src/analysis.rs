@@ -112,7 +112,10 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
         let length = arc[points.len() - 1];
         // Still a whole curve of its basis: a Bézier strand keeps 3k + 1 points, a cubic one 4.
         let group = groom.group(groom.group_of(strand));
-        let mut segments = ((length / max_segment).ceil() as usize).max(1);
+        // A hundredth of a percent of slack: a strand of a round length (48 cm at 4 mm: 120
+        // segments) would otherwise get 120 or 121 by the float noise of where it sits (moved
+        // 1 m, or read in centimetres), and its curls with them.
+        let mut segments = ((length / max_segment * (1.0 - 1e-4)).ceil() as usize).max(1);
         while !crate::primvar_rates::is_whole_curve(group.basis, group.wrap, segments + 1) {
             segments += 1;
         }
@@ -158,6 +161,32 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A strand of a round length (48 cm at 4 mm, 120 segments) resamples to 121 vertices
+    /// wherever it sits and in whatever unit it came: moved up to 10 m, or read in centimetres
+    /// and scaled, its measured length lands a few ulps either side of 120 segments.
+    #[test]
+    fn a_round_length_resamples_to_the_same_count_anywhere() {
+        let strand: Vec<Vec3> =
+            (0..=24).map(|i| Vec3::new(0.003 * (i % 2) as f32, -0.02 * i as f32, 0.1)).collect();
+        let length: f32 = strand.windows(2).map(|w| w[0].distance(w[1])).sum();
+        let max_segment = length / 120.0;
+        let mut counts = std::collections::BTreeSet::new();
+        for k in 0..200 {
+            let offset = Vec3::new(0.37 * k as f32, 0.05 * k as f32, -0.11 * k as f32) * 0.13;
+            let scale = if k % 2 == 0 { 1.0 } else { 100.0 };
+            let points: Vec<Vec3> = strand.iter().map(|&p| (p + offset) * scale).collect();
+            let groom = Groom {
+                widths: vec![1e-4; points.len()],
+                strand_offsets: vec![0, points.len() as u32],
+                strand_ids: vec![0],
+                points,
+                ..Default::default()
+            };
+            counts.insert(resample_groom(&groom, max_segment * scale).points.len());
+        }
+        assert_eq!(counts.into_iter().collect::<Vec<_>>(), vec![121]);
+    }
 
     fn helix(radius: f32, pitch: f32, turns: f32, n: usize) -> Vec<Vec3> {
         (0..n)
