@@ -63,7 +63,7 @@ fn vec3_attribute(groom: &Groom, name: &str) -> Vec<Vec3> {
     groom
         .attribute(name)
         .expect("styled attribute")
-        .data
+        .floats()
         .chunks(3)
         .map(|c| Vec3::new(c[0], c[1], c[2]))
         .collect()

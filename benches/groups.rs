@@ -71,13 +71,14 @@ fn scalp() -> SurfaceMesh {
             mesh.face_indices.extend([at(r, s), at(r + 1, s + 1), at(r, s + 1)]);
         }
     }
-    let normals = mesh.points.iter().flat_map(|p| (*p - Vec3::Y * 0.09).normalize().to_array()).collect();
+    let normals: Vec<f32> =
+        mesh.points.iter().flat_map(|p| (*p - Vec3::Y * 0.09).normalize().to_array()).collect();
     mesh.primvars.push(MeshPrimvar {
         name: MeshPrimvar::NORMALS.into(),
         kind: AttributeKind::Normal,
         components: 3,
         interpolation: MeshInterpolation::Vertex,
-        values: normals,
+        values: normals.into(),
         indices: None,
     });
     mesh

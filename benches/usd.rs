@@ -162,7 +162,7 @@ fn main() {
     bytes_of(bytemuck::cast_slice(&ids), "ids.i32");
     let mut manifest = Vec::new();
     for attribute in &groom.attributes {
-        bytes_of(bytemuck::cast_slice(&attribute.data), &format!("{}.f32", attribute.name));
+        bytes_of(bytemuck::cast_slice(&attribute.floats()[..]), &format!("{}.f32", attribute.name));
         let usd_type = if attribute.components == 3 { "float3[]" } else { "float[]" };
         let interpolation = if attribute.rate == AttributeRate::Vertex { "vertex" } else { "uniform" };
         manifest.push(

@@ -101,6 +101,7 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
     };
     let vertex_attributes: Vec<&Attribute> =
         groom.attributes.iter().filter(|a| a.rate == AttributeRate::Vertex).collect();
+    let sources: Vec<std::borrow::Cow<[f32]>> = vertex_attributes.iter().map(|a| a.floats()).collect();
     let mut data: Vec<Vec<f32>> = vec![Vec::new(); vertex_attributes.len()];
     for strand in 0..groom.strand_count() {
         let range = groom.strand_range(strand);
@@ -132,10 +133,10 @@ pub fn resample_groom(groom: &Groom, max_segment: f32) -> Groom {
                 if k == segments { points[points.len() - 1] } else { points[edge].lerp(points[edge + 1], t) };
             out.points.push(point);
             out.widths.push(groom.widths[a] + (groom.widths[b] - groom.widths[a]) * t);
-            for (attribute, values) in vertex_attributes.iter().zip(&mut data) {
+            for ((attribute, source), values) in vertex_attributes.iter().zip(&sources).zip(&mut data) {
                 let c = attribute.components;
                 for j in 0..c {
-                    let (x, y) = (attribute.data[a * c + j], attribute.data[b * c + j]);
+                    let (x, y) = (source[a * c + j], source[b * c + j]);
                     values.push(x + (y - x) * t);
                 }
             }
@@ -232,6 +233,6 @@ mod tests {
         // 0.05 m along the first edge: halfway in width and attribute.
         let mid = out.points.iter().position(|p| (p.x - 0.05).abs() < 1e-4).unwrap();
         assert!((out.widths[mid] - 0.75e-4).abs() < 1e-9);
-        assert!((out.attribute("w").unwrap().data[mid] - 0.5).abs() < 1e-5);
+        assert!((out.attribute("w").unwrap().floats()[mid] - 0.5).abs() < 1e-5);
     }
 }

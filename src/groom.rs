@@ -1,6 +1,7 @@
 //! The one in-memory groom model every reader produces, every writer consumes and the simulator
 //! reads and writes. Struct-of-arrays: all strands' points in one array, cut into strands by
 //! `strand_offsets`. Units are metres, Y is up.
+use std::borrow::Cow;
 use std::ops::Range;
 
 use glam::Vec3;
@@ -41,13 +42,21 @@ pub enum AttributeRate {
 
 /// What an attribute's numbers are, when a file said more than "floats" (a USD value type or
 /// role), so writers give the same type back and conversions move directions with the points.
+/// The integer kinds are held as integers ([`AttributeData::Int`]), the others as floats.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum AttributeKind {
     /// Plain numbers (the writer picks the type it always has for the name).
     #[default]
     Float,
+    /// 32-bit signed integers (USD `int`, `int2`…`int4`, `uchar`).
     Int,
+    /// 32-bit unsigned integers (USD `uint`).
+    UInt,
+    /// 64-bit signed integers (USD `int64`).
+    Int64,
+    /// 64-bit unsigned integers (USD `uint64`), held as their bits in an `i64`.
+    UInt64,
     Bool,
     /// Positions: transformed like the points.
     Point,
@@ -59,24 +68,215 @@ pub enum AttributeKind {
     TexCoord,
 }
 
-/// A named float attribute with 1–4 components per element (bond rates, wetness, rest positions…).
+impl AttributeKind {
+    /// Whether the kind's values are integers, held exactly.
+    pub fn is_integer(self) -> bool {
+        matches!(
+            self,
+            AttributeKind::Int | AttributeKind::UInt | AttributeKind::Int64 | AttributeKind::UInt64
+        )
+    }
+
+    /// An integer kind's value of `stored` (a `UInt64`'s bits read unsigned).
+    pub fn integer(self, stored: i64) -> i128 {
+        match self {
+            AttributeKind::UInt64 => i128::from(stored as u64),
+            _ => i128::from(stored),
+        }
+    }
+
+    /// Whether an integer kind holds `value`.
+    pub fn holds(self, value: i128) -> bool {
+        match self {
+            AttributeKind::Int => i32::try_from(value).is_ok(),
+            AttributeKind::UInt => u32::try_from(value).is_ok(),
+            AttributeKind::Int64 => i64::try_from(value).is_ok(),
+            AttributeKind::UInt64 => u64::try_from(value).is_ok(),
+            _ => false,
+        }
+    }
+
+    /// The narrowest integer kind of `kinds` (integer kinds) that holds every one of `values`;
+    /// `None` when none does (a `uint64` past 2^63 beside a negative value).
+    pub fn widest_integer(
+        kinds: &[AttributeKind],
+        values: impl Iterator<Item = i128>,
+    ) -> Option<AttributeKind> {
+        let (mut low, mut high) = (0i128, 0i128);
+        for v in values {
+            (low, high) = (low.min(v), high.max(v));
+        }
+        // The kinds given first (the file's), then the wider ones.
+        let candidates = kinds.iter().copied().chain([AttributeKind::Int64, AttributeKind::UInt64]);
+        let fits = |k: AttributeKind| k.holds(low) && k.holds(high);
+        let width = |k: AttributeKind| match k {
+            AttributeKind::Int | AttributeKind::UInt => 32,
+            _ => 64,
+        };
+        candidates.filter(|&k| k.is_integer() && fits(k)).min_by_key(|&k| width(k))
+    }
+}
+
+/// An attribute's values: floats, or, for an integer [`AttributeKind`], integers held exactly
+/// (ids past 2^24 do not survive `f32`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum AttributeData {
+    Float(Vec<f32>),
+    Int(Vec<i64>),
+}
+
+impl AttributeData {
+    pub fn len(&self) -> usize {
+        match self {
+            AttributeData::Float(v) => v.len(),
+            AttributeData::Int(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The values as numbers for what computes with them: floats as they are, integers (of
+    /// integer kind `kind`) converted.
+    pub fn floats(&self, kind: AttributeKind) -> Cow<'_, [f32]> {
+        self.values().floats(kind)
+    }
+
+    /// The values borrowed (see [`Values`]).
+    pub fn values(&self) -> Values<'_> {
+        match self {
+            AttributeData::Float(v) => Values::Float(Cow::Borrowed(v)),
+            AttributeData::Int(v) => Values::Int(Cow::Borrowed(v)),
+        }
+    }
+
+    /// An empty array of the same number type.
+    pub fn empty_like(&self, capacity: usize) -> AttributeData {
+        match self {
+            AttributeData::Float(_) => AttributeData::Float(Vec::with_capacity(capacity)),
+            AttributeData::Int(_) => AttributeData::Int(Vec::with_capacity(capacity)),
+        }
+    }
+
+    /// Appends `from[range]` `times` times; `from` holds the same number type.
+    pub fn extend_from(&mut self, from: &AttributeData, range: Range<usize>, times: usize) {
+        match (self, from) {
+            (AttributeData::Float(to), AttributeData::Float(from)) => {
+                (0..times).for_each(|_| to.extend_from_slice(&from[range.clone()]))
+            }
+            (AttributeData::Int(to), AttributeData::Int(from)) => {
+                (0..times).for_each(|_| to.extend_from_slice(&from[range.clone()]))
+            }
+            _ => unreachable!("attribute data of one number type extended by another"),
+        }
+    }
+
+    /// Appends `count` zeros.
+    pub fn extend_zeros(&mut self, count: usize) {
+        match self {
+            AttributeData::Float(v) => v.resize(v.len() + count, 0.0),
+            AttributeData::Int(v) => v.resize(v.len() + count, 0),
+        }
+    }
+}
+
+impl From<Vec<f32>> for AttributeData {
+    fn from(values: Vec<f32>) -> Self {
+        AttributeData::Float(values)
+    }
+}
+
+/// [`AttributeData`] borrowed, or gathered for some strands.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Values<'a> {
+    Float(Cow<'a, [f32]>),
+    Int(Cow<'a, [i64]>),
+}
+
+impl<'a> Values<'a> {
+    /// See [`AttributeData::floats`].
+    pub fn floats(self, kind: AttributeKind) -> Cow<'a, [f32]> {
+        match self {
+            Values::Float(v) => v,
+            Values::Int(v) => Cow::Owned(v.iter().map(|&x| kind.integer(x) as f32).collect()),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        match self {
+            Values::Float(v) => v.len(),
+            Values::Int(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A named attribute with 1–4 components per element (bond rates, wetness, rest positions,
+/// ids…): floats, or integers for an integer kind.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Attribute {
     pub name: String,
     pub rate: AttributeRate,
     pub components: usize,
-    pub data: Vec<f32>,
+    pub data: AttributeData,
     pub kind: AttributeKind,
 }
 
 impl Attribute {
+    /// A float attribute.
     pub fn new(name: impl Into<String>, rate: AttributeRate, components: usize, data: Vec<f32>) -> Self {
-        Attribute { name: name.into(), rate, components, data, kind: AttributeKind::Float }
+        Attribute {
+            name: name.into(),
+            rate,
+            components,
+            data: AttributeData::Float(data),
+            kind: AttributeKind::Float,
+        }
     }
 
+    /// An integer attribute of integer kind `kind`.
+    pub fn integers(
+        name: impl Into<String>,
+        rate: AttributeRate,
+        components: usize,
+        data: Vec<i64>,
+        kind: AttributeKind,
+    ) -> Self {
+        debug_assert!(kind.is_integer());
+        Attribute { name: name.into(), rate, components, data: AttributeData::Int(data), kind }
+    }
+
+    /// The kind of a float attribute (a role, or `Bool`).
     pub fn with_kind(mut self, kind: AttributeKind) -> Self {
+        debug_assert!(!kind.is_integer(), "integer attributes are made by Attribute::integers");
         self.kind = kind;
         self
+    }
+
+    /// The values as numbers for what computes with them (rates, wetness, frames): floats as
+    /// they are, integers converted.
+    pub fn floats(&self) -> Cow<'_, [f32]> {
+        self.data.floats(self.kind)
+    }
+
+    /// A float attribute's values, to change in place; `None` for integers.
+    pub fn floats_mut(&mut self) -> Option<&mut Vec<f32>> {
+        match &mut self.data {
+            AttributeData::Float(v) => Some(v),
+            AttributeData::Int(_) => None,
+        }
+    }
+
+    /// An integer attribute's values as stored (see [`AttributeKind::integer`]).
+    pub fn ints(&self) -> Option<&[i64]> {
+        match &self.data {
+            AttributeData::Int(v) => Some(v),
+            AttributeData::Float(_) => None,
+        }
     }
 
     /// Number of elements (vertices or strands) the data covers.
@@ -399,6 +599,7 @@ impl Groom {
             }
             let expected = self.element_count(attribute.rate) * attribute.components;
             check_len(&format!("attribute '{}'", attribute.name), expected, attribute.data.len())?;
+            check_numbers(attribute)?;
         }
         for mesh in &self.meshes {
             mesh.check().map_err(|problem| GroomError::Mesh { path: mesh.path.clone(), problem })?;
@@ -503,6 +704,23 @@ pub fn all_finite(values: &[f32]) -> bool {
     values.chunks(4096).all(|chunk| {
         chunk.iter().map(|v| u32::from(v.to_bits() & 0x7f80_0000 == 0x7f80_0000)).sum::<u32>() == 0
     })
+}
+
+/// Integers for the integer kinds, each in its kind's range; floats for the others.
+fn check_numbers(attribute: &Attribute) -> Result<(), GroomError> {
+    let problem = match (&attribute.data, attribute.kind) {
+        (AttributeData::Int(values), kind) if kind.is_integer() => values
+            .iter()
+            .map(|&v| kind.integer(v))
+            .find(|&v| !kind.holds(v))
+            .map(|v| format!("{v} is out of the range of its type ({kind:?})")),
+        (AttributeData::Float(_), kind) if !kind.is_integer() => None,
+        (_, kind) => Some(format!("{kind:?} values held as the wrong number type")),
+    };
+    match problem {
+        Some(problem) => Err(GroomError::BadAttribute { name: attribute.name.clone(), problem }),
+        None => Ok(()),
+    }
 }
 
 fn check_len(what: &str, expected: usize, found: usize) -> Result<(), GroomError> {
@@ -651,7 +869,7 @@ mod tests {
         groom.set_attribute(Attribute::new("w", AttributeRate::Strand, 1, vec![0.0, 0.0]));
         groom.set_attribute(Attribute::new("w", AttributeRate::Strand, 1, vec![1.0, 1.0]));
         assert_eq!(groom.attributes.len(), 1);
-        assert_eq!(groom.attribute("w").unwrap().data, vec![1.0, 1.0]);
+        assert_eq!(groom.attribute("w").unwrap().floats(), vec![1.0, 1.0]);
         assert!(groom.validate().is_ok());
     }
 }

@@ -12,7 +12,9 @@ use std::ops::Range;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::groom::{Attribute, AttributeRate, CurveBasis, Groom, GroomError};
+use crate::groom::{
+    Attribute, AttributeData, AttributeKind, AttributeRate, CurveBasis, Groom, GroomError, Values,
+};
 use crate::surface_mesh::SurfaceMesh;
 
 /// How a curve's ends behave (USD `wrap`; Alembic's periodicity byte).
@@ -358,6 +360,17 @@ impl Strands {
         }
     }
 
+    /// An attribute's values on these strands.
+    pub(crate) fn values<'d>(&self, groom: &Groom, attribute: &'d Attribute) -> Values<'d> {
+        let c = attribute.components;
+        match (&attribute.data, attribute.rate) {
+            (AttributeData::Float(v), AttributeRate::Strand) => Values::Float(self.per_strand(v, c)),
+            (AttributeData::Float(v), AttributeRate::Vertex) => Values::Float(self.per_vertex(groom, v, c)),
+            (AttributeData::Int(v), AttributeRate::Strand) => Values::Int(self.per_strand(v, c)),
+            (AttributeData::Int(v), AttributeRate::Vertex) => Values::Int(self.per_vertex(groom, v, c)),
+        }
+    }
+
     pub(crate) fn counts(&self, groom: &Groom) -> Vec<i32> {
         let count = |s: usize| groom.strand_range(s).len() as i32;
         match self {
@@ -527,6 +540,7 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
     names.dedup();
     for name in names {
         let found: Vec<&Attribute> = parts.iter().filter_map(|(g, _)| g.attribute(name)).collect();
+        let (kind, alike) = one_kind(name, &found)?;
         let components = found[0].components;
         if let Some(other) = found.iter().find(|a| a.components != components) {
             return Err(GroomError::AttributeComponents {
@@ -543,10 +557,13 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
             AttributeRate::Strand => strand_total,
             AttributeRate::Vertex => vertex_total,
         };
-        let mut data = Vec::with_capacity(per_element * components);
+        let mut data = alike[0].data.empty_like(per_element * components);
         let mut carried = vec![false; out.groups.len()];
+        let mut alike = alike.into_iter();
         for ((groom, strands), map) in parts.iter().zip(&group_maps) {
-            let attribute = groom.attribute(name);
+            let attribute =
+                groom.attribute(name).map(|_| alike.next().expect("one for each part that has it"));
+            let attribute = attribute.as_deref();
             for run in runs(groom, strands) {
                 let group_index = groom.group_of(run.start);
                 let vertices = groom.strand_range(run.start).start..groom.strand_range(run.end - 1).end;
@@ -559,7 +576,7 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
                         carried[map[group_index] as usize] = true;
                         match (a.rate, rate) {
                             (AttributeRate::Strand, AttributeRate::Strand) => {
-                                data.extend_from_slice(&a.data[run.start * components..run.end * components])
+                                data.extend_from(&a.data, run.start * components..run.end * components, 1)
                             }
                             (AttributeRate::Strand, AttributeRate::Vertex) => {
                                 // Writers give it back one per curve while the values allow.
@@ -568,17 +585,18 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
                                     group.interpolations.push((name.to_string(), Interpolation::Uniform));
                                 }
                                 for s in run {
-                                    let value = &a.data[s * components..(s + 1) * components];
-                                    (0..groom.strand_range(s).len())
-                                        .for_each(|_| data.extend_from_slice(value));
+                                    let value = s * components..(s + 1) * components;
+                                    data.extend_from(&a.data, value, groom.strand_range(s).len());
                                 }
                             }
-                            (AttributeRate::Vertex, _) => data.extend_from_slice(
-                                &a.data[vertices.start * components..vertices.end * components],
+                            (AttributeRate::Vertex, _) => data.extend_from(
+                                &a.data,
+                                vertices.start * components..vertices.end * components,
+                                1,
                             ),
                         }
                     }
-                    _ => data.extend(std::iter::repeat_n(0.0, count * components)),
+                    _ => data.extend_zeros(count * components),
                 }
             }
         }
@@ -587,7 +605,7 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
                 group.missing.push(name.to_string());
             }
         }
-        out.attributes.push(Attribute::new(name, rate, components, data).with_kind(found[0].kind));
+        out.attributes.push(Attribute { name: name.to_string(), rate, components, data, kind });
     }
     if let Some(first) = out.groups.first() {
         out.basis = first.basis;
@@ -595,6 +613,49 @@ fn assemble_with(parts: &[(&Groom, &[usize])], placed: Option<PlacedVertices>) -
     out.drop_default_group("");
     // Groups no strand uses (a selection) stay, so group ids keep their meaning.
     Ok(out)
+}
+
+/// One attribute's parts (of several grooms) in one number type, and its kind: the first part's
+/// when all are floats or all share it; integers of several kinds in the narrowest kind that
+/// holds them all; else floats, refused when an integer has no exact float (an id past 2^24
+/// beside a float part).
+#[allow(clippy::type_complexity)]
+fn one_kind<'a>(
+    name: &str,
+    found: &[&'a Attribute],
+) -> Result<(AttributeKind, Vec<Cow<'a, Attribute>>), GroomError> {
+    let first = found[0].kind;
+    if found.iter().all(|a| a.kind == first || !(a.kind.is_integer() || first.is_integer())) {
+        return Ok((first, found.iter().map(|&a| Cow::Borrowed(a)).collect()));
+    }
+    let bad = |problem: String| GroomError::BadAttribute { name: name.to_string(), problem };
+    let values = |a: &'a Attribute| a.ints().unwrap_or(&[]).iter().map(move |&v| a.kind.integer(v));
+    if found.iter().all(|a| a.kind.is_integer()) {
+        let kinds: Vec<AttributeKind> = found.iter().map(|a| a.kind).collect();
+        let kind = AttributeKind::widest_integer(&kinds, found.iter().flat_map(|&a| values(a)))
+            .ok_or_else(|| bad("holds values no one integer type holds (past 2^63 and negative)".into()))?;
+        let stored = |v: i128| if kind == AttributeKind::UInt64 { v as u64 as i64 } else { v as i64 };
+        let alike = found.iter().map(|&a| {
+            let data = values(a).map(stored).collect();
+            Cow::Owned(Attribute::integers(a.name.clone(), a.rate, a.components, data, kind))
+        });
+        return Ok((kind, alike.collect()));
+    }
+    let kind = found.iter().map(|a| a.kind).find(|k| !k.is_integer()).unwrap_or_default();
+    let alike = found
+        .iter()
+        .map(|&a| {
+            if let Some(v) = values(a).find(|&v| v as f32 as i128 != v) {
+                return Err(bad(format!(
+                    "is integers in one curve prim or object and floats in another, and {v} has no exact float"
+                )));
+            }
+            let data = AttributeData::Float(a.floats().into_owned());
+            let (name, rate, components) = (a.name.clone(), a.rate, a.components);
+            Ok(Cow::Owned(Attribute { name, rate, components, data, kind }))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok((kind, alike))
 }
 
 /// `strands` as runs of consecutive strands of one group, so that each run's data is copied as

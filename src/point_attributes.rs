@@ -100,14 +100,16 @@ fn turn_normals(normals: &mut Attribute, offsets: &[u32], from: Option<&[Vec3]>,
         let (a, b) = (vertex.saturating_sub(1), (vertex + 1).min(points.len().saturating_sub(1)));
         (points[b] - points[a]).normalize_or_zero()
     };
+    let rate = normals.rate;
+    let Some(data) = normals.floats_mut() else { return }; // integer "normals" are no directions
     for (strand, range) in offsets.windows(2).map(|w| w[0] as usize..w[1] as usize).enumerate() {
-        let elements: Vec<(usize, usize)> = match normals.rate {
+        let elements: Vec<(usize, usize)> = match rate {
             AttributeRate::Vertex => range.clone().map(|i| (i, i - range.start)).collect(),
             AttributeRate::Strand => vec![(strand, 0)],
         };
         for (element, vertex) in elements {
             let new = tangent(&to[range.clone()], vertex);
-            let value = &mut normals.data[3 * element..3 * element + 3];
+            let value = &mut data[3 * element..3 * element + 3];
             let n = Vec3::from_slice(value);
             let turned = match from {
                 Some(from) => {

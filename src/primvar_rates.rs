@@ -59,13 +59,13 @@ fn vertex_of_end(basis: CurveBasis, ends: usize, vertices: usize, j: usize) -> u
 /// end takes that end's value; Bézier handles between two ends are interpolated linearly; the
 /// first and last points of a nonperiodic B-spline or Catmull-Rom curve, which no segment
 /// reaches, repeat their neighbour's.
-pub fn varying_to_vertex(
+pub fn varying_to_vertex<T: Spread>(
     basis: CurveBasis,
     wrap: CurveWrap,
     counts: impl IntoIterator<Item = usize>,
-    values: &[f32],
+    values: &[T],
     components: usize,
-) -> Vec<f32> {
+) -> Vec<T> {
     let mut out = Vec::with_capacity(values.len());
     let mut start = 0;
     for n in counts {
@@ -80,7 +80,7 @@ pub fn varying_to_vertex(
                 if t == 0.0 || j + 1 >= m {
                     out.extend_from_slice(value(j.min(m - 1)));
                 } else {
-                    out.extend(value(j).iter().zip(value(j + 1)).map(|(&a, &b)| a + (b - a) * t));
+                    out.extend(value(j).iter().zip(value(j + 1)).map(|(&a, &b)| T::between(a, b, t)));
                 }
             } else {
                 out.extend_from_slice(value(i.saturating_sub(1).min(m - 1)));
@@ -89,6 +89,29 @@ pub fn varying_to_vertex(
         start += m;
     }
     out
+}
+
+/// A number a Bézier handle's value is made of from the segment ends' `varying` values.
+pub trait Spread: Copy {
+    /// The value a fraction `t` of the way from `a` to `b`.
+    fn between(a: Self, b: Self, t: f32) -> Self;
+}
+
+impl Spread for f32 {
+    fn between(a: f32, b: f32, t: f32) -> f32 {
+        a + (b - a) * t
+    }
+}
+
+/// Integers (ids) are not blended: a handle takes the nearer end's.
+impl Spread for i64 {
+    fn between(a: i64, b: i64, t: f32) -> i64 {
+        if t < 0.5 {
+            a
+        } else {
+            b
+        }
+    }
 }
 
 /// The `varying` values per-vertex `values` were spread from by [`varying_to_vertex`], or `None`

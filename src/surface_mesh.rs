@@ -4,7 +4,7 @@
 //! scalp ([`scalp_of`]), and writers that can carry meshes give them back at their paths.
 use glam::{DMat4, Vec3};
 
-use crate::groom::{AttributeKind, Groom};
+use crate::groom::{AttributeData, AttributeKind, Groom};
 use crate::interact::mesh_sdf::TriangleMesh;
 
 /// A polygon mesh as the file holds it: faces of any vertex count, wound counter-clockwise seen
@@ -94,8 +94,8 @@ impl MeshInterpolation {
     }
 }
 
-/// One named piece of mesh data: `components` floats per element (ints and bools held as
-/// floats, as groom attributes are), optionally indexed.
+/// One named piece of mesh data: `components` numbers per element (integers for an integer
+/// kind, else floats, as groom attributes are), optionally indexed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshPrimvar {
     /// The primvar's name (`st`, `rest_position`); `normals` for the mesh's normals.
@@ -104,7 +104,7 @@ pub struct MeshPrimvar {
     pub kind: AttributeKind,
     pub components: usize,
     pub interpolation: MeshInterpolation,
-    pub values: Vec<f32>,
+    pub values: AttributeData,
     /// Element `i` is `values[indices[i]]` when present.
     pub indices: Option<Vec<u32>>,
 }
@@ -124,16 +124,17 @@ impl MeshPrimvar {
         self.len() == 0
     }
 
-    /// The values expanded through the indices.
+    /// The values as numbers (see [`AttributeData::floats`]) expanded through the indices.
     pub fn expanded(&self) -> std::borrow::Cow<'_, [f32]> {
+        let values = self.values.floats(self.kind);
         match &self.indices {
-            None => std::borrow::Cow::Borrowed(&self.values),
+            None => values,
             Some(indices) => std::borrow::Cow::Owned(
                 indices
                     .iter()
                     .flat_map(|&i| {
                         let at = i as usize * self.components;
-                        self.values[at..at + self.components].iter().copied()
+                        values[at..at + self.components].iter().copied()
                     })
                     .collect(),
             ),
@@ -167,9 +168,20 @@ impl MeshPrimvar {
                 indices[i]
             ));
         }
-        if !crate::groom::all_finite(&self.values) {
-            let i = self.values.iter().position(|v| !v.is_finite()).expect("a value is not finite");
-            return Err(format!("primvar '{name}': value {i} is not finite ({})", self.values[i]));
+        let kind_fits = match &self.values {
+            AttributeData::Int(values) => {
+                self.kind.is_integer() && values.iter().all(|&v| self.kind.holds(self.kind.integer(v)))
+            }
+            AttributeData::Float(_) => !self.kind.is_integer(),
+        };
+        if !kind_fits {
+            return Err(format!("primvar '{name}': values are not of its type ({:?})", self.kind));
+        }
+        if let AttributeData::Float(values) = &self.values {
+            if !crate::groom::all_finite(values) {
+                let i = values.iter().position(|v| !v.is_finite()).expect("a value is not finite");
+                return Err(format!("primvar '{name}': value {i} is not finite ({})", values[i]));
+            }
         }
         Ok(())
     }
@@ -242,13 +254,9 @@ impl SurfaceMesh {
         }
         self.points.iter_mut().for_each(|p| *p = to.transform_point3(p.as_dvec3()).as_vec3());
         for primvar in &mut self.primvars {
-            crate::io::transform_values(
-                primvar.kind,
-                &primvar.name,
-                primvar.components,
-                &mut primvar.values,
-                to,
-            );
+            if let AttributeData::Float(values) = &mut primvar.values {
+                crate::io::transform_values(primvar.kind, &primvar.name, primvar.components, values, to);
+            }
         }
     }
 
@@ -295,7 +303,14 @@ impl SurfaceMesh {
             }
             match &mut primvar.indices {
                 Some(indices) => reverse_corners(&self.face_counts, indices, 1),
-                None => reverse_corners(&self.face_counts, &mut primvar.values, primvar.components),
+                None => match &mut primvar.values {
+                    AttributeData::Float(values) => {
+                        reverse_corners(&self.face_counts, values, primvar.components)
+                    }
+                    AttributeData::Int(values) => {
+                        reverse_corners(&self.face_counts, values, primvar.components)
+                    }
+                },
             }
         }
     }

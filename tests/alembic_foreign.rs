@@ -177,10 +177,10 @@ fn epic_groom_attributes_and_indexed_params() {
     assert_eq!(groom.strand_ids, vec![7, 8, 9]);
     assert_eq!(groom.root_uvs, Some(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.75]]));
     let color = groom.attribute(attr::COLOR).unwrap();
-    assert_eq!((color.rate, color.components, &color.data), (AttributeRate::Vertex, 3, &colors));
+    assert_eq!((color.rate, color.components, &color.floats()[..]), (AttributeRate::Vertex, 3, &colors[..]));
     let group = groom.attribute("group_id").unwrap();
-    assert_eq!((group.rate, &group.data), (AttributeRate::Strand, &vec![0.0, 0.0, 1.0]));
-    assert_eq!(groom.attribute("clump").unwrap().data, vec![20.0, 10.0, 20.0]);
+    assert_eq!((group.rate, &group.floats()[..]), (AttributeRate::Strand, &[0.0, 0.0, 1.0][..]));
+    assert_eq!(groom.attribute("clump").unwrap().floats(), vec![20.0, 10.0, 20.0]);
     groom.validate().unwrap();
 }
 
@@ -415,30 +415,34 @@ fn geom_params_keep_types_and_turn_with_the_transform() {
     };
     // Rotate Z by 90°: (x, y, z) → (−y, x, z); scale 2 first.
     assert_eq!(
-        (attribute(&groom, "clump_id").kind, attribute(&groom, "clump_id").data),
-        (AttributeKind::Int, vec![7.0, -3.0])
+        (attribute(&groom, "clump_id").kind, attribute(&groom, "clump_id").ints()),
+        (AttributeKind::Int, Some(&[7, -3][..]))
     );
     assert_eq!(
-        (attribute(&groom, "is_long").kind, attribute(&groom, "is_long").data),
-        (AttributeKind::Bool, vec![1.0, 0.0])
+        (attribute(&groom, "is_long").kind, &attribute(&groom, "is_long").floats()[..]),
+        (AttributeKind::Bool, &[1.0, 0.0][..])
     );
     assert_eq!(attribute(&groom, "N").kind, AttributeKind::Normal);
-    close(&attribute(&groom, "N").data, &[0.0, 1.0, 0.0, -0.6, 0.0, 0.8], "N turned, unit length");
+    close(&attribute(&groom, "N").floats(), &[0.0, 1.0, 0.0, -0.6, 0.0, 0.8], "N turned, unit length");
     assert_eq!(attribute(&groom, "comb").kind, AttributeKind::Vector);
-    close(&attribute(&groom, "comb").data, &[0.0, 2.0, 0.0].repeat(4), "comb turned and scaled");
+    close(&attribute(&groom, "comb").floats(), &[0.0, 2.0, 0.0].repeat(4), "comb turned and scaled");
     assert_eq!(attribute(&groom, "anchor").kind, AttributeKind::Point);
     close(
-        &attribute(&groom, "anchor").data,
+        &attribute(&groom, "anchor").floats(),
         &[0.0, 2.0, 0.0, 0.0, 0.0, 2.0],
         "anchor placed like the points",
     );
-    assert_eq!(attribute(&groom, "mystery").data, vec![0.25, 0.5, 0.75, 1.0], "unknown params pass through");
+    assert_eq!(
+        attribute(&groom, "mystery").floats(),
+        vec![0.25, 0.5, 0.75, 1.0],
+        "unknown params pass through"
+    );
     // `--up z` turns them with the points too: (x, y, z) → (x, z, −y).
     let options = coif::io::ImportOptions { up_axis: Some(coif::io::UpAxis::Z), ..Default::default() };
     let z_up = coif::io::read_groom(&source, &options).unwrap().groom;
     let turned: Vec<f32> =
-        attribute(&groom, "N").data.chunks_exact(3).flat_map(|n| [n[0], n[2], -n[1]]).collect();
-    close(&attribute(&z_up, "N").data, &turned, "N turned from Z up");
+        attribute(&groom, "N").floats().chunks_exact(3).flat_map(|n| [n[0], n[2], -n[1]]).collect();
+    close(&attribute(&z_up, "N").floats(), &turned, "N turned from Z up");
 
     // Written back: the same PODs and interpretations; read again, the same groom.
     let out = dir.path().join("back.abc");

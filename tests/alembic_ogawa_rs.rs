@@ -161,7 +161,7 @@ fn ogawa_rs_reads_the_interpolation_attributes_in_unreals_types() {
 
     // And coif reads the ids back exactly (the largest exact in f32, 2^24 - 1, included).
     let back = coif::io::read_groom(&path, &Default::default()).unwrap().groom;
-    assert_eq!(back.attribute(CLOSEST_GUIDES).unwrap().data, closest);
+    assert_eq!(back.attribute(CLOSEST_GUIDES).unwrap().floats(), closest);
     assert_eq!(back.strand_ids, g.strand_ids);
 }
 

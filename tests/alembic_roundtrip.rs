@@ -237,7 +237,9 @@ fn unreal_output_follows_epic_conventions() {
     for (a, b) in back.points.iter().zip(&groom.points) {
         assert!((*a - *b).length() < 1e-6);
     }
-    for (a, b) in back.attribute("rest").unwrap().data.iter().zip(&groom.attribute("rest").unwrap().data) {
+    for (a, b) in
+        back.attribute("rest").unwrap().floats().iter().zip(groom.attribute("rest").unwrap().floats().iter())
+    {
         assert!((a - b).abs() < 1e-6);
     }
     assert_eq!(back.attribute("wetness"), groom.attribute("wetness"));

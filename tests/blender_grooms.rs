@@ -293,7 +293,7 @@ fn the_water_set_curls_the_blender_guides_to_the_predicted_radius() {
         let held = &set.frames[common::frame_after(&set, recipe.settings.dt, wet.steps + wrap.steps)];
         let guides = group_strands(&set.groom, group(&set.groom, "Guides"));
         let rest: Vec<Vec3> =
-            set.groom.attribute("rest").unwrap().data.chunks(3).map(Vec3::from_slice).collect();
+            set.groom.attribute("rest").unwrap().floats().chunks(3).map(Vec3::from_slice).collect();
         let curls = common::wound_and_rest_curls(
             &set.groom,
             &guides,
@@ -363,7 +363,7 @@ fn the_bed_head_keeps_the_hydrogen_share_of_the_shape_blender_hair_dried_in() {
             common::hydrogen_influence(&recipe) * (dry.bond_rates.hydrogen - press.bond_rates.hydrogen),
         );
         let rest: Vec<Vec3> =
-            bed.groom.attribute("rest").unwrap().data.chunks(3).map(Vec3::from_slice).collect();
+            bed.groom.attribute("rest").unwrap().floats().chunks(3).map(Vec3::from_slice).collect();
         let kept =
             common::kept_share(&bed.groom, &guides, &bed.frames[0], &bed.frames[first + 1..=last], &rest);
         eprintln!("{file} bed-head: the rest shape keeps {kept:.3} of the shape the guides dried in, {predicted:.3} predicted");
@@ -989,8 +989,8 @@ fn styled_guides_and_children_re_import_in_blender_and_pxr_with_their_interpolat
         weights: Vec<f32>,
     }
     let per_strand = |strands: &[usize], name: &str| -> Vec<f32> {
-        let a = styled.attribute(name).unwrap();
-        strands.iter().flat_map(|&s| a.data[s * 3..s * 3 + 3].iter().copied()).collect()
+        let a = styled.attribute(name).unwrap().floats();
+        strands.iter().flat_map(|&s| a[s * 3..s * 3 + 3].iter().copied()).collect()
     };
     let expected: Vec<Expected> = ["Guides", "Hair"]
         .into_iter()

@@ -1036,15 +1036,15 @@ fn a_files_strand_ids_survive_reading_conversion_and_styling() {
             (0..styled.strand_count()).filter(|&s| flags[s]).map(|s| styled.strand_ids[s]).collect();
         let closest = styled.attribute("groom_closest_guides").expect("bindings");
         assert!(
-            closest.data.iter().all(|&id| guide_ids.contains(&(id as u32))),
+            closest.floats().iter().all(|&id| guide_ids.contains(&(id as u32))),
             "{}: a binding names no guide",
             groom.display()
         );
         // The file's bindings are kept: the first child (strand 10, after the 10 guides) follows
         // the first guide (id 1000), and the tuft's strands (the last 5) are bound too.
-        assert_eq!(closest.data[30..33], [1000.0; 3], "{}", groom.display());
+        assert_eq!(closest.floats()[30..33], [1000.0; 3], "{}", groom.display());
         let weights = styled.attribute("groom_guide_weights").expect("weights");
-        assert!(weights.data[40 * 3..].chunks(3).all(|w| (w.iter().sum::<f32>() - 1.0).abs() < 1e-5));
+        assert!(weights.floats()[40 * 3..].chunks(3).all(|w| (w.iter().sum::<f32>() - 1.0).abs() < 1e-5));
     }
 }
 
@@ -1184,7 +1184,7 @@ fn a_files_own_unreal_group_ids_are_written_once_and_kept() {
     let named = bytes.windows(b"groom_group_id".len()).filter(|w| w == b"groom_group_id").count();
     assert_eq!(named, 1, "one groom_group_id property in the Alembic output");
     // Read back as the Epic groom file it is (Epic's prefix dropped).
-    assert_eq!(read(&abc).attribute("group_id").expect("group ids").data, expected);
+    assert_eq!(read(&abc).attribute("group_id").expect("group ids").floats()[..], expected);
 }
 
 /// What one prim has and another lacks is not made up for the other: a prim with root UVs
@@ -1924,7 +1924,12 @@ fn unreal_usd_output_reads_back_as_the_groom_written_as_unreal_alembic_does() {
                 ".{ext} {}",
                 attribute.name
             );
-            let worst = read.data.iter().zip(&attribute.data).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            let worst = read
+                .floats()
+                .iter()
+                .zip(attribute.floats().iter())
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f32::max);
             assert!(worst < 1e-6, ".{ext} {}: {worst}", attribute.name);
         }
         assert_eq!(back.root_uvs, plain.root_uvs, ".{ext}");

@@ -126,10 +126,10 @@ fn children_of_one_guide_do_not_collapse_onto_it() {
     let (mut before, mut after, mut pairs) = (0.0, 0.0, 0);
     let mut by_guide: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
     for &c in &children {
-        by_guide.entry(closest.data[c * 3] as u32).or_default().push(c);
+        by_guide.entry(closest.floats()[c * 3] as u32).or_default().push(c);
     }
     for &c in &children {
-        let neighbour = by_guide[&(closest.data[c * 3] as u32)]
+        let neighbour = by_guide[&(closest.floats()[c * 3] as u32)]
             .iter()
             .copied()
             .filter(|&o| o != c)
@@ -153,7 +153,7 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     for name in ["rest", "rest_darboux", "material_frame", "bond_hydrogen", "bond_disulfide", "wetness"] {
         let a = groom.attribute(name).unwrap_or_else(|| panic!("no {name}"));
         assert_eq!(a.rate, AttributeRate::Vertex);
-        assert!(a.data.iter().all(|v| v.is_finite()), "{name}");
+        assert!(a.floats().iter().all(|v| v.is_finite()), "{name}");
     }
     // Every strand's material frames run along its own edges (a child's are rebuilt on its
     // curve, not blended from its guides', which follow other edges).
@@ -161,7 +161,7 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     for s in 0..FULL.strands {
         let range = groom.strand_range(s);
         for e in range.start..range.end - 1 {
-            let q = glam::Quat::from_slice(&frames.data[4 * e..4 * e + 4]);
+            let q = glam::Quat::from_slice(&frames.floats()[4 * e..4 * e + 4]);
             let edge = (groom.points[e + 1] - groom.points[e]).normalize();
             let cos = coif::sim::constraints::director3(q).dot(edge);
             assert!(cos > 0.996, "strand {s} edge {e}: frame {:.2}° off its edge", cos.acos().to_degrees());
@@ -170,11 +170,11 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     // The perm set 67 % of the disulfide bonds on the rods, in children as in guides: rates are
     // carried, not left at the unstyled 1.
     let flags = flags(groom);
-    let bonds = groom.attribute("bond_disulfide").unwrap();
+    let bonds = groom.attribute("bond_disulfide").unwrap().floats();
     let mean = |guide: bool| {
         let v: Vec<f32> = (0..FULL.strands)
             .filter(|&s| flags[s] == guide)
-            .flat_map(|s| bonds.data[groom.strand_range(s)].iter().copied())
+            .flat_map(|s| bonds[groom.strand_range(s)].iter().copied())
             .collect();
         v.iter().sum::<f32>() / v.len() as f32
     };
@@ -182,10 +182,10 @@ fn children_carry_rest_shape_bonds_wetness_and_bindings() {
     let weights = groom.attribute(GUIDE_WEIGHTS).unwrap();
     let closest = groom.attribute(CLOSEST_GUIDES).unwrap();
     for s in 0..FULL.strands {
-        let w = &weights.data[s * 3..s * 3 + 3];
+        let w = &weights.floats()[s * 3..s * 3 + 3];
         assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-4, "strand {s}: {w:?}");
         // Guides are named by strand id (Unreal's groom_id), here the strand index.
-        assert!(closest.data[s * 3..s * 3 + 3]
+        assert!(closest.floats()[s * 3..s * 3 + 3]
             .iter()
             .all(|&g| g >= 0.0 && flags[groom.strand_ids[g as usize] as usize]));
     }
@@ -226,7 +226,8 @@ fn a_files_guides_are_simulated_and_its_weights_used_or_refused() {
     renumbered
         .attribute_mut(CLOSEST_GUIDES)
         .unwrap()
-        .data
+        .floats_mut()
+        .unwrap()
         .iter_mut()
         .for_each(|g| *g = renumber(*g as u32) as f32);
     let moved = style(&renumbered, &short, &StyleOptions::default()).unwrap();
@@ -247,11 +248,12 @@ fn bad_bindings_are_refused_with_the_strand_in_every_file_form() {
     let permed = &SMALL.permed().groom;
     let child = (0..SMALL.strands).rev().find(|&s| !permed.guides.as_ref().unwrap()[s]).unwrap();
     let mut heavy = permed.clone();
-    heavy.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3] += 0.5;
+    heavy.attribute_mut(GUIDE_WEIGHTS).unwrap().floats_mut().unwrap()[child * 3] += 0.5;
     let mut astray = permed.clone();
     // The child's own id: no guide has it.
-    astray.attribute_mut(CLOSEST_GUIDES).unwrap().data[child * 3 + 1] = permed.strand_ids[child] as f32;
-    astray.attribute_mut(GUIDE_WEIGHTS).unwrap().data[child * 3 + 1] += 1e-6; // weighted
+    astray.attribute_mut(CLOSEST_GUIDES).unwrap().floats_mut().unwrap()[child * 3 + 1] =
+        permed.strand_ids[child] as f32;
+    astray.attribute_mut(GUIDE_WEIGHTS).unwrap().floats_mut().unwrap()[child * 3 + 1] += 1e-6; // weighted
     type Patch = fn(&Path);
     let forms: [(&str, Patch); 4] = [
         ("new.usda", |_| {}),
@@ -295,10 +297,10 @@ fn bad_bindings_are_refused_with_the_strand_in_every_file_form() {
             let closest =
                 read.attribute(CLOSEST_GUIDES).unwrap_or_else(|| panic!("{file}: no {CLOSEST_GUIDES}"));
             assert_eq!(
-                closest.data,
+                closest.floats(),
                 bad.attribute(if file == "old.abc" { "groom_closest_guidez" } else { CLOSEST_GUIDES })
                     .unwrap()
-                    .data,
+                    .floats(),
                 "{file}"
             );
             let err = style(&read, &short, &StyleOptions::default()).err().unwrap();
@@ -506,8 +508,11 @@ fn a_guided_groom_restyles_through_fewer_guides_bound_again() {
         let weights = again.attribute(GUIDE_WEIGHTS).unwrap();
         for s in (0..again.strand_count()).filter(|&s| !flags(&again)[s]) {
             for k in 0..3 {
-                if weights.data[3 * s + k] > 0.0 {
-                    assert!(ids.contains(&(closest.data[3 * s + k] as u32)), "{count} guides: strand {s}");
+                if weights.floats()[3 * s + k] > 0.0 {
+                    assert!(
+                        ids.contains(&(closest.floats()[3 * s + k] as u32)),
+                        "{count} guides: strand {s}"
+                    );
                 }
             }
         }

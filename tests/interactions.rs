@@ -79,7 +79,7 @@ duration = 0.3
 dryer = { position = [0.0, -0.05, -0.5], target = [0.0, -0.05, 0.0], strength = 300.0, falloff = 0.05 }
 "#;
     let dried = run(&groom, text);
-    let hydrogen = &dried.attribute("bond_hydrogen").unwrap().data;
+    let hydrogen = &dried.attribute("bond_hydrogen").unwrap().floats();
     let axis_distance = |p: Vec3| Vec3::new(p.x, p.y + 0.05, 0.0).length();
     let (mut near, mut far) = (Vec::new(), Vec::new());
     for (v, &p) in dried.points.iter().enumerate() {

@@ -178,8 +178,14 @@ fn bed_head_settles_to_the_same_shape_at_any_time_step_with_the_direct_solver() 
         let out = style(&groom, &recipe::parse(&text, &path).unwrap(), &StyleOptions::default()).unwrap();
         let settle = out.report.stages.last().unwrap().settle.unwrap();
         assert!(settle.converged, "Δt 1/{rate}: {settle:?}");
-        let rest = out.groom.attribute("rest").unwrap().data.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2]));
-        let rest: Vec<Vec3> = rest.collect();
+        let rest: Vec<Vec3> = out
+            .groom
+            .attribute("rest")
+            .unwrap()
+            .floats()
+            .chunks(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
         assert!(out.groom.points.iter().chain(&rest).all(|p| p.is_finite()), "Δt 1/{rate}");
         (out.groom.points, rest)
     };

@@ -92,7 +92,7 @@ fn export_writes_canonical_attributes() {
         let attribute = out.attribute(name).unwrap_or_else(|| panic!("missing {name}"));
         assert_eq!((attribute.rate, attribute.components), (AttributeRate::Vertex, components), "{name}");
     }
-    let hydrogen = &out.attribute("bond_hydrogen").unwrap().data;
+    let hydrogen = &out.attribute("bond_hydrogen").unwrap().floats();
     let range = groom.strand_range(3);
     assert!(hydrogen[range.clone()].iter().all(|&b| b == 0.25));
     assert!(hydrogen[..range.start].iter().chain(&hydrogen[range.end..]).all(|&b| b == 1.0));

@@ -117,7 +117,7 @@ fn run_captured(text: &str, case: &Case, frames_per_second: f32) -> Styled {
 }
 
 fn vec3s(groom: &Groom, attribute: &str) -> Vec<Vec3> {
-    groom.attribute(attribute).unwrap().data.chunks(3).map(Vec3::from_slice).collect()
+    groom.attribute(attribute).unwrap().floats().chunks(3).map(Vec3::from_slice).collect()
 }
 
 fn frame(case: &Case) -> HeadFrame {

@@ -26,12 +26,12 @@ fn style(dir: &Path, name: &str, recipe: &str) -> Groom {
 }
 
 fn attribute_vec3(groom: &Groom, name: &str) -> Vec<Vec3> {
-    groom.attribute(name).unwrap().data.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+    groom.attribute(name).unwrap().floats().chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
 }
 
 /// Mean hydrogen bond rate over a strand's edge pairs (root and tip carry none).
 fn hydrogen(groom: &Groom, strand: usize) -> f32 {
-    let rates = &groom.attribute("bond_hydrogen").unwrap().data;
+    let rates = &groom.attribute("bond_hydrogen").unwrap().floats();
     let range = groom.strand_range(strand);
     let pairs = range.start + 1..range.end - 1;
     let count = pairs.len() as f32;

@@ -108,7 +108,7 @@ fn perm_scene_3_curls_to_the_predicted_radius_and_keeps_a_curl_under_gravity() {
 fn pressed_side_tip_distances(a: &Groom, b: &Groom) -> (f32, f32) {
     let pressed: Vec<usize> = (0..a.strand_count()).filter(|&s| a.strand_points(s)[0].x > 0.02).collect();
     let rest = |g: &Groom| -> Vec<Vec3> {
-        g.attribute("rest").unwrap().data.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+        g.attribute("rest").unwrap().floats().chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
     };
     let mean = |p: &[Vec3], q: &[Vec3]| {
         pressed
@@ -355,8 +355,8 @@ fn frames_time_sample_wetness_bonds_and_rest() {
             // coif's .abc holds the same values at the same frame.
             let options = coif::io::ImportOptions { frame: Some(wet_end), ..Default::default() };
             let abc = coif::io::read_groom(&dir.path().join("anim.abc"), &options).unwrap().groom;
-            assert_eq!(abc.attribute("wetness").unwrap().data, values(&at_end, "wetness"));
-            assert_eq!(abc.attribute("bond_hydrogen").unwrap().data, values(&at_end, "bond_hydrogen"));
+            assert_eq!(abc.attribute("wetness").unwrap().floats(), values(&at_end, "wetness"));
+            assert_eq!(abc.attribute("bond_hydrogen").unwrap().floats(), values(&at_end, "bond_hydrogen"));
         }
     }
 }

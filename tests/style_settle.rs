@@ -109,7 +109,7 @@ max_seconds = 4.0
     let settle = styled.report.stages.last().unwrap().settle.unwrap();
     assert!(settle.converged, "{settle:?}");
     assert!(styled.groom.points.iter().all(|p| p.is_finite()));
-    let after = &styled.groom.attribute(WETNESS).unwrap().data;
+    let after = &styled.groom.attribute(WETNESS).unwrap().floats();
     let changed = after.iter().zip(&wetness).filter(|(a, b)| a != b).count();
     assert_eq!(changed, 0, "{changed} of {} vertices changed wetness while settling", wetness.len());
 }

@@ -217,7 +217,7 @@ fn difference(a: &coif::groom::Groom, b: &coif::groom::Groom) -> Option<String> 
     }
     for (x, y) in a.attributes.iter().zip(&b.attributes) {
         if x != y {
-            return Some(format!("attribute {}: {:?} != {:?}", x.name, x.data, y.data));
+            return Some(format!("attribute {}: {:?} != {:?}", x.name, x.floats(), y.floats()));
         }
     }
     (a != b).then(|| "another field (attribute list, guides, uvs, meshes)".to_string())

@@ -82,7 +82,7 @@ fn assert_pxr_sees(dump: &Value, groom: &Groom) {
         assert_eq!(pv["type"], expected_type, "type of primvar {name}");
         let interpolation = if attribute.rate == AttributeRate::Vertex { "vertex" } else { "uniform" };
         assert_eq!(pv["interpolation"], interpolation, "interpolation of primvar {name}");
-        assert_eq!(f32s(&pv["values"]), attribute.data, "values of primvar {name}");
+        assert_eq!(f32s(&pv["values"]), attribute.floats().into_owned(), "values of primvar {name}");
     }
     let expected_primvars =
         groom.attributes.len() + 1 + groom.guides.is_some() as usize + groom.root_uvs.is_some() as usize;
@@ -306,14 +306,14 @@ fn a_stage_pxr_authored_reads_in_metres_y_up_with_transforms_applied() {
         let color = groom.attribute("color").unwrap();
         assert_eq!(color.rate, AttributeRate::Strand);
         assert_eq!(
-            color.data,
+            color.floats(),
             vec![0.75, 0.5, 0.25, 0.5, 0.25, 0.125, 1.0, 0.0, 0.0],
             "indexed and constant colours"
         );
-        assert_eq!(groom.attribute("wetness").unwrap().data, vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
+        assert_eq!(groom.attribute("wetness").unwrap().floats(), vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]);
         let clump = groom.attribute("clump").unwrap();
         assert_eq!((clump.rate, clump.components), (AttributeRate::Strand, 2), "elementSize 2");
-        assert_eq!(clump.data, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(clump.floats(), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         assert_eq!(groom.guides, Some(vec![false, false, true]));
         assert_eq!(groom.strand_ids, vec![0, 1, 2]);
     }
@@ -495,6 +495,154 @@ fn primvars_widths_are_the_curves_widths_before_widths() {
                 assert!(run.status.success(), "{}", stderr(&run));
                 let back = coif::io::read_groom(&out, &Default::default()).unwrap().groom;
                 assert_eq!(back.widths, per_vertex, "{out:?}");
+            }
+        }
+    }
+}
+
+/// pxr authors a stage with `int[]`, `int64[]`, `uint[]` and `uint64[]` primvars (constant,
+/// uniform, vertex, an `elementSize`) on a BasisCurves and a Mesh, as `.usda` or `.usdc`, and
+/// prints what a stage holds of them as JSON, integers exact.
+const INTEGER_PRIMVARS_PY: &str = r#"
+import json, sys
+from pxr import Sdf, Usd, UsdGeom
+T = Sdf.ValueTypeNames
+# name: (type, interpolation, elementSize, values) on the curves (2 curves, 3 points each) ...
+CURVES = {
+    "i32_uniform": (T.IntArray, "uniform", None, [16777217, -2147483647]),
+    "i32_vertex": (T.IntArray, "vertex", None, [123456789, 16777217, -2147483647, 2147483647, 0, -1]),
+    "i32_constant": (T.IntArray, "constant", None, [16777217]),
+    "i32_sized": (T.IntArray, "uniform", 3, [16777217, 2, 3, 4, 5, 123456789]),
+    "i64_uniform": (T.Int64Array, "uniform", None, [2**40 + 1, -(2**40 + 1)]),
+    "i64_vertex": (T.Int64Array, "vertex", None, [2**40 + 1, 1, 2**62, -(2**62), 16777217, 123456789]),
+    "u32_uniform": (T.UIntArray, "uniform", None, [4000000000, 1]),
+    "u32_constant": (T.UIntArray, "constant", None, [4294967295]),
+    "u64_uniform": (T.UInt64Array, "uniform", None, [2**40 + 1, 2**63 - 1]),
+}
+# ... and on the mesh (one quad).
+MESH = {
+    "region": (T.IntArray, "uniform", None, [16777217]),
+    "m_i64": (T.Int64Array, "vertex", None, [2**40 + 1, -5, 123456789, 2**62]),
+    "m_u32": (T.UIntArray, "constant", None, [4000000000]),
+    "m_u64": (T.UInt64Array, "vertex", None, [2**40 + 1, 0, 7, 2**63 - 1]),
+}
+
+def make(path):
+    st = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageMetersPerUnit(st, 1)
+    UsdGeom.Xform.Define(st, "/groom")
+    st.SetDefaultPrim(st.GetPrimAtPath("/groom"))
+    c = UsdGeom.BasisCurves.Define(st, "/groom/c")
+    c.CreateTypeAttr("linear")
+    c.CreateCurveVertexCountsAttr([3, 3])
+    c.CreatePointsAttr([(s * 0.01, 1.5 + j * 0.01, 0) for s in range(2) for j in range(3)])
+    m = UsdGeom.Mesh.Define(st, "/groom/scalp")
+    m.CreatePointsAttr([(0, 1.5, 0), (1, 1.5, 0), (1, 1.5, 1), (0, 1.5, 1)])
+    m.CreateFaceVertexCountsAttr([4])
+    m.CreateFaceVertexIndicesAttr([0, 1, 2, 3])
+    for prim, table in ((c, CURVES), (m, MESH)):
+        for name, (type_name, interpolation, size, values) in table.items():
+            pv = UsdGeom.PrimvarsAPI(prim).CreatePrimvar(name, type_name, interpolation, size or -1)
+            pv.Set(values)
+    st.GetRootLayer().Export(path)
+
+def dump(path):
+    st = Usd.Stage.Open(path)
+    out = {}
+    for prim_path, table in (("/groom/c", CURVES), ("/groom/scalp", MESH)):
+        api = UsdGeom.PrimvarsAPI(st.GetPrimAtPath(prim_path))
+        for name in table:
+            pv = api.GetPrimvar(name)
+            if not pv:
+                out[name] = None
+                continue
+            out[name] = {
+                "type": str(pv.GetTypeName()),
+                "interpolation": pv.GetInterpolation(),
+                "elementSize": pv.GetElementSize(),
+                "values": [int(x) for v in pv.Get() for x in (v if hasattr(v, "__len__") else [v])],
+            }
+    print(json.dumps(out))
+
+def expected():
+    out = {}
+    for table in (CURVES, MESH):
+        for name, (type_name, interpolation, size, values) in table.items():
+            out[name] = {"type": str(type_name), "interpolation": interpolation, "elementSize": size or 1,
+                         "values": values}
+    print(json.dumps(out))
+
+{"make": make, "dump": dump, "expected": lambda _: expected()}[sys.argv[1]](sys.argv[2] if len(sys.argv) > 2 else None)
+"#;
+
+fn integer_primvars_py(args: &[&str]) -> Value {
+    let output = std::process::Command::new(python())
+        .arg("-c")
+        .arg(INTEGER_PRIMVARS_PY)
+        .args(args)
+        .output()
+        .expect("the project's Python runs");
+    assert!(output.status.success(), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+    if args[0] == "make" {
+        return Value::Null;
+    }
+    serde_json::from_slice(&output.stdout).expect("JSON")
+}
+
+/// Integer primvars went through `f32`: `coif convert` turned 16777217 into 16777216 and
+/// 123456789 into 123456792 (`int[]`, on curves and meshes, to .usda, .usdc and .abc), clamped
+/// `uint[]` 4000000000 and `int64[]` 2^40 to 2147483647, and dropped `int64[]` / `uint64[]` from
+/// `.usda` input altogether (read as four `int6`s), all with exit 0 and no warning. Each keeps
+/// its type, interpolation, `elementSize` and exact values now, as pxr reads the outputs.
+#[test]
+fn integer_primvars_keep_their_type_and_exact_values_through_convert() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let expected = integer_primvars_py(&["expected"]);
+    for input in ["in.usda", "in.usdc"] {
+        integer_primvars_py(&["make", &at(input)]);
+        let abc = at(&format!("{input}.abc"));
+        let mut checked = Vec::new();
+        for output in
+            ["out.usda", "out.usdc"].map(|o| at(&format!("{input}.{o}"))).into_iter().chain([abc.clone()])
+        {
+            let out = coif(&["convert", &at(input), &output]);
+            assert!(out.status.success(), "{input} → {output}: {}", stderr(&out));
+            assert!(!stderr(&out).contains("warning"), "{input} → {output}: {}", stderr(&out));
+            if !output.ends_with(".abc") {
+                checked.push(output);
+            }
+        }
+        // Through Alembic's Int32, Uint32, Int64 and Uint64 parameters and back.
+        let back = at(&format!("{input}.back.usda"));
+        let out = coif(&["convert", &abc, &back]);
+        assert!(
+            out.status.success() && !stderr(&out).contains("warning"),
+            "{abc} → {back}: {}",
+            stderr(&out)
+        );
+        checked.push(back.clone());
+        for path in checked {
+            let seen = integer_primvars_py(&["dump", &path]);
+            for (name, want) in expected.as_object().unwrap() {
+                if path == back && name == "i32_sized" {
+                    // Alembic has no `elementSize`: three ints per curve come back as `int3[]`
+                    // (values exact).
+                    let int3 = serde_json::json!({"type": "int3[]", "elementSize": 1});
+                    assert_eq!(
+                        (&seen[name]["type"], &seen[name]["elementSize"]),
+                        (&int3["type"], &int3["elementSize"])
+                    );
+                    assert_eq!(seen[name]["values"], want["values"], "{path}: primvar '{name}'");
+                    continue;
+                }
+                let mut want = want.clone();
+                if path == back && name.starts_with("u32_constant") | name.starts_with("i32_constant") {
+                    // coif's Alembic curves take a per-curve value for a constant (values exact).
+                    want["interpolation"] = "uniform".into();
+                    want["values"] = serde_json::json!([want["values"][0], want["values"][0]]);
+                }
+                assert_eq!(seen[name], want, "{path}: primvar '{name}'");
             }
         }
     }

@@ -129,10 +129,8 @@ fn interleaved_groups_groom() -> Groom {
         Attribute::new("flag", strand, 1, (0..s).map(|i| (i % 2) as f32).collect())
             .with_kind(AttributeKind::Bool),
     );
-    groom.set_attribute(
-        Attribute::new("count", AttributeRate::Vertex, 1, (0..n).map(|i| i as f32 - 3.0).collect())
-            .with_kind(AttributeKind::Int),
-    );
+    let counts = (0..n as i64).map(|i| i - 3).collect();
+    groom.set_attribute(Attribute::integers("count", AttributeRate::Vertex, 1, counts, AttributeKind::Int));
     groom.set_attribute(
         Attribute::new("nrm", AttributeRate::Vertex, 3, (0..3 * n).map(|i| i as f32 * 0.01).collect())
             .with_kind(AttributeKind::Normal),

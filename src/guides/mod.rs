@@ -209,7 +209,8 @@ pub fn style(
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
     // points, the material frames rebuilt along the children's own curves (as a reader would:
     // the guides' frames follow other edges), the others blended; merged with the guides' own
-    // over every strand. The same for each captured frame of `--frames` output, from that frame's
+    // over every strand. Integer attributes (ids) are no blend: styling leaves them as they
+    // were, the children's their own. The same for each captured frame of `--frames` output, from that frame's
     // guides.
     let carried = |from: &Children,
                    from_pose: &Curves,
@@ -218,15 +219,16 @@ pub fn style(
                    guide_attributes: &[Attribute]| {
         guide_attributes
             .iter()
-            .filter(|a| a.rate == AttributeRate::Vertex)
+            .filter(|a| a.rate == AttributeRate::Vertex && !a.kind.is_integer())
             .map(|attribute| {
+                let values = attribute.floats();
                 let data = if attribute.name == "rest" && attribute.components == 3 {
-                    let rest: Vec<Vec3> = attribute.data.chunks_exact(3).map(Vec3::from_slice).collect();
+                    let rest: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
                     deform::deform(from, from_pose, &posed(rest)).iter().flat_map(|p| p.to_array()).collect()
                 } else if attribute.name == MATERIAL_FRAME {
                     rebuilt_frames(child_points, &children.strand_offsets)
                 } else {
-                    deform::blend_attribute(&bound, after, &attribute.data, attribute.components)
+                    deform::blend_attribute(&bound, after, &values, attribute.components)
                 };
                 let child =
                     Attribute::new(attribute.name.clone(), AttributeRate::Vertex, attribute.components, data);
@@ -312,12 +314,12 @@ fn file_bindings(
             )));
         }
     }
+    let (closest, weights) = (closest.floats(), weights.floats());
     let mut bindings = Vec::with_capacity(children.len());
     for &c in children {
         let mut binding = Binding { guides: [0; GUIDES_PER_CHILD], weights: [0.0; GUIDES_PER_CHILD] };
         for k in 0..GUIDES_PER_CHILD {
-            let (id, weight) =
-                (closest.data[c * GUIDES_PER_CHILD + k], weights.data[c * GUIDES_PER_CHILD + k]);
+            let (id, weight) = (closest[c * GUIDES_PER_CHILD + k], weights[c * GUIDES_PER_CHILD + k]);
             binding.weights[k] = weight;
             // An unweighted entry names nothing (Unreal writes 0 or -1 there).
             if weight == 0.0 {
@@ -451,17 +453,16 @@ fn subset(groom: &Groom, which: &[usize]) -> Groom {
     }
     for attribute in &groom.attributes {
         let c = attribute.components;
-        let data = which
-            .iter()
-            .flat_map(|&s| {
-                let range = match attribute.rate {
-                    AttributeRate::Vertex => groom.strand_range(s),
-                    AttributeRate::Strand => s..s + 1,
-                };
-                attribute.data[range.start * c..range.end * c].iter().copied()
-            })
-            .collect();
-        out.set_attribute(Attribute::new(attribute.name.clone(), attribute.rate, c, data));
+        let mut data = attribute.data.empty_like(0);
+        for &s in which {
+            let range = match attribute.rate {
+                AttributeRate::Vertex => groom.strand_range(s),
+                AttributeRate::Strand => s..s + 1,
+            };
+            data.extend_from(&attribute.data, range.start * c..range.end * c, 1);
+        }
+        let (name, rate, kind) = (attribute.name.clone(), attribute.rate, attribute.kind);
+        out.set_attribute(Attribute { name, rate, components: c, data, kind });
     }
     out
 }
@@ -494,11 +495,12 @@ fn merge_vertex_attribute(
     let c = guide_part.components;
     let mut data = vec![0.0; groom.vertex_count() * c];
     for (which, part) in [(guides, guide_part), (children, child_part)] {
+        let part = part.floats();
         let mut at = 0;
         for &s in which {
             let range = groom.strand_range(s);
             let n = range.len() * c;
-            data[range.start * c..range.end * c].copy_from_slice(&part.data[at..at + n]);
+            data[range.start * c..range.end * c].copy_from_slice(&part[at..at + n]);
             at += n;
         }
     }
@@ -570,10 +572,11 @@ mod tests {
         whole.make_sag_free();
         let expected = whole.state_attributes();
         for name in ["rest", REST_DARBOUX] {
-            let got = subset(&groom, &child_ids).attribute(name).unwrap().data.clone();
-            let want = &expected.iter().find(|a| a.name == name).unwrap().data;
+            let got = subset(&groom, &child_ids).attribute(name).unwrap().floats().into_owned();
+            let want = &expected.iter().find(|a| a.name == name).unwrap().floats();
             assert!(
-                got.len() == want.len() && got.iter().zip(want).all(|(a, b)| a.to_bits() == b.to_bits()),
+                got.len() == want.len()
+                    && got.iter().zip(want.iter()).all(|(a, b)| a.to_bits() == b.to_bits()),
                 "{name}"
             );
         }

@@ -241,11 +241,12 @@ pub fn unsupported(groom: &Groom) -> Vec<String> {
 pub fn write(groom: &Groom, out: &mut dyn Write) -> std::io::Result<()> {
     let vertex_values = |name: &str, components: usize| -> Option<Vec<f32>> {
         let attribute = groom.attribute(name).filter(|a| a.components == components)?;
+        let data = attribute.floats();
         Some(match attribute.rate {
-            AttributeRate::Vertex => attribute.data.clone(),
+            AttributeRate::Vertex => data.into_owned(),
             AttributeRate::Strand => (0..groom.strand_count())
                 .flat_map(|s| {
-                    let value = &attribute.data[s * components..(s + 1) * components];
+                    let value = &data[s * components..(s + 1) * components];
                     std::iter::repeat_n(value, groom.strand_range(s).len()).flatten().copied()
                 })
                 .collect(),

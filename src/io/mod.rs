@@ -334,10 +334,11 @@ fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
         return Err(Error::format(path, "the file holds no strands"));
     }
     for attribute in &groom.attributes {
-        if crate::groom::all_finite(&attribute.data) {
+        let crate::groom::AttributeData::Float(data) = &attribute.data else { continue }; // integers are finite
+        if crate::groom::all_finite(data) {
             continue;
         }
-        if let Some(index) = attribute.data.iter().position(|v| !v.is_finite()) {
+        if let Some(index) = data.iter().position(|v| !v.is_finite()) {
             let element = index / attribute.components.max(1);
             let (rate, strand) = match attribute.rate {
                 crate::groom::AttributeRate::Strand => ("strand", element),
@@ -350,7 +351,7 @@ fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
                 path,
                 format!(
                     "attribute '{}': {rate} {element} (strand {strand}) has a non-finite value {}",
-                    attribute.name, attribute.data[index]
+                    attribute.name, data[index]
                 ),
             ));
         }
@@ -394,7 +395,10 @@ pub(crate) fn width_scale(to_coif: glam::DMat4) -> f32 {
 /// coif's by `to_coif` (see [`transform_values`]). Every reader uses it.
 pub(crate) fn transform_attributes(attributes: &mut [crate::groom::Attribute], to_coif: glam::DMat4) {
     for attribute in attributes.iter_mut() {
-        transform_values(attribute.kind, &attribute.name, attribute.components, &mut attribute.data, to_coif);
+        let (kind, components) = (attribute.kind, attribute.components);
+        if let crate::groom::AttributeData::Float(data) = &mut attribute.data {
+            transform_values(kind, &attribute.name, components, data, to_coif);
+        }
     }
 }
 

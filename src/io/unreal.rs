@@ -9,7 +9,7 @@
 //! `widths`, scaled to centimetres by the file's units.
 use std::path::{Path, PathBuf};
 
-use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveGroup, Groom};
+use crate::groom::{attr, Attribute, AttributeData, AttributeKind, AttributeRate, CurveGroup, Groom};
 
 use super::alembic::curves_write::epic;
 
@@ -23,7 +23,7 @@ pub fn with_root_uvs(groom: &Groom) -> Option<Groom> {
         return None;
     }
     let mut out = groom.clone();
-    out.root_uvs = Some(uv.data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+    out.root_uvs = Some(uv.floats().chunks_exact(2).map(|c| [c[0], c[1]]).collect());
     for group in out.groups.iter_mut().filter(|g| !g.carries(SURFACE_UV)) {
         group.missing.push(CurveGroup::ROOT_UVS.to_string());
     }
@@ -90,6 +90,7 @@ pub fn for_usd(groom: &Groom) -> Groom {
     out.attributes = std::mem::take(&mut out.attributes).into_iter().map(renamed_for_usd).collect();
     // Unreal's USD importer reads int, float, float2 and float3 primvars: int tuples go as floats.
     for attribute in out.attributes.iter_mut().filter(|a| a.kind == AttributeKind::Int && a.components > 1) {
+        attribute.data = AttributeData::Float(attribute.floats().into_owned());
         attribute.kind = AttributeKind::Float;
     }
     // What a group misses, it misses under the new names too.
@@ -101,10 +102,9 @@ pub fn for_usd(groom: &Groom) -> Groom {
     // A groom's own `groom_group_id` (a file's Unreal groups) stays; else each curve group is
     // one (a groom without a group table has no `group_ids`: all its strands are group 0).
     if out.attribute(epic::GROUP_ID).is_none() {
-        let group_ids = (0..out.strand_count()).map(|s| out.group_of(s) as f32).collect();
-        out.set_attribute(
-            Attribute::new(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids).with_kind(AttributeKind::Int),
-        );
+        let group_ids = (0..out.strand_count()).map(|s| out.group_of(s) as i64).collect();
+        let kind = AttributeKind::Int;
+        out.set_attribute(Attribute::integers(epic::GROUP_ID, AttributeRate::Strand, 1, group_ids, kind));
     }
     if let Some(uvs) = &out.root_uvs {
         let data = uvs.iter().flatten().copied().collect();

@@ -25,7 +25,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{
+    Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom, Values,
+};
 use crate::groups::{Interpolation, Strands};
 use crate::io::usda::names;
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
@@ -122,6 +124,12 @@ pub enum Data<'g> {
     Ints {
         values: Cow<'g, [i32]>,
         components: usize,
+    },
+    /// `uint[]`, `int64[]` or `uint64[]` (scalars; `int[]` are [`Data::Ints`]): values as
+    /// integer kind `kind` stores them.
+    WideInts {
+        values: Cow<'g, [i64]>,
+        kind: AttributeKind,
     },
     /// `bool[]` (written as 0 and 1 in text, one byte each in a crate file).
     Bools(Vec<bool>),
@@ -519,23 +527,18 @@ fn invisible<'g>() -> Property<'g> {
 /// A mesh primvar as USD properties: `primvars:NAME` (the mesh's plain `normals` attribute for
 /// unindexed normals), typed by its role, and its `:indices`.
 fn mesh_primvar(primvar: &MeshPrimvar) -> Vec<Property<'_>> {
-    let type_name = usd_type(primvar.kind, &primvar.name, primvar.components);
-    let data = match primvar.kind {
-        AttributeKind::Int if type_name.starts_with("int") => Data::Ints {
-            values: Cow::Owned(primvar.values.iter().map(|&v| v as i32).collect()),
-            components: primvar.components,
-        },
-        AttributeKind::Bool if type_name == "bool[]" => {
-            Data::Bools(primvar.values.iter().map(|&v| v != 0.0).collect())
-        }
-        _ => floats(Cow::Borrowed(&primvar.values), primvar.components),
-    };
+    // Integers of a type without tuples go as a scalar array with `elementSize`.
+    let element_size = (!has_tuples(primvar.kind) && primvar.components > 1).then_some(primvar.components);
+    let type_name = usd_type(primvar.kind, &primvar.name, element_size.map_or(primvar.components, |_| 1));
+    let components = if element_size.is_some() { 1 } else { primvar.components };
+    let data = typed_data(primvar.values.values(), primvar.kind, type_name, components);
     let name = match (primvar.name.as_str(), &primvar.indices) {
         (MeshPrimvar::NORMALS, None) => MeshPrimvar::NORMALS.to_string(),
         (name, _) => format!("primvars:{}", valid_name(name)),
     };
-    let mut properties = vec![Property::new(name.clone(), type_name, Value::Default(data))
-        .interpolated(primvar.interpolation.usd_name())];
+    let property = Property::new(name.clone(), type_name, Value::Default(data))
+        .interpolated(primvar.interpolation.usd_name());
+    let mut properties = vec![Property { element_size, ..property }];
     if let Some(indices) = &primvar.indices {
         let values = Cow::Owned(indices.iter().map(|&i| i as i32).collect());
         properties.push(Property::new(
@@ -613,7 +616,9 @@ fn primvars<'g>(
         }
         // A scalar array with `elementSize` where the file gave one (Houdini's array attributes):
         // `int[]` with three per curve stays so, not `float3[]`.
-        let element_size = (group.element_sized.contains(&attribute.name) && attribute.components > 1)
+        // Integers of a type without tuples (`uint`, `int64`, `uint64`) go so too.
+        let element_size = ((group.element_sized.contains(&attribute.name) || !has_tuples(attribute.kind))
+            && attribute.components > 1)
             .then_some(attribute.components);
         let type_name =
             usd_type(attribute.kind, &attribute.name, element_size.map_or(attribute.components, |_| 1));
@@ -623,22 +628,23 @@ fn primvars<'g>(
         // (Per-curve and constant values made per vertex to merge with another group's
         // per-vertex ones go back as they came while every strand's vertices still agree.)
         let components = attribute.components;
-        let all_equal = |values: &[f32]| values.chunks_exact(components).all(|v| v == &values[..v.len()]);
+        let all_equal = |values: &Values, run: std::ops::Range<usize>| match values {
+            Values::Float(v) => equal_elements(&v[run], components),
+            Values::Int(v) => equal_elements(&v[run], components),
+        };
         let fits = |interpolation| match (interpolation, attribute.rate) {
-            (Interpolation::Constant, AttributeRate::Strand) => {
-                sampled.is_none() && all_equal(&strands.per_strand(&attribute.data, components))
-            }
-            (Interpolation::Constant, AttributeRate::Vertex) => {
-                sampled.is_none() && all_equal(&strands.per_vertex(groom, &attribute.data, components))
+            (Interpolation::Constant, _) => {
+                let values = strands.values(groom, attribute);
+                sampled.is_none() && all_equal(&values, 0..values.len())
             }
             (Interpolation::Uniform, AttributeRate::Vertex) => {
-                let values = strands.per_vertex(groom, &attribute.data, components);
+                let values = strands.values(groom, attribute);
                 let mut runs = strands.counts(groom).into_iter().scan(0, |at, count| {
                     let run = *at..*at + count as usize * components;
                     *at = run.end;
                     Some(run)
                 });
-                sampled.is_none() && runs.all(|run| all_equal(&values[run]))
+                sampled.is_none() && runs.all(|run| all_equal(&values, run))
             }
             (Interpolation::Varying, AttributeRate::Vertex) => {
                 group.basis == CurveBasis::Linear
@@ -706,10 +712,21 @@ fn primvar_data<'g>(
     flat: bool,
 ) -> Data<'g> {
     let components = attribute.components;
-    let mut values = match attribute.rate {
-        AttributeRate::Vertex => strands.per_vertex(groom, &attribute.data, components),
-        AttributeRate::Strand => strands.per_strand(&attribute.data, components),
+    let values = match strands.values(groom, attribute) {
+        Values::Float(values) => Values::Float(taken(values, groom, strands, take, components)),
+        Values::Int(values) => Values::Int(taken(values, groom, strands, take, components)),
     };
+    typed_data(values, attribute.kind, type_name, if flat { 1 } else { components })
+}
+
+/// `take` of a group's values.
+fn taken<'g, T: Clone>(
+    mut values: Cow<'g, [T]>,
+    groom: &Groom,
+    strands: &Strands,
+    take: Take,
+    components: usize,
+) -> Cow<'g, [T]> {
     match take {
         Take::Every => {}
         Take::First => values.to_mut().truncate(components),
@@ -723,17 +740,39 @@ fn primvar_data<'g>(
             values = Cow::Owned(firsts.collect());
         }
     }
-    let components = if flat { 1 } else { components };
-    match attribute.kind {
+    values
+}
+
+/// Whether every element (`components` values) equals the first.
+fn equal_elements<T: PartialEq>(values: &[T], components: usize) -> bool {
+    values.chunks_exact(components).all(|v| v == &values[..v.len()])
+}
+
+/// Values of kind `kind` as `type_name` (see [`usd_type`]) holds them: integers exactly in their
+/// own type (each in its range: `Groom::validate` checks), flags as bools, else floats.
+fn typed_data<'g>(values: Values<'g>, kind: AttributeKind, type_name: &str, components: usize) -> Data<'g> {
+    match values {
+        Values::Int(values) => match kind {
+            AttributeKind::UInt | AttributeKind::Int64 | AttributeKind::UInt64 => {
+                Data::WideInts { values, kind }
+            }
+            _ if type_name.starts_with("int") => {
+                Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
+            }
+            // coif's guide binding goes as floats (see `usd_type`).
+            _ => floats(Values::Int(values).floats(kind), components),
+        },
         // Bool tuples have no USD type: they go as floats (see `usd_type`).
-        AttributeKind::Int if type_name.starts_with("int") => {
-            Data::Ints { values: Cow::Owned(values.iter().map(|&v| v as i32).collect()), components }
-        }
-        AttributeKind::Bool if type_name == "bool[]" => {
+        Values::Float(values) if kind == AttributeKind::Bool && type_name == "bool[]" => {
             Data::Bools(values.iter().map(|&v| v != 0.0).collect())
         }
-        _ => floats(values, components),
+        Values::Float(values) => floats(values, components),
     }
+}
+
+/// Whether USD has tuples of the kind's type (`int3`, `float3`; no `uint3`, `int64_3`).
+fn has_tuples(kind: AttributeKind) -> bool {
+    !matches!(kind, AttributeKind::UInt | AttributeKind::Int64 | AttributeKind::UInt64)
 }
 
 /// The USD array type an attribute is written as: its kind's, or for plain floats the type coif
@@ -743,6 +782,9 @@ pub(crate) fn usd_type(kind: AttributeKind, name: &str, components: usize) -> &'
     let by_size = |types: [&'static str; 4]| types[components.clamp(1, 4) - 1];
     match kind {
         AttributeKind::Int if components == 1 => "int[]",
+        AttributeKind::UInt => "uint[]",
+        AttributeKind::Int64 => "int64[]",
+        AttributeKind::UInt64 => "uint64[]",
         // A file's int pairs to quadruples stay ints. coif's guide binding goes as `float3[]`
         // whatever came in: Blender and Unreal's USD importers drop `int3[]` (README).
         AttributeKind::Int if name != crate::guides::CLOSEST_GUIDES => {

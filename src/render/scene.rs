@@ -208,7 +208,7 @@ fn pigment_values(
         )));
     }
     let mut values = Vec::with_capacity(a.data.len() / a.components * components);
-    for (element, chunk) in a.data.chunks(a.components).enumerate() {
+    for (element, chunk) in a.floats().chunks(a.components).enumerate() {
         for &v in &chunk[..components] {
             if !(v >= range.0 && v <= range.1) {
                 let strand = match a.rate {
@@ -313,7 +313,8 @@ impl<'d> RenderScene<'d> {
         };
         let transparency = groom
             .attribute(attr::TRANSPARENCY)
-            .filter(|a| a.components == 1 && a.rate == AttributeRate::Vertex);
+            .filter(|a| a.components == 1 && a.rate == AttributeRate::Vertex)
+            .map(|a| a.floats());
         let mut opacity_needed = transparency.is_some();
         let mut points = Vec::with_capacity(groom.vertex_count());
         let mut opacity = Vec::with_capacity(groom.vertex_count());
@@ -331,8 +332,8 @@ impl<'d> RenderScene<'d> {
                 }
             }
             let mut alpha = if radius > 0.0 { true_radius / radius } else { 1.0 };
-            if let Some(t) = transparency {
-                alpha *= (1.0 - t.data[i]).clamp(0.0, 1.0);
+            if let Some(t) = &transparency {
+                alpha *= (1.0 - t[i]).clamp(0.0, 1.0);
             }
             points.push([p.x, p.y, p.z, radius]);
             opacity.push(alpha);
@@ -624,7 +625,7 @@ impl AttributeView {
                 if known.is_empty() { "none".to_string() } else { known.join(", ") }
             ))
         })?;
-        let first: Vec<f32> = a.data.chunks(a.components).map(|c| c[0]).collect();
+        let first: Vec<f32> = a.floats().chunks(a.components).map(|c| c[0]).collect();
         Ok(match a.rate {
             AttributeRate::Vertex => AttributeView::Vertex(first),
             AttributeRate::Strand => AttributeView::Strand(first),

@@ -127,7 +127,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
 pub(crate) fn carry_groom_water(sim: &mut Simulation, groom: &Groom) {
     if let Some(wetness) = groom.attribute(WETNESS) {
         if wetness.rate == AttributeRate::Vertex && wetness.components == 1 {
-            carry_water(sim, &wetness.data, &WetnessParams::default());
+            carry_water(sim, &wetness.floats(), &WetnessParams::default());
         }
     }
 }

@@ -312,13 +312,14 @@ fn check_fractions(groom: &Groom) -> Result<()> {
         }
         // Up to round-off: a blend of rates (children's, interpolated from guides) lands a few
         // ulps past 1, and is clamped as any rate is.
-        if let Some(vertex) = attribute.data.iter().position(|v| !(-1e-5..=1.0 + 1e-5).contains(v)) {
+        let values = attribute.floats();
+        if let Some(vertex) = values.iter().position(|v| !(-1e-5..=1.0 + 1e-5).contains(v)) {
             let (strand, index) = groom.strand_and_vertex(vertex);
             return Err(Error::Groom(crate::groom::GroomError::BadAttribute {
                 name: name.to_string(),
                 problem: format!(
                     "strand {strand}, vertex {index}: {} is outside [0, 1] (a fraction)",
-                    crate::validate::shortest(attribute.data[vertex].into())
+                    crate::validate::shortest(values[vertex].into())
                 ),
             }));
         }
@@ -352,7 +353,7 @@ impl Simulation {
                         problem: "must be one float per vertex to drive bond rates".into(),
                     }));
                 }
-                let rates = attribute.data.clone();
+                let rates = attribute.floats().into_owned();
                 sim.set_bond_rates_with(kind, |vertex| rates[vertex]);
             }
         }

@@ -57,14 +57,14 @@ impl Simulation {
         else {
             return Ok(false);
         };
-        if let Some(i) = attribute.data.iter().position(|v| !v.is_finite()) {
+        let values = attribute.floats();
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
             return Err(bad_attribute(REST_DARBOUX, format!("vertex {} is not finite", i / 3)));
         }
         // The vector part of a unit turn (`darboux_canonical`): at most 1 long, up to round-off
         // (1e30 once went into the bonds' memory and the rods overflowed within a step).
         let length = |c: &[f32]| Vec3::from_slice(c).as_dvec3().length();
-        if let Some((i, c)) = attribute.data.chunks_exact(3).enumerate().find(|(_, c)| length(c) > 1.0 + 1e-3)
-        {
+        if let Some((i, c)) = values.chunks_exact(3).enumerate().find(|(_, c)| length(c) > 1.0 + 1e-3) {
             return Err(bad_attribute(
                 REST_DARBOUX,
                 format!(
@@ -74,8 +74,7 @@ impl Simulation {
                 ),
             ));
         }
-        let mut shape: Vec<Vec3> = attribute
-            .data
+        let mut shape: Vec<Vec3> = values
             .chunks_exact(3)
             .enumerate()
             .map(|(i, c)| if self.rods.is_pair_centre(i) { Vec3::new(c[0], c[1], c[2]) } else { Vec3::ZERO })
@@ -114,7 +113,7 @@ impl Simulation {
             return Ok(None);
         };
         attribute
-            .data
+            .floats()
             .chunks_exact(4)
             .enumerate()
             .map(|(i, c)| {
@@ -333,13 +332,14 @@ mod tests {
         let frames = edited.attributes.iter_mut().find(|a| a.name == MATERIAL_FRAME).unwrap();
         // Every frame twisted about its edge (still a valid state), then strand 0's second edge
         // frame turned a quarter turn off its edge.
-        for q in frames.data.chunks_exact_mut(4) {
+        let data = frames.floats_mut().unwrap();
+        for q in data.chunks_exact_mut(4) {
             let twisted = Quat::from_slice(q) * Quat::from_rotation_z(0.3);
             q.copy_from_slice(&twisted.to_array());
         }
-        let twisted: Vec<Quat> = frames.data.chunks_exact(4).map(Quat::from_slice).collect();
+        let twisted: Vec<Quat> = data.chunks_exact(4).map(Quat::from_slice).collect();
         let turned = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2) * twisted[1];
-        frames.data[4..8].copy_from_slice(&turned.to_array());
+        data[4..8].copy_from_slice(&turned.to_array());
         let mut read = Simulation::new(&edited, SimParams::default()).unwrap();
         assert!(read.adopt_rest_state(&edited).unwrap());
         let edited_strand = read.rods.strand_range(0);
@@ -350,7 +350,7 @@ mod tests {
         }
 
         let frames = edited.attributes.iter_mut().find(|a| a.name == MATERIAL_FRAME).unwrap();
-        frames.data[12] = 2.0;
+        frames.floats_mut().unwrap()[12] = 2.0;
         let message = Simulation::new(&edited, SimParams::default())
             .unwrap()
             .adopt_rest_state(&edited)

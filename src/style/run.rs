@@ -417,7 +417,7 @@ impl Session {
         let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
         let n = groom.vertex_count();
         let wetness = match groom.attribute(wetness::WETNESS) {
-            Some(a) if a.rate == AttributeRate::Vertex && a.components == 1 => a.data.clone(),
+            Some(a) if a.rate == AttributeRate::Vertex && a.components == 1 => a.floats().into_owned(),
             _ => vec![0.0; n],
         };
         let contacts = recipe.contacts.hair_hair.then(|| {

@@ -423,6 +423,35 @@ impl<'a> Sampled<'a> {
         Ok(values)
     }
 
+    /// Sample `index` of an integer property as `i64` values, exactly (a `uint64`'s as its bits:
+    /// see `AttributeKind::UInt64`).
+    pub fn read_i64(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<i64>> {
+        let bytes = self.sample_bytes(ogawa, index)?;
+        let size = self.pod.size();
+        let integer = matches!(
+            self.pod,
+            Pod::U8 | Pod::I8 | Pod::U16 | Pod::I16 | Pod::U32 | Pod::I32 | Pod::U64 | Pod::I64
+        );
+        if !integer || bytes.len() % (size * self.extent as usize) != 0 {
+            return fail(format!(
+                "{} is {}×{} ({} bytes), integers expected",
+                self.name,
+                self.pod.name(),
+                self.extent,
+                bytes.len()
+            ));
+        }
+        let pod = self.pod;
+        Ok(bytes
+            .chunks_exact(size)
+            .map(|b| match pod {
+                Pod::U64 | Pod::I64 => i64::from_le_bytes(b.try_into().unwrap()),
+                // The narrower integers are exact as f64.
+                _ => pod_to_f64(pod, b) as i64,
+            })
+            .collect())
+    }
+
     /// Sample `index` as f32 values (other numeric PODs are converted).
     pub fn read_f32(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<f32>> {
         let mut out = Vec::new();

@@ -7,9 +7,11 @@ use rayon::prelude::*;
 
 use super::archive_read::{Archive, Compound, Object, Property, Sampled};
 use super::curves_write::{epic, CURVE_SCHEMA, VISIBILITY_HIDDEN, VISIBLE, XFORM_SCHEMA};
-use super::ogawa::{OgawaError, OgawaResult};
+use super::ogawa::{OgawaError, OgawaReader, OgawaResult};
 use super::types::Pod;
-use crate::groom::{Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{
+    Attribute, AttributeData, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
+};
 use crate::groups::Interpolation;
 use crate::surface_mesh::{MeshInterpolation, MeshPrimvar, SurfaceMesh};
 use crate::{point_attributes, primvar_rates};
@@ -328,7 +330,13 @@ impl<'a> CurvesArchive<'a> {
         let fail_here =
             |message: String| OgawaError(format!("{}: geometry parameter '{name}': {message}", mesh.path));
         vals.expect(NUMERIC, extent)?;
-        let values = vals.read_f32(ogawa, self.index_at(vals, time))?;
+        let kind = kind.unwrap_or_else(|| param_kind(property, extent));
+        let index = self.index_at(vals, time);
+        let values = if kind.is_integer() {
+            AttributeData::Int(vals.read_i64(ogawa, index)?)
+        } else {
+            AttributeData::Float(vals.read_f32(ogawa, index)?)
+        };
         let indices = match indices {
             None => None,
             Some(indices) => {
@@ -350,7 +358,6 @@ impl<'a> CurvesArchive<'a> {
             .find(|i| i.count(mesh) == count)
             .unwrap_or(MeshInterpolation::Vertex),
         };
-        let kind = kind.unwrap_or_else(|| param_kind(property, extent));
         Ok(Some(MeshPrimvar { name, kind, components: extent as usize, interpolation, values, indices }))
     }
 
@@ -551,7 +558,20 @@ impl<'a> CurvesArchive<'a> {
                     continue;
                 }
             }
-            let param = self.expand(member, time, &strands, extent, path)?;
+            let kind = param_kind(member, extent);
+            if kind.is_integer() && !matches!(name, epic::ID | epic::GUIDE) {
+                // Integers stay integers (the file's ids): past 2^24 `f32` rounds them.
+                let param = self.expand::<i64>(member, time, &strands, extent, path)?;
+                // One value for the whole object: the object is the group (coif writes that).
+                if name == epic::GROUP_ID && param.values.windows(2).all(|w| w[0] == w[1]) {
+                    continue;
+                }
+                let canonical = crate::io::unreal::attribute_for_epic_name(name);
+                let (rate, data) = param.into_attribute(&strands);
+                groom.set_attribute(Attribute::integers(canonical, rate, extent as usize, data, kind));
+                continue;
+            }
+            let param = self.expand::<f32>(member, time, &strands, extent, path)?;
             match name {
                 epic::ID => groom.strand_ids = param.to_strands(&strands).iter().map(|&v| v as u32).collect(),
                 epic::GUIDE => {
@@ -561,11 +581,7 @@ impl<'a> CurvesArchive<'a> {
                 epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
                     let canonical = crate::io::unreal::attribute_for_epic_name(name);
-                    let (rate, data) = match param.rate {
-                        Rate::Vertex => (AttributeRate::Vertex, param.values),
-                        _ => (AttributeRate::Strand, param.to_strands(&strands)),
-                    };
-                    let kind = param_kind(member, extent);
+                    let (rate, data) = param.into_attribute(&strands);
                     let mut attribute =
                         Attribute::new(canonical, rate, extent as usize, data).with_kind(kind);
                     crate::io::transform_attributes(std::slice::from_mut(&mut attribute), matrix);
@@ -650,14 +666,14 @@ impl<'a> CurvesArchive<'a> {
 
     /// A geometry parameter (plain array or indexed `.vals`/`.indices` compound) at `time`,
     /// expanded through its indices, with its rate from `geoScope` or, failing that, its count.
-    fn expand(
+    fn expand<T: ParamNumber>(
         &self,
         property: &Property<'a>,
         time: f64,
         strands: &Strands<'_>,
         extent: u8,
         path: &str,
-    ) -> OgawaResult<Param> {
+    ) -> OgawaResult<Param<T>> {
         let mut values = Vec::new();
         let (rate, _) = self.expand_into(property, time, strands, extent, path, &mut values)?;
         Ok(Param { values, extent: extent as usize, rate })
@@ -667,21 +683,21 @@ impl<'a> CurvesArchive<'a> {
     /// [`Rate::Vertex`], `var` values spread onto the vertices), so a reader can put them where
     /// they belong without a second copy; with the rate the file gave, when not per vertex
     /// (what a writer gives back).
-    fn expand_into(
+    fn expand_into<T: ParamNumber>(
         &self,
         property: &Property<'a>,
         time: f64,
         strands: &Strands<'_>,
         extent: u8,
         path: &str,
-        out: &mut Vec<f32>,
+        out: &mut Vec<T>,
     ) -> OgawaResult<(Rate, Option<Interpolation>)> {
         let ogawa = &self.archive.ogawa;
         let start = out.len();
         let (metadata_scope, name) = match property {
             Property::Sampled(s) => {
                 s.expect(NUMERIC, extent)?;
-                s.append_f32(ogawa, self.index_at(s, time), out)?;
+                T::append(s, ogawa, self.index_at(s, time), out)?;
                 (s.metadata.get("geoScope").map(str::to_string), s.name.clone())
             }
             Property::Compound(c) => {
@@ -689,7 +705,8 @@ impl<'a> CurvesArchive<'a> {
                     .sampled(".vals")
                     .ok_or_else(|| OgawaError(format!("{path}: {} has no .vals", c.name)))?;
                 vals.expect(NUMERIC, extent)?;
-                let raw = vals.read_f32(ogawa, self.index_at(vals, time))?;
+                let mut raw = Vec::new();
+                T::append(vals, ogawa, self.index_at(vals, time), &mut raw)?;
                 match c.sampled(".indices") {
                     Some(indices) => {
                         let indices = indices
@@ -869,15 +886,57 @@ enum Rate {
     Vertex,
 }
 
-struct Param {
+/// Numbers a geometry parameter is read as: floats (any numeric POD converted), or integers
+/// exactly (integer PODs).
+trait ParamNumber: primvar_rates::Spread {
+    fn append(
+        property: &Sampled<'_>,
+        ogawa: &OgawaReader<'_>,
+        index: u32,
+        out: &mut Vec<Self>,
+    ) -> OgawaResult<()>;
+}
+
+impl ParamNumber for f32 {
+    fn append(
+        property: &Sampled<'_>,
+        ogawa: &OgawaReader<'_>,
+        index: u32,
+        out: &mut Vec<f32>,
+    ) -> OgawaResult<()> {
+        property.append_f32(ogawa, index, out)
+    }
+}
+
+impl ParamNumber for i64 {
+    fn append(
+        property: &Sampled<'_>,
+        ogawa: &OgawaReader<'_>,
+        index: u32,
+        out: &mut Vec<i64>,
+    ) -> OgawaResult<()> {
+        out.extend(property.read_i64(ogawa, index)?);
+        Ok(())
+    }
+}
+
+struct Param<T = f32> {
     /// Per-vertex values when `rate` is `Vertex` (`var` values spread onto the vertices).
-    values: Vec<f32>,
+    values: Vec<T>,
     extent: usize,
     rate: Rate,
 }
 
-impl Param {
-    fn into_vertices(self, strands: &Strands<'_>) -> Vec<f32> {
+impl<T: Copy> Param<T> {
+    /// A groom attribute's rate and values: per vertex, else per strand.
+    fn into_attribute(self, strands: &Strands<'_>) -> (AttributeRate, Vec<T>) {
+        match self.rate {
+            Rate::Vertex => (AttributeRate::Vertex, self.values),
+            _ => (AttributeRate::Strand, self.to_strands(strands)),
+        }
+    }
+
+    fn into_vertices(self, strands: &Strands<'_>) -> Vec<T> {
         match self.rate {
             Rate::Vertex => self.values,
             Rate::Constant => self.values.repeat(strands.vertex_count()),
@@ -889,7 +948,7 @@ impl Param {
         }
     }
 
-    fn to_strands(&self, strands: &Strands<'_>) -> Vec<f32> {
+    fn to_strands(&self, strands: &Strands<'_>) -> Vec<T> {
         match self.rate {
             Rate::Strand => self.values.clone(),
             Rate::Constant => self.values.repeat(strands.strand_count()),
@@ -898,7 +957,7 @@ impl Param {
     }
 
     /// Per-strand values, taking a per-vertex parameter at each strand's root.
-    fn to_strand_roots(&self, strands: &Strands<'_>) -> Vec<f32> {
+    fn to_strand_roots(&self, strands: &Strands<'_>) -> Vec<T> {
         match self.rate {
             Rate::Vertex => (0..strands.strand_count())
                 .flat_map(|s| {
@@ -941,9 +1000,10 @@ fn param_kind(property: &Property<'_>, extent: u8) -> AttributeKind {
     };
     let kind = match (pod, interpretation.as_deref(), extent) {
         (Pod::Bool, _, 1) => AttributeKind::Bool,
-        (Pod::I8 | Pod::U8 | Pod::I16 | Pod::U16 | Pod::I32 | Pod::U32 | Pod::I64 | Pod::U64, _, _) => {
-            AttributeKind::Int
-        }
+        (Pod::I8 | Pod::U8 | Pod::I16 | Pod::U16 | Pod::I32, _, _) => AttributeKind::Int,
+        (Pod::U32, _, _) => AttributeKind::UInt,
+        (Pod::I64, _, _) => AttributeKind::Int64,
+        (Pod::U64, _, _) => AttributeKind::UInt64,
         (Pod::F16 | Pod::F32 | Pod::F64, Some("point"), 3) => AttributeKind::Point,
         (Pod::F16 | Pod::F32 | Pod::F64, Some("normal"), 3) => AttributeKind::Normal,
         (Pod::F16 | Pod::F32 | Pod::F64, Some("vector"), 3) => AttributeKind::Vector,

@@ -14,7 +14,10 @@ use super::archive_write::{ArchiveWriter, CompoundId, ObjectId, PropertyId};
 use super::curves_read::POLYMESH_SCHEMA;
 use super::murmur3::sample_key;
 use super::types::{MetaData, Pod, TimeSampling};
-use crate::groom::{attr, Attribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom};
+use crate::groom::{
+    attr, Attribute, AttributeData, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
+    Values,
+};
 use crate::groups::{Interpolation, Strands};
 use crate::surface_mesh::{MeshPrimvar, SurfaceMesh};
 use crate::{point_attributes, primvar_rates};
@@ -157,7 +160,7 @@ struct GroupPart<'g> {
     guides: Option<Cow<'g, [bool]>>,
     root_uvs: Option<Cow<'g, [[f32; 2]]>>,
     /// The attributes the group carries, with its strands' values.
-    attributes: Vec<(&'g Attribute, Cow<'g, [f32]>)>,
+    attributes: Vec<(&'g Attribute, Values<'g>)>,
 }
 
 impl<'g> GroupPart<'g> {
@@ -167,13 +170,7 @@ impl<'g> GroupPart<'g> {
             .attributes
             .iter()
             .filter(|a| group.carries(&a.name))
-            .map(|a| {
-                let data = match a.rate {
-                    AttributeRate::Strand => strands.per_strand(&a.data, a.components),
-                    AttributeRate::Vertex => strands.per_vertex(groom, &a.data, a.components),
-                };
-                (a, data)
-            })
+            .map(|a| (a, strands.values(groom, a)))
             .collect();
         GroupPart {
             points: strands.per_vertex(groom, &groom.points, 1),
@@ -196,8 +193,8 @@ impl<'g> GroupPart<'g> {
     }
 
     /// Attribute `name` and its values.
-    fn attribute(&self, name: &str) -> Option<(&'g Attribute, &[f32])> {
-        self.attributes.iter().find(|(a, _)| a.name == name).map(|(a, data)| (*a, &data[..]))
+    fn attribute(&self, name: &str) -> Option<(&'g Attribute, &Values<'g>)> {
+        self.attributes.iter().find(|(a, _)| a.name == name).map(|(a, data)| (*a, data))
     }
 }
 
@@ -548,11 +545,14 @@ pub(crate) fn interpretation(kind: AttributeKind, name: &str, components: usize)
     }
 }
 
-/// The POD an attribute is written as: int32 for ints (and for the names Unreal wants as ints),
-/// bool for flags, else float32.
+/// The POD an attribute is written as: its integer kind's (int32 also for the names Unreal wants
+/// as ints), bool for flags, else float32.
 pub(crate) fn pod(kind: AttributeKind, name: &str) -> Pod {
     match kind {
         AttributeKind::Int => Pod::I32,
+        AttributeKind::UInt => Pod::U32,
+        AttributeKind::Int64 => Pod::I64,
+        AttributeKind::UInt64 => Pod::U64,
         AttributeKind::Bool => Pod::Bool,
         _ if written_as_int32(name) => Pod::I32,
         _ => Pod::F32,
@@ -784,7 +784,8 @@ fn overflow_when_scaled(groom: &Groom, scale: f32) -> Option<String> {
         return beyond(format!("strand {strand}, vertex {vertex}: the width"), groom.widths[i]);
     }
     // `rest` is a position too, scaled with the points.
-    if let Some(v) = groom.attribute("rest").and_then(|a| a.data.iter().copied().find(|&v| overflows(v))) {
+    if let Some(v) = groom.attribute("rest").and_then(|a| a.floats().iter().copied().find(|&v| overflows(v)))
+    {
         return beyond("attribute 'rest': a coordinate".into(), v.abs());
     }
     for mesh in &groom.meshes {
@@ -861,10 +862,13 @@ fn add_mesh_param<W: Write + Seek>(
         extent,
         interpretation(primvar.kind, &primvar.name, primvar.components),
     );
-    let bytes: Vec<u8> = match pod {
-        Pod::I32 => primvar.values.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect(),
-        Pod::Bool => primvar.values.iter().map(|&v| (v != 0.0) as u8).collect(),
-        _ => bytemuck::cast_slice(&primvar.values).to_vec(),
+    let bytes: Vec<u8> = match &primvar.values {
+        AttributeData::Int(values) => int_bytes(values, pod),
+        AttributeData::Float(values) => match pod {
+            Pod::I32 => values.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect(),
+            Pod::Bool => values.iter().map(|&v| (v != 0.0) as u8).collect(),
+            _ => bytemuck::cast_slice(values).to_vec(),
+        },
     };
     // The UV set's name goes where Blender writes and reads it (its importer names the map so).
     let metadata = if name == "uv" && crate::surface_mesh::is_identifier(&primvar.name) {
@@ -1010,6 +1014,10 @@ fn param_bytes<'g>(
                 _ => 1.0,
             };
             let elements = (data.len() / a.components.max(1)) as u64;
+            let data = match data {
+                Values::Int(values) => return (Cow::Owned(int_bytes(values, pod(a.kind, name))), elements),
+                Values::Float(data) => data,
+            };
             match pod(a.kind, name) {
                 Pod::I32 => {
                     (Cow::Owned(data.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect()), elements)
@@ -1018,5 +1026,16 @@ fn param_bytes<'g>(
                 _ => (floats(data, factor), elements),
             }
         }
+    }
+}
+
+/// Integers as an integer kind stores them, as the bytes of its POD ([`pod`]); the kind holds
+/// each value (`Groom::validate` checks), so none is cut.
+fn int_bytes(values: &[i64], pod: Pod) -> Vec<u8> {
+    match pod {
+        Pod::I32 => values.iter().flat_map(|&v| (v as i32).to_le_bytes()).collect(),
+        Pod::U32 => values.iter().flat_map(|&v| (v as u32).to_le_bytes()).collect(),
+        Pod::I64 | Pod::U64 => values.iter().flat_map(|&v| v.to_le_bytes()).collect(),
+        _ => unreachable!("integer attributes are written as integer PODs"),
     }
 }

@@ -93,8 +93,12 @@ pub enum Kind {
 }
 
 pub fn type_info(type_name: &str) -> (Kind, usize) {
+    // A trailing 2–4 is a tuple size only after a tuple's base: `int64` is one 64-bit integer,
+    // not four `int6`s.
     let (base, components) = match type_name.as_bytes().last() {
-        Some(&d @ b'2'..=b'4') => (&type_name[..type_name.len() - 1], (d - b'0') as usize),
+        Some(&d @ b'2'..=b'4') if !matches!(type_name, "int64" | "uint64") => {
+            (&type_name[..type_name.len() - 1], (d - b'0') as usize)
+        }
         _ => (type_name, 1),
     };
     match (base, components) {
@@ -1299,6 +1303,15 @@ impl Layer {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn type_info_reads_64_bit_integers_as_one_integer() {
+        assert_eq!(type_info("int64"), (Kind::Int, 1));
+        assert_eq!(type_info("uint64"), (Kind::Int, 1));
+        assert_eq!(type_info("int4"), (Kind::Int, 4));
+        assert_eq!(type_info("half2"), (Kind::F32, 2));
+        assert_eq!(type_info("point3f"), (Kind::F32, 3));
+    }
 
     /// A stage whose points span many read windows, with comments holding `)`, `,` and `]`.
     fn big_stage(bad_at: Option<usize>) -> (String, Vec<Vec3>, usize) {

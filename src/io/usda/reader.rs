@@ -9,7 +9,8 @@ use super::parser::{Attribute, FileArray, FileArrays, Layer, Prim, Site, Value};
 use super::{names, SiteFiles, DEFAULT_WIDTH};
 use crate::error::{Error, Result};
 use crate::groom::{
-    Attribute as GroomAttribute, AttributeKind, AttributeRate, CurveBasis, CurveGroup, CurveWrap, Groom,
+    Attribute as GroomAttribute, AttributeData, AttributeKind, AttributeRate, CurveBasis, CurveGroup,
+    CurveWrap, Groom,
 };
 use crate::groups::Interpolation;
 use crate::io::alembic::curves_write::epic;
@@ -700,19 +701,8 @@ impl Walker<'_> {
                 (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
             let Some(value) = take_value(attr, time) else { continue };
             let value = self.read(value).map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
-            // Strand ids one per curve, as integers: through `f32` ids past 2^24 would round.
-            if let (names::GROOM_ID, "uniform", None, Value::Int(ids)) =
-                (name.as_str(), interpolation.as_str(), &indices, &value)
-            {
-                if ids.len() == counts.len() {
-                    let ids = ids.iter().map(|&v| u32::try_from(v).ok()).collect::<Option<_>>();
-                    curves.strand_ids = Some(ids.ok_or_else(|| {
-                        at_prim(site, "groom_id values must be non-negative integers".into())
-                    })?);
-                    continue;
-                }
-            }
-            let Some(mut values) = value.into_f32() else { continue }; // strings, tokens: not groom data
+            let Some(values) = attribute_data(value, &type_name) else { continue }; // strings, tokens
+
             if !is_primvar && values.is_empty() {
                 continue; // an empty `velocities` or `normals`: none, as pxr reads it
             }
@@ -720,39 +710,56 @@ impl Walker<'_> {
             if components > 4 {
                 continue; // the groom model carries at most 4 components per element
             }
+            let mut values = values;
             if let Some(indices) = indices {
                 let indices =
                     indices.ok_or_else(|| at_prim(site, format!("primvars:{name}:indices must be int[]")))?;
-                values = expand_indices(&values, &indices, components)
-                    .map_err(|m| at_prim(site, format!("primvars:{name}:indices: {m}")))?;
+                values = match values {
+                    AttributeData::Float(v) => {
+                        expand_indices(&v, &indices, components).map(AttributeData::Float)
+                    }
+                    AttributeData::Int(v) => expand_indices(&v, &indices, components).map(AttributeData::Int),
+                }
+                .map_err(|m| at_prim(site, format!("primvars:{name}:indices: {m}")))?;
             }
-            let (rate, data) = layout
-                .resolve(values, components, &interpolation)
-                .map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
+            let (rate, data) = match values {
+                AttributeData::Float(v) => {
+                    layout.resolve(v, components, &interpolation).map(|(r, d)| (r, d.into()))
+                }
+                AttributeData::Int(v) => {
+                    layout.resolve(v, components, &interpolation).map(|(r, d)| (r, AttributeData::Int(d)))
+                }
+            }
+            .map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
+            let floats = || data.floats(integer_kind(&type_name).unwrap_or_default());
             match (name.as_str(), rate, components) {
                 (names::ST, AttributeRate::Strand, 2) => {
-                    curves.root_uvs = Some(data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+                    curves.root_uvs = Some(floats().chunks_exact(2).map(|c| [c[0], c[1]]).collect());
                 }
                 (names::GROOM_ID, AttributeRate::Strand, 1) => {
-                    let ids = data
-                        .iter()
-                        .map(|&v| (v >= 0.0 && v.fract() == 0.0).then_some(v as u32))
-                        .collect::<Option<_>>();
+                    let ids = match &data {
+                        AttributeData::Int(ids) => {
+                            ids.iter().map(|&v| u32::try_from(v).ok()).collect::<Option<_>>()
+                        }
+                        AttributeData::Float(ids) => {
+                            ids.iter().map(|&v| (v >= 0.0 && v.fract() == 0.0).then_some(v as u32)).collect()
+                        }
+                    };
                     curves.strand_ids = Some(ids.ok_or_else(|| {
                         at_prim(site, "groom_id values must be non-negative integers".into())
                     })?);
                 }
                 (names::GROOM_GUIDE, AttributeRate::Strand, 1) => {
-                    curves.guides = Some(data.iter().map(|&v| v != 0.0).collect());
+                    curves.guides = Some(floats().iter().map(|&v| v != 0.0).collect());
                 }
                 // Unreal's root UVs (`--unreal` writes them beside `st`, which wins).
                 (epic::ROOT_UV, AttributeRate::Strand, 2) => {
                     if !has_st {
-                        curves.root_uvs = Some(data.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+                        curves.root_uvs = Some(floats().chunks_exact(2).map(|c| [c[0], c[1]]).collect());
                     }
                 }
                 // One group id for the whole prim: the prim is the group (`--unreal` writes that).
-                (epic::GROUP_ID, AttributeRate::Strand, 1) if data.windows(2).all(|w| w[0] == w[1]) => {}
+                (epic::GROUP_ID, AttributeRate::Strand, 1) if all_same(&data) => {}
                 _ => {
                     // Epic's names as in Alembic: a `--unreal` stage reads back as coif wrote it.
                     let groom_name =
@@ -769,9 +776,7 @@ impl Walker<'_> {
                     if kind_components == 1 && element_size > 1 {
                         curves.element_sized.push(groom_name.clone());
                     }
-                    curves
-                        .attributes
-                        .push(GroomAttribute::new(groom_name, rate, components, data).with_kind(kind));
+                    curves.attributes.push(GroomAttribute { name: groom_name, rate, components, data, kind });
                 }
             }
         }
@@ -808,7 +813,7 @@ fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<Mesh
         let type_name = attribute.type_name.trim_end_matches("[]");
         let components = super::parser::type_info(&attribute.type_name).1
             * attribute.element_size.unwrap_or(1).max(1) as usize;
-        let Some(values) = value.into_f32() else { continue };
+        let Some(values) = attribute_data(value, type_name) else { continue };
         if !(1..=4).contains(&components) {
             continue; // more components than coif's data model holds (as for curve primvars)
         }
@@ -836,11 +841,41 @@ fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<Mesh
     Ok(primvars)
 }
 
+/// The integer kind of a USD integer type (held exactly), `None` for others (`bool` is a flag).
+fn integer_kind(type_name: &str) -> Option<AttributeKind> {
+    match type_name {
+        "int" | "int2" | "int3" | "int4" | "uchar" => Some(AttributeKind::Int),
+        "uint" => Some(AttributeKind::UInt),
+        "int64" => Some(AttributeKind::Int64),
+        "uint64" => Some(AttributeKind::UInt64),
+        _ => None,
+    }
+}
+
+/// A value of USD type `type_name` as groom data: integer types as integers (ids past 2^24 do
+/// not survive `f32`), other numbers as floats; `None` for text.
+fn attribute_data(value: Value, type_name: &str) -> Option<AttributeData> {
+    match value {
+        Value::Int(values) if integer_kind(type_name).is_some() => Some(AttributeData::Int(values)),
+        value => value.into_f32().map(AttributeData::Float),
+    }
+}
+
+/// Whether every value is the same.
+fn all_same(data: &AttributeData) -> bool {
+    match data {
+        AttributeData::Float(v) => v.windows(2).all(|w| w[0] == w[1]),
+        AttributeData::Int(v) => v.windows(2).all(|w| w[0] == w[1]),
+    }
+}
+
 /// The kind a primvar's USD type gives an attribute; plain floats when the type is the one
 /// coif's writer would choose for that name anyway, so what coif writes reads back unchanged.
 fn attribute_kind(type_name: &str, name: &str, components: usize) -> AttributeKind {
+    if let Some(kind) = integer_kind(type_name) {
+        return kind;
+    }
     let kind = match type_name {
-        "int" | "int2" | "int3" | "int4" | "uint" | "int64" | "uint64" | "uchar" => AttributeKind::Int,
         "bool" => AttributeKind::Bool,
         t if t.starts_with("point3") => AttributeKind::Point,
         t if t.starts_with("normal3") => AttributeKind::Normal,
@@ -877,12 +912,12 @@ impl Layout<'_> {
     }
 
     /// Checks the value count against the interpolation and returns per-strand or per-vertex data.
-    fn resolve(
+    fn resolve<T: primvar_rates::Spread>(
         &self,
-        values: Vec<f32>,
+        values: Vec<T>,
         components: usize,
         interpolation: &str,
-    ) -> std::result::Result<(AttributeRate, Vec<f32>), String> {
+    ) -> std::result::Result<(AttributeRate, Vec<T>), String> {
         let strands = self.counts.len();
         let found = values.len() / components;
         let expect = |n: usize| {
@@ -949,11 +984,11 @@ fn append_array(
     }
 }
 
-fn expand_indices(
-    values: &[f32],
+fn expand_indices<T: Copy>(
+    values: &[T],
     indices: &[f64],
     components: usize,
-) -> std::result::Result<Vec<f32>, String> {
+) -> std::result::Result<Vec<T>, String> {
     let available = values.len() / components;
     let mut out = Vec::with_capacity(indices.len() * components);
     for &index in indices {
@@ -1386,7 +1421,7 @@ mod tests {
             let Ok(ReadOutcome::Groom(groom, _)) = read_on_threads(&text, threads) else {
                 panic!("a groom on {threads} threads");
             };
-            let attribute = |name: &str| bits(&groom.attribute(name).expect(name).data);
+            let attribute = |name: &str| bits(&groom.attribute(name).expect(name).floats());
             let read = [
                 bits(bytemuck::cast_slice(&groom.points)),
                 bits(&groom.widths),

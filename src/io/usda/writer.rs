@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::spell::{self, WINDOW};
 use crate::error::{Error, Result};
-use crate::groom::Groom;
+use crate::groom::{AttributeKind, Groom};
 use crate::io::usd_stage::{self, Data, Prim, Property, Stage, TimeCodes, Value};
 
 /// Text formatted per task, about: large enough that the buffered file takes it without a
@@ -141,6 +141,14 @@ fn write_data(data: &Data, out: &mut (impl Write + ?Sized)) -> std::io::Result<(
                 push_tuple(text, t, |text, &v| text.push_int(v));
             })
         }
+        // A `uint64`'s bits read unsigned (see `AttributeKind::UInt64`).
+        Data::WideInts { values, kind } => write_array(out, values, stateless, |(), text, &v| {
+            text.push_fixed(SEPARATOR);
+            match kind {
+                AttributeKind::UInt64 => text.push_int(v as u64),
+                _ => text.push_int(v),
+            }
+        }),
         Data::Bools(values) => write_array(out, values, stateless, |(), text, &v| {
             text.push_fixed(if v { b", 1" } else { b", 0" });
         }),
@@ -275,7 +283,7 @@ impl Text {
         });
     }
 
-    fn push_int(&mut self, value: i32) {
+    fn push_int(&mut self, value: impl itoa::Integer) {
         let mut buffer = itoa::Buffer::new();
         let spelled = buffer.format(value).as_bytes();
         let (spelling, length) = (padded(spelled), spelled.len());

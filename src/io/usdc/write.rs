@@ -5,6 +5,7 @@ use std::io::{Seek, Write};
 
 use super::encode::{Encoder, Rep};
 use super::format::{rep, SpecType, Type, SPECIFIER_DEF, UNIFORM, VARYING};
+use crate::groom::AttributeKind;
 use crate::io::usd_stage::{Data, Prim, Property, Stage, Value};
 
 /// Writes the stage to `out`.
@@ -100,6 +101,14 @@ fn data_rep<W: Write + Seek>(e: &mut Encoder<W>, data: &Data) -> std::io::Result
             e.array(kind, values.len() / components, bytemuck::cast_slice(values))
         }
         Data::Int(value) => Ok(rep::inline(Type::Int, *value as u32 as u64)),
+        Data::WideInts { values, kind } => match kind {
+            AttributeKind::UInt => {
+                let values: Vec<u32> = values.iter().map(|&v| v as u32).collect();
+                e.array(Type::Uint, values.len(), bytemuck::cast_slice(&values))
+            }
+            AttributeKind::UInt64 => e.array(Type::Uint64, values.len(), bytemuck::cast_slice(&values[..])),
+            _ => e.array(Type::Int64, values.len(), bytemuck::cast_slice(&values[..])),
+        },
         Data::Bools(values) => {
             let bytes: Vec<u8> = values.iter().map(|&b| b as u8).collect();
             e.array(Type::Bool, bytes.len(), &bytes)
