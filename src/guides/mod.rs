@@ -256,7 +256,9 @@ pub fn style(
         let (from, from_pose) = start(index);
         let after = posed(frame.clone());
         let mut points = deform::deform(&from, from_pose, &after);
-        push_out(&mut points, &children.strand_offsets, &radii, &shapes);
+        // The colliders where they were at that frame: a press part-way in, the rods.
+        let colliders = styled.frame_colliders.get(index).map_or(shapes.as_slice(), |c| c);
+        push_out(&mut points, &children.strand_offsets, &radii, colliders);
         let mut all = out.points.clone();
         scatter(&mut all, &out, &guide_ids, &frame);
         scatter(&mut all, &out, &child_ids, &points);
@@ -274,6 +276,7 @@ pub fn style(
         report,
         frames,
         frame_attributes,
+        frame_colliders: styled.frame_colliders,
         frames_per_second: styled.frames_per_second,
         droplets: Vec::new(),
     })

@@ -119,6 +119,9 @@ pub struct Styled {
     /// captured frame, as the groom holds them at the end.
     pub frame_attributes: Vec<Vec<Attribute>>,
     pub frames_per_second: f32,
+    /// The colliders as they were at each captured frame (a press where it had moved to, the rods
+    /// while strands were wound), for children interpolated into that frame to be pushed out of.
+    pub(crate) frame_colliders: Vec<Arc<[Shape]>>,
     /// The water droplets among the hair each time they were dried off (and at the end if still
     /// there), for children interpolated from these strands to clump by the same adhesion.
     pub(crate) droplets: Vec<DropletSnapshot>,
@@ -260,6 +263,7 @@ pub(crate) fn style_strands(
         report,
         frames: session.frames,
         frame_attributes: session.frame_attributes,
+        frame_colliders: session.frame_colliders,
         frames_per_second: options.frames_per_second,
         droplets: session.droplet_snapshots,
     })
@@ -369,6 +373,9 @@ struct Session {
     wind_dv: Vec<f32>,
     frames: Vec<Vec<Vec3>>,
     frame_attributes: Vec<Vec<Attribute>>,
+    frame_colliders: Vec<Arc<[Shape]>>,
+    /// `active` as captured frames share it, until the obstacles next change.
+    captured_active: Option<Arc<[Shape]>>,
     /// Steps between `--frames` frames (any real number), when frames are asked for.
     steps_per_frame: Option<f64>,
     /// Deepest penetration of the current stage so far (metres).
@@ -462,6 +469,8 @@ impl Session {
             wind_dv: vec![0.0; n],
             frames: Vec::new(),
             frame_attributes: Vec::new(),
+            frame_colliders: Vec::new(),
+            captured_active: None,
             steps_per_frame,
             penetration: 0.0,
             head_frame: placed.frame,
@@ -483,6 +492,8 @@ impl Session {
     fn capture_frame(&mut self) {
         self.frames.push(self.sim.rods().positions().to_vec());
         self.frame_attributes.push(self.state());
+        let active = self.captured_active.get_or_insert_with(|| self.active.as_slice().into());
+        self.frame_colliders.push(Arc::clone(active));
     }
 
     /// What styling changes beside the positions: the simulation's state attributes and wetness.
@@ -498,6 +509,7 @@ impl Session {
 
     fn refresh_obstacles(&mut self) {
         self.active = self.obstacles.iter().zip(&self.offsets).map(|(s, &o)| s.translated(o)).collect();
+        self.captured_active = None;
         if self.rods_active {
             self.active.extend(self.rods.iter().cloned());
         }
