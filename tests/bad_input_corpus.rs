@@ -1104,6 +1104,46 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
     cases
 }
 
+/// Corrupt `.usdz` packages, each a valid package with its curves' `primvars:groom_id` LZ4
+/// block overwritten (usd-core's error was exit 1 and named no file). Either in the package's
+/// root layer or in a crate the root layer sublayers.
+fn usdz_cases() -> Vec<Case> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let run = |args: &[&str]| {
+        let output =
+            Command::new(env!("CARGO_BIN_EXE_coif")).args(args).current_dir(dir.path()).output().unwrap();
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+    };
+    // 20 ids: 16 or more are compressed.
+    run(&["generate", "-o", "g.hair", "--strands", "20", "--vertices", "8"]);
+    run(&["convert", "g.hair", "crate.usdz"]);
+    run(&["convert", "g.hair", "groom.usdc"]);
+    std::fs::write(
+        path("root.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"Groom\"\n    subLayers = [@groom.usdc@]\n)\n",
+    )
+    .unwrap();
+    common::usd::usdz_package(&path("root.usda"), &path("layered.usdz"));
+    let mut cases = Vec::new();
+    for (package, where_) in [("crate.usdz", "root crate"), ("layered.usdz", "sublayered crate")] {
+        let valid = std::fs::read(path(package)).unwrap();
+        // groom_id: u64 count 20, u64 compressed size 12, then the block (a 0 byte, LZ4).
+        let ids = [&20u64.to_le_bytes()[..], &12u64.to_le_bytes()].concat();
+        let at = valid.windows(ids.len()).rposition(|w| w == ids).expect("groom_id's compressed array");
+        let mut damaged = valid.clone();
+        damaged[at + 17..at + 28].fill(0xff);
+        let info = ["--max-memory", "512M", "info", "bad.usdz"];
+        let convert = ["--max-memory", "512M", "convert", "bad.usdz", "out.usda"];
+        let files = |bytes: &Vec<u8>| vec![("bad.usdz", bytes.clone())];
+        for args in [&info[..], &convert[..]] {
+            let name = format!(".usdz: damaged LZ4 block in its {where_}, {}", args[2]);
+            cases.push(case(&name, files(&damaged), args, 2, &["bad.usdz", "LZ4"]));
+        }
+    }
+    cases
+}
+
 /// Directories given as files: refused up front as bad input.
 fn directory_cases(hair: &[u8]) -> Vec<Case> {
     let g = || vec![("g.hair", hair.to_vec()), ("r.toml", BASE.as_bytes().to_vec())];
@@ -1202,6 +1242,7 @@ fn all_cases() -> Vec<Case> {
     cases.extend(manifest_cases(&inputs.hair));
     cases.extend(directory_cases(&inputs.hair));
     cases.extend(fuzz_found_cases(&inputs.hair));
+    cases.extend(usdz_cases());
     cases
 }
 

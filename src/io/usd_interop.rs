@@ -55,7 +55,7 @@ pub fn python() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("python3"))
 }
 
-/// Runs the interop script; `input` is the user's file named in "bad input" errors.
+/// Runs the interop script; `input` is the user's file its errors name (read or written).
 fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     let script = script()?;
     let python = python();
@@ -72,9 +72,12 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     if output.status.success() {
         return Ok(());
     }
-    let message = String::from_utf8_lossy(&output.stderr).trim().to_string();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    // The script's messages name the file too, for when it is run by hand.
+    let message = stderr.trim().strip_prefix("usd_interop: ").unwrap_or(stderr.trim());
+    let message = message.strip_prefix(&format!("{}: ", input.display())).unwrap_or(message);
     Err(match output.status.code() {
-        Some(2) => Error::format(input, format!("usd-core: {message}")),
+        Some(2) => Error::format(input, message),
         Some(3) => Error::External(format!(
             "usd-core (pxr) is missing from {}: run `make setup` or set COIF_PYTHON to a Python with usd-core ({message})",
             python.display()
@@ -180,7 +183,7 @@ where
     let text = folder.path().join("groom.usda");
     atomic::write_atomically(&text, fill)?;
     let converted = folder.path().join(format!("groom.{extension}"));
-    run(&[text.as_os_str(), converted.as_os_str()], "export", &text)?;
+    run(&[text.as_os_str(), converted.as_os_str()], "export", path)?;
     let file = std::fs::File::open(&converted).map_err(|e| Error::io(&converted, e))?;
     file.sync_all().map_err(|e| Error::io(&converted, e))?;
     std::fs::rename(&converted, path).map_err(|e| Error::io(path, e))
