@@ -6,6 +6,10 @@
 //! Python is found as `$COIF_PYTHON`, else `.deps/venv/bin/python` in the project folder (the
 //! nearest ancestor of the executable holding `pipeline/usd_interop.py`, or the folder coif was
 //! built from), else `python3` on the `PATH`. `$COIF_PIPELINE` may point at the scripts' folder.
+//!
+//! usd-core is bounded as coif is: the child may allocate `--max-memory` besides what Python and
+//! usd-core take themselves (usd-core allocates an array's count before it finds that the bytes
+//! cannot hold it).
 use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -13,8 +17,22 @@ use std::process::Command;
 use crate::error::{Error, Result};
 use crate::groom::Groom;
 use crate::io::{atomic, usda, ImportOptions};
+use crate::limits;
 
 const SCRIPT: &str = "usd_interop.py";
+
+/// Data memory (what `RLIMIT_DATA` counts) Python and usd-core hold before reading anything.
+/// Measured: 85 MB flattening a small package with one usd-core thread, about 7 MB more for each
+/// further thread (usd-core starts one a CPU); both rounded up.
+const INTERPRETER_BYTES: u64 = 128 << 20;
+const BYTES_PER_THREAD: u64 = 16 << 20;
+
+/// What the usd-core child may allocate: `--max-memory`, plus the interpreter's own.
+fn child_memory() -> u64 {
+    // SAFETY: sysconf has no preconditions.
+    let cpus = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
+    limits::max_memory().saturating_add(INTERPRETER_BYTES + BYTES_PER_THREAD * cpus)
+}
 
 /// The project folder holding `pipeline/`, searched from the executable's location upwards,
 /// then the folder the crate was built from.
@@ -63,6 +81,7 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     child.arg(&script).arg(command).args(args);
     // Killed with coif: an orphaned usd-core must not write into a folder coif has removed.
     super::cleanup::die_with_parent(&mut child);
+    limits::limit_child_memory(&mut child, child_memory());
     let output = child.output().map_err(|e| {
         Error::External(format!(
             "cannot run Python ({}) for USD interop: {e}; run `make setup` or set COIF_PYTHON to a Python with usd-core",
@@ -76,12 +95,28 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     // The script's messages name the file too, for when it is run by hand.
     let message = stderr.trim().strip_prefix("usd_interop: ").unwrap_or(stderr.trim());
     let message = message.strip_prefix(&format!("{}: ", input.display())).unwrap_or(message);
-    Err(match output.status.code() {
-        Some(2) => Error::format(input, message),
-        Some(3) => Error::External(format!(
+    // usd-core reports an allocation that failed inside its reader as a corrupt value, so every
+    // failure to read says what it had.
+    let memory = format!(
+        "usd-core may use {} of memory here: --max-memory",
+        limits::gigabytes(limits::max_memory() as f64)
+    );
+    #[cfg(unix)]
+    let signal = std::os::unix::process::ExitStatusExt::signal(&output.status);
+    #[cfg(not(unix))]
+    let signal: Option<i32> = None;
+    Err(match (output.status.code(), signal) {
+        (Some(2), _) => Error::format(input, format!("{message} ({memory})")),
+        (Some(3), _) => Error::External(format!(
             "usd-core (pxr) is missing from {}: run `make setup` or set COIF_PYTHON to a Python with usd-core ({message})",
             python.display()
         )),
+        (Some(4), _) => Error::format(input, format!("usd-core ran out of memory: {memory}")),
+        // Killed or crashed reading the user's file: an allocation past the limit that usd-core
+        // did not survive, or a corruption it did not check.
+        (None, Some(signal)) if command == "flatten" => {
+            Error::format(input, format!("usd-core died of signal {signal} reading it ({memory}): {message}"))
+        }
         _ => Error::External(format!("{SCRIPT} {command} failed ({}): {message}", output.status)),
     })
 }
