@@ -1107,8 +1107,8 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
 /// Corrupt `.usdz` packages, each a valid package with one change to the crate file of its
 /// curves: `primvars:groom_id`'s count 20 made 1073741844 (usd-core allocated 4 GB for it, past
 /// `--max-memory`, and failed with exit 1), or its LZ4 block overwritten (usd-core's error was
-/// exit 1 and named no file). Either in the package's root layer or in a crate the root layer
-/// sublayers.
+/// exit 1 and named no file). Either in the package's root layer, which coif's own crate reader
+/// checks first, or in a crate the root layer sublayers, which only usd-core reads.
 fn usdz_cases() -> Vec<Case> {
     let dir = tempfile::tempdir().unwrap();
     let path = |name: &str| dir.path().join(name);
@@ -1139,7 +1139,11 @@ fn usdz_cases() -> Vec<Case> {
         damaged[at + 17..at + 28].fill(0xff);
         let info = ["--max-memory", "512M", "info", "bad.usdz"];
         let convert = ["--max-memory", "512M", "convert", "bad.usdz", "out.usda"];
-        let huge_names: &[&str] = &["bad.usdz", "usd-core", "--max-memory"];
+        let huge_names: &[&str] = if package == "crate.usdz" {
+            &["bad.usdz", "groom_id", "1073741844 integers"]
+        } else {
+            &["bad.usdz", "usd-core", "--max-memory"]
+        };
         let files = |bytes: &Vec<u8>| vec![("bad.usdz", bytes.clone())];
         cases.push(case(
             &format!(".usdz: count 1073741844 in its {where_}"),

@@ -8,15 +8,16 @@
 //! built from), else `python3` on the `PATH`. `$COIF_PIPELINE` may point at the scripts' folder.
 //!
 //! usd-core is bounded as coif is: the child may allocate `--max-memory` besides what Python and
-//! usd-core take themselves (usd-core allocates an array's count before it finds that the bytes
-//! cannot hold it).
+//! usd-core take themselves, and a package's root layer, when it is a crate file, passes coif's
+//! own `.usdc` reader before usd-core reads it (usd-core allocates an array's count before it
+//! finds that the bytes cannot hold it).
 use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::error::{Error, Result};
 use crate::groom::Groom;
-use crate::io::{atomic, usda, ImportOptions};
+use crate::io::{atomic, input, usda, usdc, ImportOptions};
 use crate::limits;
 
 const SCRIPT: &str = "usd_interop.py";
@@ -121,6 +122,54 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     })
 }
 
+/// Refuses a package whose root layer is a crate file coif's own reader refuses, as it would
+/// the same bytes as a `.usdc`: usd-core would first allocate what the file's counts ask (one
+/// changed byte in a 3 KB package asks for 4 GB). Values are checked at their first time
+/// sample; usd-core reads the rest within its memory limit. The root layer is the package's first
+/// entry, stored uncompressed as the usdz format requires; one laid out otherwise, or a text
+/// root layer, is left to usd-core.
+fn check_root_layer(path: &Path) -> Result<()> {
+    let bytes = input::map_file(path)?;
+    let Some((name, layer)) = first_entry(&bytes).map_err(|message| Error::format(path, message))? else {
+        return Ok(());
+    };
+    if !layer.starts_with(usdc::MAGIC) {
+        return Ok(());
+    }
+    match usdc::read_layer(layer, path) {
+        Ok(_) => Ok(()),
+        Err(Error::Format { message, .. }) => {
+            Err(Error::format(path, format!("{name} (the package's root layer): {message}")))
+        }
+        Err(other) => Err(other),
+    }
+}
+
+/// The name and bytes of a zip archive's first entry, when it is stored whole (not compressed,
+/// encrypted, with its sizes after the data, or zip64).
+fn first_entry(bytes: &[u8]) -> std::result::Result<Option<(String, &[u8])>, String> {
+    const HEADER: usize = 30;
+    let Some(header) = bytes.get(..HEADER).filter(|h| h.starts_with(b"PK\x03\x04")) else {
+        return Ok(None);
+    };
+    let u16_at = |at: usize| u16::from_le_bytes([header[at], header[at + 1]]) as usize;
+    let size = u32::from_le_bytes(header[18..22].try_into().unwrap());
+    // Flag bit 0: encrypted; bit 3: sizes follow the data.
+    if u16_at(6) & 0b1001 != 0 || u16_at(8) != 0 || size == u32::MAX {
+        return Ok(None);
+    }
+    let name_end = HEADER + u16_at(26);
+    let start = name_end + u16_at(28);
+    let name = bytes.get(HEADER..name_end).map(String::from_utf8_lossy).unwrap_or_default().into_owned();
+    match bytes.get(start..).and_then(|rest| rest.get(..size as usize)) {
+        Some(entry) => Ok(Some((name, entry))),
+        None => Err(format!(
+            "the package's first entry ({name:?}, {size} bytes at offset {start}) runs past its end ({} bytes)",
+            bytes.len()
+        )),
+    }
+}
+
 /// A stage usd-core flattened into a temporary `.usda`, removed when this is dropped (or when
 /// coif is interrupted).
 pub struct Flattened {
@@ -137,6 +186,7 @@ impl Flattened {
 
 /// Flattens any USD stage usd-core can open (with `variants` selected) into a temporary `.usda`.
 pub fn flatten(path: &Path, variants: &[String]) -> Result<Flattened> {
+    check_root_layer(path)?;
     let folder = tempfile::tempdir().map_err(|e| Error::io(Path::new("temporary folder"), e))?;
     let flattened = Flattened { _tracked: super::cleanup::Tracked::new(folder.path()), folder };
     let flat = flattened.path();
