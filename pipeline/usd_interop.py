@@ -12,8 +12,10 @@ coif reads and writes USD text (.usda) itself. Everything else goes through this
   usd_interop.py export INPUT.usda OUTPUT.(usdc|usda|usdz)
       Writes a layer in another USD file format (crate binary, text, or a usdz package).
 
-Exit codes: 0 done, 2 the input cannot be opened or an option is wrong, 3 usd-core (pxr) is not
-importable by this Python, 1 anything else.
+Exit codes: 0 done, 2 the input cannot be read (usd-core raised while opening, composing or
+flattening it) or an option is wrong, 3 usd-core (pxr) is not importable by this Python, 4 out of
+memory (coif runs this script under its --max-memory), 1 anything else (such as an output that
+cannot be written).
 """
 import argparse
 import os
@@ -36,6 +38,8 @@ def open_stage(path):
         raise BadInput(f"{path}: no such file")
     try:
         stage = Usd.Stage.Open(path)
+    except MemoryError:
+        raise
     except Exception as error:  # pxr raises Tf.ErrorException with the parser's message
         raise BadInput(f"{path}: usd-core cannot open the stage: {error}") from error
     if stage is None:
@@ -73,6 +77,18 @@ def select_variant(stage, spec):
 
 
 def flatten(args):
+    try:
+        layer = flattened(args)
+    except (BadInput, MemoryError):
+        raise
+    except Exception as error:  # Tf.ErrorException (a corrupt value or block), text not UTF-8, ...
+        raise BadInput(f"{args.input}: usd-core cannot read the stage: {error}") from error
+    if not layer.Export(args.output, args={"format": "usda"}):
+        raise RuntimeError(f"{args.output}: usd-core could not write the flattened stage")
+
+
+def flattened(args):
+    """The input's stage, variants selected, flattened into an anonymous layer."""
     stage = open_stage(args.input)
     # Selections go to the session layer, so the user's files are never modified.
     stage.SetEditTarget(stage.GetSessionLayer())
@@ -86,9 +102,7 @@ def flatten(args):
             break
         for prim in instances:
             prim.SetInstanceable(False)
-    layer = stage.Flatten()
-    if not layer.Export(args.output, args={"format": "usda"}):
-        raise RuntimeError(f"{args.output}: usd-core could not write the flattened stage")
+    return stage.Flatten()
 
 
 def export(args):
@@ -127,6 +141,9 @@ def main(argv=None):
     except BadInput as error:
         print(f"usd_interop: {error}", file=sys.stderr)
         return 2
+    except MemoryError:  # also a std::bad_alloc in usd-core
+        print("usd_interop: out of memory", file=sys.stderr)
+        return 4
     except Exception as error:
         print(f"usd_interop: {error}", file=sys.stderr)
         return 1

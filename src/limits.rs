@@ -88,13 +88,40 @@ pub fn parse_size(text: &str) -> Result<u64> {
 
 /// A memory size in the unit that shows it with a few significant digits ("0.000 GB" hid a
 /// one-byte limit).
-fn memory_text(bytes: f64) -> String {
+pub(crate) fn memory_text(bytes: f64) -> String {
     match bytes {
         b if b >= 1e9 => format!("{:.3} GB", b / 1e9),
         b if b >= 1e6 => format!("{:.3} MB", b / 1e6),
         b if b >= 1e3 => format!("{:.3} kB", b / 1e3),
         b => format!("{b:.0} bytes"),
     }
+}
+
+/// Caps the memory the process `command` starts may allocate (its data: heap and private maps,
+/// `RLIMIT_DATA`) at `bytes`, or its current hard limit if lower: past it, an allocation in the
+/// child fails instead of growing until the kernel's OOM killer acts.
+pub fn limit_child_memory(command: &mut std::process::Command, bytes: u64) {
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: getrlimit and setrlimit are async-signal-safe and touch no memory of the parent.
+        unsafe {
+            command.pre_exec(move || {
+                let mut limit = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+                if libc::getrlimit(libc::RLIMIT_DATA, &mut limit) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                let bytes = (bytes as libc::rlim_t).min(limit.rlim_max);
+                if libc::setrlimit(libc::RLIMIT_DATA, &libc::rlimit { rlim_cur: bytes, rlim_max: bytes }) != 0
+                {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = (command, bytes);
 }
 
 /// Refuses `bytes` of `what` over the memory limit.

@@ -1143,6 +1143,62 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
     cases
 }
 
+/// Corrupt `.usdz` packages, each a valid package with one change to the crate file of its
+/// curves: `primvars:groom_id`'s count 20 made 1073741844 (usd-core allocated 4 GB for it, past
+/// `--max-memory`, and failed with exit 1), or its LZ4 block overwritten (usd-core's error was
+/// exit 1 and named no file). Either in the package's root layer, which coif's own crate reader
+/// checks first, or in a crate the root layer sublayers, which only usd-core reads.
+fn usdz_cases() -> Vec<Case> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let run = |args: &[&str]| {
+        let output =
+            Command::new(env!("CARGO_BIN_EXE_coif")).args(args).current_dir(dir.path()).output().unwrap();
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+    };
+    // 20 ids: 16 or more are compressed.
+    run(&["generate", "-o", "g.hair", "--strands", "20", "--vertices", "8"]);
+    run(&["convert", "g.hair", "crate.usdz"]);
+    run(&["convert", "g.hair", "groom.usdc"]);
+    std::fs::write(
+        path("root.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"Groom\"\n    subLayers = [@groom.usdc@]\n)\n",
+    )
+    .unwrap();
+    common::usd::usdz_package(&path("root.usda"), &path("layered.usdz"));
+    let mut cases = Vec::new();
+    for (package, where_) in [("crate.usdz", "root crate"), ("layered.usdz", "sublayered crate")] {
+        let valid = std::fs::read(path(package)).unwrap();
+        // groom_id: u64 count 20, u64 compressed size 12, then the block (a 0 byte, LZ4).
+        let ids = [&20u64.to_le_bytes()[..], &12u64.to_le_bytes()].concat();
+        let at = valid.windows(ids.len()).rposition(|w| w == ids).expect("groom_id's compressed array");
+        let mut huge = valid.clone();
+        huge[at + 3] = 0x40;
+        let mut damaged = valid.clone();
+        damaged[at + 17..at + 28].fill(0xff);
+        let info = ["--max-memory", "512M", "info", "bad.usdz"];
+        let convert = ["--max-memory", "512M", "convert", "bad.usdz", "out.usda"];
+        let huge_names: &[&str] = if package == "crate.usdz" {
+            &["bad.usdz", "groom_id", "1073741844 integers"]
+        } else {
+            &["bad.usdz", "usd-core", "--max-memory"]
+        };
+        let files = |bytes: &Vec<u8>| vec![("bad.usdz", bytes.clone())];
+        cases.push(case(
+            &format!(".usdz: count 1073741844 in its {where_}"),
+            files(&huge),
+            &info,
+            2,
+            huge_names,
+        ));
+        for args in [&info[..], &convert[..]] {
+            let name = format!(".usdz: damaged LZ4 block in its {where_}, {}", args[2]);
+            cases.push(case(&name, files(&damaged), args, 2, &["bad.usdz", "LZ4"]));
+        }
+    }
+    cases
+}
+
 /// Directories given as files: refused up front as bad input.
 fn directory_cases(hair: &[u8]) -> Vec<Case> {
     let g = || vec![("g.hair", hair.to_vec()), ("r.toml", BASE.as_bytes().to_vec())];
@@ -1241,6 +1297,7 @@ fn all_cases() -> Vec<Case> {
     cases.extend(manifest_cases(&inputs.hair));
     cases.extend(directory_cases(&inputs.hair));
     cases.extend(fuzz_found_cases(&inputs.hair));
+    cases.extend(usdz_cases());
     cases
 }
 
@@ -1378,6 +1435,50 @@ fn a_failing_write_exits_1_and_leaves_nothing() {
         let out = args.split(' ').find(|a| a.starts_with("out.")).unwrap();
         assert!(err.contains(out), "{args}: {err}");
         assert_eq!(listing(dir.path()), vec!["g.hair".to_string(), "r.toml".to_string()], "{args}");
+    }
+}
+
+/// The corrupt packages of [`usdz_cases`] are refused (exit 2, the file named, nothing left)
+/// within seconds, coif and usd-core together never holding `--max-memory` (512 MB). Each run is
+/// fenced at 6 GB of address space, so that a build that lets usd-core allocate what the file asks
+/// fails here rather than meeting the OOM killer.
+#[cfg(target_os = "linux")]
+#[test]
+fn corrupt_usdz_packages_are_refused_quickly_within_the_memory_limit() {
+    use std::io::Read;
+    use std::os::unix::process::ExitStatusExt;
+    for case in usdz_cases() {
+        let dir = tempfile::tempdir().unwrap();
+        let start = std::time::Instant::now();
+        #[allow(clippy::zombie_processes)] // reaped by wait4 below
+        let mut child = Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 6000000; exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_coif"))
+            .args(&case.args)
+            .current_dir(prepared(&case, &dir))
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut err = Vec::new();
+        child.stderr.take().unwrap().read_to_end(&mut err).unwrap();
+        // wait4, not Child::wait: its peak resident memory covers the children coif waited for.
+        let (mut status, mut usage) = (0, unsafe { std::mem::zeroed::<libc::rusage>() });
+        let waited = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
+        assert_eq!(waited, child.id() as libc::pid_t);
+        let seconds = start.elapsed().as_secs_f64();
+        let peak = usage.ru_maxrss as f64 * 1024.0;
+        let output = std::process::Output {
+            status: std::process::ExitStatus::from_raw(status),
+            stdout: Vec::new(),
+            stderr: err,
+        };
+        if let Some(failure) = judge(&case, &output, dir.path()) {
+            panic!("{failure}");
+        }
+        assert!(seconds < 30.0, "{}: {seconds:.1} s", case.name);
+        assert!(peak < 512.0 * 1024.0 * 1024.0, "{}: peak resident memory {:.0} MB", case.name, peak / 1e6);
     }
 }
 

@@ -6,15 +6,34 @@
 //! Python is found as `$COIF_PYTHON`, else `.deps/venv/bin/python` in the project folder (the
 //! nearest ancestor of the executable holding `pipeline/usd_interop.py`, or the folder coif was
 //! built from), else `python3` on the `PATH`. `$COIF_PIPELINE` may point at the scripts' folder.
+//!
+//! usd-core is bounded as coif is: the child may allocate `--max-memory` besides what Python and
+//! usd-core take themselves, and a package's root layer, when it is a crate file, passes coif's
+//! own `.usdc` reader before usd-core reads it (usd-core allocates an array's count before it
+//! finds that the bytes cannot hold it).
 use std::ffi::{OsStr, OsString};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::error::{Error, Result};
 use crate::groom::Groom;
-use crate::io::{atomic, usda, ImportOptions};
+use crate::io::{atomic, input, usda, usdc, ImportOptions};
+use crate::limits;
 
 const SCRIPT: &str = "usd_interop.py";
+
+/// Data memory (what `RLIMIT_DATA` counts) Python and usd-core hold before reading anything.
+/// Measured: 85 MB flattening a small package with one usd-core thread, about 7 MB more for each
+/// further thread (usd-core starts one a CPU); both rounded up.
+const INTERPRETER_BYTES: u64 = 128 << 20;
+const BYTES_PER_THREAD: u64 = 16 << 20;
+
+/// What the usd-core child may allocate: `--max-memory`, plus the interpreter's own.
+fn child_memory() -> u64 {
+    // SAFETY: sysconf has no preconditions.
+    let cpus = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
+    limits::max_memory().saturating_add(INTERPRETER_BYTES + BYTES_PER_THREAD * cpus)
+}
 
 /// The project folder holding `pipeline/`, searched from the executable's location upwards,
 /// then the folder the crate was built from.
@@ -55,7 +74,7 @@ pub fn python() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("python3"))
 }
 
-/// Runs the interop script; `input` is the user's file named in "bad input" errors.
+/// Runs the interop script; `input` is the user's file its errors name (read or written).
 fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     let script = script()?;
     let python = python();
@@ -63,6 +82,7 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     child.arg(&script).arg(command).args(args);
     // Killed with coif: an orphaned usd-core must not write into a folder coif has removed.
     super::cleanup::die_with_parent(&mut child);
+    limits::limit_child_memory(&mut child, child_memory());
     let output = child.output().map_err(|e| {
         Error::External(format!(
             "cannot run Python ({}) for USD interop: {e}; run `make setup` or set COIF_PYTHON to a Python with usd-core",
@@ -72,15 +92,82 @@ fn run(args: &[&OsStr], command: &str, input: &Path) -> Result<()> {
     if output.status.success() {
         return Ok(());
     }
-    let message = String::from_utf8_lossy(&output.stderr).trim().to_string();
-    Err(match output.status.code() {
-        Some(2) => Error::format(input, format!("usd-core: {message}")),
-        Some(3) => Error::External(format!(
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    // The script's messages name the file too, for when it is run by hand.
+    let message = stderr.trim().strip_prefix("usd_interop: ").unwrap_or(stderr.trim());
+    let message = message.strip_prefix(&format!("{}: ", input.display())).unwrap_or(message);
+    // usd-core reports an allocation that failed inside its reader as a corrupt value, so every
+    // failure to read says what it had.
+    let memory = format!(
+        "usd-core may use {} of memory here: --max-memory",
+        limits::memory_text(limits::max_memory() as f64)
+    );
+    #[cfg(unix)]
+    let signal = std::os::unix::process::ExitStatusExt::signal(&output.status);
+    #[cfg(not(unix))]
+    let signal: Option<i32> = None;
+    Err(match (output.status.code(), signal) {
+        (Some(2), _) => Error::format(input, format!("{message} ({memory})")),
+        (Some(3), _) => Error::External(format!(
             "usd-core (pxr) is missing from {}: run `make setup` or set COIF_PYTHON to a Python with usd-core ({message})",
             python.display()
         )),
+        (Some(4), _) => Error::format(input, format!("usd-core ran out of memory: {memory}")),
+        // Killed or crashed reading the user's file: an allocation past the limit that usd-core
+        // did not survive, or a corruption it did not check.
+        (None, Some(signal)) if command == "flatten" => {
+            Error::format(input, format!("usd-core died of signal {signal} reading it ({memory}): {message}"))
+        }
         _ => Error::External(format!("{SCRIPT} {command} failed ({}): {message}", output.status)),
     })
+}
+
+/// Refuses a package whose root layer is a crate file coif's own reader refuses, as it would
+/// the same bytes as a `.usdc`: usd-core would first allocate what the file's counts ask (one
+/// changed byte in a 3 KB package asks for 4 GB). Values are checked at their first time
+/// sample; usd-core reads the rest within its memory limit. The root layer is the package's first
+/// entry, stored uncompressed as the usdz format requires; one laid out otherwise, or a text
+/// root layer, is left to usd-core.
+fn check_root_layer(path: &Path) -> Result<()> {
+    let bytes = input::map_file(path)?;
+    let Some((name, layer)) = first_entry(&bytes).map_err(|message| Error::format(path, message))? else {
+        return Ok(());
+    };
+    if !layer.starts_with(usdc::MAGIC) {
+        return Ok(());
+    }
+    match usdc::read_layer(layer, path) {
+        Ok(_) => Ok(()),
+        Err(Error::Format { message, .. }) => {
+            Err(Error::format(path, format!("{name} (the package's root layer): {message}")))
+        }
+        Err(other) => Err(other),
+    }
+}
+
+/// The name and bytes of a zip archive's first entry, when it is stored whole (not compressed,
+/// encrypted, with its sizes after the data, or zip64).
+fn first_entry(bytes: &[u8]) -> std::result::Result<Option<(String, &[u8])>, String> {
+    const HEADER: usize = 30;
+    let Some(header) = bytes.get(..HEADER).filter(|h| h.starts_with(b"PK\x03\x04")) else {
+        return Ok(None);
+    };
+    let u16_at = |at: usize| u16::from_le_bytes([header[at], header[at + 1]]) as usize;
+    let size = u32::from_le_bytes(header[18..22].try_into().unwrap());
+    // Flag bit 0: encrypted; bit 3: sizes follow the data.
+    if u16_at(6) & 0b1001 != 0 || u16_at(8) != 0 || size == u32::MAX {
+        return Ok(None);
+    }
+    let name_end = HEADER + u16_at(26);
+    let start = name_end + u16_at(28);
+    let name = bytes.get(HEADER..name_end).map(String::from_utf8_lossy).unwrap_or_default().into_owned();
+    match bytes.get(start..).and_then(|rest| rest.get(..size as usize)) {
+        Some(entry) => Ok(Some((name, entry))),
+        None => Err(format!(
+            "the package's first entry ({name:?}, {size} bytes at offset {start}) runs past its end ({} bytes)",
+            bytes.len()
+        )),
+    }
 }
 
 /// A stage usd-core flattened into a temporary `.usda`, removed when this is dropped (or when
@@ -99,6 +186,7 @@ impl Flattened {
 
 /// Flattens any USD stage usd-core can open (with `variants` selected) into a temporary `.usda`.
 pub fn flatten(path: &Path, variants: &[String]) -> Result<Flattened> {
+    check_root_layer(path)?;
     let folder = tempfile::tempdir().map_err(|e| Error::io(Path::new("temporary folder"), e))?;
     let flattened = Flattened { _tracked: super::cleanup::Tracked::new(folder.path()), folder };
     let flat = flattened.path();
@@ -180,7 +268,7 @@ where
     let text = folder.path().join("groom.usda");
     atomic::write_atomically(&text, fill)?;
     let converted = folder.path().join(format!("groom.{extension}"));
-    run(&[text.as_os_str(), converted.as_os_str()], "export", &text)?;
+    run(&[text.as_os_str(), converted.as_os_str()], "export", path)?;
     let file = std::fs::File::open(&converted).map_err(|e| Error::io(&converted, e))?;
     file.sync_all().map_err(|e| Error::io(&converted, e))?;
     std::fs::rename(&converted, path).map_err(|e| Error::io(path, e))

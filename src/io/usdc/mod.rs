@@ -102,10 +102,16 @@ pub fn read_timeline(bytes: &[u8], path: &Path) -> Result<usda::LayerTimeline> {
     decode::read_timeline(bytes, path)
 }
 
+/// The layer model of crate-file bytes (each time-sampled value at its first sample), arcs
+/// recorded, not resolved.
+pub(crate) fn read_layer(bytes: &[u8], path: &Path) -> Result<usda::Layer> {
+    decode::read_layer(bytes, None, path, None)
+}
+
 /// Whether a crate file's stage (composed, if it needs composition) time-samples anything that
 /// places its curves or meshes.
 pub fn is_animated(bytes: &[u8], path: &Path) -> Result<Option<bool>> {
-    let mut layer = decode::read_layer(bytes, None, path, None)?;
+    let mut layer = read_layer(bytes, path)?;
     if layer.composes() {
         layer = crate::io::usd_compose::compose(layer, path, &Default::default())?;
     }
