@@ -95,13 +95,7 @@ fn invariance(solver: StrandSolver, run: &dyn Fn(&str) -> bool) {
 fn invariance_of(solver: StrandSolver, name: &str, groom_file: &str, step: usize) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let recipe_path = root.join(format!("grooms/recipes/{name}.toml"));
-    let mut preset = std::fs::read_to_string(&recipe_path).expect("preset");
-    if let Ok(edit) = std::env::var("ACC_EDIT") {
-        for e in edit.split(';') {
-            let (a, b) = e.split_once("=>").unwrap();
-            preset = preset.replace(a, &b.replace("\\n", "\n"));
-        }
-    }
+    let preset = std::fs::read_to_string(&recipe_path).expect("preset");
     let dt_key = preset.lines().find(|l| l.starts_with("dt = ")).expect("the preset sets dt").to_owned();
     let iterations_key = preset
         .lines()
@@ -141,7 +135,6 @@ fn invariance_of(solver: StrandSolver, name: &str, groom_file: &str, step: usize
         StrandSolver::Direct => &[1, 2, 5, 10, 20],
         StrandSolver::GaussSeidel => &[5, 10, 20],
     };
-    let counts: &[u32] = if std::env::var("ACC_ITER5").is_ok() { &[5] } else { counts };
     for rate in [240u32, 360, 720, 1440] {
         for &iterations in counts {
             let fresh;

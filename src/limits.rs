@@ -143,7 +143,8 @@ pub fn check_steps(what: &str, steps: f64, vertices: f64, iterations: f64) -> Re
     let max = max_steps() as f64;
     if steps.is_nan() || steps > max {
         return Err(Error::Usage(format!(
-            "{what} takes {steps:.3e} simulation steps, over the budget of {max:.0} (--max-steps)"
+            "{what} takes {} simulation steps, over the budget of {max:.0} (--max-steps)",
+            crate::validate::shortest(steps)
         )));
     }
     let work = steps * vertices * (iterations / WORK_ITERATIONS).max(1.0);
@@ -216,7 +217,10 @@ pub fn check_style(groom: &Groom, recipe: &crate::style::Recipe, frames_per_seco
         recipe.stages.iter().map(|s| steps_for(s.get_ref().duration().into(), settings.dt.into())).sum();
     let frames = (seconds * frames_per_second as f64).ceil() + 2.0;
     let frame_bytes = if frames_per_second > 0.0 { frames * vertices * 12.0 } else { 0.0 };
-    let what = format!("styling {vertices:.0} vertices with {droplets:.0} droplets for {seconds} s");
+    let what = format!(
+        "styling {vertices:.0} vertices with {droplets:.0} droplets for {} s",
+        crate::validate::seconds_text(seconds)
+    );
     check_memory(&what, vertices * SIM_BYTES_PER_VERTEX + droplets * DROPLET_BYTES + frame_bytes)?;
     check_steps(&what, steps, vertices + droplets, settings.iterations.into())
 }

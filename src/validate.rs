@@ -93,6 +93,12 @@ pub fn shortest(value: f64) -> String {
     }
 }
 
+/// A duration summed from `f32` seconds, as a person wrote it: to the microsecond (stages of 0.2
+/// and 1.5 s last 1.7 s, not 1.7000000476837158).
+pub fn seconds_text(seconds: f64) -> String {
+    shortest((seconds * 1e6).round() / 1e6)
+}
+
 /// Checks one number; the message names the key, the value and the range.
 pub fn number(key: &str, value: impl Into<f64>, range: Range) -> std::result::Result<(), String> {
     let value = value.into();

@@ -428,6 +428,12 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["simulate", "g.hair", "out.hair", "--dt", "0"], &["--dt", "'0'"]),
         (&["simulate", "g.hair", "out.hair", "--youngs-modulus", "1e40"], &["--youngs-modulus", "1e40"]),
         (&["simulate", "g.hair", "out.hair", "--max-memory", "1"], &["over the limit of 1 bytes"]),
+        // Not "over the budget of 1", nor 0.009999999776482582 s and 4.000e0 steps.
+        (&["simulate", "g.hair", "out.hair", "--max-steps", "0"], &["--max-steps", "'0'"]),
+        (
+            &["simulate", "g.hair", "out.hair", "--seconds", "0.01", "--max-steps", "3"],
+            &["for 0.01 s takes 4 simulation steps"],
+        ),
         (&["render", "g.hair", "-o", "out.png", "--fov", "0"], &["--fov", "(0.5, 170)"]),
         (&["render", "g.hair", "-o", "out.png", "--fov", "175"], &["--fov", "(0.5, 170)"]),
         (&["render", "g.hair", "-o", "out.png", "--camera", "0,0,1,0,0,0,175"], &["--camera", "(0.5, 170)"]),

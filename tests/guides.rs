@@ -565,9 +565,9 @@ fn children_in_every_frame_stay_out_of_the_rods_their_guides_are_wound_on() {
             continue;
         }
         wound_frames += 1;
-        for s in 0..styled.groom.strand_count() {
+        for (s, &is_guide) in guide.iter().enumerate() {
             let depth = styled.groom.strand_range(s).map(|i| inside(points[i])).fold(f32::MIN, f32::max);
-            let deepest = if guide[s] { &mut deepest_guide } else { &mut deepest_child };
+            let deepest = if is_guide { &mut deepest_guide } else { &mut deepest_child };
             *deepest = deepest.max(depth);
         }
     }

@@ -16,7 +16,8 @@ pub(crate) struct Cli {
     #[arg(long, global = true, value_name = "SIZE")]
     pub(crate) max_memory: Option<String>,
     /// Refuse simulations of more steps than this.
-    #[arg(long, global = true, value_name = "STEPS", default_value_t = coif::limits::DEFAULT_MAX_STEPS)]
+    #[arg(long, global = true, value_name = "STEPS", default_value_t = coif::limits::DEFAULT_MAX_STEPS,
+          value_parser = clap::value_parser!(u64).range(1..))]
     pub(crate) max_steps: u64,
 }
 

@@ -211,7 +211,11 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
     };
     let seconds = args.seconds as f64 + if args.settle { args.settle_seconds as f64 } else { 0.0 };
     coif::limits::check_simulation(
-        &format!("simulating {} vertices for {seconds} s", loaded.groom.vertex_count()),
+        &format!(
+            "simulating {} vertices for {} s",
+            loaded.groom.vertex_count(),
+            coif::validate::seconds_text(seconds)
+        ),
         loaded.groom.vertex_count() as f64,
         0.0,
         coif::limits::steps_for(seconds, params.dt.into()),
