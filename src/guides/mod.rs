@@ -209,9 +209,9 @@ pub fn style(
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
     // points, the material frames rebuilt along the children's own curves (as a reader would:
     // the guides' frames follow other edges), the others blended; merged with the guides' own
-    // over every strand. Integer attributes (ids) are no blend: styling leaves them as they
-    // were, the children's their own. The same for each captured frame of `--frames` output, from that frame's
-    // guides.
+    // over every strand. Integer attributes (ids) are not blended: styling leaves them as they
+    // were, the children's their own. The same for each captured frame of `--frames` output,
+    // from that frame's guides.
     let carried = |from: &Children,
                    from_pose: &Curves,
                    after: &Curves,

@@ -383,17 +383,14 @@ impl<'a> Sampled<'a> {
         Ok(bytes.chunks_exact(size).map(|b| pod_to_f64(self.pod, b)).collect())
     }
 
-    /// Sample `index` of an integer property as `u32` values, read as integers (no detour
-    /// through floats: ids past 2^24 stay exact). A negative or too large value is an error
-    /// naming its entry.
-    pub fn read_u32(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<u32>> {
+    /// Sample `index`'s bytes, when the property holds integers in whole elements.
+    fn integer_bytes(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<&'a [u8]> {
         let bytes = self.sample_bytes(ogawa, index)?;
-        let size = self.pod.size();
-        if !matches!(
+        let integer = matches!(
             self.pod,
             Pod::U8 | Pod::I8 | Pod::U16 | Pod::I16 | Pod::U32 | Pod::I32 | Pod::U64 | Pod::I64
-        ) || bytes.len() % (size * self.extent as usize) != 0
-        {
+        );
+        if !integer || bytes.len() % (self.pod.size() * self.extent as usize) != 0 {
             return fail(format!(
                 "{} is {}×{} ({} bytes), integers expected",
                 self.name,
@@ -402,6 +399,15 @@ impl<'a> Sampled<'a> {
                 bytes.len()
             ));
         }
+        Ok(bytes)
+    }
+
+    /// Sample `index` of an integer property as `u32` values, read as integers (no detour
+    /// through floats: ids past 2^24 stay exact). A negative or too large value is an error
+    /// naming its entry.
+    pub fn read_u32(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<u32>> {
+        let bytes = self.integer_bytes(ogawa, index)?;
+        let size = self.pod.size();
         let in_range = |b: &[u8]| (0.0..=u32::MAX as f64).contains(&pod_to_f64(self.pod, b));
         let values: Vec<u32> = match self.pod {
             // A negative `i32` keeps its top bit set as `u32`: one test over the whole array.
@@ -426,21 +432,8 @@ impl<'a> Sampled<'a> {
     /// Sample `index` of an integer property as `i64` values, exactly (a `uint64`'s as its bits:
     /// see `AttributeKind::UInt64`).
     pub fn read_i64(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<Vec<i64>> {
-        let bytes = self.sample_bytes(ogawa, index)?;
+        let bytes = self.integer_bytes(ogawa, index)?;
         let size = self.pod.size();
-        let integer = matches!(
-            self.pod,
-            Pod::U8 | Pod::I8 | Pod::U16 | Pod::I16 | Pod::U32 | Pod::I32 | Pod::U64 | Pod::I64
-        );
-        if !integer || bytes.len() % (size * self.extent as usize) != 0 {
-            return fail(format!(
-                "{} is {}×{} ({} bytes), integers expected",
-                self.name,
-                self.pod.name(),
-                self.extent,
-                bytes.len()
-            ));
-        }
         let pod = self.pod;
         Ok(bytes
             .chunks_exact(size)
