@@ -30,8 +30,8 @@ const BYTES_PER_THREAD: u64 = 16 << 20;
 
 /// What the usd-core child may allocate: `--max-memory`, plus the interpreter's own.
 fn child_memory() -> u64 {
-    // SAFETY: sysconf has no preconditions.
-    let cpus = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) }.max(1) as u64;
+    // usd-core starts a thread a CPU it may run on, as the standard library counts them.
+    let cpus = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
     limits::max_memory().saturating_add(INTERPRETER_BYTES + BYTES_PER_THREAD * cpus)
 }
 
