@@ -200,11 +200,10 @@ pub fn style(
     let bound = bind(&children.points);
     let after = posed(styled.groom.points.clone());
     let placed = place(recipe, &guides, options.scalp.as_deref(), frame)?;
-    let shapes = placed.shapes;
     let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
     let (last, last_pose) = start(usize::MAX);
     let mut child_points = deform::deform(&last, last_pose, &after);
-    push_out(&mut child_points, &children.strand_offsets, &radii, &shapes);
+    push_out(&mut child_points, &children.strand_offsets, &radii, &styled.colliders);
 
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
     // points, the material frames rebuilt along the children's own curves (as a reader would:
@@ -257,7 +256,7 @@ pub fn style(
         let after = posed(frame.clone());
         let mut points = deform::deform(&from, from_pose, &after);
         // The colliders where they were at that frame: a press part-way in, the rods.
-        let colliders = styled.frame_colliders.get(index).map_or(shapes.as_slice(), |c| c);
+        let colliders = styled.frame_colliders.get(index).map_or(styled.colliders.as_slice(), |c| c);
         push_out(&mut points, &children.strand_offsets, &radii, colliders);
         let mut all = out.points.clone();
         scatter(&mut all, &out, &guide_ids, &frame);
@@ -277,6 +276,7 @@ pub fn style(
         frames,
         frame_attributes,
         frame_colliders: styled.frame_colliders,
+        colliders: styled.colliders,
         frames_per_second: styled.frames_per_second,
         droplets: Vec::new(),
     })

@@ -122,6 +122,9 @@ pub struct Styled {
     /// The colliders as they were at each captured frame (a press where it had moved to, the rods
     /// while strands were wound), for children interpolated into that frame to be pushed out of.
     pub(crate) frame_colliders: Vec<Arc<[Shape]>>,
+    /// The colliders at the end (the ones the groom settled against: no pressing obstacle after a
+    /// `release`), for children interpolated into the final state.
+    pub(crate) colliders: Vec<Shape>,
     /// The water droplets among the hair each time they were dried off (and at the end if still
     /// there), for children interpolated from these strands to clump by the same adhesion.
     pub(crate) droplets: Vec<DropletSnapshot>,
@@ -264,6 +267,7 @@ pub(crate) fn style_strands(
         frames: session.frames,
         frame_attributes: session.frame_attributes,
         frame_colliders: session.frame_colliders,
+        colliders: session.active,
         frames_per_second: options.frames_per_second,
         droplets: session.droplet_snapshots,
     })
@@ -331,6 +335,19 @@ impl Winding {
     }
 }
 
+/// Where a recipe obstacle is during a style.
+#[derive(Clone, Copy, Debug)]
+enum ObstaclePose {
+    /// Where the recipe placed it.
+    AtRest,
+    /// Moved by a `press` stage (metres, world).
+    Pressed(Vec3),
+    /// Taken away by a `release`: a pressing obstacle is a styling tool, like the rods. Left at
+    /// its start it held hair longer than the preset was tuned for (the blow-dry's floor under
+    /// 30 cm hair), which fell as soon as a shot simulated the groom without it.
+    Withdrawn,
+}
+
 struct Session {
     /// The recipe placed on the groom: world coordinates, layouts laid out as rods.
     recipe: Recipe,
@@ -340,9 +357,10 @@ struct Session {
     /// Unit direction from the head centre to each strand's root (for masks).
     root_dirs: Vec<Vec3>,
     radii: Vec<f32>,
-    /// The recipe's obstacles, their current offsets (pressing), and the rods.
+    /// The recipe's obstacles, where each is (pressing, or withdrawn by a `release`), and the
+    /// rods.
     obstacles: Vec<Shape>,
-    offsets: Vec<Vec3>,
+    poses: Vec<ObstaclePose>,
     rods: Vec<Shape>,
     rods_active: bool,
     active: Vec<Shape>,
@@ -433,7 +451,7 @@ impl Session {
         });
         let steps_per_frame = (options.frames_per_second > 0.0)
             .then(|| 1.0 / (f64::from(options.frames_per_second) * f64::from(settings.dt)));
-        let offsets = vec![Vec3::ZERO; obstacles.len()];
+        let poses = vec![ObstaclePose::AtRest; obstacles.len()];
         let friction = Friction {
             static_friction: recipe.contacts.static_friction,
             dynamic_friction: recipe.contacts.dynamic_friction,
@@ -444,7 +462,7 @@ impl Session {
             sim,
             root_dirs,
             obstacles,
-            offsets,
+            poses,
             rods,
             rods_active: false,
             active: Vec::new(),
@@ -508,7 +526,13 @@ impl Session {
     }
 
     fn refresh_obstacles(&mut self) {
-        self.active = self.obstacles.iter().zip(&self.offsets).map(|(s, &o)| s.translated(o)).collect();
+        self.active = (self.obstacles.iter().zip(&self.poses))
+            .filter_map(|(shape, pose)| match *pose {
+                ObstaclePose::AtRest => Some(shape.clone()),
+                ObstaclePose::Pressed(offset) => Some(shape.translated(offset)),
+                ObstaclePose::Withdrawn => None,
+            })
+            .collect();
         self.captured_active = None;
         if self.rods_active {
             self.active.extend(self.rods.iter().cloned());
@@ -788,10 +812,11 @@ impl Session {
                 let total = steps.max(1) as f32;
                 let travel = *travel;
                 self.run_steps(steps, progress, |s, k| {
-                    s.offsets[which] = direction * travel * smoothstep((k + 1) as f32 / total);
+                    s.poses[which] =
+                        ObstaclePose::Pressed(direction * travel * smoothstep((k + 1) as f32 / total));
                     s.refresh_obstacles();
                 });
-                self.offsets[which] = direction * travel;
+                self.poses[which] = ObstaclePose::Pressed(direction * travel);
                 self.refresh_obstacles();
             }
             Stage::Release { .. } => {
@@ -800,7 +825,11 @@ impl Session {
                 }
                 self.held.clear();
                 self.rods_active = false;
-                self.offsets.iter_mut().for_each(|o| *o = Vec3::ZERO);
+                for pose in &mut self.poses {
+                    if let ObstaclePose::Pressed(_) = pose {
+                        *pose = ObstaclePose::Withdrawn;
+                    }
+                }
                 self.refresh_obstacles();
                 self.run_steps(steps, progress, |_, _| {});
             }
