@@ -1192,3 +1192,53 @@ fn sublayers_listed_twice_are_taken_once_as_pxr_composes_them() {
     assert_eq!(report["groom"]["strands"], 2, "{report}");
     eprintln!("a chain of {levels} doubled sublayers read in {:.2} s", start.elapsed().as_secs_f64());
 }
+
+/// A shot layout: a 30 tc/s head cache whose transform is sampled every code, referenced with an
+/// offset and a scale by a 24 tc/s layer, sublayered at 1000 into a 48 tc/s shot. Some samples
+/// land exactly on the shot's frames (1011, 1023): pxr takes the sample there; coif took the
+/// one before it (a whole sample step, 9–13 mm here), as the composed time, mapped back into the
+/// cache and out again, ended a hair short of the sample.
+#[test]
+fn transform_samples_that_land_on_a_frame_through_retimed_layers_are_taken_as_pxr_takes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let samples: Vec<String> = (1..=10).map(|t| format!("{t}: (0, {}, 0)", 0.001 * (t * t) as f64)).collect();
+    std::fs::write(
+        path("cache.usda"),
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    timeCodesPerSecond = 30\n    startTimeCode = 1\n    \
+             endTimeCode = 10\n)\n\ndef Xform \"G\"\n{{\n    double3 xformOp:translate.timeSamples = {{ {} }}\n    \
+             uniform token[] xformOpOrder = [\"xformOp:translate\"]\n\n    def BasisCurves \"hair\"\n    {{\n        \
+             uniform token type = \"linear\"\n        int[] curveVertexCounts = [2]\n        \
+             point3f[] points = [(0, 0, 0), (0, -0.1, 0)]\n        float[] widths = [0.001] (interpolation = \"constant\")\n    }}\n}}\n",
+            samples.join(", ")
+        ),
+    )
+    .unwrap();
+    std::fs::write(
+        path("sub.usda"),
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    timeCodesPerSecond = 24\n)\n\n\
+         def Xform \"W\" (references = @cache.usda@</G> (offset = -0.5; scale = 1.5))\n{\n}\n",
+    )
+    .unwrap();
+    let shot = path("shot.usda");
+    std::fs::write(
+        &shot,
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    timeCodesPerSecond = 48\n    startTimeCode = 1001\n    \
+         endTimeCode = 1023\n    subLayers = [@sub.usda@ (offset = 1000)]\n)\n",
+    )
+    .unwrap();
+    let want = pxr_frames(&shot, 1001.0, 1023.0);
+    assert_eq!(want.len(), 23);
+    for (k, frame) in (1001..=1023).enumerate() {
+        let options = coif::io::ImportOptions { frame: Some(frame as f64), ..Default::default() };
+        let groom = coif::io::read_groom(&shot, &options).unwrap().groom;
+        let got: Vec<f32> = groom.points.iter().flat_map(|p| p.to_array()).collect();
+        same_frames(&[got], &want[k..=k], &format!("frame {frame}"));
+    }
+    let converted = path("converted.usda");
+    let run = coif(&["convert", path_str(&shot), path_str(&converted)]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    same_frames(&pxr_frames(&converted, 1001.0, 1023.0), &want, "the whole shot converted");
+    assert!(want.windows(2).filter(|w| w[0] != w[1]).count() >= 10, "the shot barely moves");
+}

@@ -1006,11 +1006,12 @@ fn expand_indices<T: Copy>(
 /// without a time, the default or else the earliest sample. `None` when blocked or unauthored.
 pub fn value_at(attribute: &Attribute, time: Option<f64>) -> Option<Value> {
     let from_samples = |samples: &[(f64, Value)]| -> Option<Value> {
-        match (samples, time) {
-            ([], _) => None,
-            ([(t0, a), (t1, b)], Some(t)) if *t0 <= t && t < *t1 => Some(lerp(a, b, (t - t0) / (t1 - t0))),
-            ([(t0, a), ..], Some(t)) if *t0 <= t => Some(a.clone()),
-            ([(_, first), ..], _) => Some(first.clone()),
+        match sample_at(samples, time)? {
+            SampleAt::Held(i) => Some(samples[i].1.clone()),
+            SampleAt::Between(i) => {
+                let ((t0, a), (t1, b)) = (&samples[i], &samples[i + 1]);
+                Some(lerp(a, b, (time? - t0) / (t1 - t0)))
+            }
         }
     };
     let value = match time {
@@ -1018,6 +1019,29 @@ pub fn value_at(attribute: &Attribute, time: Option<f64>) -> Option<Value> {
         _ => attribute.default.clone().or_else(|| from_samples(&attribute.samples)),
     }?;
     (value != Value::Blocked).then_some(value)
+}
+
+/// Which of an attribute's samples (sorted by time) give its value at `time`.
+enum SampleAt {
+    /// This sample's value as it is.
+    Held(usize),
+    /// Interpolated between this sample and the next.
+    Between(usize),
+}
+
+/// The latest sample at or before `time` (else the first; the first with no time), and whether
+/// the value lies between it and the next. A time equal to a sample's takes that sample: a
+/// composed time maps a layer's sample onto the stage's frame exactly where pxr finds it.
+fn sample_at(samples: &[(f64, Value)], time: Option<f64>) -> Option<SampleAt> {
+    if samples.is_empty() {
+        return None;
+    }
+    let Some(t) = time else { return Some(SampleAt::Held(0)) };
+    Some(match samples.iter().rposition(|(s, _)| *s <= t) {
+        Some(i) if i + 1 < samples.len() && samples[i].0 < t => SampleAt::Between(i),
+        Some(i) => SampleAt::Held(i),
+        None => SampleAt::Held(0),
+    })
 }
 
 /// Like [`value_at`] but moves large values out of the attribute instead of copying them
@@ -1030,19 +1054,10 @@ fn take_value(attribute: &mut Attribute, time: Option<f64>) -> Option<Value> {
     let value = if use_default {
         attribute.default.take()?
     } else {
-        let between = match (attribute.samples.as_slice(), time) {
-            ([(t0, _), (t1, _)], Some(t)) => *t0 < t && t < *t1,
-            _ => false,
-        };
-        if between {
-            return value_at(attribute, time);
+        match sample_at(&attribute.samples, time)? {
+            SampleAt::Between(_) => return value_at(attribute, time),
+            SampleAt::Held(i) => std::mem::take(&mut attribute.samples).into_iter().nth(i)?.1,
         }
-        let held = match time {
-            // The latest sample at or before the time, else the first.
-            Some(t) => attribute.samples.iter().rposition(|(s, _)| *s <= t).unwrap_or(0),
-            None => 0,
-        };
-        std::mem::take(&mut attribute.samples).into_iter().nth(held)?.1
     };
     (value != Value::Blocked).then_some(value)
 }
