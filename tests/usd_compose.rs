@@ -1242,3 +1242,48 @@ fn transform_samples_that_land_on_a_frame_through_retimed_layers_are_taken_as_px
     same_frames(&pxr_frames(&converted, 1001.0, 1023.0), &want, "the whole shot converted");
     assert!(want.windows(2).filter(|w| w[0] != w[1]).count() >= 10, "the shot barely moves");
 }
+
+/// Transform ops count only on xformable prims: authored on a `Scope` or a typeless prim they
+/// are no part of any transform, in pxr (coif moved such curves by the ops); on an Xform or a
+/// curves prim they are. (Prims named in pxr's traversal order, which the dump sorts by path.)
+#[test]
+fn transform_ops_on_prims_that_are_not_xformable_are_ignored_as_pxr_ignores_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let stage = dir.path().join("scoped.usda");
+    let ops = |x: f32, y: f32, z: f32| {
+        format!(
+            "    double3 xformOp:translate = ({x}, {y}, {z})\n    uniform token[] xformOpOrder = [\"xformOp:translate\"]\n"
+        )
+    };
+    let curves = |name: &str| {
+        format!(
+            "def BasisCurves \"{name}\"\n{{\n{}    uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    \
+             point3f[] points = [(0, 0, 0), (0, -0.1, 0)]\n    float[] widths = [0.001] (interpolation = \"constant\")\n}}\n",
+            ops(0.0, 0.0, 0.5)
+        )
+    };
+    std::fs::write(
+        &stage,
+        format!(
+            "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\n\
+             def Scope \"A\"\n{{\n{}    def Xform \"X\"\n    {{\n{}{}    }}\n}}\n\n\
+             def \"B\"\n{{\n{}{}}}\n\n\
+             def Xform \"C\"\n{{\n{}    def Scope \"Inner\"\n    {{\n{}{}    }}\n}}\n",
+            ops(1.0, 0.0, 0.0),
+            ops(0.0, 2.0, 0.0),
+            curves("a"),
+            ops(0.0, 0.0, 3.0),
+            curves("b"),
+            ops(4.0, 0.0, 0.0),
+            ops(0.0, 5.0, 0.0),
+            curves("c"),
+        ),
+    )
+    .unwrap();
+    let want = pxr_frames(&stage, 1.0, 1.0);
+    let groom = coif::io::read_groom(&stage, &Default::default()).unwrap().groom;
+    let got: Vec<f32> = groom.points.iter().flat_map(|p| p.to_array()).collect();
+    same_frames(&[got.clone()], &want, "prims with and without transforms");
+    // Not vacuous: the xformable prims' ops do move the curves.
+    assert!(got.contains(&2.0) && got.contains(&4.0), "{got:?}");
+}

@@ -1080,11 +1080,23 @@ fn lerp(a: &Value, b: &Value, t: f64) -> Value {
     }
 }
 
+/// Prim types of UsdGeom, UsdSkel and UsdLux that derive from `UsdGeomXformable`.
+fn is_xformable(type_name: &str) -> bool {
+    (Imageable::is_imageable(type_name) && type_name != "Scope")
+        || type_name.ends_with("Light")
+        || type_name.ends_with("Light_1")
+}
+
 /// A prim's local transform from its `xformOpOrder`, and whether it resets the parent stack.
+/// Only xformable prims have one: ops authored on a `Scope`, a typeless prim or a material are
+/// not part of any transform, in pxr as here.
 pub(crate) fn local_transform(
     prim: &Prim,
     time: Option<f64>,
 ) -> std::result::Result<(DMat4, bool), (Site, String)> {
+    if !is_xformable(&prim.type_name) {
+        return Ok((DMat4::IDENTITY, false));
+    }
     let Some(order_attribute) = prim.attribute("xformOpOrder") else { return Ok((DMat4::IDENTITY, false)) };
     let Some(order) = value_at(order_attribute, time) else { return Ok((DMat4::IDENTITY, false)) };
     let Value::Text(order) = order else {
