@@ -667,12 +667,9 @@ impl Parser<'_> {
                             self.lexer.bump();
                             break;
                         }
+                        // A dictionary's `double[] name = [1, 2]`: the type's `[]` is skipped as
+                        // an empty list, the value as a list.
                         Some(b',' | b'=' | b':' | b';') => self.lexer.bump(),
-                        Some(b'[') if open == b'{' => {
-                            // `double[] name = …` inside a dictionary.
-                            self.lexer.bump();
-                            self.lexer.expect(b']', "']'")?;
-                        }
                         None => {
                             return Err(self.syntax(format!(
                                 "unexpected end of file: '{}' opened on line {start} is not closed",
