@@ -1287,3 +1287,95 @@ fn transform_ops_on_prims_that_are_not_xformable_are_ignored_as_pxr_ignores_them
     // Not vacuous: the xformable prims' ops do move the curves.
     assert!(got.contains(&2.0) && got.contains(&4.0), "{got:?}");
 }
+
+/// Value clips (a `clips` dictionary, as Houdini's geometry clip sequences and usdstitchclips
+/// write it) animate the points in pxr. coif does not compose them: `info` and `convert` exit 2
+/// naming the layer and the prim that authors them, for `.usdc` and `.usda` top layers and
+/// through a reference (they read as the rest pose with exit 0). An empty `clips` dictionary
+/// and the legacy `clipAssetPaths` keys, which pxr does not play, read as pxr reads them.
+#[test]
+fn value_clips_are_refused_naming_the_layer_and_prim() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name);
+    let script = r#"
+import os, sys
+from pxr import Usd, UsdGeom, Sdf, Vt, Gf
+os.chdir(sys.argv[1])
+def new(name):
+    stage = Usd.Stage.CreateNew(name)
+    UsdGeom.SetStageMetersPerUnit(stage, 1)
+    stage.SetStartTimeCode(1)
+    stage.SetEndTimeCode(3)
+    return stage
+def curves(stage, shift, time=None):
+    UsdGeom.Xform.Define(stage, '/G')
+    c = UsdGeom.BasisCurves.Define(stage, '/G/hair')
+    c.CreateTypeAttr('linear')
+    c.CreateCurveVertexCountsAttr([3])
+    points = Vt.Vec3fArray([Gf.Vec3f(shift, -0.1 * k, 0) for k in range(3)])
+    c.CreatePointsAttr().Set(points, Usd.TimeCode.Default() if time is None else time)
+for frame in (1, 2, 3):
+    s = new(f'clip.{frame}.usda'); curves(s, 0.1 * frame, frame); s.Save()
+s = new('topology.usda'); curves(s, 0.0); s.Save()
+for name in ('shot.usdc', 'shot.usda'):
+    top = new(name)
+    top.GetRootLayer().subLayerPaths.append('./topology.usda')
+    g = top.OverridePrim('/G')
+    top.SetDefaultPrim(g)
+    clips = Usd.ClipsAPI(g)
+    clips.SetClipAssetPaths([Sdf.AssetPath(f'./clip.{f}.usda') for f in (1, 2, 3)])
+    clips.SetClipPrimPath('/G')
+    clips.SetClipActive([(1, 0), (2, 1), (3, 2)])
+    clips.SetClipTimes([(1, 1), (2, 2), (3, 3)])
+    clips.SetClipManifestAssetPath(Sdf.AssetPath('./clip.1.usda'))
+    top.Save()
+shot = new('referencing.usda')
+shot.DefinePrim('/Shot').GetReferences().AddReference('./shot.usdc')
+shot.Save()
+"#;
+    let made = std::process::Command::new(python()).arg("-c").arg(script).arg(dir.path()).output().unwrap();
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    // pxr plays the clips: the stage moves, so its rest pose is not what it holds at frame 2.
+    let x = |file: &str, frame: f64| {
+        pxr_dump(&path(file), Some(frame))["curves"][0]["points"][0].as_f64().unwrap()
+    };
+    for file in ["shot.usdc", "shot.usda", "referencing.usda"] {
+        assert!((x(file, 2.0) - 0.2).abs() < 1e-6 && (x(file, 3.0) - 0.3).abs() < 1e-6, "{file}");
+    }
+    let out = path("out.usda");
+    for (file, prim) in [("shot.usdc", "/G"), ("shot.usda", "/G"), ("referencing.usda", "/Shot")] {
+        let input = path(file);
+        for args in [vec!["info"], vec!["convert", "--frame", "2"]] {
+            let mut args = args.clone();
+            args.push(path_str(&input));
+            if args[0] == "convert" {
+                args.push(path_str(&out));
+            }
+            let run = coif(&args);
+            assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+            let message = stderr(&run);
+            assert!(message.contains(&format!("prim <{prim}>: value clips are not supported")), "{message}");
+            let layer = if file == "referencing.usda" { "shot.usdc" } else { file };
+            assert!(message.contains(layer), "the layer authoring the clips: {message}");
+            assert!(!out.exists());
+        }
+    }
+    // No clip set: an empty dictionary, or the legacy keys pxr no longer reads.
+    let text = std::fs::read_to_string(path("shot.usda")).unwrap();
+    let start = text.find("clips = {").unwrap();
+    let end = start + text[start..].find("\n    }\n").unwrap() + "\n    }".len();
+    for (name, metadata) in [
+        ("empty.usda", "clips = {\n    }"),
+        ("legacy.usda", "clipAssetPaths = [@./clip.1.usda@, @./clip.2.usda@]\n    clipPrimPath = \"/G\""),
+    ] {
+        std::fs::write(path(name), format!("{}{metadata}{}", &text[..start], &text[end..])).unwrap();
+        let groom = coif::io::read_groom(
+            &path(name),
+            &coif::io::ImportOptions { frame: Some(2.0), ..Default::default() },
+        )
+        .unwrap()
+        .groom;
+        let dump = pxr_dump(&path(name), Some(2.0));
+        assert_eq!(flat(&groom.points), f32s(&dump["curves"][0]["points"]), "{name}");
+    }
+}

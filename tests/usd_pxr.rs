@@ -647,3 +647,37 @@ fn integer_primvars_keep_their_type_and_exact_values_through_convert() {
         }
     }
 }
+
+/// Metadata dictionaries holding arrays, as pipelines stamp them on layers and prims
+/// (`customLayerData`, `customData`, `assetInfo`): pxr writes them as `string[] name = [...]`
+/// inside the dictionary, and the layer reads with the points pxr reads (the array's `[` after
+/// `=` was taken for a type's `[]` and the layer refused: "expected ']'").
+#[test]
+fn metadata_dictionaries_holding_arrays_do_not_stop_a_usda_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("stamped.usda");
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Sdf, Vt, Gf
+stage = Usd.Stage.CreateNew(sys.argv[1])
+UsdGeom.SetStageMetersPerUnit(stage, 1)
+stage.GetRootLayer().customLayerData = {'sourceFiles': Vt.StringArray(['a.hip', 'b.ma']), 'frames': Vt.IntArray([1, 2])}
+UsdGeom.Xform.Define(stage, '/G')
+curves = UsdGeom.BasisCurves.Define(stage, '/G/hair')
+curves.CreateTypeAttr('linear')
+curves.CreateCurveVertexCountsAttr([3])
+curves.CreatePointsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(0.5, -0.1, 0), Gf.Vec3f(0, -0.2, 0.25)])
+prim = curves.GetPrim()
+prim.SetCustomData({'tags': Vt.StringArray(['hero', 'groom']), 'nested': {'weights': Vt.DoubleArray([0.5, 1.0]), 'empty': Vt.StringArray()}})
+prim.SetAssetInfo({'payloadAssetDependencies': Sdf.AssetPathArray([Sdf.AssetPath('a.usd'), Sdf.AssetPath('b.usd')])})
+stage.Save()
+text = open(sys.argv[1]).read()
+assert 'string[] tags = ["hero", "groom"]' in text and 'asset[] payloadAssetDependencies = [' in text, text
+"#;
+    let made = std::process::Command::new(python()).arg("-c").arg(script).arg(&path).output().unwrap();
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    let groom = coif::io::usda::read_file(&path, &Default::default(), None).unwrap();
+    let dump = pxr_dump(&path, None);
+    assert_eq!(flat(&groom.points), f32s(&dump["curves"][0]["world_points"]));
+    assert_eq!(groom.vertex_counts().collect::<Vec<_>>(), vec![3]);
+}

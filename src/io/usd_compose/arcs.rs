@@ -139,8 +139,8 @@ pub struct Arcs {
     /// `variants = { string set = "name" }`.
     pub selections: Vec<(String, String)>,
     pub variant_sets: Vec<VariantSet>,
-    /// An arc coif does not compose (`specializes`, `relocates`): refused when the prim is
-    /// composed.
+    /// An arc coif does not compose (`specializes`, `relocates`, value clips): refused when
+    /// the prim is composed.
     pub refused: Option<String>,
 }
 
@@ -163,5 +163,20 @@ impl Arcs {
                 self.variant_sets.last_mut().unwrap()
             }
         }
+    }
+}
+
+/// The prim metadata of value clips: a dictionary of clip sets (files, prim path, active clips,
+/// time mapping, or a template). Clips are not composed: a prim with a clip set is refused, not
+/// read as its rest pose (the time samples the clips hold were dropped without a word). The
+/// legacy `clipAssetPaths`… keys are not refused: pxr no longer reads them either.
+pub const VALUE_CLIPS: &str = "clips";
+
+/// Why the refused arc or metadata `what` stops composition.
+pub fn refusal(what: &str) -> String {
+    if what == VALUE_CLIPS {
+        "value clips are not supported (flatten the stage with usd-core first)".to_string()
+    } else {
+        format!("'{what}' is not composed by coif (flatten the stage with usd-core first)")
     }
 }

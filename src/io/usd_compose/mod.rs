@@ -22,7 +22,8 @@
 //! strongest opinion with a value; at a time code, time samples or a default, whichever is
 //! stronger. Stage metadata (units, up axis) is the root layer's.
 //!
-//! Refused with exit 2 naming the file, prim and arc: `specializes` and `relocates`, `.usdz`
+//! Refused with exit 2 naming the file, prim and arc: `specializes`, `relocates` and value
+//! `clips` (the animation they hold would be lost under the rest pose), `.usdz`
 //! targets, missing files or prims, a missing `defaultPrim`, cycles, and sizes past the limits
 //! below (each bounding work a hostile file could otherwise multiply).
 pub mod arcs;
@@ -643,10 +644,7 @@ impl Composer<'_> {
         {
             let what = spec.arcs.as_ref().and_then(|a| a.refused.clone()).unwrap_or_default();
             let display = self.layers[layer].display.clone();
-            return Err(Error::format(
-                &display,
-                format!("prim <{stage_path}>: '{what}' is not composed by coif (flatten the stage with usd-core first)"),
-            ));
+            return Err(Error::format(&display, format!("prim <{stage_path}>: {}", arcs::refusal(&what))));
         }
         let inherits = self.composed(node, |a| &a.inherits);
         let references = self.composed(node, |a| &a.references);

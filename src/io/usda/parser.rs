@@ -8,7 +8,7 @@ use std::io::Read;
 use glam::Vec3;
 
 use super::lexer::{describe, LexError, LexResult, Lexer};
-use crate::io::usd_compose::arcs::{Arcs, AssetArc, LayerOffset, ListEdit, SubLayer};
+use crate::io::usd_compose::arcs::{self, Arcs, AssetArc, LayerOffset, ListEdit, SubLayer};
 
 /// A value of a declared type, flattened (tuples and matrices become runs of numbers).
 #[derive(Clone, Debug, PartialEq)]
@@ -317,6 +317,10 @@ const COMPOSITION_KEYS: &[&str] = &[
 enum Meta {
     Number(f64),
     Text(String),
+    /// `{ … }`, and whether it holds no entry.
+    Dictionary {
+        empty: bool,
+    },
     Other,
 }
 
@@ -619,6 +623,10 @@ impl Parser<'_> {
             Some(b'"' | b'\'') => Ok(Meta::Text(self.lexer.string()?)),
             _ if self.lexer.at_number() => Ok(Meta::Number(self.lexer.f64()?)),
             _ if self.lexer.at_identifier() => Ok(Meta::Text(self.lexer.identifier()?)),
+            Some(b'{') => {
+                let entries = self.nested(|parser| parser.skip_bracketed(b'{'))?;
+                Ok(Meta::Dictionary { empty: entries == 0 })
+            }
             _ => {
                 self.skip_value()?;
                 Ok(Meta::Other)
@@ -654,34 +662,7 @@ impl Parser<'_> {
                 self.lexer.asset()?;
             }
             Some(open @ (b'[' | b'(' | b'{')) => {
-                let close = match open {
-                    b'[' => b']',
-                    b'(' => b')',
-                    _ => b'}',
-                };
-                let start = self.lexer.line;
-                self.lexer.bump();
-                loop {
-                    match self.lexer.next_byte() {
-                        Some(b) if b == close => {
-                            self.lexer.bump();
-                            break;
-                        }
-                        Some(b',' | b'=' | b':' | b';') => self.lexer.bump(),
-                        Some(b'[') if open == b'{' => {
-                            // `double[] name = …` inside a dictionary.
-                            self.lexer.bump();
-                            self.lexer.expect(b']', "']'")?;
-                        }
-                        None => {
-                            return Err(self.syntax(format!(
-                                "unexpected end of file: '{}' opened on line {start} is not closed",
-                                open as char
-                            )))
-                        }
-                        Some(_) => self.skip_value()?,
-                    }
-                }
+                self.skip_bracketed(open)?;
             }
             _ if self.lexer.at_number() => {
                 self.lexer.f64()?;
@@ -693,6 +674,39 @@ impl Parser<'_> {
             None => return Err(self.syntax("unexpected end of file: expected a value")),
         }
         Ok(())
+    }
+
+    /// Skips a list, tuple or dictionary opening with `open`; how many values it held.
+    fn skip_bracketed(&mut self, open: u8) -> ParseResult<usize> {
+        let close = match open {
+            b'[' => b']',
+            b'(' => b')',
+            _ => b'}',
+        };
+        let start = self.lexer.line;
+        self.lexer.bump();
+        let mut values = 0;
+        loop {
+            match self.lexer.next_byte() {
+                Some(b) if b == close => {
+                    self.lexer.bump();
+                    return Ok(values);
+                }
+                // A dictionary's `double[] name = [1, 2]`: the type's `[]` is skipped as an
+                // empty list, the value as a list.
+                Some(b',' | b'=' | b':' | b';') => self.lexer.bump(),
+                None => {
+                    return Err(self.syntax(format!(
+                        "unexpected end of file: '{}' opened on line {start} is not closed",
+                        open as char
+                    )))
+                }
+                Some(_) => {
+                    self.skip_value()?;
+                    values += 1;
+                }
+            }
+        }
     }
 
     /// After `def`/`over`/`class`: `[Type] "name" [( metadata )] { body }`.
@@ -721,6 +735,7 @@ impl Parser<'_> {
         let line = self.lexer.line;
         if self.lexer.next_byte() == Some(b'(') {
             let mut active = None;
+            let mut clips = false;
             let outer = self.arcs.replace(Arcs::default());
             let result = self.metadata(|key, value, _| {
                 if key == "active" {
@@ -729,9 +744,15 @@ impl Parser<'_> {
                             && !matches!(value, Meta::Number(n) if n == 0.0),
                     );
                 }
+                if key == arcs::VALUE_CLIPS && !matches!(value, Meta::Dictionary { empty: true }) {
+                    clips = true;
+                }
             });
-            let arcs = std::mem::replace(&mut self.arcs, outer).unwrap_or_default();
+            let mut arcs = std::mem::replace(&mut self.arcs, outer).unwrap_or_default();
             result?;
+            if clips {
+                arcs.refused.get_or_insert(arcs::VALUE_CLIPS.to_string());
+            }
             prim.active = active;
             if !arcs.is_empty() {
                 prim.arcs = Some(Box::new(arcs));

@@ -13,7 +13,7 @@ use super::format::{
     rep, SpecType, Type, BOOTSTRAP_SIZE, MAGIC, MIN_COMPRESSED_ARRAY, SPECIFIER_CLASS, SPECIFIER_DEF,
 };
 use crate::error::{Error, Result};
-use crate::io::usd_compose::arcs::{Arcs, AssetArc, LayerOffset, ListOp, SubLayer};
+use crate::io::usd_compose::arcs::{self, Arcs, AssetArc, LayerOffset, ListOp, SubLayer};
 use crate::io::usda::{self, Attribute, Layer, LayerTimeline, Prim, Specifier, Value};
 use crate::io::ImportOptions;
 
@@ -426,6 +426,9 @@ impl<'a> Crate<'a> {
                         }
                         "variantSelection" => arcs.selections = self.selections(value).map_err(fail)?,
                         "specializes" | "relocates" => arcs.refused = Some(field.to_string()),
+                        arcs::VALUE_CLIPS if !self.dictionary_is_empty(value).map_err(fail)? => {
+                            arcs.refused.get_or_insert(field.to_string());
+                        }
                         _ => {}
                     }
                 }
@@ -538,6 +541,14 @@ impl<'a> Crate<'a> {
             return Err(format!("expected a {kind:?} value"));
         }
         Ok(())
+    }
+
+    /// Whether a dictionary value holds no entry (its count leads it).
+    fn dictionary_is_empty(&self, value: u64) -> Checked<bool> {
+        if Self::kind(value)? != Type::Dictionary || rep::is_array(value) {
+            return Err("expected a Dictionary value".into());
+        }
+        Ok(rep::is_inline(value) || self.cursor(value).u64()? == 0)
     }
 
     fn string_vector(&self, value: u64) -> Checked<Vec<String>> {
