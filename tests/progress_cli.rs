@@ -66,6 +66,21 @@ fn style_and_render_log_progress_with_an_eta_only_when_asked() {
     assert_eq!(percentages.last(), Some(&100), "{}", stderr(&rendered));
     assert!(percentages.windows(2).all(|w| w[0] < w[1]), "{percentages:?}");
 
+    // `--quiet`, as on `style` (the README and render's help name it; it was a usage error).
+    let quiet = coif(&[
+        "render",
+        path_str(&styled),
+        "-o",
+        path_str(&image),
+        "--res",
+        "64x48",
+        "--spp",
+        "2",
+        "--quiet",
+    ]);
+    assert!(quiet.status.success(), "{}", stderr(&quiet));
+    assert!(logged_percentages(&stderr(&quiet), "render").is_empty(), "{}", stderr(&quiet));
+
     let bad = coif(&[&args[..], &["--progress", "sometimes"]].concat());
     assert_eq!(bad.status.code(), Some(2));
     assert!(stderr(&bad).contains("--progress"), "{}", stderr(&bad));

@@ -409,3 +409,38 @@ fn frames_are_captured_at_their_times_at_any_rate() {
         }
     }
 }
+
+/// An output that is a directory, or spelled as one, exits 2 before any work, naming it, for
+/// `style`, `convert` and `render` (it failed with exit 1 "Is a directory" after the whole run).
+#[test]
+fn an_output_that_is_a_directory_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let taken = dir.path().join("taken.usda");
+    std::fs::create_dir(&taken).unwrap();
+    let image = dir.path().join("taken.png");
+    std::fs::create_dir(&image).unwrap();
+    let slash = format!("{}/", dir.path().join("new.usda").display());
+    let recipe = repo("grooms/recipes/bedhead_scene1.toml");
+    let groom = repo("grooms/sample_wavy.hair");
+    for output in [path_str(&taken), slash.as_str()] {
+        let runs = [
+            vec!["style", path_str(&recipe), "--groom", path_str(&groom), "-o", output],
+            vec!["convert", path_str(&groom), output],
+        ];
+        for args in runs {
+            let run = coif(&args);
+            // Exit 2 and this message come from the check before any work (the late failure
+            // was exit 1, "Is a directory").
+            assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+            assert!(
+                stderr(&run).contains(&format!("{output}: the output is a directory")),
+                "{}",
+                stderr(&run)
+            );
+        }
+    }
+    let run = coif(&["render", path_str(&groom), "-o", path_str(&image), "--res", "8x8", "--spp", "1"]);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    assert!(stderr(&run).contains("taken.png: the output is a directory"), "{}", stderr(&run));
+    assert!(!dir.path().join("new.usda").exists());
+}

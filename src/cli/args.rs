@@ -193,6 +193,9 @@ pub(crate) struct RenderArgs {
     /// Worker threads (default: all cores). The image is the same for any count.
     #[arg(long)]
     pub(crate) threads: Option<usize>,
+    /// No progress bar (--progress never).
+    #[arg(long)]
+    pub(crate) quiet: bool,
     /// Progress on stderr: auto (a bar on a terminal), log (plain lines with an ETA) or never.
     #[arg(long, value_enum, default_value_t)]
     pub(crate) progress: ProgressArg,

@@ -371,7 +371,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
     for warning in &loaded.warnings {
         eprintln!("coif: warning: {warning}");
     }
-    let progress = Progress::new(args.progress.mode(false, false), "render", 1);
+    let progress = Progress::new(args.progress.mode(args.quiet, false), "render", 1);
     let report = |done: u64, total: u64| {
         progress.set_total(total);
         progress.set_done(done);

@@ -529,9 +529,16 @@ pub fn check_output(path: &Path, options: &ExportOptions) -> Result<Format> {
     Ok(format)
 }
 
-/// The usage error for an output whose directory does not exist, checked before any work: a
-/// mistyped directory would otherwise be found only when a long run writes its result.
+/// The usage error for an output whose directory does not exist, or that is a directory, checked
+/// before any work: a mistyped path would otherwise be found only when a long run writes its
+/// result.
 pub fn check_output_directory(path: &Path) -> Result<()> {
+    // An output that is itself a directory, or spelled as one, fails the same way at the end.
+    let spelled_as_directory =
+        path.as_os_str().as_encoded_bytes().last().is_some_and(|&b| std::path::is_separator(b as char));
+    if path.is_dir() || spelled_as_directory {
+        return Err(Error::Usage(format!("{}: the output is a directory, not a file", path.display())));
+    }
     match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => {
             let problem = if dir.exists() { "is not a directory" } else { "does not exist" };
