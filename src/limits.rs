@@ -18,6 +18,11 @@ use crate::groom::Groom;
 pub const SIM_BYTES_PER_VERTEX: f64 = 512.0;
 /// Bytes per water droplet (position, velocity, its list of touched vertices).
 pub const DROPLET_BYTES: f64 = 128.0;
+/// A captured `--frames` frame, per vertex: the position and the attributes styling changes
+/// (`rest` and `rest_darboux` 12 B each, four `bond_*` rates, `wetness`, `material_frame` 16 B):
+/// 84 B. Counting the positions alone (12 B) let 6,800 frames of 600 vertices past a 60 MB limit
+/// to a 311 MB peak.
+const FRAME_BYTES_PER_VERTEX: f64 = 84.0;
 /// Bytes a groom holds per vertex (point, width and a few attributes). Measured: `coif info`'s
 /// peak RSS grows by 32 bytes per vertex of a generated groom; attributes add more.
 pub const GROOM_BYTES_PER_VERTEX: f64 = 64.0;
@@ -216,7 +221,7 @@ pub fn check_style(groom: &Groom, recipe: &crate::style::Recipe, frames_per_seco
     let steps: f64 =
         recipe.stages.iter().map(|s| steps_for(s.get_ref().duration().into(), settings.dt.into())).sum();
     let frames = (seconds * frames_per_second as f64).ceil() + 2.0;
-    let frame_bytes = if frames_per_second > 0.0 { frames * vertices * 12.0 } else { 0.0 };
+    let frame_bytes = if frames_per_second > 0.0 { frames * vertices * FRAME_BYTES_PER_VERTEX } else { 0.0 };
     let what = format!(
         "styling {vertices:.0} vertices with {droplets:.0} droplets for {} s",
         crate::validate::seconds_text(seconds)
@@ -259,6 +264,32 @@ mod tests {
         let e = check_memory("water", 1e12 * DROPLET_BYTES).unwrap_err().to_string();
         assert!(e.contains("128000.000 GB"), "{e}");
         assert!(check_steps("tiny", 10.0, 10.0, 1000.0).is_ok());
+    }
+
+    /// What one captured frame of a style holds per vertex, counted from a real run, fits the
+    /// estimate (it counted the positions alone).
+    #[test]
+    fn a_captured_frame_is_counted_with_its_attributes() {
+        let groom = crate::generate::generate(&crate::generate::GenerateParams {
+            strands: 4,
+            vertices_per_strand: 6,
+            ..Default::default()
+        })
+        .unwrap();
+        let recipe = crate::style::recipe::parse(
+            "[settings]\ndt = 0.01\n\n[[stages]]\nkind = \"wet\"\nduration = 0.05\n",
+            std::path::Path::new("r.toml"),
+        )
+        .unwrap();
+        let options = crate::style::StyleOptions { frames_per_second: 100.0, ..Default::default() };
+        let styled = crate::style::style(&groom, &recipe, &options).unwrap();
+        let vertices = groom.vertex_count() as f64;
+        let attributes: usize = styled.frame_attributes[0]
+            .iter()
+            .map(|a| a.data.len() * 4)
+            .sum();
+        let held = (styled.frames[0].len() * 12 + attributes) as f64 / vertices;
+        assert!(held > 12.0 && held <= FRAME_BYTES_PER_VERTEX, "a frame holds {held} B per vertex");
     }
 
     #[test]
