@@ -45,6 +45,16 @@ fn simulate_settle_reports_its_residual_and_can_require_convergence() {
     assert!(settle["force_residual"].as_f64().unwrap() > tolerance, "{settle}");
     assert!(stderr(&short).contains("did not reach its tolerance"), "{}", stderr(&short));
 
+    // Shorter than one probe (~11 ms): still residuals to report, numbers in the JSON (they were
+    // infinite, `null`).
+    std::fs::remove_file(&output).unwrap();
+    let shortest = run(&["--settle-seconds", "0.005"]);
+    assert_eq!(shortest.status.code(), Some(0), "{}", stderr(&shortest));
+    let settle = stdout_json(&shortest)["simulation"]["settle"].clone();
+    for residual in ["force_residual", "torque_residual"] {
+        assert!(settle[residual].as_f64().is_some_and(f64::is_finite), "{residual}: {settle}");
+    }
+
     std::fs::remove_file(&output).unwrap();
     let required = run(&["--settle-seconds", "0.02", "--require-converged"]);
     assert_eq!(required.status.code(), Some(1), "{}", stderr(&required));

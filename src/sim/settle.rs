@@ -49,7 +49,8 @@ use crate::groom::{Attribute, AttributeRate, Groom};
 pub struct SettleOptions {
     /// Largest accepted force and torque residual, relative to gravity's (see the module docs).
     pub tolerance: f32,
-    /// Give up after this many seconds of simulated time.
+    /// Give up after this many seconds of simulated time (at least two probes' worth, ~22 ms,
+    /// so the report has residuals to give).
     pub max_seconds: f32,
     /// Solver iterations while settling (`None`: the simulation's own). Static shapes of stiff,
     /// finely cut strands need more than a dynamic step does.
@@ -151,6 +152,11 @@ const PROBE_INTERVAL: f32 = 0.25;
 /// Four steps' worth at 1/360 s resolve ~2e-5 at every Δt.
 const PROBE_TIME: f32 = 4.0 / 360.0;
 
+/// Steps a probe takes at Δt `dt`.
+fn probe_steps(dt: f32) -> u64 {
+    (PROBE_TIME / dt).round().max(1.0) as u64
+}
+
 /// Standard gravity, the residual's scale when gravity is off.
 const STANDARD_GRAVITY: f32 = 9.80665;
 
@@ -185,7 +191,9 @@ pub fn settle_with<C>(
         strand_steps_asleep: 0,
         max_speed: 0.0,
     };
-    let max_steps = (options.max_seconds / dt).ceil().max(1.0) as u64;
+    // At least one probe in each phase: a shorter settle measured nothing and reported its
+    // residuals as infinite (`null` in JSON).
+    let max_steps = (options.max_seconds / dt).ceil().max(2.0 * probe_steps(dt) as f32) as u64;
     // Light frames get there fast; the simulation's own frames then move the state to a rest
     // state of the stepper the groom will be simulated with. With unconverged iterations the two
     // rest states differ, and not slightly: every strand of seed_200 hanging under gravity moves
@@ -224,7 +232,7 @@ fn relax<C>(
 ) {
     let dt = sim(context).params().dt;
     let probe_every = (PROBE_INTERVAL / dt).ceil().max(2.0) as u64;
-    let probe_steps = (PROBE_TIME / dt).round().max(1.0) as u64;
+    let probe_steps = probe_steps(dt);
     report.converged = false;
     let mut probe: Option<(Vec<Vec3>, Vec<Quat>)> = None;
     let mut since_reset = 0u64;
