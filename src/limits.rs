@@ -284,10 +284,7 @@ mod tests {
         let options = crate::style::StyleOptions { frames_per_second: 100.0, ..Default::default() };
         let styled = crate::style::style(&groom, &recipe, &options).unwrap();
         let vertices = groom.vertex_count() as f64;
-        let attributes: usize = styled.frame_attributes[0]
-            .iter()
-            .map(|a| a.data.len() * 4)
-            .sum();
+        let attributes: usize = styled.frame_attributes[0].iter().map(|a| a.data.len() * 4).sum();
         let held = (styled.frames[0].len() * 12 + attributes) as f64 / vertices;
         assert!(held > 12.0 && held <= FRAME_BYTES_PER_VERTEX, "a frame holds {held} B per vertex");
     }

@@ -9,7 +9,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -356,6 +356,9 @@ struct Session {
     sim: Simulation,
     /// Unit direction from the head centre to each strand's root (for masks).
     root_dirs: Vec<Vec3>,
+    /// The rotation from coif's head axes (X side, Y up, Z front) to the head's: what is random
+    /// in a direction is drawn in the head's axes, so a turned groom gets the same style.
+    head_rotation: Quat,
     radii: Vec<f32>,
     /// The recipe's obstacles, where each is (pressing, or withdrawn by a `release`), and the
     /// rods.
@@ -461,6 +464,7 @@ impl Session {
             recipe,
             sim,
             root_dirs,
+            head_rotation: placed.mask_rotation,
             obstacles,
             poses,
             rods,
@@ -1097,7 +1101,8 @@ impl Session {
                 let dir = Vec3::new(unit_hash(seed, 1, k), unit_hash(seed, 2, k), unit_hash(seed, 3, k))
                     * 2.0
                     - 1.0;
-                self.sim.rods().positions()[v] + dir.normalize_or_zero() * (0.5 * (r_min + r_max))
+                let dir = self.head_rotation * dir.normalize_or_zero();
+                self.sim.rods().positions()[v] + dir * (0.5 * (r_min + r_max))
             })
             .collect();
         self.droplets = Droplets::new(positions);
