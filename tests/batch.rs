@@ -468,3 +468,61 @@ fn a_batch_killed_at_random_resumes_to_the_bytes_of_an_uninterrupted_run() {
     assert_eq!(a.len(), 400);
     assert!(a == b, "the resumed batch differs from an uninterrupted run");
 }
+
+/// `coif` run in `dir` (so that the manifest can be named relative to it).
+fn coif_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_coif")).current_dir(dir).args(args).output().unwrap()
+}
+
+/// Whether a task is complete does not depend on how the manifest path is spelled, nor on
+/// where the project is mounted. Sidecars recorded outputs as spelled from the manifest path on
+/// the command line (`out/a/groom.usda` for `m.toml`, `/tmp/…/out/a/groom.usda` for the path
+/// `farm submit` puts in the sbatch script) and composed layers by absolute path: after
+/// `coif batch m.toml`, `farm status ./m.toml` said 0 of 2 complete, and the farm's
+/// `coif batch /abs/m.toml --task 0` styled the task again; a project seen under another folder
+/// redid every task.
+#[test]
+fn a_finished_task_is_complete_for_any_spelling_of_the_manifest_path_and_any_mount_point() {
+    let manifest = "[defaults]\nrecipe = \"quick.toml\"\noutputs = [\"out/{name}/groom.usda\"]\n\
+                    [[tasks]]\nname = \"a\"\ngroom = \"groom.hair\"\n\
+                    [[tasks]]\nname = \"shot\"\ngroom = \"shot.usda\"\n";
+    let parent = tempfile::tempdir().unwrap();
+    let project = parent.path().join("project");
+    std::fs::rename(small_job(manifest).keep(), &project).unwrap();
+    // A shot composing a groom cache: the cache is a recorded layer.
+    let cache = project.join("cache.usda");
+    let made = coif(&["convert", path_str(&project.join("groom.hair")), path_str(&cache)]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    std::fs::write(
+        project.join("shot.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"shot\"\n    metersPerUnit = 1\n)\n\
+         def Xform \"shot\" (\n    references = @cache.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+
+    let run = stdout_json(&coif_in(&project, &["batch", "m.toml", "--json"]));
+    assert_eq!(run["done"], 2, "{run}");
+    let complete = |dir: &Path, spelling: &str| {
+        let status = stdout_json(&coif_in(dir, &["farm", "status", spelling, "--json"]));
+        (status["complete"].as_u64().unwrap(), status["total"].as_u64().unwrap())
+    };
+    let absolute = project.join("m.toml");
+    for spelling in ["m.toml", "./m.toml", "../project/m.toml", path_str(&absolute)] {
+        assert_eq!(complete(&project, spelling), (2, 2), "farm status {spelling}");
+    }
+    // The task as the sbatch script runs it.
+    let rerun = stdout_json(&coif(&["batch", path_str(&absolute), "--task", "0", "--json"]));
+    assert_eq!(rerun["outcome"]["status"], "skipped", "{rerun}");
+
+    // The project under another folder, as a farm node that mounts it elsewhere sees it.
+    let elsewhere = parent.path().join("mounted-elsewhere");
+    std::fs::rename(&project, &elsewhere).unwrap();
+    assert_eq!(complete(parent.path(), path_str(&elsewhere.join("m.toml"))), (2, 2));
+    let resumed = stdout_json(&coif(&["batch", path_str(&elsewhere.join("m.toml")), "--json"]));
+    assert_eq!((resumed["skipped"].as_u64(), resumed["done"].as_u64()), (Some(2), Some(0)), "{resumed}");
+    // Still checked: a changed layer of the moved project makes its task pending.
+    let mut edited = std::fs::read(elsewhere.join("cache.usda")).unwrap();
+    edited.extend_from_slice(b"# edited\n");
+    std::fs::write(elsewhere.join("cache.usda"), edited).unwrap();
+    assert_eq!(complete(&elsewhere, "m.toml"), (1, 2));
+}

@@ -100,6 +100,9 @@ pub struct Task {
     pub wedge_values: Vec<String>,
     /// The manifest line the task (or its wedge) starts on.
     pub line: usize,
+    /// The manifest's folder, as the manifest path was given: sidecars record files relative
+    /// to it (see `recorded_name`).
+    pub folder: PathBuf,
 }
 
 #[derive(Clone, Debug)]
@@ -198,6 +201,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             require_converged: spec.require_converged.or(defaults.require_converged).unwrap_or(false),
             wedge_values,
             line,
+            folder: base.clone(),
         });
         Ok(())
     };
@@ -408,6 +412,18 @@ fn list_entry<'a>(
 
 fn not_a_container(path: &str, keys: &[&str]) -> String {
     format!("override '{path}': '{}' is a value, not a table or list", keys.join("."))
+}
+
+/// How a sidecar names a file: its identity relative to the manifest's `folder` (absolute when
+/// outside it). The same whether the manifest was given as `m.toml`, `./m.toml` or its absolute
+/// path, and on a farm node that mounts the project somewhere else.
+pub fn recorded_name(folder: &Path, path: &Path) -> PathBuf {
+    let folder = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
+    let file = file_identity(path);
+    match file.strip_prefix(file_identity(folder)) {
+        Ok(relative) => relative.to_path_buf(),
+        Err(_) => file,
+    }
 }
 
 /// What names a file whatever the spelling of its path: absolute, without `.` and `..`, and
