@@ -526,3 +526,32 @@ fn a_finished_task_is_complete_for_any_spelling_of_the_manifest_path_and_any_mou
     std::fs::write(elsewhere.join("cache.usda"), edited).unwrap();
     assert_eq!(complete(&elsewhere, "m.toml"), (1, 2));
 }
+
+/// `coif --max-steps N batch` and `--max-memory` hold for every task. They were not passed to
+/// the task processes nor written into the sbatch script: a batch whose one task alone is refused
+/// (36 steps of 1/360 s over a budget of 10) exited 0 with the task done.
+#[test]
+fn a_batchs_limits_hold_for_its_tasks_locally_and_on_the_farm() {
+    let manifest = "[defaults]\ngroom = \"groom.hair\"\nrecipe = \"quick.toml\"\n\
+                    outputs = [\"out/{name}.usda\"]\n[[tasks]]\nname = \"a\"\n";
+    for (limit, value, refusal) in
+        [("--max-steps", "10", "over the budget of 10"), ("--max-memory", "1K", "1.024 kB")]
+    {
+        let dir = small_job(manifest);
+        let path = dir.path().join("m.toml");
+        let local = coif(&[limit, value, "batch", path_str(&path), "--json"]);
+        assert_eq!(local.status.code(), Some(2), "{limit} {value}: {}", stderr(&local));
+        let log = std::fs::read_to_string(dir.path().join("logs/a.log")).unwrap();
+        assert!(log.contains(refusal), "{limit} {value}: {log}");
+        assert!(!dir.path().join("out/a.usda").exists());
+
+        // The sbatch script's task line, as a farm node runs it.
+        let submitted =
+            stdout_json(&coif(&[limit, value, "farm", "submit", path_str(&path), "--dry-run", "--json"]));
+        let script = submitted["script"].as_str().unwrap();
+        let task = Command::new("bash").arg(script).env("SLURM_ARRAY_TASK_ID", "0").output().unwrap();
+        assert_eq!(task.status.code(), Some(2), "{limit} {value}: {}", stderr(&task));
+        assert!(stderr(&task).contains(refusal), "{limit} {value}: {}", stderr(&task));
+        assert!(!dir.path().join("out/a.usda").exists());
+    }
+}

@@ -1,7 +1,8 @@
 //! A batch on one machine: every task runs as its own `coif batch MANIFEST --task I` process,
 //! `jobs` at a time, its output in a per-task log — the same invocation a farm array job makes,
 //! so a task behaves the same here and there, and one failing or crashing task cannot take the
-//! others down. Tasks already complete are skipped without starting a process.
+//! others down. Tasks already complete are skipped without starting a process. Each task gets
+//! the batch's `--max-memory` and `--max-steps`.
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -82,6 +83,7 @@ pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport>
             let mut command = Command::new(coif);
             crate::io::cleanup::die_with_parent(&mut command);
             let child = command
+                .args(crate::limits::as_flags())
                 .arg("batch")
                 .arg(&manifest.path)
                 .arg("--task")

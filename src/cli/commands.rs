@@ -463,7 +463,12 @@ fn run_farm(action: FarmAction) -> Result<()> {
             let coif = std::env::current_exe()
                 .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
             let logs = std::path::absolute(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
-            let options = slurm::SubmitOptions { partition, cpus_per_task: cpus, max_parallel };
+            let options = slurm::SubmitOptions {
+                partition,
+                cpus_per_task: cpus,
+                max_parallel,
+                coif_flags: coif::limits::as_flags(),
+            };
             let text = slurm::script(&coif, &absolute, manifest.tasks.len(), &logs, &options)?;
             std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
             let dir = slurm::farm_dir(&absolute);
