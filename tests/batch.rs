@@ -555,3 +555,29 @@ fn a_batchs_limits_hold_for_its_tasks_locally_and_on_the_farm() {
         assert!(!dir.path().join("out/a.usda").exists());
     }
 }
+
+/// A contact sheet in a folder that does not exist yet: the folder is made, as the tasks'
+/// output folders are. It was not: every task ran, then the batch failed at the sheet (exit 2,
+/// "No such file or directory") and `--json` printed nothing, not even the tasks that ran.
+#[test]
+fn a_contact_sheet_gets_its_folder_and_a_failed_sheet_still_reports_the_tasks() {
+    let manifest = "contact_sheet = \"sheets/of/wedges.png\"\n[defaults]\ngroom = \"groom.hair\"\n\
+                    recipe = \"quick.toml\"\npreview = \"out/{name}.png\"\n\
+                    [[tasks]]\nname = \"a\"\n[[tasks]]\nname = \"b\"\n";
+    let dir = small_job(manifest);
+    let report = batch(dir.path(), "1");
+    assert_eq!(report["done"], 2, "{report}");
+    let sheet = dir.path().join("sheets/of/wedges.png");
+    assert_eq!(report["contact_sheet"].as_str(), Some(path_str(&sheet)), "{report}");
+    assert_eq!(&std::fs::read(&sheet).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+
+    // A sheet that cannot be written (its name is a folder): the tasks' report is printed.
+    let blocked = small_job(manifest);
+    std::fs::create_dir_all(blocked.path().join("sheets/of/wedges.png")).unwrap();
+    let out = coif(&["batch", path_str(&blocked.path().join("m.toml")), "--json"]);
+    assert_ne!(out.status.code(), Some(0), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("the --json report");
+    assert_eq!((report["done"].as_u64(), report["failed"].as_u64()), (Some(2), Some(0)), "{report}");
+    assert!(report["contact_sheet"].is_null(), "{report}");
+    assert!(report["contact_sheet_error"].as_str().unwrap().contains("wedges.png"), "{report}");
+}
