@@ -21,6 +21,7 @@ import argparse
 import os
 import sys
 import tempfile
+import time
 
 try:
     from pxr import Sdf, Usd, UsdUtils
@@ -105,6 +106,10 @@ def flattened(args):
     return stage.Flatten()
 
 
+# 1980-01-01 00:00 local time, the earliest time a zip entry holds, as reproducible zips use.
+ZIP_EPOCH = time.mktime((1980, 1, 1, 0, 0, 0, 0, 1, -1))
+
+
 def export(args):
     layer = Sdf.Layer.FindOrOpen(args.input)
     if layer is None:
@@ -119,6 +124,9 @@ def export(args):
             crate = os.path.join(folder, os.path.splitext(os.path.basename(args.output))[0] + ".usdc")
             if not layer.Export(crate, args={"format": "usdc"}):
                 raise RuntimeError(f"{crate}: usd-core could not write the layer")
+            # The package's entry carries the file's modification time (as local DOS time): the
+            # clock's would make every export other bytes.
+            os.utime(crate, (ZIP_EPOCH, ZIP_EPOCH))
             if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(crate), args.output):
                 raise RuntimeError(f"{args.output}: usd-core could not write the usdz package")
     else:

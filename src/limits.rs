@@ -62,6 +62,20 @@ pub fn max_steps() -> u64 {
     MAX_STEPS.load(Ordering::Relaxed)
 }
 
+/// The limits set for this process as coif's command-line flags, for the coif processes a batch
+/// starts (its local tasks, the sbatch script's line): every task runs under the limits the batch
+/// was given. Defaults are left out, so that a farm node's memory limit stays half its own RAM.
+pub fn as_flags() -> Vec<String> {
+    let mut flags = Vec::new();
+    if let set @ 1.. = MAX_MEMORY.load(Ordering::Relaxed) {
+        flags.extend(["--max-memory".to_string(), set.to_string()]);
+    }
+    if max_steps() != DEFAULT_MAX_STEPS {
+        flags.extend(["--max-steps".to_string(), max_steps().to_string()]);
+    }
+    flags
+}
+
 fn total_ram() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;

@@ -1064,6 +1064,16 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
             ),
             &["a.exr", ".png"],
         ),
+        // Written after the tasks, the sheet replaced task a's preview; a's sidecar then never
+        // held, so every re-run styled a again. Spelled otherwise, the same file.
+        (
+            "sheet over a preview",
+            format!(
+                "contact_sheet = \"./out/a/p.png\"\n{plain}preview = \"out/{{name}}/p.png\"\n\
+                 [[tasks]]\nname = \"a\"\n[[tasks]]\nname = \"b\"\n"
+            ),
+            &["line 1", "task 'a'", "out/a/p.png"],
+        ),
     ] {
         cases.push(case(
             &format!("batch {label}"),

@@ -468,3 +468,116 @@ fn a_batch_killed_at_random_resumes_to_the_bytes_of_an_uninterrupted_run() {
     assert_eq!(a.len(), 400);
     assert!(a == b, "the resumed batch differs from an uninterrupted run");
 }
+
+/// `coif` run in `dir` (so that the manifest can be named relative to it).
+fn coif_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_coif")).current_dir(dir).args(args).output().unwrap()
+}
+
+/// Whether a task is complete does not depend on how the manifest path is spelled, nor on
+/// where the project is mounted. Sidecars recorded outputs as spelled from the manifest path on
+/// the command line (`out/a/groom.usda` for `m.toml`, `/tmp/…/out/a/groom.usda` for the path
+/// `farm submit` puts in the sbatch script) and composed layers by absolute path: after
+/// `coif batch m.toml`, `farm status ./m.toml` said 0 of 2 complete, and the farm's
+/// `coif batch /abs/m.toml --task 0` styled the task again; a project seen under another folder
+/// redid every task.
+#[test]
+fn a_finished_task_is_complete_for_any_spelling_of_the_manifest_path_and_any_mount_point() {
+    let manifest = "[defaults]\nrecipe = \"quick.toml\"\noutputs = [\"out/{name}/groom.usda\"]\n\
+                    [[tasks]]\nname = \"a\"\ngroom = \"groom.hair\"\n\
+                    [[tasks]]\nname = \"shot\"\ngroom = \"shot.usda\"\n";
+    let parent = tempfile::tempdir().unwrap();
+    let project = parent.path().join("project");
+    std::fs::rename(small_job(manifest).keep(), &project).unwrap();
+    // A shot composing a groom cache: the cache is a recorded layer.
+    let cache = project.join("cache.usda");
+    let made = coif(&["convert", path_str(&project.join("groom.hair")), path_str(&cache)]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    std::fs::write(
+        project.join("shot.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"shot\"\n    metersPerUnit = 1\n)\n\
+         def Xform \"shot\" (\n    references = @cache.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+
+    let run = stdout_json(&coif_in(&project, &["batch", "m.toml", "--json"]));
+    assert_eq!(run["done"], 2, "{run}");
+    let complete = |dir: &Path, spelling: &str| {
+        let status = stdout_json(&coif_in(dir, &["farm", "status", spelling, "--json"]));
+        (status["complete"].as_u64().unwrap(), status["total"].as_u64().unwrap())
+    };
+    let absolute = project.join("m.toml");
+    for spelling in ["m.toml", "./m.toml", "../project/m.toml", path_str(&absolute)] {
+        assert_eq!(complete(&project, spelling), (2, 2), "farm status {spelling}");
+    }
+    // The task as the sbatch script runs it.
+    let rerun = stdout_json(&coif(&["batch", path_str(&absolute), "--task", "0", "--json"]));
+    assert_eq!(rerun["outcome"]["status"], "skipped", "{rerun}");
+
+    // The project under another folder, as a farm node that mounts it elsewhere sees it.
+    let elsewhere = parent.path().join("mounted-elsewhere");
+    std::fs::rename(&project, &elsewhere).unwrap();
+    assert_eq!(complete(parent.path(), path_str(&elsewhere.join("m.toml"))), (2, 2));
+    let resumed = stdout_json(&coif(&["batch", path_str(&elsewhere.join("m.toml")), "--json"]));
+    assert_eq!((resumed["skipped"].as_u64(), resumed["done"].as_u64()), (Some(2), Some(0)), "{resumed}");
+    // Still checked: a changed layer of the moved project makes its task pending.
+    let mut edited = std::fs::read(elsewhere.join("cache.usda")).unwrap();
+    edited.extend_from_slice(b"# edited\n");
+    std::fs::write(elsewhere.join("cache.usda"), edited).unwrap();
+    assert_eq!(complete(&elsewhere, "m.toml"), (1, 2));
+}
+
+/// `coif --max-steps N batch` and `--max-memory` hold for every task. They were not passed to
+/// the task processes nor written into the sbatch script: a batch whose one task alone is refused
+/// (36 steps of 1/360 s over a budget of 10) exited 0 with the task done.
+#[test]
+fn a_batchs_limits_hold_for_its_tasks_locally_and_on_the_farm() {
+    let manifest = "[defaults]\ngroom = \"groom.hair\"\nrecipe = \"quick.toml\"\n\
+                    outputs = [\"out/{name}.usda\"]\n[[tasks]]\nname = \"a\"\n";
+    for (limit, value, refusal) in
+        [("--max-steps", "10", "over the budget of 10"), ("--max-memory", "1K", "1.024 kB")]
+    {
+        let dir = small_job(manifest);
+        let path = dir.path().join("m.toml");
+        let local = coif(&[limit, value, "batch", path_str(&path), "--json"]);
+        assert_eq!(local.status.code(), Some(2), "{limit} {value}: {}", stderr(&local));
+        let log = std::fs::read_to_string(dir.path().join("logs/a.log")).unwrap();
+        assert!(log.contains(refusal), "{limit} {value}: {log}");
+        assert!(!dir.path().join("out/a.usda").exists());
+
+        // The sbatch script's task line, as a farm node runs it.
+        let submitted =
+            stdout_json(&coif(&[limit, value, "farm", "submit", path_str(&path), "--dry-run", "--json"]));
+        let script = submitted["script"].as_str().unwrap();
+        let task = Command::new("bash").arg(script).env("SLURM_ARRAY_TASK_ID", "0").output().unwrap();
+        assert_eq!(task.status.code(), Some(2), "{limit} {value}: {}", stderr(&task));
+        assert!(stderr(&task).contains(refusal), "{limit} {value}: {}", stderr(&task));
+        assert!(!dir.path().join("out/a.usda").exists());
+    }
+}
+
+/// A contact sheet in a folder that does not exist yet: the folder is made, as the tasks'
+/// output folders are. It was not: every task ran, then the batch failed at the sheet (exit 2,
+/// "No such file or directory") and `--json` printed nothing, not even the tasks that ran.
+#[test]
+fn a_contact_sheet_gets_its_folder_and_a_failed_sheet_still_reports_the_tasks() {
+    let manifest = "contact_sheet = \"sheets/of/wedges.png\"\n[defaults]\ngroom = \"groom.hair\"\n\
+                    recipe = \"quick.toml\"\npreview = \"out/{name}.png\"\n\
+                    [[tasks]]\nname = \"a\"\n[[tasks]]\nname = \"b\"\n";
+    let dir = small_job(manifest);
+    let report = batch(dir.path(), "1");
+    assert_eq!(report["done"], 2, "{report}");
+    let sheet = dir.path().join("sheets/of/wedges.png");
+    assert_eq!(report["contact_sheet"].as_str(), Some(path_str(&sheet)), "{report}");
+    assert_eq!(&std::fs::read(&sheet).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+
+    // A sheet that cannot be written (its name is a folder): the tasks' report is printed.
+    let blocked = small_job(manifest);
+    std::fs::create_dir_all(blocked.path().join("sheets/of/wedges.png")).unwrap();
+    let out = coif(&["batch", path_str(&blocked.path().join("m.toml")), "--json"]);
+    assert_ne!(out.status.code(), Some(0), "{}", stderr(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("the --json report");
+    assert_eq!((report["done"].as_u64(), report["failed"].as_u64()), (Some(2), Some(0)), "{report}");
+    assert!(report["contact_sheet"].is_null(), "{report}");
+    assert!(report["contact_sheet_error"].as_str().unwrap().contains("wedges.png"), "{report}");
+}

@@ -634,6 +634,36 @@ fn unreal_meshes_file_is_written_with_the_groom_or_not_at_all() {
     }
 }
 
+/// The meshes file cannot be put in place (a directory holds its name; a full disk fails the
+/// same way, later): the groom file is not left behind, and a groom file from an earlier run is
+/// restored. The groom file was renamed into place first and kept: a new groom beside no (or an
+/// old) meshes file, exit 1.
+#[test]
+fn unreal_groom_file_is_taken_back_when_its_meshes_file_fails() {
+    for ext in ["usda", "usdc", "abc"] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(format!("groom.{ext}"));
+        let meshes = format!("groom_meshes.{ext}");
+        std::fs::create_dir(dir.path().join(&meshes)).unwrap();
+        let convert = || coif(&["convert", "tests/data/blender_groom.usda", path_str(&out), "--unreal"]);
+        let run = convert();
+        assert!(!run.status.success(), ".{ext}: a directory was overwritten");
+        assert_eq!(dir_listing(dir.path()), vec![meshes.clone()], ".{ext}: {}", stderr(&run));
+
+        let previous = b"the groom file of an earlier run";
+        std::fs::write(&out, previous).unwrap();
+        let run = convert();
+        assert!(!run.status.success(), ".{ext}: a directory was overwritten");
+        assert_eq!(std::fs::read(&out).unwrap(), previous, ".{ext}: the earlier groom file was replaced");
+        assert_eq!(
+            dir_listing(dir.path()),
+            vec![format!("groom.{ext}"), meshes.clone()],
+            ".{ext}: {}",
+            stderr(&run)
+        );
+    }
+}
+
 #[test]
 fn nonperiodic_catmull_rom_to_alembic_warns_naming_the_file_and_object() {
     // Alembic records no wrap, and its readers (Blender, coif) take Catmull-Rom as pinned: a

@@ -68,3 +68,39 @@ fn usdc_bytes_do_not_depend_on_the_thread_count() {
         );
     }
 }
+
+/// `.usdz` output is the same bytes whenever it is made: the package's zip entry held the
+/// temporary crate file's modification time, so two converts two seconds apart differed (DOS
+/// times count in 2 s). The entry's time is now 1980-01-01 00:00, in any time zone.
+#[test]
+fn usdz_bytes_do_not_depend_on_the_clock_or_the_time_zone() {
+    let dir = tempfile::tempdir().unwrap();
+    let hair = dir.path().join("g.hair");
+    let generated = coif(&["generate", "-o", path_str(&hair), "--strands", "20", "--vertices", "8"]);
+    assert!(generated.status.success(), "{}", stderr(&generated));
+    let mut outputs = Vec::new();
+    for (k, zone) in ["UTC", "America/New_York", "Pacific/Kiritimati"].into_iter().enumerate() {
+        if k > 0 {
+            std::thread::sleep(std::time::Duration::from_millis(2100));
+        }
+        let usdz = dir.path().join(format!("{k}.usdz"));
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_coif"))
+            .args(["convert", path_str(&hair), path_str(&usdz)])
+            .env("TZ", zone)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        // Python's zipfile, not usd-core, reads the entry's time.
+        let entries = std::process::Command::new("python3")
+            .args([
+                "-c",
+                "import sys, zipfile; print([i.date_time for i in zipfile.ZipFile(sys.argv[1]).infolist()])",
+            ])
+            .arg(&usdz)
+            .output()
+            .unwrap();
+        assert_eq!(String::from_utf8_lossy(&entries.stdout).trim(), "[(1980, 1, 1, 0, 0, 0)]", "TZ={zone}");
+        outputs.push(std::fs::read(&usdz).unwrap());
+    }
+    assert!(outputs.iter().all(|o| *o == outputs[0]), "the same groom gave other .usdz bytes");
+}

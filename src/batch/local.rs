@@ -1,7 +1,8 @@
 //! A batch on one machine: every task runs as its own `coif batch MANIFEST --task I` process,
 //! `jobs` at a time, its output in a per-task log — the same invocation a farm array job makes,
 //! so a task behaves the same here and there, and one failing or crashing task cannot take the
-//! others down. Tasks already complete are skipped without starting a process.
+//! others down. Tasks already complete are skipped without starting a process. Each task gets
+//! the batch's `--max-memory` and `--max-steps`.
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -32,6 +33,8 @@ pub struct BatchReport {
     pub failed: usize,
     pub seconds: f64,
     pub contact_sheet: Option<PathBuf>,
+    /// Why the contact sheet could not be made, when it could not.
+    pub contact_sheet_error: Option<String>,
 }
 
 impl BatchReport {
@@ -53,7 +56,14 @@ pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport>
     let start = Instant::now();
     let jobs = jobs.max(1);
     task::check_overrides(manifest)?;
-    std::fs::create_dir_all(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
+    // Folders made before any task runs: a sheet's missing folder found after hours of tasks
+    // failed the batch then.
+    let sheet_folder = manifest.contact_sheet.as_deref().and_then(Path::parent);
+    for dir in std::iter::once(manifest.logs.as_path()).chain(sheet_folder) {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+    }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let threads_per_task = (cores / jobs).max(1);
 
@@ -82,6 +92,7 @@ pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport>
             let mut command = Command::new(coif);
             crate::io::cleanup::die_with_parent(&mut command);
             let child = command
+                .args(crate::limits::as_flags())
                 .arg("batch")
                 .arg(&manifest.path)
                 .arg("--task")
@@ -121,24 +132,38 @@ pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport>
     }
     let tasks: Vec<TaskReport> = reports.into_iter().map(|r| r.expect("every task reports")).collect();
     let count = |status: &str| tasks.iter().filter(|t| t.status == status).count();
-    let mut report = BatchReport {
+    Ok(BatchReport {
         done: count("done"),
         skipped: count("skipped"),
         failed: count("failed"),
         seconds: start.elapsed().as_secs_f64(),
         contact_sheet: None,
+        contact_sheet_error: None,
         tasks,
-    };
-    if let Some(sheet) = &manifest.contact_sheet {
-        if report.failed == 0 {
-            report.contact_sheet = Some(assemble_sheet(manifest, sheet)?);
+    })
+}
+
+/// Assembles the manifest's contact sheet after a batch in which no task failed, and puts where
+/// it went, or why it failed, in the report (which is printed either way).
+pub fn make_contact_sheet(manifest: &Manifest, report: &mut BatchReport) -> Result<()> {
+    let Some(sheet) = &manifest.contact_sheet else { return Ok(()) };
+    if report.failed > 0 {
+        return Ok(());
+    }
+    match assemble_sheet(manifest, sheet) {
+        Ok(path) => {
+            report.contact_sheet = Some(path);
+            Ok(())
+        }
+        Err(e) => {
+            report.contact_sheet_error = Some(e.to_string());
+            Err(e)
         }
     }
-    Ok(report)
 }
 
 /// The labelled grid of every task's preview (parameter values under each tile).
-pub fn assemble_sheet(manifest: &Manifest, sheet: &Path) -> Result<PathBuf> {
+fn assemble_sheet(manifest: &Manifest, sheet: &Path) -> Result<PathBuf> {
     let tiles: Vec<(PathBuf, Vec<String>)> = manifest
         .tasks
         .iter()

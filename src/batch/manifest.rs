@@ -44,7 +44,7 @@ struct ManifestFile {
     /// Where per-task logs go (default `logs/` beside the manifest).
     logs: Option<String>,
     /// A labelled grid of the wedges' previews, assembled after a local batch.
-    contact_sheet: Option<String>,
+    contact_sheet: Option<Spanned<String>>,
 }
 
 #[derive(Clone, Debug, Default, Deserialize)]
@@ -100,6 +100,9 @@ pub struct Task {
     pub wedge_values: Vec<String>,
     /// The manifest line the task (or its wedge) starts on.
     pub line: usize,
+    /// The manifest's folder, as the manifest path was given: sidecars record files relative
+    /// to it (see `recorded_name`).
+    pub folder: PathBuf,
 }
 
 #[derive(Clone, Debug)]
@@ -198,6 +201,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             require_converged: spec.require_converged.or(defaults.require_converged).unwrap_or(false),
             wedge_values,
             line,
+            folder: base.clone(),
         });
         Ok(())
     };
@@ -300,12 +304,25 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             }
         }
     }
-    if let Some(sheet) = &file.contact_sheet {
+    if let Some(spanned) = &file.contact_sheet {
+        let line = line_of(text, spanned.span().start);
+        let sheet = spanned.get_ref();
         // The sheet is a PNG of the previews, read back as PNGs.
         let previews: Vec<&PathBuf> = tasks.iter().filter_map(|t| t.preview.as_ref()).collect();
         let png = |p: &Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        // Written after the tasks, the sheet would replace a task's file: that task's sidecar
+        // would never hold again, so every re-run would style it and replace it again.
+        let sheet_path = resolve(sheet);
+        let identity = file_identity(&sheet_path);
+        let taken = outputs.iter().find(|(written, ..)| *written == identity);
         let problem = if !png(Path::new(sheet)) {
             Some(format!("contact_sheet {sheet}: a contact sheet is written as .png"))
+        } else if let Some((_, path, task)) = taken {
+            let spelled =
+                if **path == sheet_path { String::new() } else { format!(" (as {})", path.display()) };
+            Some(format!(
+                "contact_sheet {sheet} is a file task '{task}' writes{spelled}: give the sheet its own file"
+            ))
         } else if previews.is_empty() {
             Some("a contact sheet needs at least one task with a preview".to_string())
         } else {
@@ -314,13 +331,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
             })
         };
         if let Some(problem) = problem {
-            return Err(bad(problem));
+            return Err(bad(format!("line {line}: {problem}")));
         }
     }
     Ok(Manifest {
         path: path.to_path_buf(),
         logs: resolve(file.logs.as_deref().unwrap_or("logs")),
-        contact_sheet: file.contact_sheet.as_deref().map(resolve),
+        contact_sheet: file.contact_sheet.as_ref().map(|sheet| resolve(sheet.get_ref())),
         tasks,
     })
 }
@@ -408,6 +425,18 @@ fn list_entry<'a>(
 
 fn not_a_container(path: &str, keys: &[&str]) -> String {
     format!("override '{path}': '{}' is a value, not a table or list", keys.join("."))
+}
+
+/// How a sidecar names a file: its identity relative to the manifest's `folder` (absolute when
+/// outside it). The same whether the manifest was given as `m.toml`, `./m.toml` or its absolute
+/// path, and on a farm node that mounts the project somewhere else.
+pub fn recorded_name(folder: &Path, path: &Path) -> PathBuf {
+    let folder = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
+    let file = file_identity(path);
+    match file.strip_prefix(file_identity(folder)) {
+        Ok(relative) => relative.to_path_buf(),
+        Err(_) => file,
+    }
 }
 
 /// What names a file whatever the spelling of its path: absolute, without `.` and `..`, and

@@ -4,18 +4,24 @@
 //! skips it — only if the sidecar exists, was made from the same inputs, every composed layer
 //! still has its recorded bytes, and every output still has the recorded size and checksum. A
 //! task killed half-way has no sidecar, so it runs again.
+//!
+//! Files are recorded relative to the manifest's folder (`manifest::recorded_name`), not as
+//! their paths were spelled: a task run as `coif batch m.toml` is complete for
+//! `coif farm status /abs/m.toml`, and for a farm node that mounts the project elsewhere.
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use super::manifest::recorded_name;
 use crate::error::{Error, Result};
 use crate::io::atomic::write_bytes_atomically;
 
 /// A file as it was when the task finished.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FileRecord {
+    /// Relative to the manifest's folder (absolute for a file outside it).
     pub path: PathBuf,
     pub size: u64,
     pub sha256: String,
@@ -67,27 +73,32 @@ fn hex(bytes: &[u8]) -> String {
 }
 
 impl FileRecord {
-    fn of(path: &Path) -> Result<FileRecord> {
+    /// The file at `path` as it is now, named relative to the manifest's `folder`.
+    fn of(folder: &Path, path: &Path) -> Result<FileRecord> {
         let (size, sha256) = file_sha256(path)?;
-        Ok(FileRecord { path: path.to_path_buf(), size, sha256 })
+        Ok(FileRecord { path: recorded_name(folder, path), size, sha256 })
     }
 
-    /// Whether the file at the recorded path still has the recorded bytes.
-    fn holds(&self) -> bool {
-        std::fs::metadata(&self.path).is_ok_and(|m| m.len() == self.size)
-            && file_sha256(&self.path).is_ok_and(|(_, sha)| sha == self.sha256)
+    /// Whether the file at `path` still has the recorded bytes.
+    fn holds_at(&self, path: &Path) -> bool {
+        std::fs::metadata(path).is_ok_and(|m| m.len() == self.size)
+            && file_sha256(path).is_ok_and(|(_, sha)| sha == self.sha256)
     }
 }
 
 impl Sidecar {
-    /// Records the current state of `outputs` and of the composed `layers`.
-    pub fn record(task: &str, inputs: String, outputs: &[PathBuf], layers: &[PathBuf]) -> Result<Sidecar> {
-        let outputs = outputs.iter().map(|path| FileRecord::of(path)).collect::<Result<_>>()?;
-        // Absolute, so that a re-run from another directory (a farm node's) finds them.
-        let layers = layers
-            .iter()
-            .map(|path| FileRecord::of(&std::fs::canonicalize(path).unwrap_or_else(|_| path.clone())))
-            .collect::<Result<_>>()?;
+    /// Records the current state of `outputs` and of the composed `layers`, named relative to
+    /// the manifest's `folder`.
+    pub fn record(
+        task: &str,
+        inputs: String,
+        folder: &Path,
+        outputs: &[PathBuf],
+        layers: &[PathBuf],
+    ) -> Result<Sidecar> {
+        let of = |path: &PathBuf| FileRecord::of(folder, path);
+        let outputs = outputs.iter().map(of).collect::<Result<_>>()?;
+        let layers = layers.iter().map(of).collect::<Result<_>>()?;
         Ok(Sidecar { task: task.to_string(), inputs, outputs, layers })
     }
 
@@ -100,12 +111,17 @@ impl Sidecar {
         serde_json::from_slice(&std::fs::read(path).ok()?).ok()
     }
 
-    /// Whether this record proves the task done for these inputs and outputs.
-    pub fn proves_complete(&self, inputs: &str, outputs: &[PathBuf]) -> bool {
+    /// Whether this record proves the task done for these inputs and outputs, the manifest
+    /// being in `folder`.
+    pub fn proves_complete(&self, inputs: &str, folder: &Path, outputs: &[PathBuf]) -> bool {
         self.inputs == inputs
-            && self.layers.iter().all(FileRecord::holds)
+            && self.layers.iter().all(|record| record.holds_at(&folder.join(&record.path)))
             && self.outputs.len() == outputs.len()
-            && self.outputs.iter().zip(outputs).all(|(record, path)| &record.path == path && record.holds())
+            && self
+                .outputs
+                .iter()
+                .zip(outputs)
+                .all(|(record, path)| record.path == recorded_name(folder, path) && record.holds_at(path))
     }
 }
 
@@ -135,21 +151,22 @@ mod tests {
         let outputs = vec![out.clone()];
         let layer = dir.path().join("cache.usda");
         std::fs::write(&layer, b"#usda 1.0\n").unwrap();
+        let folder = dir.path();
         let sidecar =
-            Sidecar::record("t", "inputs-1".into(), &outputs, std::slice::from_ref(&layer)).unwrap();
+            Sidecar::record("t", "inputs-1".into(), folder, &outputs, std::slice::from_ref(&layer)).unwrap();
         let path = dir.path().join("t.task.json");
         sidecar.write(&path).unwrap();
         let read = Sidecar::read(&path).unwrap();
-        assert!(read.proves_complete("inputs-1", &outputs));
-        assert!(!read.proves_complete("inputs-2", &outputs), "other inputs must re-run");
+        assert!(read.proves_complete("inputs-1", folder, &outputs));
+        assert!(!read.proves_complete("inputs-2", folder, &outputs), "other inputs must re-run");
         std::fs::write(&layer, b"#usda 1.1\n").unwrap();
-        assert!(!read.proves_complete("inputs-1", &outputs), "a changed composed layer must re-run");
+        assert!(!read.proves_complete("inputs-1", folder, &outputs), "a changed composed layer must re-run");
         std::fs::write(&layer, b"#usda 1.0\n").unwrap();
-        assert!(read.proves_complete("inputs-1", &outputs));
+        assert!(read.proves_complete("inputs-1", folder, &outputs));
         std::fs::write(&out, b"styled hairX").unwrap();
-        assert!(!read.proves_complete("inputs-1", &outputs), "a changed output must re-run");
+        assert!(!read.proves_complete("inputs-1", folder, &outputs), "a changed output must re-run");
         std::fs::write(&out, b"styled hairs").unwrap();
-        assert!(!read.proves_complete("inputs-1", &outputs), "same size, other bytes must re-run");
+        assert!(!read.proves_complete("inputs-1", folder, &outputs), "same size, other bytes must re-run");
     }
 
     #[test]

@@ -14,6 +14,8 @@ pub struct SubmitOptions {
     pub cpus_per_task: usize,
     /// Tasks Slurm may run at once (`%N` on the array), if limited.
     pub max_parallel: Option<usize>,
+    /// coif's own flags for every task (`--max-memory`, `--max-steps`: `limits::as_flags`).
+    pub coif_flags: Vec<String>,
 }
 
 /// Where `coif farm submit` keeps the script and the submitted job id, beside the manifest.
@@ -73,6 +75,7 @@ pub fn script(
     let job_name: String =
         stem.chars().map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) { c } else { '_' }).collect();
     let quote = |p: &Path| shell_quote(&p.to_string_lossy());
+    let flags: String = options.coif_flags.iter().map(|f| format!(" {}", shell_quote(f))).collect();
     let mut array = format!("0-{}", tasks.saturating_sub(1));
     if let Some(n) = options.max_parallel {
         array.push_str(&format!("%{n}"));
@@ -93,7 +96,7 @@ pub fn script(
     lines.extend([
         "set -euo pipefail".to_string(),
         format!("export RAYON_NUM_THREADS={}", options.cpus_per_task),
-        format!("exec {} batch {} --task \"$SLURM_ARRAY_TASK_ID\"", quote(coif), quote(manifest)),
+        format!("exec {}{flags} batch {} --task \"$SLURM_ARRAY_TASK_ID\"", quote(coif), quote(manifest)),
         String::new(),
     ]);
     Ok(lines.join("\n"))
@@ -152,8 +155,12 @@ mod tests {
 
     #[test]
     fn script_runs_one_coif_task_per_array_index() {
-        let options =
-            SubmitOptions { partition: Some("gpu-free".into()), cpus_per_task: 2, max_parallel: Some(4) };
+        let options = SubmitOptions {
+            partition: Some("gpu-free".into()),
+            cpus_per_task: 2,
+            max_parallel: Some(4),
+            coif_flags: vec!["--max-steps".into(), "10".into()],
+        };
         let text = script(
             Path::new("/opt/coif"),
             Path::new("/jobs/it's.toml"),
@@ -167,7 +174,9 @@ mod tests {
         assert!(text.contains("#SBATCH --partition=gpu-free\n"));
         assert!(text.contains("#SBATCH --cpus-per-task=2\n"));
         assert!(
-            text.contains(r#"exec '/opt/coif' batch '/jobs/it'\''s.toml' --task "$SLURM_ARRAY_TASK_ID""#),
+            text.contains(
+                r#"exec '/opt/coif' '--max-steps' '10' batch '/jobs/it'\''s.toml' --task "$SLURM_ARRAY_TASK_ID""#
+            ),
             "{text}"
         );
         // The job name is a label: a quote in the manifest's name does not reach the script.
@@ -177,8 +186,11 @@ mod tests {
     #[test]
     fn nothing_a_user_gives_adds_lines_to_the_script() {
         let run = |partition: &str, cpus: usize, manifest: &str, logs: &str| {
-            let options =
-                SubmitOptions { partition: Some(partition.into()), cpus_per_task: cpus, max_parallel: None };
+            let options = SubmitOptions {
+                partition: Some(partition.into()),
+                cpus_per_task: cpus,
+                ..Default::default()
+            };
             script(Path::new("/opt/coif"), Path::new(manifest), 2, Path::new(logs), &options)
         };
         assert!(run("a,b-c_d.e", 1, "/jobs/m.toml", "/jobs/logs").is_ok());

@@ -149,7 +149,8 @@ fn refuse_writing_what_it_reads(task: &Task, files: &[PathBuf]) -> Result<()> {
 /// Whether the task's outputs are complete for its current inputs.
 pub fn is_complete(task: &Task) -> bool {
     let Ok((_, inputs)) = effective_inputs(task) else { return false };
-    Sidecar::read(&sidecar_path(task)).is_some_and(|s| s.proves_complete(&inputs, &all_outputs(task)))
+    Sidecar::read(&sidecar_path(task))
+        .is_some_and(|s| s.proves_complete(&inputs, &task.folder, &all_outputs(task)))
 }
 
 /// Runs a task unless its outputs are already complete.
@@ -158,7 +159,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     let (effective, inputs) = effective_inputs(task)?;
     let outputs = all_outputs(task);
     let sidecar = sidecar_path(task);
-    if Sidecar::read(&sidecar).is_some_and(|s| s.proves_complete(&inputs, &outputs)) {
+    if Sidecar::read(&sidecar).is_some_and(|s| s.proves_complete(&inputs, &task.folder, &outputs)) {
         return Ok(Outcome::Skipped);
     }
     let recipe = recipe::parse(&effective, &task.recipe)?;
@@ -197,7 +198,7 @@ pub fn run(task: &Task) -> Result<Outcome> {
     if let Some(failure) = unsettled.filter(|_| task.require_converged) {
         return Err(Error::NotConverged(format!("task '{}': {failure}", task.name)));
     }
-    Sidecar::record(&task.name, inputs, &outputs, loaded.composed_layers())?.write(&sidecar)?;
+    Sidecar::record(&task.name, inputs, &task.folder, &outputs, loaded.composed_layers())?.write(&sidecar)?;
     Ok(Outcome::Done { seconds: start.elapsed().as_secs_f64() })
 }
 
@@ -226,6 +227,7 @@ mod tests {
             require_converged: false,
             wedge_values: Vec::new(),
             line: 1,
+            folder: dir.path().to_path_buf(),
         };
         let before = effective_inputs(&task).unwrap().1;
         assert_eq!(before, effective_inputs(&task).unwrap().1);

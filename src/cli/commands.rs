@@ -411,7 +411,9 @@ fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool)
     }
     let coif = std::env::current_exe()
         .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
-    let report = local::run(&manifest, &coif, jobs)?;
+    let mut report = local::run(&manifest, &coif, jobs)?;
+    // The tasks' report is printed before a failed sheet is reported: they ran.
+    let sheet = local::make_contact_sheet(&manifest, &mut report);
     if json {
         print_json(json!(report));
     } else {
@@ -430,6 +432,7 @@ fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool)
             report.done, report.skipped, report.failed, report.seconds
         );
     }
+    sheet?;
     match report.exit_code() {
         0 => Ok(()),
         2 => Err(Error::Usage(format!(
@@ -463,7 +466,12 @@ fn run_farm(action: FarmAction) -> Result<()> {
             let coif = std::env::current_exe()
                 .map_err(|e| Error::External(format!("cannot find the coif executable: {e}")))?;
             let logs = std::path::absolute(&manifest.logs).map_err(|e| Error::io(&manifest.logs, e))?;
-            let options = slurm::SubmitOptions { partition, cpus_per_task: cpus, max_parallel };
+            let options = slurm::SubmitOptions {
+                partition,
+                cpus_per_task: cpus,
+                max_parallel,
+                coif_flags: coif::limits::as_flags(),
+            };
             let text = slurm::script(&coif, &absolute, manifest.tasks.len(), &logs, &options)?;
             std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
             let dir = slurm::farm_dir(&absolute);

@@ -6,7 +6,7 @@
 //! is hundreds of megabytes, and its fsync alone used to take as long as formatting it).
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use tempfile::NamedTempFile;
 
@@ -71,14 +71,9 @@ fn start_writeback(_file: &File) {}
 /// A buffered temporary file beside `path`, for writers that stream or seek (Ogawa patches its
 /// header at the end). Hand it to [`commit`] when complete; dropping it removes it.
 pub fn create_beside(path: &Path) -> Result<BufWriter<TempFile>> {
-    let dir = match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let prefix = format!(".{name}.");
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
+    let dir = folder_of(path);
+    let prefix = temp_prefix(path);
+    let mut builder = temp_names(&prefix);
     // Temporary files are private (0600) by default; an output should get the usual 0666 & !umask.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
@@ -98,18 +93,108 @@ pub fn create_beside(path: &Path) -> Result<BufWriter<TempFile>> {
     Ok(BufWriter::with_capacity(1 << 20, TempFile { file: temp, since_writeback: 0 }))
 }
 
+/// The folder `path` is in (`.` for a bare file name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    }
+}
+
+/// The start of temporary names beside `path`: `.NAME.` (then random, then `.tmp`; batch re-runs
+/// clear such files away).
+fn temp_prefix(path: &Path) -> String {
+    format!(".{}.", path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default())
+}
+
+fn temp_names(prefix: &str) -> tempfile::Builder<'_, 'static> {
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(prefix).suffix(".tmp");
+    builder
+}
+
 /// Flushes and fsyncs a file from [`create_beside`], then renames it over `path`.
-pub fn commit(path: &Path, mut writer: BufWriter<TempFile>) -> Result<()> {
-    let temp_path = writer.get_ref().file.path().to_path_buf();
-    let result = (|| {
-        writer.flush().map_err(|e| Error::io(path, e))?;
-        let temp = writer.into_inner().map_err(|e| Error::io(path, e.into_error()))?.file;
-        temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-        temp.persist(path).map_err(|e| Error::io(path, e.error))?;
-        Ok(())
-    })();
-    super::cleanup::untrack(&temp_path);
+pub fn commit(path: &Path, writer: BufWriter<TempFile>) -> Result<()> {
+    commit_together(vec![(path.to_path_buf(), writer)])
+}
+
+/// Commits files that only make sense together (an Unreal groom and its `_meshes` file), in
+/// order: every one is flushed and fsynced before any is renamed, and when a rename fails the
+/// files already put in place are taken back — the file each replaced restored, or removed where
+/// there was none. A failure leaves the previous files, never a new one beside an old one.
+pub fn commit_together(files: Vec<(PathBuf, BufWriter<TempFile>)>) -> Result<()> {
+    let temp_paths: Vec<PathBuf> = files.iter().map(|(_, w)| w.get_ref().file.path().to_path_buf()).collect();
+    let result = sync_then_rename(files);
+    for temp_path in &temp_paths {
+        super::cleanup::untrack(temp_path);
+    }
     result
+}
+
+fn sync_then_rename(files: Vec<(PathBuf, BufWriter<TempFile>)>) -> Result<()> {
+    let mut synced = Vec::with_capacity(files.len());
+    for (path, mut writer) in files {
+        writer.flush().map_err(|e| Error::io(&path, e))?;
+        let temp = writer.into_inner().map_err(|e| Error::io(&path, e.into_error()))?.file;
+        temp.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
+        synced.push((path, temp));
+    }
+    let last = synced.len().saturating_sub(1);
+    let mut placed: Vec<(PathBuf, Option<Previous>)> = Vec::new();
+    for (k, (path, temp)) in synced.into_iter().enumerate() {
+        // Only a file with a later one to fail after it may have to be taken back.
+        let previous = if k < last { Previous::keep(&path) } else { None };
+        if let Err(e) = temp.persist(&path) {
+            if let Some(previous) = previous {
+                previous.discard();
+            }
+            for (placed_path, previous) in placed.into_iter().rev() {
+                match previous {
+                    Some(previous) => previous.restore(&placed_path),
+                    None => {
+                        let _ = std::fs::remove_file(&placed_path);
+                    }
+                }
+            }
+            return Err(Error::io(&path, e.error));
+        }
+        placed.push((path, previous));
+    }
+    placed.into_iter().filter_map(|(_, previous)| previous).for_each(Previous::discard);
+    Ok(())
+}
+
+/// The file an output replaces, kept under a temporary name beside it (a hard link: no copy)
+/// until the files committed with it are in place.
+struct Previous(NamedTempFile<()>);
+
+impl Previous {
+    /// None when there is no file at `path` or it cannot be linked (then a failure removes the
+    /// new file instead of restoring the old one).
+    fn keep(path: &Path) -> Option<Previous> {
+        std::fs::symlink_metadata(path).ok().filter(|m| !m.is_dir())?;
+        let prefix = temp_prefix(path);
+        let kept =
+            temp_names(&prefix).make_in(folder_of(path), |link| std::fs::hard_link(path, link)).ok()?;
+        // Removed by the signal handler if the process is interrupted before it is done with.
+        super::cleanup::track(kept.path());
+        Some(Previous(kept))
+    }
+
+    /// Puts the kept file back at `path`.
+    fn restore(self, path: &Path) {
+        let link = self.0.path().to_path_buf();
+        // Best effort: the commit's own error is what is reported.
+        let _ = self.0.persist(path);
+        super::cleanup::untrack(&link);
+    }
+
+    /// Removes the kept name (the file it named is replaced).
+    fn discard(self) {
+        let link = self.0.path().to_path_buf();
+        drop(self.0);
+        super::cleanup::untrack(&link);
+    }
 }
 
 /// Writes a whole byte buffer atomically.

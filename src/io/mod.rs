@@ -805,7 +805,7 @@ pub fn check_animated_output(path: &Path) -> Result<Format> {
 
 /// One USD stage (still, or animated) in `format`, with the groom's meshes; `--unreal` adds
 /// Epic's layout (see [`unreal`]): `groom_*` primvars and the spec version, and the meshes go
-/// to the sibling file [`unreal::meshes_path`], committed after the groom file.
+/// to the sibling file [`unreal::meshes_path`], committed with the groom file (both or neither).
 fn write_usd_stage(
     path: &Path,
     format: Format,
@@ -824,7 +824,7 @@ fn write_usd_stage(
         if !meshes.is_empty() {
             let sibling = unreal::meshes_path(path);
             let stage = usd_stage::plan_meshes(&meshes, animation)?;
-            meshes_file = Some((usd_to_temp(&sibling, format, &stage)?, sibling));
+            meshes_file = Some((sibling.clone(), usd_to_temp(&sibling, format, &stage)?));
         }
         // Unreal's names for the attributes that change, like the groom's own.
         let renamed: Vec<Vec<crate::groom::Attribute>> = animation
@@ -843,11 +843,8 @@ fn write_usd_stage(
         });
         let mut stage = usd_stage::plan(&unreal_groom, animation.as_ref())?;
         usd_stage::add_unreal_groom_properties(&mut stage);
-        let out = usd_to_temp(path, format, &stage)?;
-        atomic::commit(path, out)?;
-        if let Some((out, sibling)) = meshes_file {
-            atomic::commit(&sibling, out)?;
-        }
+        let groom_file = (path.to_path_buf(), usd_to_temp(path, format, &stage)?);
+        atomic::commit_together(std::iter::once(groom_file).chain(meshes_file).collect())?;
         return Ok(usd_warnings(path, &unreal_groom));
     }
     usda::check_writable(groom, path)?;

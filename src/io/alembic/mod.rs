@@ -105,7 +105,8 @@ pub fn write(path: &Path, groom: &Groom, options: &AlembicWriteOptions) -> Resul
 /// Writes an animated groom frame by frame (uniform time sampling at the options' frame rate,
 /// one sample per frame, constant topology), streaming each frame to disk. The file appears
 /// under its name only when [`AnimationWriter::finish`] succeeds. With `--unreal` the meshes
-/// stream to their own file ([`crate::io::unreal::meshes_path`]), committed after the groom's.
+/// stream to their own file ([`crate::io::unreal::meshes_path`]), committed with the groom's (both
+/// or neither).
 pub struct AnimationWriter {
     path: PathBuf,
     writer: CurvesWriter<BufWriter<atomic::TempFile>>,
@@ -146,16 +147,14 @@ impl AnimationWriter {
     }
 
     pub fn finish(self) -> Result<()> {
-        let out = self.writer.finish().map_err(|e| Error::io(&self.path, e))?;
-        let meshes = match self.meshes {
-            Some((path, writer)) => Some((writer.finish().map_err(|e| Error::io(&path, e))?, path)),
-            None => None,
-        };
-        atomic::commit(&self.path, out)?;
-        if let Some((out, path)) = meshes {
-            atomic::commit(&path, out)?;
+        let groom = self.writer.finish().map_err(|e| Error::io(&self.path, e))?;
+        let mut files = vec![(self.path, groom)];
+        if let Some((path, writer)) = self.meshes {
+            let meshes = writer.finish().map_err(|e| Error::io(&path, e))?;
+            files.push((path, meshes));
         }
-        Ok(())
+        // The groom file and the meshes file together: both or neither.
+        atomic::commit_together(files)
     }
 }
 
