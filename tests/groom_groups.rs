@@ -1187,6 +1187,98 @@ fn a_files_own_unreal_group_ids_are_written_once_and_kept() {
     assert_eq!(read(&abc).attribute("group_id").expect("group ids").floats()[..], expected);
 }
 
+/// `--unreal` Alembic puts Epic's groom version on the topmost Xform, and always added a `groom`
+/// Xform for it: every round trip nested the groups one level deeper (`/groom/hair` →
+/// `/groom/groom/hair` → …) and `--group /groom/hair` stopped matching. Groups under one top prim
+/// keep their paths (the version goes on that prim); groups at the root get the `groom` Xform
+/// once. Paths and the version as ogawa-rs reads them, through three round trips.
+#[test]
+fn unreal_alembic_round_trips_keep_the_group_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let curves = |name: &str, x: f32| {
+        format!(
+            "def BasisCurves \"{name}\" {{\n uniform token type = \"linear\"\n \
+             int[] curveVertexCounts = [3, 3]\n point3f[] points = [({x}, 0, 0), ({x}, -0.1, 0), ({x}, -0.2, 0), \
+             ({}, 0, 0), ({}, -0.1, 0), ({}, -0.2, 0)]\n}}\n",
+            x + 0.01,
+            x + 0.01,
+            x + 0.01
+        )
+    };
+    let xform =
+        |name: &str, children: &[String]| format!("def Xform \"{name}\" {{\n{}}}\n", children.concat());
+    let cases = [
+        (
+            "one top Xform",
+            xform("groom", &[curves("guides", 0.0), curves("hair", 0.1)]),
+            vec!["/groom/guides", "/groom/hair"],
+        ),
+        (
+            "Blender's layout",
+            xform(
+                "root",
+                &[xform("Hair", &[curves("HairData", 0.0)]), xform("Fuzz", &[curves("FuzzData", 0.1)])],
+            ),
+            vec!["/root/Fuzz/FuzzData", "/root/Hair/HairData"],
+        ),
+        ("curves at the root", curves("hair", 0.0), vec!["/groom/hair"]),
+    ];
+    let recipe = dir.path().join("brief.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    for (case, (label, stage, expected)) in cases.into_iter().enumerate() {
+        let mut input = dir.path().join(format!("{case}.usda"));
+        std::fs::write(
+            &input,
+            format!("#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n{stage}"),
+        )
+        .unwrap();
+        for trip in 1..=3 {
+            let out = dir.path().join(format!("{case}_{trip}.abc"));
+            let run = coif(&["convert", "--unreal", path_str(&input), path_str(&out)]);
+            assert!(run.status.success(), "{label}, trip {trip}: {}", stderr(&run));
+            let paths: Vec<String> =
+                curve_int_param_via_ogawa_rs(&out, "groom_id").into_iter().map(|(path, _)| path).collect();
+            assert_eq!(paths, expected, "{label}, trip {trip}");
+            let top = expected[0].split('/').nth(1).unwrap();
+            assert_eq!(
+                top_xform_groom_version_via_ogawa_rs(&out),
+                (format!("/{top}"), 1),
+                "{label}, trip {trip}"
+            );
+            input = out;
+        }
+        // The group is found by the path it was given.
+        let first = dir.path().join(format!("{case}_1.abc"));
+        let styled = dir.path().join(format!("{case}_styled.abc"));
+        let args = ["style", path_str(&recipe), "--groom", path_str(&first), "--group", expected[0]];
+        let run = coif(&[&args[..], &["-o", path_str(&styled), "--quiet"]].concat());
+        assert!(run.status.success(), "{label}: style --group {}: {}", expected[0], stderr(&run));
+    }
+}
+
+/// The archive's first top object (its full name) and the `groom_version_major` (int16) on its
+/// `.userProperties`, as ogawa-rs reads them.
+fn top_xform_groom_version_via_ogawa_rs(path: &Path) -> (String, i16) {
+    use ogawa_rs::{Archive, FileReader, PodArray, PropertyReader};
+    let mut reader = FileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let root = archive.load_root_object(&mut reader).unwrap();
+    let top = root.load_child(0, &mut reader, &archive.indexed_meta_data, &archive.time_samplings).unwrap();
+    let properties = top.properties().expect("the top object has properties");
+    let Ok(Some(PropertyReader::Compound(user))) =
+        properties.load_sub_property_by_name(".userProperties", &mut reader, &archive)
+    else {
+        panic!("{}: no .userProperties on {}", path.display(), top.header.full_name)
+    };
+    let Ok(Some(PropertyReader::Scalar(major))) =
+        user.load_sub_property_by_name("groom_version_major", &mut reader, &archive)
+    else {
+        panic!("{}: no groom_version_major on {}", path.display(), top.header.full_name)
+    };
+    let Ok(PodArray::I16(value)) = major.load_sample(0, &mut reader) else { panic!("not int16") };
+    (top.header.full_name.clone(), value[0])
+}
+
 /// What one prim has and another lacks is not made up for the other: a prim with root UVs
 /// (`st`) and a per-strand `mask` beside a tuft with neither. Written, the tuft's prim held
 /// `st = (0, 0)` for every strand (Unreal takes that for real root UVs and skips its own
