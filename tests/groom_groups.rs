@@ -1183,8 +1183,91 @@ fn a_files_own_unreal_group_ids_are_written_once_and_kept() {
     let bytes = std::fs::read(&abc).unwrap();
     let named = bytes.windows(b"groom_group_id".len()).filter(|w| w == b"groom_group_id").count();
     assert_eq!(named, 1, "one groom_group_id property in the Alembic output");
-    // Read back as the Epic groom file it is (Epic's prefix dropped).
-    assert_eq!(read(&abc).attribute("group_id").expect("group ids").floats()[..], expected);
+    // Read back as the Epic groom file it is, under Epic's name.
+    assert_eq!(read(&abc).attribute("groom_group_id").expect("group ids").floats()[..], expected);
+}
+
+/// An Unreal-ready groom whose guides prim and strands prim are one Unreal group
+/// (`groom_group_id` 3 on both): the readers took an id that is the same for a whole prim for the
+/// prim itself, so `--unreal` renumbered the groups (guides 0, strands 1: Unreal's strands group
+/// had no guides) and a plain convert or style dropped the ids. pxr (USD outputs) and ogawa-rs
+/// (Alembic outputs) must read 3 on every strand of both, from `.usda` and `.usdc` inputs.
+#[test]
+fn a_files_group_id_shared_by_its_guides_and_strands_prims_is_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let prim = |name: &str, x: &[f32], guide: i32| {
+        let points: Vec<String> =
+            x.iter().flat_map(|x| (0..4).map(move |k| format!("({x}, {}, 0)", -0.05 * k as f32))).collect();
+        let uniform = |v: i32| vec![v.to_string(); x.len()].join(", ");
+        format!(
+            "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
+             int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
+             int[] primvars:groom_group_id = [{}] (interpolation = \"uniform\")\n        \
+             int[] primvars:groom_guide = [{}] (interpolation = \"uniform\")\n    }}\n",
+            uniform(4),
+            points.join(", "),
+            uniform(3),
+            uniform(guide)
+        )
+    };
+    let usda = dir.path().join("in.usda");
+    let stage = format!(
+        "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\
+         def Xform \"groom\"\n{{\n{}{}}}\n",
+        prim("guides", &[0.0, 0.02], 1),
+        prim("hair", &[0.005, 0.01, 0.015], 0)
+    );
+    std::fs::write(&usda, stage).unwrap();
+    let usdc = dir.path().join("in.usdc");
+    probe(&["export", path_str(&usda), path_str(&usdc)]);
+    let recipe = dir.path().join("brief.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    let expected = [("/groom/guides", 2), ("/groom/hair", 3)];
+
+    for (input, command, unreal, ext) in [
+        (&usda, "convert", false, "usda"),
+        (&usda, "convert", true, "usda"),
+        (&usdc, "convert", false, "usdc"),
+        (&usdc, "convert", true, "usdc"),
+        (&usda, "convert", false, "abc"),
+        (&usdc, "convert", true, "abc"),
+        (&usda, "style", false, "usda"),
+        (&usda, "style", true, "abc"),
+    ] {
+        let input_name = input.file_name().unwrap().to_string_lossy().into_owned();
+        let label = format!("{command} {input_name}{} → .{ext}", if unreal { " --unreal" } else { "" });
+        let out = dir.path().join(format!("{command}_{}_{unreal}.{ext}", input_name.replace('.', "_")));
+        let mut args = match command {
+            "convert" => vec!["convert", path_str(input), path_str(&out)],
+            _ => {
+                vec!["style", path_str(&recipe), "--groom", path_str(input), "-o", path_str(&out), "--quiet"]
+            }
+        };
+        if unreal {
+            args.push("--unreal");
+        }
+        let run = coif(&args);
+        assert!(run.status.success(), "{label}: {}", stderr(&run));
+        let found: Vec<(String, Vec<i32>)> = if ext == "abc" {
+            curve_int_param_via_ogawa_rs(&out, "groom_group_id")
+                .into_iter()
+                .map(|(name, ids)| (name, ids.unwrap_or_default()))
+                .collect()
+        } else {
+            let dump = pxr_dump(&out, None);
+            curves_by_path(&dump)
+                .into_iter()
+                .map(|(path, c)| {
+                    let ids =
+                        c["primvars"].get("groom_group_id").map(|p| f32s(&p["values"])).unwrap_or_default();
+                    (path, ids.iter().map(|&v| v as i32).collect())
+                })
+                .collect()
+        };
+        let want: Vec<(String, Vec<i32>)> =
+            expected.iter().map(|&(path, n)| (path.to_string(), vec![3; n])).collect();
+        assert_eq!(found, want, "{label}");
+    }
 }
 
 /// `--unreal` Alembic puts Epic's groom version on the topmost Xform, and always added a `groom`
@@ -1990,8 +2073,9 @@ fn velocities_follow_the_points_units() {
 
 /// A `--unreal` USD stage reads back as the same groom as the `--unreal` Alembic file and the
 /// groom written: Epic's `groom_` names (`groom_rest`, `groom_bond_*`, `groom_color`,
-/// `groom_root_uv`, `groom_group_id`) are coif's attributes again, in both formats. Read from the
-/// USD under their prefixed names, a styled groom lost its rest shape and fell when simulated again.
+/// `groom_root_uv`) are coif's attributes again, in both formats, and the `groom_group_id` written
+/// reads back as the file's own (group 0 for this groom of one group). Read from the USD under
+/// their prefixed names, a styled groom lost its rest shape and fell when simulated again.
 #[test]
 fn unreal_usd_output_reads_back_as_the_groom_written_as_unreal_alembic_does() {
     let dir = tempfile::tempdir().unwrap();
@@ -2007,7 +2091,11 @@ fn unreal_usd_output_reads_back_as_the_groom_written_as_unreal_alembic_does() {
         let names = |g: &Groom| {
             g.attributes.iter().map(|a| a.name.clone()).collect::<std::collections::BTreeSet<_>>()
         };
-        assert_eq!(names(&back), names(&plain), ".{ext}");
+        let mut written = names(&plain);
+        written.insert("groom_group_id".to_string());
+        assert_eq!(names(&back), written, ".{ext}");
+        let group_ids = back.attribute("groom_group_id").unwrap();
+        assert_eq!(group_ids.floats()[..], vec![0.0; back.strand_count()], ".{ext}");
         for attribute in &plain.attributes {
             let read = back.attribute(&attribute.name).unwrap();
             assert_eq!(

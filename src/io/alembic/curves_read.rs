@@ -562,10 +562,6 @@ impl<'a> CurvesArchive<'a> {
             if kind.is_integer() && !matches!(name, epic::ID | epic::GUIDE) {
                 // Integers stay integers (the file's ids): past 2^24 `f32` rounds them.
                 let param = self.expand::<i64>(member, time, &strands, extent, path)?;
-                // One value for the whole object: the object is the group (coif writes that).
-                if name == epic::GROUP_ID && param.values.windows(2).all(|w| w[0] == w[1]) {
-                    continue;
-                }
                 let canonical = crate::io::unreal::attribute_for_epic_name(name);
                 let (rate, data) = param.into_attribute(&strands);
                 groom.set_attribute(Attribute::integers(canonical, rate, extent as usize, data, kind));
@@ -577,8 +573,6 @@ impl<'a> CurvesArchive<'a> {
                 epic::GUIDE => {
                     groom.guides = Some(param.to_strands(&strands).iter().map(|&v| v != 0.0).collect())
                 }
-                // One value for the whole object: the object is the group (coif writes that).
-                epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
                     let canonical = crate::io::unreal::attribute_for_epic_name(name);
                     let (rate, data) = param.into_attribute(&strands);
