@@ -94,6 +94,18 @@ impl<'a> CurvesArchive<'a> {
         if found.is_empty() {
             return fail("the archive holds no curves (no AbcGeom_Curve_v2 object)");
         }
+        // An object whose positions hold no sample has no curves (Blender's importer makes it a
+        // hair object of none): it is skipped, as the USD reader skips a prim without points.
+        let (empty, found): (Vec<_>, Vec<_>) = found.into_iter().partition(|(path, _)| {
+            let positions =
+                find(&archive.top, path).and_then(|o| o.properties.compound(".geom")?.sampled("P"));
+            positions.is_some_and(Sampled::holds_no_sample)
+        });
+        if let (Some((path, _)), true) = (empty.first(), found.is_empty()) {
+            return fail(format!(
+                "{path}/.geom/P: the property holds no sample: its writer left the object empty"
+            ));
+        }
         let mut result =
             CurvesArchive { archive, curves: found, meshes, times: Vec::new(), fps: 0.0, epic_groom };
         let animated = result.animated_properties()?;
