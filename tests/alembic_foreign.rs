@@ -178,10 +178,37 @@ fn epic_groom_attributes_and_indexed_params() {
     assert_eq!(groom.root_uvs, Some(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.75]]));
     let color = groom.attribute(attr::COLOR).unwrap();
     assert_eq!((color.rate, color.components, &color.floats()[..]), (AttributeRate::Vertex, 3, &colors[..]));
-    let group = groom.attribute("group_id").unwrap();
+    let group = groom.attribute("groom_group_id").unwrap();
     assert_eq!((group.rate, &group.floats()[..]), (AttributeRate::Strand, &[0.0, 0.0, 1.0][..]));
     assert_eq!(groom.attribute("clump").unwrap().floats(), vec![20.0, 10.0, 20.0]);
     groom.validate().unwrap();
+}
+
+/// Epic's `groom_group_id` the same for a whole object (a guides object and a strands object of
+/// one Unreal group, 3): the reader took it for the object itself and dropped it, so the groups
+/// were renumbered on writing. Stored as int32 (Epic's type) or float32, it reads back as 3.
+#[test]
+fn an_objects_constant_group_id_is_kept() {
+    for pod in [Pod::I32, Pod::F32] {
+        let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+        let top = w.top();
+        let root = xform(&mut w, top, "groom", &[], &[], None);
+        for (k, name) in ["guides", "hair"].into_iter().enumerate() {
+            let points = [line(k as f32, 3), line(k as f32 + 0.5, 3)].concat();
+            let geom = curves(&mut w, root, name, &[3, 3], &points, [1, 0, 0, 0]);
+            let arb = w.add_compound(geom, ".arbGeomParams", MetaData::new());
+            let ids = w.add_array(arb, "groom_group_id", param_md("uni", pod, 1), pod, 1, 0);
+            let bytes = match pod {
+                Pod::I32 => bytemuck::cast_slice(&[3i32, 3]).to_vec(),
+                _ => f32s(&[3.0, 3.0]),
+            };
+            w.set_sample(ids, &bytes, 2).unwrap();
+        }
+        let bytes = w.finish().unwrap().into_inner();
+        let groom = alembic::read(&bytes, std::path::Path::new("unreal.abc"), None, false).unwrap();
+        let ids = groom.attribute("groom_group_id").unwrap_or_else(|| panic!("{pod:?}: group ids dropped"));
+        assert_eq!((ids.rate, &ids.floats()[..]), (AttributeRate::Strand, &[3.0; 4][..]), "{pod:?}");
+    }
 }
 
 #[test]

@@ -231,9 +231,13 @@ fn unreal_output_follows_epic_conventions() {
     assert_eq!(back.strand_ids, groom.strand_ids);
     assert_eq!(back.guides, groom.guides);
     assert_eq!(back.root_uvs, groom.root_uvs);
+    // The group id written for Unreal (one group: 0) reads back as the file's own.
     let names: Vec<&str> = back.attributes.iter().map(|a| a.name.as_str()).collect();
-    let expected: Vec<&str> = groom.attributes.iter().map(|a| a.name.as_str()).collect();
+    let mut expected: Vec<&str> = groom.attributes.iter().map(|a| a.name.as_str()).collect();
+    expected.push("groom_group_id");
+    expected.sort();
     assert_eq!(names, expected);
+    assert_eq!(back.attribute("groom_group_id").unwrap().floats()[..], vec![0.0; back.strand_count()]);
     for (a, b) in back.points.iter().zip(&groom.points) {
         assert!((*a - *b).length() < 1e-6);
     }

@@ -620,6 +620,33 @@ fn blenders_empty_export_of_mixed_cyclic_curves_is_refused_saying_so() {
     assert!(message.contains("/Hair") && message.contains("holds no sample"), "{message}");
 }
 
+/// A hair object not yet groomed (no curves) beside a groomed one: Blender's Alembic exporter
+/// writes the empty object's properties with no sample, and coif refused the whole file ("the
+/// property holds no sample", exit 2) where Blender's importer reads it (the empty object with no
+/// curves). The empty object is skipped, as the USD reader skips a prim without points; the other
+/// is read as Blender reads it: its curves, point counts and points.
+#[test]
+fn blenders_empty_hair_object_is_skipped_and_the_groomed_one_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let exported = dir.path().join("scene.abc");
+    let Some(python) = bpy_python("Blender's empty hair object") else { return };
+    let made = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_empty_hair.py", exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(made.status.success() && exported.exists(), "{}", String::from_utf8_lossy(&made.stderr));
+    let blender = bpy_reimport(&exported).unwrap();
+    assert_eq!(blender_object(&blender, "objects", "Empty")["curves"], 0, "{blender}");
+    let good = blender_object(&blender, "objects", "Good");
+
+    let groom = load_path(&exported);
+    assert_eq!(groom.group_count(), 1, "only the groomed object");
+    assert_eq!(serde_json::json!(groom.strand_count()), good["curves"]);
+    assert_eq!(serde_json::json!(groom.vertex_count()), good["points"]);
+    let worst = worst_distance(&group_points(&groom, "Good"), &blender_points(&good["positions"], 1.0));
+    assert!(worst < 1e-6, "points {worst} m from Blender's");
+}
+
 /// Blender's Alembic export of a Bézier curve object (tests/blender/bpy_bezier.py: three curves
 /// of three knots, free handles, a radius per knot) writes the handles into P, 7 points a curve,
 /// and one width per knot with no geoScope: the `varying` count, which coif refused ("9 values,

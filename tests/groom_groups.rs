@@ -1213,8 +1213,183 @@ fn a_files_own_unreal_group_ids_are_written_once_and_kept() {
     let bytes = std::fs::read(&abc).unwrap();
     let named = bytes.windows(b"groom_group_id".len()).filter(|w| w == b"groom_group_id").count();
     assert_eq!(named, 1, "one groom_group_id property in the Alembic output");
-    // Read back as the Epic groom file it is (Epic's prefix dropped).
-    assert_eq!(read(&abc).attribute("group_id").expect("group ids").floats()[..], expected);
+    // Read back as the Epic groom file it is, under Epic's name.
+    assert_eq!(read(&abc).attribute("groom_group_id").expect("group ids").floats()[..], expected);
+}
+
+/// An Unreal-ready groom whose guides prim and strands prim are one Unreal group
+/// (`groom_group_id` 3 on both): the readers took an id that is the same for a whole prim for the
+/// prim itself, so `--unreal` renumbered the groups (guides 0, strands 1: Unreal's strands group
+/// had no guides) and a plain convert or style dropped the ids. pxr (USD outputs) and ogawa-rs
+/// (Alembic outputs) must read 3 on every strand of both, from `.usda` and `.usdc` inputs.
+#[test]
+fn a_files_group_id_shared_by_its_guides_and_strands_prims_is_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let prim = |name: &str, x: &[f32], guide: i32| {
+        let points: Vec<String> =
+            x.iter().flat_map(|x| (0..4).map(move |k| format!("({x}, {}, 0)", -0.05 * k as f32))).collect();
+        let uniform = |v: i32| vec![v.to_string(); x.len()].join(", ");
+        format!(
+            "    def BasisCurves \"{name}\"\n    {{\n        uniform token type = \"linear\"\n        \
+             int[] curveVertexCounts = [{}]\n        point3f[] points = [{}]\n        \
+             int[] primvars:groom_group_id = [{}] (interpolation = \"uniform\")\n        \
+             int[] primvars:groom_guide = [{}] (interpolation = \"uniform\")\n    }}\n",
+            uniform(4),
+            points.join(", "),
+            uniform(3),
+            uniform(guide)
+        )
+    };
+    let usda = dir.path().join("in.usda");
+    let stage = format!(
+        "#usda 1.0\n(\n    defaultPrim = \"groom\"\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\
+         def Xform \"groom\"\n{{\n{}{}}}\n",
+        prim("guides", &[0.0, 0.02], 1),
+        prim("hair", &[0.005, 0.01, 0.015], 0)
+    );
+    std::fs::write(&usda, stage).unwrap();
+    let usdc = dir.path().join("in.usdc");
+    probe(&["export", path_str(&usda), path_str(&usdc)]);
+    let recipe = dir.path().join("brief.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    let expected = [("/groom/guides", 2), ("/groom/hair", 3)];
+
+    for (input, command, unreal, ext) in [
+        (&usda, "convert", false, "usda"),
+        (&usda, "convert", true, "usda"),
+        (&usdc, "convert", false, "usdc"),
+        (&usdc, "convert", true, "usdc"),
+        (&usda, "convert", false, "abc"),
+        (&usdc, "convert", true, "abc"),
+        (&usda, "style", false, "usda"),
+        (&usda, "style", true, "abc"),
+    ] {
+        let input_name = input.file_name().unwrap().to_string_lossy().into_owned();
+        let label = format!("{command} {input_name}{} → .{ext}", if unreal { " --unreal" } else { "" });
+        let out = dir.path().join(format!("{command}_{}_{unreal}.{ext}", input_name.replace('.', "_")));
+        let mut args = match command {
+            "convert" => vec!["convert", path_str(input), path_str(&out)],
+            _ => {
+                vec!["style", path_str(&recipe), "--groom", path_str(input), "-o", path_str(&out), "--quiet"]
+            }
+        };
+        if unreal {
+            args.push("--unreal");
+        }
+        let run = coif(&args);
+        assert!(run.status.success(), "{label}: {}", stderr(&run));
+        let found: Vec<(String, Vec<i32>)> = if ext == "abc" {
+            curve_int_param_via_ogawa_rs(&out, "groom_group_id")
+                .into_iter()
+                .map(|(name, ids)| (name, ids.unwrap_or_default()))
+                .collect()
+        } else {
+            let dump = pxr_dump(&out, None);
+            curves_by_path(&dump)
+                .into_iter()
+                .map(|(path, c)| {
+                    let ids =
+                        c["primvars"].get("groom_group_id").map(|p| f32s(&p["values"])).unwrap_or_default();
+                    (path, ids.iter().map(|&v| v as i32).collect())
+                })
+                .collect()
+        };
+        let want: Vec<(String, Vec<i32>)> =
+            expected.iter().map(|&(path, n)| (path.to_string(), vec![3; n])).collect();
+        assert_eq!(found, want, "{label}");
+    }
+}
+
+/// `--unreal` Alembic puts Epic's groom version on the topmost Xform, and always added a `groom`
+/// Xform for it: every round trip nested the groups one level deeper (`/groom/hair` →
+/// `/groom/groom/hair` → …) and `--group /groom/hair` stopped matching. Groups under one top prim
+/// keep their paths (the version goes on that prim); groups at the root get the `groom` Xform
+/// once. Paths and the version as ogawa-rs reads them, through three round trips.
+#[test]
+fn unreal_alembic_round_trips_keep_the_group_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let curves = |name: &str, x: f32| {
+        format!(
+            "def BasisCurves \"{name}\" {{\n uniform token type = \"linear\"\n \
+             int[] curveVertexCounts = [3, 3]\n point3f[] points = [({x}, 0, 0), ({x}, -0.1, 0), ({x}, -0.2, 0), \
+             ({}, 0, 0), ({}, -0.1, 0), ({}, -0.2, 0)]\n}}\n",
+            x + 0.01,
+            x + 0.01,
+            x + 0.01
+        )
+    };
+    let xform =
+        |name: &str, children: &[String]| format!("def Xform \"{name}\" {{\n{}}}\n", children.concat());
+    let cases = [
+        (
+            "one top Xform",
+            xform("groom", &[curves("guides", 0.0), curves("hair", 0.1)]),
+            vec!["/groom/guides", "/groom/hair"],
+        ),
+        (
+            "Blender's layout",
+            xform(
+                "root",
+                &[xform("Hair", &[curves("HairData", 0.0)]), xform("Fuzz", &[curves("FuzzData", 0.1)])],
+            ),
+            vec!["/root/Fuzz/FuzzData", "/root/Hair/HairData"],
+        ),
+        ("curves at the root", curves("hair", 0.0), vec!["/groom/hair"]),
+    ];
+    let recipe = dir.path().join("brief.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    for (case, (label, stage, expected)) in cases.into_iter().enumerate() {
+        let mut input = dir.path().join(format!("{case}.usda"));
+        std::fs::write(
+            &input,
+            format!("#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n{stage}"),
+        )
+        .unwrap();
+        for trip in 1..=3 {
+            let out = dir.path().join(format!("{case}_{trip}.abc"));
+            let run = coif(&["convert", "--unreal", path_str(&input), path_str(&out)]);
+            assert!(run.status.success(), "{label}, trip {trip}: {}", stderr(&run));
+            let paths: Vec<String> =
+                curve_int_param_via_ogawa_rs(&out, "groom_id").into_iter().map(|(path, _)| path).collect();
+            assert_eq!(paths, expected, "{label}, trip {trip}");
+            let top = expected[0].split('/').nth(1).unwrap();
+            assert_eq!(
+                top_xform_groom_version_via_ogawa_rs(&out),
+                (format!("/{top}"), 1),
+                "{label}, trip {trip}"
+            );
+            input = out;
+        }
+        // The group is found by the path it was given.
+        let first = dir.path().join(format!("{case}_1.abc"));
+        let styled = dir.path().join(format!("{case}_styled.abc"));
+        let args = ["style", path_str(&recipe), "--groom", path_str(&first), "--group", expected[0]];
+        let run = coif(&[&args[..], &["-o", path_str(&styled), "--quiet"]].concat());
+        assert!(run.status.success(), "{label}: style --group {}: {}", expected[0], stderr(&run));
+    }
+}
+
+/// The archive's first top object (its full name) and the `groom_version_major` (int16) on its
+/// `.userProperties`, as ogawa-rs reads them.
+fn top_xform_groom_version_via_ogawa_rs(path: &Path) -> (String, i16) {
+    use ogawa_rs::{Archive, FileReader, PodArray, PropertyReader};
+    let mut reader = FileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let root = archive.load_root_object(&mut reader).unwrap();
+    let top = root.load_child(0, &mut reader, &archive.indexed_meta_data, &archive.time_samplings).unwrap();
+    let properties = top.properties().expect("the top object has properties");
+    let Ok(Some(PropertyReader::Compound(user))) =
+        properties.load_sub_property_by_name(".userProperties", &mut reader, &archive)
+    else {
+        panic!("{}: no .userProperties on {}", path.display(), top.header.full_name)
+    };
+    let Ok(Some(PropertyReader::Scalar(major))) =
+        user.load_sub_property_by_name("groom_version_major", &mut reader, &archive)
+    else {
+        panic!("{}: no groom_version_major on {}", path.display(), top.header.full_name)
+    };
+    let Ok(PodArray::I16(value)) = major.load_sample(0, &mut reader) else { panic!("not int16") };
+    (top.header.full_name.clone(), value[0])
 }
 
 /// What one prim has and another lacks is not made up for the other: a prim with root UVs
@@ -1928,8 +2103,9 @@ fn velocities_follow_the_points_units() {
 
 /// A `--unreal` USD stage reads back as the same groom as the `--unreal` Alembic file and the
 /// groom written: Epic's `groom_` names (`groom_rest`, `groom_bond_*`, `groom_color`,
-/// `groom_root_uv`, `groom_group_id`) are coif's attributes again, in both formats. Read from the
-/// USD under their prefixed names, a styled groom lost its rest shape and fell when simulated again.
+/// `groom_root_uv`) are coif's attributes again, in both formats, and the `groom_group_id` written
+/// reads back as the file's own (group 0 for this groom of one group). Read from the USD under
+/// their prefixed names, a styled groom lost its rest shape and fell when simulated again.
 #[test]
 fn unreal_usd_output_reads_back_as_the_groom_written_as_unreal_alembic_does() {
     let dir = tempfile::tempdir().unwrap();
@@ -1945,7 +2121,11 @@ fn unreal_usd_output_reads_back_as_the_groom_written_as_unreal_alembic_does() {
         let names = |g: &Groom| {
             g.attributes.iter().map(|a| a.name.clone()).collect::<std::collections::BTreeSet<_>>()
         };
-        assert_eq!(names(&back), names(&plain), ".{ext}");
+        let mut written = names(&plain);
+        written.insert("groom_group_id".to_string());
+        assert_eq!(names(&back), written, ".{ext}");
+        let group_ids = back.attribute("groom_group_id").unwrap();
+        assert_eq!(group_ids.floats()[..], vec![0.0; back.strand_count()], ".{ext}");
         for attribute in &plain.attributes {
             let read = back.attribute(&attribute.name).unwrap();
             assert_eq!(

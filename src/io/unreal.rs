@@ -55,11 +55,13 @@ fn name_for_usd(name: &str) -> String {
 }
 
 /// The groom attribute a file's attribute of Epic's groom names is, as both readers take it:
-/// `groom_X` is `X` (`groom_color` is `color`), except Unreal's interpolation names, which are
-/// coif's own and keep their prefix. Other names are themselves.
+/// `groom_X` is `X` (`groom_color` is `color`), except the names coif uses itself, which keep
+/// their prefix: Unreal's interpolation names and `groom_group_id` (a file's Unreal groups, which
+/// every writer then writes under that name). Other names are themselves.
 pub fn attribute_for_epic_name(name: &str) -> String {
     match name {
         epic::COLOR => attr::COLOR.to_string(),
+        epic::GROUP_ID => name.to_string(),
         n if n == crate::guides::CLOSEST_GUIDES || n == crate::guides::GUIDE_WEIGHTS => n.to_string(),
         n => n.strip_prefix(epic::PREFIX).unwrap_or(n).to_string(),
     }

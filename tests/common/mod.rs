@@ -197,7 +197,52 @@ pub fn polymesh_via_ogawa_rs(path: &Path) -> (Vec<[f32; 3]>, Vec<i32>, Vec<i32>)
 /// object's full name, the `geoScope` metadata and the values of the first sample.
 #[allow(dead_code)]
 pub fn curve_widths_via_ogawa_rs(path: &Path) -> Vec<(String, String, Vec<f32>)> {
-    use ogawa_rs::{Archive, FileReader, PodArray, PropertyReader, Schema};
+    use ogawa_rs::{PodArray, PropertyReader};
+    curves_via_ogawa_rs(path, |name, geom, reader, archive| {
+        let PropertyReader::Compound(geom) = geom else { panic!("{name}: .geom is not a compound") };
+        let index = geom.find_sub_property_index("width").expect("a width property");
+        let scope =
+            geom.property_headers[index].meta_data.tokens.get("geoScope").cloned().unwrap_or_default();
+        let Ok(PropertyReader::Array(array)) = geom.load_sub_property(index, reader, archive) else {
+            panic!("{name}: width is not an array")
+        };
+        let Ok(PodArray::F32(values)) = array.load_sample(0, reader) else { panic!("width is not float32") };
+        (scope, values)
+    })
+    .into_iter()
+    .map(|(name, (scope, values))| (name, scope, values))
+    .collect()
+}
+
+/// Every curves object's int32 `.arbGeomParams` member `param` (first sample) as ogawa-rs reads
+/// it, by the object's full name; `None` for an object without it.
+#[allow(dead_code)]
+pub fn curve_int_param_via_ogawa_rs(path: &Path, param: &str) -> Vec<(String, Option<Vec<i32>>)> {
+    use ogawa_rs::{PodArray, PropertyReader};
+    curves_via_ogawa_rs(path, |name, geom, reader, archive| {
+        let PropertyReader::Compound(geom) = geom else { panic!("{name}: .geom is not a compound") };
+        let Ok(Some(PropertyReader::Compound(arb))) =
+            geom.load_sub_property_by_name(".arbGeomParams", reader, archive)
+        else {
+            return None;
+        };
+        let index = arb.find_sub_property_index(param)?;
+        let Ok(PropertyReader::Array(array)) = arb.load_sub_property(index, reader, archive) else {
+            panic!("{name}: {param} is not an array")
+        };
+        let Ok(PodArray::I32(values)) = array.load_sample(0, reader) else { panic!("{param} is not int32") };
+        Some(values)
+    })
+}
+
+/// What `read` finds in each curves object's `.geom` compound, by the object's full name, in
+/// name order, as ogawa-rs walks the archive.
+#[allow(dead_code)]
+fn curves_via_ogawa_rs<T>(
+    path: &Path,
+    mut read: impl FnMut(&str, &ogawa_rs::PropertyReader, &mut ogawa_rs::FileReader, &ogawa_rs::Archive) -> T,
+) -> Vec<(String, T)> {
+    use ogawa_rs::{Archive, FileReader, Schema};
     let mut reader = FileReader::new(std::fs::File::open(path).unwrap()).unwrap();
     let archive = Archive::new(&mut reader).unwrap();
     let mut found = Vec::new();
@@ -205,20 +250,9 @@ pub fn curve_widths_via_ogawa_rs(path: &Path) -> Vec<(String, String, Vec<f32>)>
     while let Some(object) = stack.pop() {
         if let Ok(Schema::Curves(_)) = Schema::parse(&object, &mut reader, &archive) {
             let top = object.properties().unwrap();
-            let Ok(PropertyReader::Compound(geom)) = top.load_sub_property(0, &mut reader, &archive) else {
-                panic!("{}: .geom is not a compound", object.header.full_name)
-            };
-            let index = geom.find_sub_property_index("width").expect("a width property");
-            let scope =
-                geom.property_headers[index].meta_data.tokens.get("geoScope").cloned().unwrap_or_default();
-            let Ok(PropertyReader::Array(array)) = geom.load_sub_property(index, &mut reader, &archive)
-            else {
-                panic!("width is not an array")
-            };
-            let Ok(PodArray::F32(values)) = array.load_sample(0, &mut reader) else {
-                panic!("width is not float32")
-            };
-            found.push((object.header.full_name.clone(), scope, values));
+            let geom = top.load_sub_property(0, &mut reader, &archive).unwrap();
+            let name = object.header.full_name.clone();
+            found.push((name.clone(), read(&name, &geom, &mut reader, &archive)));
         }
         for i in 0..object.child_count() {
             stack.push(

@@ -320,6 +320,13 @@ impl<'a> Sampled<'a> {
         }
     }
 
+    /// Whether the property stores no sample at all (Blender writes such properties for an
+    /// object it leaves empty: a hair object without curves, or one mixing cyclic and non-cyclic
+    /// curves).
+    pub fn holds_no_sample(&self) -> bool {
+        self.group.is_empty()
+    }
+
     /// The sample bytes (key stripped) of sample `index`; an empty slice for an empty sample.
     pub fn sample_bytes(&self, ogawa: &OgawaReader<'a>, index: u32) -> OgawaResult<&'a [u8]> {
         if index >= self.num_samples.max(1) {
@@ -327,9 +334,7 @@ impl<'a> Sampled<'a> {
         }
         let slot = self.slot(index) as usize;
         let child = if self.kind == PropertyKind::Array { slot * 2 } else { slot };
-        if self.group.is_empty() {
-            // Blender, asked to export a Curves object that mixes cyclic and non-cyclic curves,
-            // writes its properties with no sample at all.
+        if self.holds_no_sample() {
             return fail(format!(
                 "{}: the property holds no sample: its writer left the object empty",
                 self.name

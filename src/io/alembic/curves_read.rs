@@ -94,6 +94,18 @@ impl<'a> CurvesArchive<'a> {
         if found.is_empty() {
             return fail("the archive holds no curves (no AbcGeom_Curve_v2 object)");
         }
+        // An object whose positions hold no sample has no curves (Blender's importer makes it a
+        // hair object of none): it is skipped, as the USD reader skips a prim without points.
+        let (empty, found): (Vec<_>, Vec<_>) = found.into_iter().partition(|(path, _)| {
+            let positions =
+                find(&archive.top, path).and_then(|o| o.properties.compound(".geom")?.sampled("P"));
+            positions.is_some_and(Sampled::holds_no_sample)
+        });
+        if let (Some((path, _)), true) = (empty.first(), found.is_empty()) {
+            return fail(format!(
+                "{path}/.geom/P: the property holds no sample: its writer left the object empty"
+            ));
+        }
         let mut result =
             CurvesArchive { archive, curves: found, meshes, times: Vec::new(), fps: 0.0, epic_groom };
         let animated = result.animated_properties()?;
@@ -562,10 +574,6 @@ impl<'a> CurvesArchive<'a> {
             if kind.is_integer() && !matches!(name, epic::ID | epic::GUIDE) {
                 // Integers stay integers (the file's ids): past 2^24 `f32` rounds them.
                 let param = self.expand::<i64>(member, time, &strands, extent, path)?;
-                // One value for the whole object: the object is the group (coif writes that).
-                if name == epic::GROUP_ID && param.values.windows(2).all(|w| w[0] == w[1]) {
-                    continue;
-                }
                 let canonical = crate::io::unreal::attribute_for_epic_name(name);
                 let (rate, data) = param.into_attribute(&strands);
                 groom.set_attribute(Attribute::integers(canonical, rate, extent as usize, data, kind));
@@ -577,8 +585,6 @@ impl<'a> CurvesArchive<'a> {
                 epic::GUIDE => {
                     groom.guides = Some(param.to_strands(&strands).iter().map(|&v| v != 0.0).collect())
                 }
-                // One value for the whole object: the object is the group (coif writes that).
-                epic::GROUP_ID if param.values.windows(2).all(|w| w[0] == w[1]) => {}
                 _ => {
                     let canonical = crate::io::unreal::attribute_for_epic_name(name);
                     let (rate, data) = param.into_attribute(&strands);

@@ -52,8 +52,9 @@ pub mod epic {
 /// How to write a groom as Alembic.
 #[derive(Clone, Debug)]
 pub struct AlembicWriteOptions {
-    /// Follow Epic's groom conventions: centimetres, `groom_*` attribute names, a `groom` Xform
-    /// parent whose `.userProperties` carry the groom spec version.
+    /// Follow Epic's groom conventions: centimetres, `groom_*` attribute names, the groom spec
+    /// version on the topmost Xform's `.userProperties` (the groups' own top, else a `groom`
+    /// Xform parent).
     pub unreal: bool,
     /// A parent Xform with this matrix (column-vector convention; translation in column 3).
     pub xform: Option<DMat4>,
@@ -236,15 +237,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
         } else {
             0
         };
-        let mut parent = archive.top();
         let with_curves = options.objects != Objects::Meshes;
-        if options.unreal && with_curves {
-            parent = add_xform(&mut archive, parent, "groom", None)?;
-            add_groom_version(&mut archive, parent)?;
-        }
-        if let Some(matrix) = options.xform {
-            parent = add_xform(&mut archive, parent, "xform", Some(matrix))?;
-        }
         // One curves object per group with strands (a groom of one plain group gets its object
         // even when it has none).
         let plain = first.groups.len() <= 1 && first.group(0).missing.is_empty();
@@ -256,11 +249,32 @@ impl<W: Write + Seek> CurvesWriter<W> {
         } else {
             Vec::new()
         };
+        let mut tree = Tree { parent: archive.top(), nodes: Vec::new() };
+        if options.unreal && with_curves {
+            // Epic's groom-wide properties go on the topmost Xform: the groups' own when they all
+            // sit under one (so the groom reads back at the same paths), else a `groom` Xform
+            // above them.
+            let paths =
+                groups.iter().map(|&(g, _)| first.groups.get(g).map_or("", |group| group.name.as_str()));
+            match shared_top(paths).filter(|_| options.xform.is_none()) {
+                Some(top) => {
+                    let object = add_xform(&mut archive, tree.parent, top, None)?;
+                    add_groom_version(&mut archive, object)?;
+                    tree.nodes.push((format!("/{top}"), object));
+                }
+                None => {
+                    tree.parent = add_xform(&mut archive, tree.parent, "groom", None)?;
+                    add_groom_version(&mut archive, tree.parent)?;
+                }
+            }
+        }
+        if let Some(matrix) = options.xform {
+            tree.parent = add_xform(&mut archive, tree.parent, "xform", Some(matrix))?;
+        }
         let several = groups.len() > 1;
         // Ids are written for every object or none: a reader numbers objects without ids after
         // the ids it was given, so one object's plain 0, 1, 2, … would read back elsewhere.
         let write_ids = has_custom_ids(&first.strand_ids);
-        let mut tree = Tree { parent, nodes: Vec::new() };
         let mut objects = Vec::with_capacity(groups.len());
         for (group, strands) in groups {
             let part = GroupPart::of(first, group, &strands);
@@ -759,6 +773,21 @@ impl Tree {
         self.nodes.push((format!("{prefix}/{name}"), object));
         Ok(made)
     }
+}
+
+/// The first part of every path (`/root/Hair/HairData` → `root`) when they all share it and it is
+/// an Xform above each (not an object of its own); `None` for no paths.
+fn shared_top<'a>(paths: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let mut top = None;
+    for path in paths {
+        let mut components = path.split('/').filter(|c| !c.is_empty());
+        let (first, below) = (components.next()?, components.next());
+        below?;
+        if *top.get_or_insert(first) != first {
+            return None;
+        }
+    }
+    top
 }
 
 /// What of `groom` scaling by `scale` (Epic's centimetres) takes beyond f32: a point, a width or

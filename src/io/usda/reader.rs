@@ -758,8 +758,6 @@ impl Walker<'_> {
                         curves.root_uvs = Some(floats().chunks_exact(2).map(|c| [c[0], c[1]]).collect());
                     }
                 }
-                // One group id for the whole prim: the prim is the group (`--unreal` writes that).
-                (epic::GROUP_ID, AttributeRate::Strand, 1) if all_same(&data) => {}
                 _ => {
                     // Epic's names as in Alembic: a `--unreal` stage reads back as coif wrote it.
                     let groom_name =
@@ -858,14 +856,6 @@ fn attribute_data(value: Value, type_name: &str) -> Option<AttributeData> {
     match value {
         Value::Int(values) if integer_kind(type_name).is_some() => Some(AttributeData::Int(values)),
         value => value.into_f32().map(AttributeData::Float),
-    }
-}
-
-/// Whether every value is the same.
-fn all_same(data: &AttributeData) -> bool {
-    match data {
-        AttributeData::Float(v) => v.windows(2).all(|w| w[0] == w[1]),
-        AttributeData::Int(v) => v.windows(2).all(|w| w[0] == w[1]),
     }
 }
 
