@@ -3,7 +3,7 @@
 //! `rest_darboux` and bond rates are the rest state); a groom fresh from a DCC tool moves less than
 //! 1 mm with the sag-free option, while without it, it falls.
 mod common;
-use common::thin;
+use common::{shot_colliders, thin};
 
 use std::path::Path;
 
@@ -99,23 +99,6 @@ fn styled_full_head_perm_holds_still_when_simulated_again() {
 fn every_tenth(name: &str) -> Groom {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("grooms").join(name);
     thin(&coif::io::read_groom(&path, &Default::default()).unwrap().groom, 10)
-}
-
-/// The colliders a shot has: the recipe's obstacles but the ones its stages press (a pillow, the
-/// blow-dry's floor — styling tools, gone when the groom is handed on).
-fn shot_colliders(recipe: &recipe::Recipe, shapes: Vec<Shape>) -> Vec<Shape> {
-    let pressed = |name: &str| {
-        recipe
-            .stages
-            .iter()
-            .any(|s| matches!(s.get_ref(), recipe::Stage::Press { obstacle, .. } if obstacle == name))
-    };
-    shapes
-        .into_iter()
-        .zip(&recipe.obstacles)
-        .filter(|(_, o)| !pressed(o.get_ref().name()))
-        .map(|(s, _)| s)
-        .collect()
 }
 
 /// Each preset styles its groom and writes it to a file of the given format; the groom read back,

@@ -182,7 +182,7 @@ fn a_blow_dry_that_folds_a_strand_at_its_root_settles() {
             seconds: 2.0,
             settle: None,
             sag_free: false,
-            colliders: placed.shapes,
+            colliders: shot_colliders(&parsed, placed.shapes),
             hair_contacts: None,
         };
         let (again, _) = coif::sim::driver::simulate(b, &options).unwrap();

@@ -453,7 +453,7 @@ pub enum Stage {
         #[serde(default)]
         direction: Option<[f32; 3]>,
     },
-    /// Let go of rods and pressing.
+    /// Let go of rods and withdraw the pressed obstacles.
     Release { duration: f32 },
     /// Relax to static equilibrium and bake the new rest shape (model.md §6).
     Settle {
@@ -529,7 +529,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Recipe> {
 /// [`parse`] without reading and baking the mesh obstacles: every key, number and rule of the
 /// recipe checked, cheaply (a batch checks each task's recipe before running any).
 pub fn parse_unbaked(text: &str, path: &Path) -> Result<Recipe> {
-    let recipe: Recipe = toml::from_str(text).map_err(|e| Error::format(path, toml_message(&e, text)))?;
+    let recipe: Recipe = toml::from_str(text)
+        .map_err(|e| Error::format(path, entry_error(text).unwrap_or_else(|| toml_message(&e, text))))?;
     check(&recipe, text).map_err(|message| Error::format(path, message))?;
     Ok(recipe)
 }
@@ -566,6 +567,67 @@ pub fn bake_mesh(
 ) -> std::result::Result<MeshSdf, String> {
     let cell = resolution.unwrap_or(MESH_RESOLUTION);
     mesh.bake(cell, band.unwrap_or(4.0 * cell))
+}
+
+/// The first `[[stages]]` or `[[obstacles]]` entry that does not read, with the line of the key at
+/// fault (else of the entry) and which entry it is. Entries are tagged by `kind` / `shape`, and
+/// serde reads such an entry through a buffer that loses its place: toml's own error pointed at the
+/// first entry of the list, whichever was wrong.
+fn entry_error(text: &str) -> Option<String> {
+    #[derive(Deserialize)]
+    struct Entries {
+        #[serde(default)]
+        obstacles: Vec<Spanned<toml::Table>>,
+        #[serde(default)]
+        stages: Vec<Spanned<toml::Table>>,
+    }
+    fn first_failure<T: serde::de::DeserializeOwned>(
+        entries: &[Spanned<toml::Table>],
+        what: &str,
+        text: &str,
+    ) -> Option<String> {
+        entries.iter().enumerate().find_map(|(index, entry)| {
+            let error = toml::Value::Table(entry.get_ref().clone()).try_into::<T>().err()?;
+            let message = error.message().trim().to_string();
+            // The entry's text: from its header to the next table header (toml's span of an
+            // array-of-tables entry may be its header alone).
+            let start = entry.span().start;
+            let rest = &text[start..];
+            let end = rest.get(1..).and_then(|r| r.find("\n[")).map_or(rest.len(), |i| i + 1);
+            let within = &rest[..end];
+            let as_key = |key: &str| {
+                within.match_indices(key).map(|(i, _)| i).find(|&i| {
+                    let before = within[..i].chars().next_back();
+                    let after = within[i + key.len()..].trim_start();
+                    !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+                        && (after.starts_with('=') || after.starts_with('.'))
+                })
+            };
+            // Where the entry spells what the message quotes: a key (`travle`), else a value
+            // (`kind = "curl"`, `duration = "long"`).
+            let named = message.split('`').nth(1).filter(|k| !k.is_empty());
+            let quoted = message.split('"').nth(1).filter(|v| !v.is_empty());
+            let at = named
+                .and_then(as_key)
+                .or_else(|| named.or(quoted).and_then(|v| within.find(&format!("\"{v}\""))));
+            let Some(at) = at else {
+                return Some(format!("line {}: {what} {}: {message}", line_column(text, start).0, index + 1));
+            };
+            // A value's message does not say whose: the key on its line does.
+            let line_text = within[..at].rsplit('\n').next().unwrap_or("");
+            let key = line_text
+                .split('=')
+                .next()
+                .map(str::trim)
+                .filter(|k| line_text.contains('=') && !k.is_empty());
+            let whose = key.filter(|k| !message.contains(*k)).map(|k| format!("{k}: ")).unwrap_or_default();
+            let line = line_column(text, start + at).0;
+            Some(format!("line {line}: {what} {}: {whose}{message}", index + 1))
+        })
+    }
+    let entries: Entries = toml::from_str(text).ok()?;
+    first_failure::<Obstacle>(&entries.obstacles, "obstacle", text)
+        .or_else(|| first_failure::<Stage>(&entries.stages, "stage", text))
 }
 
 /// "line N, column M: what" from a TOML error, on one line.
@@ -1015,5 +1077,28 @@ kind = "settle"
 
         let unknown_stage = PERM.replace("kind = \"release\"", "kind = \"curl\"");
         assert!(error_of(&unknown_stage).contains("line 33"), "{}", error_of(&unknown_stage));
+    }
+
+    /// A mistake inside the n-th `[[stages]]` or `[[obstacles]]` entry names its own line and
+    /// entry (toml's error gave the line of the first entry of the list, whichever was wrong).
+    #[test]
+    fn a_mistake_in_a_later_entry_names_its_own_line() {
+        let line_of = |text: &str, needle: &str| text[..text.find(needle).unwrap()].lines().count() + 1;
+        let typo = PERM.replace("kind = \"release\"", "kind = \"release\"\ndurtion = 1.0");
+        let e = error_of(&typo);
+        let line = line_of(&typo, "durtion");
+        assert!(e.contains(&format!("line {line}: stage 4")) && e.contains("durtion"), "{e}");
+        let obstacles = format!(
+            "[[obstacles]]\nname = \"head\"\nshape = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.1\n\n\
+             [[obstacles]]\nname = \"floor\"\nshape = \"plane\"\npoint = [0.0, -1.0, 0.0]\nnormal = [0.0, 1.0, 0.0]\n\
+             nromal = [0.0, 1.0, 0.0]\n\n{PERM}"
+        );
+        let e = error_of(&obstacles);
+        let line = line_of(&obstacles, "nromal");
+        assert!(e.contains(&format!("line {line}: obstacle 2")) && e.contains("nromal"), "{e}");
+        let wrong_type =
+            PERM.replace("kind = \"release\"\nduration = 0.5", "kind = \"release\"\nduration = \"long\"");
+        let e = error_of(&wrong_type);
+        assert!(e.contains("stage 4") && e.contains("duration"), "{e}");
     }
 }

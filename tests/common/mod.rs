@@ -32,6 +32,25 @@ pub fn dir_listing(dir: &Path) -> Vec<String> {
     names
 }
 
+/// The colliders a shot simulates a styled groom with: the recipe's obstacles as placed, but the
+/// ones its stages press (a pillow, the blow-dry's floor — styling tools, withdrawn by `release`).
+#[allow(dead_code)]
+pub fn shot_colliders(
+    recipe: &coif::style::recipe::Recipe,
+    shapes: Vec<coif::interact::obstacles::Shape>,
+) -> Vec<coif::interact::obstacles::Shape> {
+    use coif::style::recipe::Stage;
+    let pressed = |name: &str| {
+        recipe.stages.iter().any(|s| matches!(s.get_ref(), Stage::Press { obstacle, .. } if obstacle == name))
+    };
+    shapes
+        .into_iter()
+        .zip(&recipe.obstacles)
+        .filter(|(_, o)| !pressed(o.get_ref().name()))
+        .map(|(s, _)| s)
+        .collect()
+}
+
 /// Every `step`-th strand of a groom, with its widths and attributes: a preset's recipe on a few
 /// strands, so a test stays fast while still going through every stage.
 pub fn thin(groom: &coif::Groom, step: usize) -> coif::Groom {
