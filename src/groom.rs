@@ -540,8 +540,20 @@ impl Groom {
         crate::io::transform_attributes(&mut self.attributes, scale);
     }
 
-    /// Checks every invariant of the model; the first violation is returned.
+    /// Checks every invariant of the model, and that every segment has a direction (a strand can
+    /// be simulated and rendered); the first violation is returned.
     pub fn validate(&self) -> Result<(), GroomError> {
+        self.check(Segments::Directed)
+    }
+
+    /// [`Self::validate`] but for segment lengths: what a file may hold and coif reads, converts
+    /// and writes. DCC tools write coincident consecutive points (a duplicated root), and pxr and
+    /// Blender read them; only simulating or rendering such a strand needs a direction there.
+    pub fn validate_stored(&self) -> Result<(), GroomError> {
+        self.check(Segments::Any)
+    }
+
+    fn check(&self, segments: Segments) -> Result<(), GroomError> {
         self.validate_offsets()?;
         let strands = self.strand_count();
         let vertices = self.vertex_count();
@@ -570,6 +582,7 @@ impl Groom {
         // Segments are all long when the only short pairs of consecutive points are pairs that
         // straddle two strands (a strand's tip and the next one's root).
         let long = strands == 0
+            || (counts_ok && segments == Segments::Any)
             || (counts_ok && {
                 // Each chunk with the next one's first point: every pair is counted once.
                 let pairs: usize = (0..vertices.div_ceil(CHUNK))
@@ -585,7 +598,7 @@ impl Groom {
                 pairs == straddling
             });
         if !(finite & widths_ok & long) {
-            self.find_fault()?;
+            self.find_fault(segments)?;
         }
         for (i, attribute) in self.attributes.iter().enumerate() {
             if !(1..=4).contains(&attribute.components) {
@@ -617,9 +630,9 @@ impl Groom {
         Some(format!("curve {curve} of <{name}>"))
     }
 
-    /// The first bad strand: too few vertices, a point not finite, a zero-length segment or a
-    /// bad width, in strand order.
-    fn find_fault(&self) -> Result<(), GroomError> {
+    /// The first bad strand: too few vertices, a point not finite, a zero-length segment (when
+    /// `segments` asks for directions) or a bad width, in strand order.
+    fn find_fault(&self, segments: Segments) -> Result<(), GroomError> {
         for strand in 0..self.strand_count() {
             let range = self.strand_range(strand);
             let points = &self.points[range.clone()];
@@ -632,7 +645,9 @@ impl Groom {
                 }
             }
             for (segment, pair) in points.windows(2).enumerate() {
-                if pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH {
+                if segments == Segments::Directed
+                    && pair[0].distance_squared(pair[1]) <= MIN_SEGMENT_LENGTH * MIN_SEGMENT_LENGTH
+                {
                     return Err(GroomError::ZeroLengthSegment { strand, segment });
                 }
             }
@@ -693,6 +708,15 @@ fn short_pairs(points: &[Vec3], min_squared: f32) -> usize {
         first += BLOCK;
     }
     count + (first..pairs).filter(|&i| points[i].distance_squared(points[i + 1]) <= min_squared).count()
+}
+
+/// What [`Groom`]'s checks ask of segment lengths.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Segments {
+    /// Every segment at least [`MIN_SEGMENT_LENGTH`] long.
+    Directed,
+    /// Any length.
+    Any,
 }
 
 /// Segments shorter than this (metres) count as zero-length: a solver cannot give them a direction.

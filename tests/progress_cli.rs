@@ -49,35 +49,18 @@ fn style_and_render_log_progress_with_an_eta_only_when_asked() {
     assert!(logged_percentages(&stderr(&quiet), "style").is_empty(), "no bar or lines in a log by default");
 
     let image = dir.path().join("p.png");
-    let rendered = coif(&[
-        "render",
-        path_str(&styled),
-        "-o",
-        path_str(&image),
-        "--res",
-        "64x48",
-        "--spp",
-        "2",
-        "--progress",
-        "log",
-    ]);
+    let render = |progress: &[&str]| {
+        let args = ["render", path_str(&styled), "-o", path_str(&image), "--res", "64x48", "--spp", "2"];
+        coif(&[&args[..], progress].concat())
+    };
+    let rendered = render(&["--progress", "log"]);
     assert!(rendered.status.success(), "{}", stderr(&rendered));
     let percentages = logged_percentages(&stderr(&rendered), "render");
     assert_eq!(percentages.last(), Some(&100), "{}", stderr(&rendered));
     assert!(percentages.windows(2).all(|w| w[0] < w[1]), "{percentages:?}");
 
     // `--quiet`, as on `style` (the README and render's help name it; it was a usage error).
-    let quiet = coif(&[
-        "render",
-        path_str(&styled),
-        "-o",
-        path_str(&image),
-        "--res",
-        "64x48",
-        "--spp",
-        "2",
-        "--quiet",
-    ]);
+    let quiet = render(&["--quiet"]);
     assert!(quiet.status.success(), "{}", stderr(&quiet));
     assert!(logged_percentages(&stderr(&quiet), "render").is_empty(), "{}", stderr(&quiet));
 

@@ -681,3 +681,59 @@ assert 'string[] tags = ["hero", "groom"]' in text and 'asset[] payloadAssetDepe
     assert_eq!(flat(&groom.points), f32s(&dump["curves"][0]["world_points"]));
     assert_eq!(groom.vertex_counts().collect::<Vec<_>>(), vec![3]);
 }
+
+/// A curve with a point repeated (a DCC tool's duplicated root) is a file pxr and Blender read:
+/// coif reads it, tells about it and converts it to every format with the points as they are
+/// (it refused even `info`: "zero-length segment"). Only what needs a direction along every
+/// segment — simulating, styling, rendering — refuses it, naming the file, strand and segment.
+#[test]
+fn a_repeated_point_is_read_and_converted_and_refused_only_where_a_direction_is_needed() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("repeated.usda");
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Gf
+stage = Usd.Stage.CreateNew(sys.argv[1])
+UsdGeom.SetStageMetersPerUnit(stage, 1)
+UsdGeom.SetStageUpAxis(stage, 'Y')
+curves = UsdGeom.BasisCurves.Define(stage, '/hair')
+curves.CreateTypeAttr('linear')
+curves.CreateCurveVertexCountsAttr([3, 4])
+curves.CreatePointsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(0, -0.1, 0), Gf.Vec3f(0, -0.2, 0),
+                         Gf.Vec3f(0.01, 0, 0), Gf.Vec3f(0.01, 0, 0), Gf.Vec3f(0.01, -0.1, 0), Gf.Vec3f(0.01, -0.2, 0)])
+curves.CreateWidthsAttr([0.0001])
+curves.SetWidthsInterpolation('constant')
+stage.Save()
+"#;
+    let made = std::process::Command::new(python()).arg("-c").arg(script).arg(&path).output().unwrap();
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    let want = f32s(&pxr_dump(&path, None)["curves"][0]["world_points"]);
+    let info = coif(&["info", "--json", path_str(&path)]);
+    assert!(info.status.success(), "{}", stderr(&info));
+    assert_eq!(stdout_json(&info)["groom"]["vertices"], 7);
+    for ext in ["usda", "usdc", "abc", "hair"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&path), path_str(&out)]);
+        assert!(run.status.success(), "{ext}: {}", stderr(&run));
+        let read = coif::io::read_groom(&out, &Default::default()).unwrap().groom;
+        assert_eq!(flat(&read.points), want, "{ext}");
+        if ext.starts_with("usd") {
+            assert_eq!(f32s(&pxr_dump(&out, None)["curves"][0]["world_points"]), want, "{ext} in pxr");
+        }
+    }
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    let styled = dir.path().join("styled.usda");
+    let image = dir.path().join("p.png");
+    for args in [
+        vec!["style", path_str(&recipe), "--groom", path_str(&path), "-o", path_str(&styled)],
+        vec!["simulate", path_str(&path), path_str(&styled), "--seconds", "0.01"],
+        vec!["render", path_str(&path), "-o", path_str(&image), "--res", "8x8", "--spp", "1"],
+    ] {
+        let run = coif(&args);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {}", stderr(&run));
+        let message = stderr(&run);
+        assert!(message.contains("repeated.usda") && message.contains("strand 1, segment 0"), "{message}");
+        assert!(!styled.exists() && !image.exists(), "{args:?} wrote its output");
+    }
+}

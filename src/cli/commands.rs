@@ -376,7 +376,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         progress.set_total(total);
         progress.set_done(done);
     };
-    let rendered = render::with_threads(args.threads, || render::render(&loaded.groom, &settings, &report))??;
+    let rendered = render::with_threads(args.threads, || render::render(&loaded.groom, &settings, &report))?
+        .map_err(|e| e.in_file(&args.input))?;
     progress.finish();
     rendered.image.write(&args.output)?;
     let stats = rendered.stats;

@@ -310,7 +310,7 @@ fn read_groom_from(
             groom
         }
     };
-    groom.validate().map_err(|source| Error::InvalidGroom {
+    groom.validate_stored().map_err(|source| Error::InvalidGroom {
         path: path.to_path_buf(),
         origin: source.strand().and_then(|strand| groom.strand_origin(strand)),
         source,
@@ -470,7 +470,7 @@ pub fn write_groom(path: &Path, groom: &Groom) -> Result<Vec<String>> {
 /// the curves; with `--unreal` they go to the sibling file [`unreal::meshes_path`] instead,
 /// written together with the groom (both or neither).
 pub fn write_groom_with(path: &Path, groom: &Groom, options: &ExportOptions) -> Result<Vec<String>> {
-    groom.validate()?;
+    groom.validate_stored()?;
     let format = check_output(path, options)?;
     match format {
         Format::Hair => {
@@ -583,7 +583,7 @@ pub fn write_animated(
     frames_per_second: f32,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
-    groom.validate()?;
+    groom.validate_stored()?;
     if frames.is_empty() {
         return write_groom_with(path, groom, options);
     }
@@ -648,7 +648,7 @@ pub fn write_frames(
     timeline: &timeline::Timeline,
     options: &ExportOptions,
 ) -> Result<Vec<String>> {
-    first.validate()?;
+    first.validate_stored()?;
     check_output(path, options)?;
     let format = check_animated_output(path)?;
     let count = timeline.frame_count();

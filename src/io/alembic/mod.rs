@@ -118,7 +118,7 @@ impl AnimationWriter {
     /// Starts the file; `first` fixes the topology and attribute layout (it is not written:
     /// pass it to [`AnimationWriter::write_frame`] too). `animated` false makes a static file.
     pub fn create(path: &Path, first: &Groom, options: &AlembicWriteOptions, animated: bool) -> Result<Self> {
-        first.validate()?;
+        first.validate_stored()?;
         let start = |path: &Path, options: &AlembicWriteOptions| -> Result<CurvesWriter<_>> {
             let out = atomic::create_beside(path)?;
             CurvesWriter::new(out, first, options, animated).map_err(|e| Error::io(path, e))
@@ -138,7 +138,7 @@ impl AnimationWriter {
     }
 
     pub fn write_frame(&mut self, groom: &Groom) -> Result<()> {
-        groom.validate()?;
+        groom.validate_stored()?;
         self.writer.write_frame(groom).map_err(|e| frame_error(&self.path, e))?;
         if let Some((path, writer)) = &mut self.meshes {
             writer.write_frame(groom).map_err(|e| frame_error(path, e))?;
