@@ -19,9 +19,9 @@ pub const SIM_BYTES_PER_VERTEX: f64 = 512.0;
 /// Bytes per water droplet (position, velocity, its list of touched vertices).
 pub const DROPLET_BYTES: f64 = 128.0;
 /// A captured `--frames` frame, per vertex: the position and the attributes styling changes
-/// (`rest` and `rest_darboux` 12 B each, four `bond_*` rates, `wetness`, `material_frame` 16 B):
-/// 84 B. Counting the positions alone (12 B) let 6,800 frames of 600 vertices past a 60 MB limit
-/// to a 311 MB peak.
+/// (`rest` and `rest_darboux` 12 B each, four `bond_*` rates, `wetness`, `material_frame` 16 B:
+/// 72 B held), rounded up past the 76 B measured: 6,800 frames of 600 vertices peaked at 311 MB,
+/// which a count of the positions alone (12 B) let past a 60 MB limit.
 const FRAME_BYTES_PER_VERTEX: f64 = 84.0;
 /// Bytes a groom holds per vertex (point, width and a few attributes). Measured: `coif info`'s
 /// peak RSS grows by 32 bytes per vertex of a generated groom; attributes add more.
