@@ -1333,8 +1333,7 @@ shot = new('referencing.usda')
 shot.DefinePrim('/Shot').GetReferences().AddReference('./shot.usdc')
 shot.Save()
 "#;
-    let made = std::process::Command::new(python()).arg("-c").arg(script).arg(dir.path()).output().unwrap();
-    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    run_pxr_script(script, dir.path());
     // pxr plays the clips: the stage moves, so its rest pose is not what it holds at frame 2.
     let x = |file: &str, frame: f64| {
         pxr_dump(&path(file), Some(frame))["curves"][0]["points"][0].as_f64().unwrap()

@@ -674,8 +674,7 @@ stage.Save()
 text = open(sys.argv[1]).read()
 assert 'string[] tags = ["hero", "groom"]' in text and 'asset[] payloadAssetDependencies = [' in text, text
 "#;
-    let made = std::process::Command::new(python()).arg("-c").arg(script).arg(&path).output().unwrap();
-    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    run_pxr_script(script, &path);
     let groom = coif::io::usda::read_file(&path, &Default::default(), None).unwrap();
     let dump = pxr_dump(&path, None);
     assert_eq!(flat(&groom.points), f32s(&dump["curves"][0]["world_points"]));
@@ -705,8 +704,7 @@ curves.CreateWidthsAttr([0.0001])
 curves.SetWidthsInterpolation('constant')
 stage.Save()
 "#;
-    let made = std::process::Command::new(python()).arg("-c").arg(script).arg(&path).output().unwrap();
-    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    run_pxr_script(script, &path);
     let want = f32s(&pxr_dump(&path, None)["curves"][0]["world_points"]);
     let info = coif(&["info", "--json", path_str(&path)]);
     assert!(info.status.success(), "{}", stderr(&info));

@@ -25,6 +25,15 @@ pub fn probe(args: &[&str]) -> String {
     String::from_utf8(output.stdout).unwrap()
 }
 
+/// Runs a usd-core (pxr) script with the project's Python and `arg` as `sys.argv[1]`; returns its
+/// stdout, failing the test with its stderr when it fails.
+pub fn run_pxr_script(script: &str, arg: &Path) -> Vec<u8> {
+    let made =
+        Command::new(python()).arg("-c").arg(script).arg(arg).output().expect("the project's Python runs");
+    assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+    made.stdout
+}
+
 /// Packages the stage `root` (and what it references) as the `.usdz` `package`, with usd-core.
 pub fn usdz_package(root: &Path, package: &Path) {
     let made = Command::new(python())
