@@ -129,10 +129,11 @@ fn run_style(args: StyleArgs) -> Result<()> {
         }));
     } else {
         for stage in &report.stages {
-            let curl = stage.curl_radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
+            let cm = |radius: Option<f32>| radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
+            let (curl, rest_curl) = (cm(stage.curl_radius), cm(stage.rest_curl_radius));
             let b = &stage.bond_rates;
             eprintln!(
-                "{:>2} {:<10} {:>6.2} s {:>6} steps {:>7.2} s wall  curl {curl:>9}  bonds H {:.2} I {:.2} S {:.2} P {:.2}  wet {:.2}",
+                "{:>2} {:<10} {:>6.2} s {:>6} steps {:>7.2} s wall  curl {curl:>9} (rest {rest_curl:>8})  bonds H {:.2} I {:.2} S {:.2} P {:.2}  wet {:.2}",
                 stage.index + 1,
                 stage.kind,
                 stage.seconds,

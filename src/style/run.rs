@@ -63,6 +63,9 @@ pub struct StageReport {
     pub mean_curvature: f32,
     /// Median curl radius of the strands that were wound on rods (else of all strands), metres.
     pub curl_radius: Option<f32>,
+    /// The same median over the zero-stress rest curves (the exported `rest`): the curl the bonds
+    /// hold free of gravity and contacts, which hanging curls stretch narrower.
+    pub rest_curl_radius: Option<f32>,
     /// Mean bond rates per kind at the stage's end.
     pub bond_rates: BondRates,
     /// Mean wetness at the stage's end.
@@ -1123,17 +1126,20 @@ impl Session {
             (0..strands).map(|s| mean_curvature(&positions[self.groom.strand_range(s)])).sum::<f32>()
                 / strands.max(1) as f32;
         let any_wound = self.wound.iter().any(Option::is_some);
-        let mut radii: Vec<f32> = (0..strands)
-            .filter_map(|s| {
-                let range = self.groom.strand_range(s);
-                match self.wound[s] {
-                    Some(first) => curl_radius(&positions[first..range.end]),
-                    None if !any_wound => curl_radius(&positions[range]),
-                    None => None,
-                }
-            })
-            .collect();
-        radii.sort_by(f32::total_cmp);
+        let median_curl = |points: &[Vec3]| {
+            let mut radii: Vec<f32> = (0..strands)
+                .filter_map(|s| {
+                    let range = self.groom.strand_range(s);
+                    match self.wound[s] {
+                        Some(first) => curl_radius(&points[first..range.end]),
+                        None if !any_wound => curl_radius(&points[range]),
+                        None => None,
+                    }
+                })
+                .collect();
+            radii.sort_by(f32::total_cmp);
+            radii.get(radii.len() / 2).copied()
+        };
         let mean = |kind: BondKind| {
             let rates = self.sim.bonds.rates(kind);
             let centres: Vec<f32> = self.sim.rods().pair_centres().map(|v| rates[v]).collect();
@@ -1150,7 +1156,8 @@ impl Session {
             steps,
             wall_seconds,
             mean_curvature: curvature,
-            curl_radius: radii.get(radii.len() / 2).copied(),
+            curl_radius: median_curl(positions),
+            rest_curl_radius: median_curl(&self.sim.rest_curves()),
             bond_rates: BondRates {
                 hydrogen: mean(BondKind::Hydrogen),
                 ionic: mean(BondKind::Ionic),

@@ -102,6 +102,22 @@ pub fn kept_share(
     along / squared
 }
 
+/// The groom's zero-stress rest curves (its exported `rest` attribute) as a groom: the shape its
+/// bonds hold free of gravity and contacts.
+pub fn rest_shape(groom: &coif::Groom) -> coif::Groom {
+    let rest = groom.attribute("rest").expect("a styled groom carries its rest curves").floats();
+    let mut shape = groom.clone();
+    shape.points = rest.chunks_exact(3).map(Vec3::from_slice).collect();
+    shape
+}
+
+/// A recipe's text with its last settle run without gravity (model.md §2: the free shape).
+pub fn last_settle_without_gravity(recipe: &str) -> String {
+    let at =
+        recipe.rfind("kind = \"settle\"").expect("the recipe ends on a settle") + "kind = \"settle\"".len();
+    format!("{}\ngravity = false{}", &recipe[..at], &recipe[at..])
+}
+
 /// For each of `strands` whose tail lay on a rod's surface in `wound` (a pose while the rods
 /// held the hair; rods as `(a, b, radius)`), the radius it was wound at and the radius of the
 /// same vertices in `rest` (the rest curves).
