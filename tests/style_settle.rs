@@ -25,11 +25,12 @@ fn style(recipe: &Path, groom: &Path, output: &Path) -> (serde_json::Value, Groo
 fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
     // The water set's 24 cm strands come off 2.5 cm rollers with their curls far from the shape
     // their bonds now hold; the static solve must reach its residual (net force and torque a
-    // thousandth of gravity's) within the preset's 8 s. Before settling used light frames, they
-    // crept open at ~1 cm/s for the whole 8 s.
+    // thousandth of gravity's) within 8 s (the preset allows 90 s for slower grooms). Before
+    // settling used light frames, they crept open at ~1 cm/s for the whole 8 s.
     let dir = tempfile::tempdir().unwrap();
     let groom = repo("grooms/seed_200x24cm.hair");
     let text = std::fs::read_to_string(repo("grooms/recipes/water_set.toml")).unwrap();
+    let text = text.replace("max_seconds = 90.0", "max_seconds = 8.0");
     assert!(text.contains("max_seconds = 8.0") && text.contains("tolerance = 1e-3"));
     let recipe = dir.path().join("water_set.toml");
     std::fs::write(&recipe, &text).unwrap();
