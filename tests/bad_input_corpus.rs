@@ -987,6 +987,28 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
             &["m.toml", "line 6"],
         ));
     }
+    // A placeholder coif does not know was written as it stands: every task of the batch wrote
+    // into one folder named `{foo}` (and the later ones skipped as complete), exit 0.
+    for (template, shown) in [("out/{foo}/g.usda", "'{foo}'"), ("out/{name.usda", "'{name.usda'")] {
+        let manifest = format!(
+            "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = [\"{template}\"]\n\n[[tasks]]\nname = \"t\"\n"
+        );
+        cases.push(case(
+            &format!("output template {template}"),
+            files(&manifest),
+            &["batch", "m.toml"],
+            2,
+            &["m.toml", "line 6", shown, "{name}, {index}, {groom}, {recipe}"],
+        ));
+    }
+    // `--jobs 0` ran the batch one task at a time without a word.
+    cases.push(case(
+        "batch --jobs 0",
+        files(&format!("{head}[[tasks]]\nname = \"t\"\n")),
+        &["batch", "m.toml", "--jobs", "0"],
+        2,
+        &["--jobs 0"],
+    ));
     cases.push(case(
         "output climbs out",
         files("[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = [\"../{name}.usda\"]\n\n[[tasks]]\nname = \"t\"\n"),

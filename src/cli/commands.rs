@@ -397,6 +397,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
 
 fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool) -> Result<()> {
     use coif::batch::{local, manifest, task as batch_task};
+    local::check_jobs(jobs)?;
     let manifest = manifest::load(manifest_path)?;
     if let Some(index) = task {
         let task = manifest.tasks.get(index).ok_or_else(|| {
