@@ -513,6 +513,15 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
             names,
         ));
     }
+    // An empty group name (`--group "$GROUP"`, the variable unset) matched a .hair file's one
+    // unnamed group and styled every strand, exit 0.
+    cases.push(case(
+        "style --group \"\" of g.hair",
+        vec![("r.toml", BASE.as_bytes().to_vec()), ("g.hair", hair.to_vec())],
+        &["style", "r.toml", "--groom", "g.hair", "--group", "", "-o", "out.usda"],
+        2,
+        &["--group \"\"", "never empty"],
+    ));
     cases
 }
 
