@@ -593,6 +593,24 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         &["in.usda", "strand 3, vertex 1", "curve 1 of </groom/b>"],
     ));
 
+    // A `uint64` is 0 to 2^64 − 1, as pxr reads it: `-1` was read as 2^64 − 1 (pxr refuses the
+    // layer), in an array and alone.
+    for (name, declaration) in [
+        ("array", "uint64[] primvars:n = [-1, 2]"),
+        ("value", "uint64 m = -1\n    uint64[] primvars:n = [1, 2]"),
+    ] {
+        let text = format!(
+            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+             {declaration} (interpolation = \"uniform\")\n}}\n"
+        );
+        cases.push(convert(
+            format!(".usda uint64 -1 {name}"),
+            "in.usda",
+            text.into_bytes(),
+            &["in.usda", "'-1'"],
+        ));
+    }
     let usda = &inputs.usda;
     for cut in [9, usda.len() / 4, usda.len() / 2, usda.len() * 3 / 4, usda.len() - 3] {
         cases.push(convert(format!(".usda cut at {cut}"), "in.usda", usda[..cut].to_vec(), &["in.usda"]));
