@@ -255,8 +255,14 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         eprintln!("coif: warning: {shortfall}");
     }
     if args.json {
-        let warnings: Vec<String> =
-            loaded.warnings.iter().cloned().chain(io::write_groom(&args.output, &groom)?).collect();
+        // All of them, as `style --json` gives them (the simulation's were only under `simulation`).
+        let warnings: Vec<String> = loaded
+            .warnings
+            .iter()
+            .chain(&summary.warnings)
+            .cloned()
+            .chain(io::write_groom(&args.output, &groom)?)
+            .collect();
         print_json(
             json!({ "output": args.output, "simulation": summary, "groom": GroomInfo::of(&groom), "warnings": warnings }),
         );
