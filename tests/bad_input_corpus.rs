@@ -375,6 +375,8 @@ fn mesh_cases(hair: &[u8]) -> Vec<Case> {
         mesh_case("mesh face index", &cube.replace("f 2 3 4", "f 2 3 9"), "", &["m.obj"]),
         mesh_case("mesh no faces", "v 0 0 0\n", "", &["m.obj", "no triangles"]),
         mesh_case("mesh binary", "\u{0}\u{1}\u{2}garbage", "", &["m.obj"]),
+        // An empty path was the recipe's folder: ": No such file or directory", no key named.
+        style_case("mesh path empty", &recipe("").replace("m.obj", ""), hair, &["line 1", "path = \"\""]),
         // A scalp without a curved surface near the roots cannot place a head-frame recipe: the
         // refusal names the mesh (it named the groom's file).
         {
