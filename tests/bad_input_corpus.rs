@@ -613,6 +613,16 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             &["in.usda", "'-1'"],
         ));
     }
+    // A NaN root UV (`st`, per curve) was read and written on into every output, exit 0.
+    let uv = "#usda 1.0\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
+              int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+              texCoord2f[] primvars:st = [(0, 0), (nan, 0)] (interpolation = \"uniform\")\n}\n";
+    cases.push(convert(
+        ".usda NaN root UV".into(),
+        "in.usda",
+        uv.as_bytes().to_vec(),
+        &["in.usda", "root UV of strand 1"],
+    ));
     let usda = &inputs.usda;
     for cut in [9, usda.len() / 4, usda.len() / 2, usda.len() * 3 / 4, usda.len() - 3] {
         cases.push(convert(format!(".usda cut at {cut}"), "in.usda", usda[..cut].to_vec(), &["in.usda"]));

@@ -356,6 +356,14 @@ fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
             ));
         }
     }
+    // Root UVs too: a NaN `st` went on into every output (Unreal's `groom_root_uv`).
+    let uvs = groom.root_uvs.as_deref().unwrap_or_default();
+    if let Some((strand, uv)) = uvs.iter().enumerate().find(|(_, uv)| !uv.iter().all(|v| v.is_finite())) {
+        return Err(Error::format(
+            path,
+            format!("root UV of strand {strand} is ({}, {}), not finite", uv[0], uv[1]),
+        ));
+    }
     Ok(())
 }
 
