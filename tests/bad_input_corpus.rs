@@ -623,6 +623,24 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         uv.as_bytes().to_vec(),
         &["in.usda", "root UV of strand 1"],
     ));
+    // Guide ids as floats that no int32 holds: Alembic got 2147483647 for 1e30 and 0 for 0.5.
+    for (ids, culprit) in [
+        ("(1, 2, 3), (1e30, 0, 0)", "strand 1: 1000000000000000000000000000000 is not"),
+        ("(0.5, 0, 0), (1, 0, 0)", "strand 0: 0.5 is not"),
+    ] {
+        let text = format!(
+            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+             float3[] primvars:groom_closest_guides = [{ids}] (interpolation = \"uniform\")\n}}\n"
+        );
+        cases.push(case(
+            &format!("groom_closest_guides [{ids}] to .abc"),
+            vec![("in.usda", text.into_bytes())],
+            &["convert", "in.usda", "out.abc", "--unreal"],
+            2,
+            &["in.usda", "groom_closest_guides", culprit],
+        ));
+    }
     let usda = &inputs.usda;
     for cut in [9, usda.len() / 4, usda.len() / 2, usda.len() * 3 / 4, usda.len() - 3] {
         cases.push(convert(format!(".usda cut at {cut}"), "in.usda", usda[..cut].to_vec(), &["in.usda"]));
