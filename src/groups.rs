@@ -235,7 +235,8 @@ impl Groom {
     pub fn select_groups(&self, names: &[String]) -> Result<(Groom, GroupSelection), String> {
         let mut wanted = Vec::new();
         for name in names {
-            let found = (0..self.group_count()).find(|&g| {
+            // An empty name names no group (not a .hair file's unnamed one).
+            let found = (0..self.group_count()).filter(|_| !name.is_empty()).find(|&g| {
                 let group = self.group(g);
                 group.name == *name || group.name.rsplit('/').next() == Some(name.as_str())
             });

@@ -375,6 +375,8 @@ fn mesh_cases(hair: &[u8]) -> Vec<Case> {
         mesh_case("mesh face index", &cube.replace("f 2 3 4", "f 2 3 9"), "", &["m.obj"]),
         mesh_case("mesh no faces", "v 0 0 0\n", "", &["m.obj", "no triangles"]),
         mesh_case("mesh binary", "\u{0}\u{1}\u{2}garbage", "", &["m.obj"]),
+        // An empty path was the recipe's folder: ": No such file or directory", no key named.
+        style_case("mesh path empty", &recipe("").replace("m.obj", ""), hair, &["line 1", "path = \"\""]),
         // A scalp without a curved surface near the roots cannot place a head-frame recipe: the
         // refusal names the mesh (it named the groom's file).
         {
@@ -513,6 +515,15 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
             names,
         ));
     }
+    // An empty group name (`--group "$GROUP"`, the variable unset) matched a .hair file's one
+    // unnamed group and styled every strand, exit 0.
+    cases.push(case(
+        "style --group \"\" of g.hair",
+        vec![("r.toml", BASE.as_bytes().to_vec()), ("g.hair", hair.to_vec())],
+        &["style", "r.toml", "--groom", "g.hair", "--group", "", "-o", "out.usda"],
+        2,
+        &["--group \"\"", "never empty"],
+    ));
     cases
 }
 
@@ -584,6 +595,52 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         &["in.usda", "strand 3, vertex 1", "curve 1 of </groom/b>"],
     ));
 
+    // A `uint64` is 0 to 2^64 − 1, as pxr reads it: `-1` was read as 2^64 − 1 (pxr refuses the
+    // layer), in an array and alone.
+    for (name, declaration) in [
+        ("array", "uint64[] primvars:n = [-1, 2]"),
+        ("value", "uint64 m = -1\n    uint64[] primvars:n = [1, 2]"),
+    ] {
+        let text = format!(
+            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+             {declaration} (interpolation = \"uniform\")\n}}\n"
+        );
+        cases.push(convert(
+            format!(".usda uint64 -1 {name}"),
+            "in.usda",
+            text.into_bytes(),
+            &["in.usda", "'-1'"],
+        ));
+    }
+    // A NaN root UV (`st`, per curve) was read and written on into every output, exit 0.
+    let uv = "#usda 1.0\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
+              int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+              texCoord2f[] primvars:st = [(0, 0), (nan, 0)] (interpolation = \"uniform\")\n}\n";
+    cases.push(convert(
+        ".usda NaN root UV".into(),
+        "in.usda",
+        uv.as_bytes().to_vec(),
+        &["in.usda", "root UV of strand 1"],
+    ));
+    // Guide ids as floats that no int32 holds: Alembic got 2147483647 for 1e30 and 0 for 0.5.
+    for (ids, culprit) in [
+        ("(1, 2, 3), (1e30, 0, 0)", "strand 1: 1000000000000000000000000000000 is not"),
+        ("(0.5, 0, 0), (1, 0, 0)", "strand 0: 0.5 is not"),
+    ] {
+        let text = format!(
+            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+             float3[] primvars:groom_closest_guides = [{ids}] (interpolation = \"uniform\")\n}}\n"
+        );
+        cases.push(case(
+            &format!("groom_closest_guides [{ids}] to .abc"),
+            vec![("in.usda", text.into_bytes())],
+            &["convert", "in.usda", "out.abc", "--unreal"],
+            2,
+            &["in.usda", "groom_closest_guides", culprit],
+        ));
+    }
     let usda = &inputs.usda;
     for cut in [9, usda.len() / 4, usda.len() / 2, usda.len() * 3 / 4, usda.len() - 3] {
         cases.push(convert(format!(".usda cut at {cut}"), "in.usda", usda[..cut].to_vec(), &["in.usda"]));
@@ -987,6 +1044,28 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
             &["m.toml", "line 6"],
         ));
     }
+    // A placeholder coif does not know was written as it stands: every task of the batch wrote
+    // into one folder named `{foo}` (and the later ones skipped as complete), exit 0.
+    for (template, shown) in [("out/{foo}/g.usda", "'{foo}'"), ("out/{name.usda", "'{name.usda'")] {
+        let manifest = format!(
+            "[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = [\"{template}\"]\n\n[[tasks]]\nname = \"t\"\n"
+        );
+        cases.push(case(
+            &format!("output template {template}"),
+            files(&manifest),
+            &["batch", "m.toml"],
+            2,
+            &["m.toml", "line 6", shown, "{name}, {index}, {groom}, {recipe}"],
+        ));
+    }
+    // `--jobs 0` ran the batch one task at a time without a word.
+    cases.push(case(
+        "batch --jobs 0",
+        files(&format!("{head}[[tasks]]\nname = \"t\"\n")),
+        &["batch", "m.toml", "--jobs", "0"],
+        2,
+        &["--jobs 0"],
+    ));
     cases.push(case(
         "output climbs out",
         files("[defaults]\ngroom = \"g.hair\"\nrecipe = \"r.toml\"\noutputs = [\"../{name}.usda\"]\n\n[[tasks]]\nname = \"t\"\n"),

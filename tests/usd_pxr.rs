@@ -517,14 +517,14 @@ CURVES = {
     "i64_vertex": (T.Int64Array, "vertex", None, [2**40 + 1, 1, 2**62, -(2**62), 16777217, 123456789]),
     "u32_uniform": (T.UIntArray, "uniform", None, [4000000000, 1]),
     "u32_constant": (T.UIntArray, "constant", None, [4294967295]),
-    "u64_uniform": (T.UInt64Array, "uniform", None, [2**40 + 1, 2**63 - 1]),
+    "u64_uniform": (T.UInt64Array, "uniform", None, [2**64 - 1, 2**63]),
 }
 # ... and on the mesh (one quad).
 MESH = {
     "region": (T.IntArray, "uniform", None, [16777217]),
     "m_i64": (T.Int64Array, "vertex", None, [2**40 + 1, -5, 123456789, 2**62]),
     "m_u32": (T.UIntArray, "constant", None, [4000000000]),
-    "m_u64": (T.UInt64Array, "vertex", None, [2**40 + 1, 0, 7, 2**63 - 1]),
+    "m_u64": (T.UInt64Array, "vertex", None, [2**40 + 1, 0, 2**64 - 1, 2**63 - 1]),
 }
 
 def make(path):
@@ -593,7 +593,8 @@ fn integer_primvars_py(args: &[&str]) -> Value {
 /// 123456789 into 123456792 (`int[]`, on curves and meshes, to .usda, .usdc and .abc), clamped
 /// `uint[]` 4000000000 and `int64[]` 2^40 to 2147483647, and dropped `int64[]` / `uint64[]` from
 /// `.usda` input altogether (read as four `int6`s), all with exit 0 and no warning. Each keeps
-/// its type, interpolation, `elementSize` and exact values now, as pxr reads the outputs.
+/// its type, interpolation, `elementSize` and exact values now, as pxr reads the outputs. A
+/// `.usda`'s `uint64` past 2^63 − 1 was refused ("bad number '18446744073709551615'").
 #[test]
 fn integer_primvars_keep_their_type_and_exact_values_through_convert() {
     let dir = tempfile::tempdir().unwrap();

@@ -51,10 +51,19 @@ impl BatchReport {
     }
 }
 
+/// Refuses `--jobs 0` (as cargo does), which was run as one job at a time without a word: a
+/// farm script's `--jobs $NPROC` with an empty variable should fail, not crawl.
+pub fn check_jobs(jobs: usize) -> Result<()> {
+    if jobs == 0 {
+        return Err(Error::Usage("--jobs 0: at least one task must run at a time".into()));
+    }
+    Ok(())
+}
+
 /// Runs every task of the manifest with `coif` (this executable) as child processes.
 pub fn run(manifest: &Manifest, coif: &Path, jobs: usize) -> Result<BatchReport> {
     let start = Instant::now();
-    let jobs = jobs.max(1);
+    check_jobs(jobs)?;
     task::check_overrides(manifest)?;
     // Folders made before any task runs: a sheet's missing folder found after hours of tasks
     // failed the batch then.

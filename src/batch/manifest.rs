@@ -21,7 +21,7 @@
 //! parameters = { "rods.0.radius" = [0.008, 0.012], "stages.1.break.disulfide" = [0.1, 0.2, 0.3] }
 //! ```
 //! Paths are relative to the manifest's folder. Templates: `{name}`, `{index}`, `{groom}` and
-//! `{recipe}` (file stems).
+//! `{recipe}` (file stems); any other `{` is refused.
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -161,14 +161,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
         let index = tasks.len();
         let stem =
             |p: &str| Path::new(p).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        // In the order of PLACEHOLDERS.
+        let values = [name.clone(), index.to_string(), stem(&groom), stem(&recipe)];
         let fill = |template: &str| {
-            template
-                .replace("{name}", &name)
-                .replace("{index}", &index.to_string())
-                .replace("{groom}", &stem(&groom))
-                .replace("{recipe}", &stem(&recipe))
+            PLACEHOLDERS
+                .iter()
+                .zip(&values)
+                .fold(template.to_string(), |text, (key, value)| text.replace(&format!("{{{key}}}"), value))
         };
         for template in outputs.iter().chain(preview.iter()) {
+            check_placeholders(template).map_err(|m| bad(format!("line {line}: task '{name}': {m}")))?;
             if Path::new(&fill(template)).components().any(|c| c == std::path::Component::ParentDir) {
                 return Err(bad(format!(
                     "line {line}: task '{name}': output '{}' climbs out of its folder with '..'",
@@ -340,6 +342,29 @@ pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
         contact_sheet: file.contact_sheet.as_ref().map(|sheet| resolve(sheet.get_ref())),
         tasks,
     })
+}
+
+/// The `{…}` names an output or preview template may hold.
+const PLACEHOLDERS: [&str; 4] = ["name", "index", "groom", "recipe"];
+
+/// Refuses a template with a `{` that opens no known placeholder: `{foo}` (a typo of `{name}`)
+/// was written literally, so every task wrote one folder named `{foo}`.
+fn check_placeholders(template: &str) -> std::result::Result<(), String> {
+    let mut rest = template;
+    while let Some(open) = rest.find('{') {
+        let after = &rest[open + 1..];
+        let known = after.find('}').map(|close| &after[..close]).filter(|key| PLACEHOLDERS.contains(key));
+        let Some(key) = known else {
+            let shown = after.find('}').map_or(&rest[open..], |close| &rest[open..open + close + 2]);
+            let list: Vec<String> = PLACEHOLDERS.iter().map(|p| format!("{{{p}}}")).collect();
+            return Err(format!(
+                "output template '{template}' has an unknown placeholder '{shown}'; the known ones are {}",
+                list.join(", ")
+            ));
+        };
+        rest = &after[key.len() + 1..];
+    }
+    Ok(())
 }
 
 /// Tasks a manifest may expand to.

@@ -63,7 +63,8 @@ pub(crate) enum Command {
     /// by index (what a farm array job runs). Complete tasks are skipped, so re-runs resume.
     Batch {
         manifest: PathBuf,
-        /// Tasks run at once (each as its own process).
+        /// Tasks run at once (each as its own process), at least 1; 0 is refused (as cargo
+        /// does), not taken as "all cores".
         #[arg(long, default_value_t = 2)]
         jobs: usize,
         /// Run only this task, in this process.

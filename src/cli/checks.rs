@@ -35,6 +35,13 @@ pub(crate) fn style(args: &StyleArgs) -> Result<()> {
         // At least one; more than the groom's strands is refused once it is read.
         flag("--guides", guides as f64, Range::closed(1.0, 1e9))?;
     }
+    // An empty name matched the one unnamed group of a .hair file (every strand), so
+    // `--group "$GROUP"` with an unset variable styled the whole groom.
+    if args.groups.iter().any(|name| name.trim().is_empty()) {
+        return Err(coif::Error::Usage(
+            "--group \"\": a group is named by its prim or object path or its last name, never empty".into(),
+        ));
+    }
     let inputs = [
         ("--groom", Some(&args.groom)),
         ("the recipe", Some(&args.recipe)),

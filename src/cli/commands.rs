@@ -256,8 +256,14 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         eprintln!("coif: warning: {shortfall}");
     }
     if args.json {
-        let warnings: Vec<String> =
-            loaded.warnings.iter().cloned().chain(io::write_groom(&args.output, &groom)?).collect();
+        // All of them, as `style --json` gives them (the simulation's were only under `simulation`).
+        let warnings: Vec<String> = loaded
+            .warnings
+            .iter()
+            .chain(&summary.warnings)
+            .cloned()
+            .chain(io::write_groom(&args.output, &groom)?)
+            .collect();
         print_json(
             json!({ "output": args.output, "simulation": summary, "groom": GroomInfo::of(&groom), "warnings": warnings }),
         );
@@ -398,6 +404,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
 
 fn run_batch(manifest_path: &Path, jobs: usize, task: Option<usize>, json: bool) -> Result<()> {
     use coif::batch::{local, manifest, task as batch_task};
+    local::check_jobs(jobs)?;
     let manifest = manifest::load(manifest_path)?;
     if let Some(index) = task {
         let task = manifest.tasks.get(index).ok_or_else(|| {

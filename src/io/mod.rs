@@ -356,6 +356,31 @@ fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
             ));
         }
     }
+    // Guide ids held as floats (USD's `float3[]`) are written to Alembic as Unreal's int32×3:
+    // 1e30 became 2147483647 and 0.5 became 0 there, without a word.
+    if let Some(closest) = groom.attribute(crate::guides::CLOSEST_GUIDES) {
+        let int32 = |v: f32| v.fract() == 0.0 && (-2_147_483_648.0..2_147_483_648.0).contains(&v);
+        if let Some(index) = closest.floats().iter().position(|&v| !int32(v)) {
+            let rate = if closest.rate == crate::groom::AttributeRate::Strand { "strand" } else { "vertex" };
+            return Err(Error::format(
+                path,
+                format!(
+                    "attribute '{}' at {rate} {}: {} is not a strand id (a whole number an int32 holds)",
+                    closest.name,
+                    index / closest.components.max(1),
+                    closest.floats()[index]
+                ),
+            ));
+        }
+    }
+    // Root UVs too: a NaN `st` went on into every output (Unreal's `groom_root_uv`).
+    let uvs = groom.root_uvs.as_deref().unwrap_or_default();
+    if let Some((strand, uv)) = uvs.iter().enumerate().find(|(_, uv)| !uv.iter().all(|v| v.is_finite())) {
+        return Err(Error::format(
+            path,
+            format!("root UV of strand {strand} is ({}, {}), not finite", uv[0], uv[1]),
+        ));
+    }
     Ok(())
 }
 

@@ -49,7 +49,8 @@ pub struct SimulateSummary {
     pub rest: &'static str,
     pub max_speed: f32,
     pub energy: Energy,
-    /// The file's point attributes the simulation could not carry (`point_attributes`).
+    /// The file's point attributes the simulation could not carry (`point_attributes`), and
+    /// strands a sag-free rest shape did not hold (`Simulation::unheld_warning`).
     pub warnings: Vec<String>,
 }
 
@@ -105,10 +106,20 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
     });
     let sim = stepper.sim;
     sim.check_diverged(None)?;
+    // A sag-free groom is meant to hold its shape: say so when it did not.
+    let simulated = steps as f32 * options.params.dt + settle.as_ref().map_or(0.0, |s| s.seconds);
+    let mut warnings: Vec<String> = match options.sag_free {
+        true => sim.unheld_warning(groom, simulated).into_iter().collect(),
+        false => Vec::new(),
+    };
     let mut out = groom.clone();
     sim.write_to_groom(&mut out);
     // The simulation's own velocities replace the file's; its accelerations are not kept.
-    let warnings = crate::point_attributes::follow_new_shape(groom, &mut out, Some(sim.rods().velocities()));
+    warnings.extend(crate::point_attributes::follow_new_shape(
+        groom,
+        &mut out,
+        Some(sim.rods().velocities()),
+    ));
     let summary = SimulateSummary {
         steps: sim.steps_taken(),
         seconds: steps as f32 * options.params.dt,

@@ -38,6 +38,10 @@ pub const REST_DARBOUX: &str = "rest_darboux";
 /// third director runs along the edge (per vertex; the tip repeats the last edge's).
 pub const MATERIAL_FRAME: &str = "material_frame";
 
+/// How far a vertex of a sag-free groom may move before the run is said not to have held it:
+/// straight strands hold to 0.4 mm and coarse curls to 8 mm (module docs).
+pub const HELD: f32 = 0.01;
+
 /// Cosine of the largest angle between a written frame's third director and its edge for the
 /// frame to be taken (5°; a settled strand's shear is a fraction of a degree).
 const MAX_FRAME_TILT_COS: f32 = 0.996_194_7;
@@ -220,6 +224,41 @@ impl Simulation {
             }
         }
         self.remember_shape(&shape);
+    }
+
+    /// A warning when a sag-free run did not hold the shape: strands whose vertices moved more
+    /// than [`HELD`] from `initial` (the groom the simulation was built from) after `seconds`.
+    /// Strands that rise above their root before hanging are balanced by their sag-free rest
+    /// shape in an unstable equilibrium: 16 crown strands of `coif generate`'s default groom
+    /// fell 10–20 cm in 2 s, while its other strands moved under 2.2 cm (most under 1 mm).
+    pub fn unheld_warning(&self, initial: &Groom, seconds: f32) -> Option<String> {
+        let r = &self.rods;
+        let up = -self.params.gravity.normalize_or_zero();
+        let (mut moved, mut rising, mut worst) = (0usize, 0usize, (0usize, 0.0f32));
+        for strand in 0..r.strand_count() {
+            let range = r.strand_range(strand);
+            let now = &r.positions()[range.clone()];
+            let before = &initial.points[range.clone()];
+            let drift = now.iter().zip(before).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+            if drift > HELD {
+                moved += 1;
+                let root = before[0].dot(up);
+                rising += usize::from(before.iter().any(|p| p.dot(up) > root + HELD));
+                if drift > worst.1 {
+                    worst = (strand, drift);
+                }
+            }
+        }
+        (moved > 0).then(|| {
+            format!(
+                "--sag-free did not hold {moved} of {} strands in {seconds} s (strand {}: {:.1} cm), {rising} of \
+                 them rising above their root: a sag-free rest shape holds a strand up there in an unstable \
+                 balance, and it falls (settle the groom first, or lay those strands down)",
+                r.strand_count(),
+                worst.0,
+                worst.1 * 100.0
+            )
+        })
     }
 
     /// `1 − β`: the influence-weighted share of intact bonds at a pair.

@@ -713,6 +713,15 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
         if bad {
             return Err(format!("line {line}: obstacle '{name}' has a zero or negative size"));
         }
+        // An empty path is the recipe's own folder: it was refused as ": No such file or
+        // directory", or as a directory, without saying which key.
+        if let Obstacle::Mesh { path, .. } = obstacle.get_ref() {
+            if path.as_os_str().is_empty() {
+                return Err(format!(
+                    "line {line}: mesh obstacle '{name}': path = \"\": give its OBJ file, relative to the recipe"
+                ));
+            }
+        }
         let in_head = |frame: &Option<Frame>| frame.unwrap_or(recipe.frame) == Frame::Head;
         let what = format!("line {line}: obstacle '{name}'");
         match obstacle.get_ref() {

@@ -301,6 +301,22 @@ impl Number for i64 {
     }
 }
 
+/// A `uint64` value held as the bits of an `i64`, the way coif stores one (see
+/// `AttributeKind::UInt64`): 0 to 2^64 − 1, as pxr reads them; a sign or more is not one
+/// (an `i64` read took `-1` for 2^64 − 1 and refused 2^63 and up).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct U64Bits(pub i64);
+
+impl Number for U64Bits {
+    fn prefix(_bytes: &[u8]) -> Option<(U64Bits, usize)> {
+        None
+    }
+
+    fn token(token: &str) -> Option<U64Bits> {
+        super::lexer::parse_u64_bits(token).map(U64Bits)
+    }
+}
+
 /// Whether a byte would still belong to a number token (so a prefix is not the whole token).
 #[inline(always)]
 fn continues_token(byte: Option<&u8>) -> bool {
@@ -918,6 +934,17 @@ mod tests {
         assert_eq!(values, [0, -7, 42, 5, 1, 0, 7, 999_999_999_999_999_999, i64::MIN]);
         for bad in ["9223372036854775808", "1.5", "12a", "-", "1e3", "99999999999999999999"] {
             let error = parse_all::<i64>(&format!("1, {bad}"), 1).unwrap_err();
+            assert_eq!(error, format!("at 3: bad number '{bad}'"), "{bad}");
+        }
+    }
+
+    #[test]
+    fn uint64_reads_to_two_to_the_64_and_refuses_signs() {
+        let values = parse_all::<U64Bits>("0, 18446744073709551615, 9223372036854775808, +3", 1).unwrap();
+        let unsigned: Vec<u64> = values.iter().map(|v| v.0 as u64).collect();
+        assert_eq!(unsigned, [0, u64::MAX, 1 << 63, 3]);
+        for bad in ["-1", "18446744073709551616", "1.5", "true"] {
+            let error = parse_all::<U64Bits>(&format!("1, {bad}"), 1).unwrap_err();
             assert_eq!(error, format!("at 3: bad number '{bad}'"), "{bad}");
         }
     }

@@ -346,6 +346,18 @@ impl<'a> Lexer<'a> {
         }
     }
 
+    /// A `uint64`, as the bits of an `i64` (see [`parse_u64_bits`]).
+    pub fn u64_bits(&mut self) -> LexResult<i64> {
+        let token = self.number_token()?;
+        match parse_u64_bits(token) {
+            Some(value) => Ok(value),
+            None => {
+                let message = format!("bad uint64 '{token}': a uint64 is 0 to {}", u64::MAX);
+                self.error(message)
+            }
+        }
+    }
+
     /// Whether a number starts here (after whitespace).
     pub fn at_number(&mut self) -> bool {
         match self.next_byte() {
@@ -491,6 +503,15 @@ pub fn parse_i64(token: &str) -> Option<i64> {
         "false" => Some(0),
         _ => token.parse().ok(),
     }
+}
+
+/// A `uint64` value, 0 to 2^64 − 1 (pxr refuses a sign and anything more), as the bits of an
+/// `i64`, the way `AttributeKind::UInt64` stores it.
+pub fn parse_u64_bits(token: &str) -> Option<i64> {
+    if token.starts_with('-') {
+        return None;
+    }
+    token.parse::<u64>().ok().map(|v| v as i64)
 }
 
 /// USD writes `inf`, `-inf` and `nan`; Rust's parser accepts those and plain decimal forms but

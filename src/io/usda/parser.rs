@@ -7,6 +7,7 @@ use std::io::Read;
 
 use glam::Vec3;
 
+use super::bulk::U64Bits;
 use super::lexer::{describe, LexError, LexResult, Lexer};
 use crate::io::usd_compose::arcs::{self, Arcs, AssetArc, LayerOffset, ListEdit, SubLayer};
 
@@ -88,6 +89,8 @@ pub enum Kind {
     F32,
     F64,
     Int,
+    /// `uint64`: the one integer type past `i64` (its values are stored as `i64` bits).
+    UInt64,
     Text,
     Other,
 }
@@ -104,7 +107,8 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
     match (base, components) {
         ("float" | "half", _) => (Kind::F32, components),
         ("double" | "timecode", _) => (Kind::F64, components),
-        ("int" | "uint" | "int64" | "uint64" | "uchar" | "bool", _) => (Kind::Int, components),
+        ("uint64", _) => (Kind::UInt64, 1),
+        ("int" | "uint" | "int64" | "uchar" | "bool", _) => (Kind::Int, components),
         ("string" | "token" | "asset", 1) => (Kind::Text, 1),
         ("quatf" | "quath", 1) => (Kind::F32, 4),
         ("quatd", 1) => (Kind::F64, 4),
@@ -987,7 +991,7 @@ impl Parser<'_> {
             self.skip_value()?;
             return Ok(Value::Ignored);
         }
-        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int) {
+        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int | Kind::UInt64) {
             self.lexer.expect(b'[', "'[' to open an array")?;
             let value = match (kind, components) {
                 (Kind::F32, 3) => {
@@ -1002,6 +1006,12 @@ impl Parser<'_> {
                     self.lexer.bulk_array(components, |v: Vec<f32>| data.extend_from_slice(&v))?;
                     data.shrink_to_fit();
                     Value::F32(data)
+                }
+                (Kind::UInt64, _) => {
+                    let mut data = Vec::new();
+                    self.lexer
+                        .bulk_array(components, |v: Vec<U64Bits>| data.extend(v.iter().map(|u| u.0)))?;
+                    Value::Int(data)
                 }
                 _ => {
                     let mut data = Vec::new();
@@ -1029,10 +1039,10 @@ impl Parser<'_> {
                 })?;
                 Value::F64(data)
             }
-            Kind::Int => {
+            Kind::Int | Kind::UInt64 => {
                 let mut data = Vec::new();
                 self.numbers(components, array, &mut |lexer| {
-                    data.push(lexer.i64()?);
+                    data.push(if kind == Kind::UInt64 { lexer.u64_bits()? } else { lexer.i64()? });
                     Ok(())
                 })?;
                 Value::Int(data)
@@ -1328,7 +1338,7 @@ mod tests {
     #[test]
     fn type_info_reads_64_bit_integers_as_one_integer() {
         assert_eq!(type_info("int64"), (Kind::Int, 1));
-        assert_eq!(type_info("uint64"), (Kind::Int, 1));
+        assert_eq!(type_info("uint64"), (Kind::UInt64, 1));
         assert_eq!(type_info("int4"), (Kind::Int, 4));
         assert_eq!(type_info("half2"), (Kind::F32, 2));
         assert_eq!(type_info("point3f"), (Kind::F32, 3));
