@@ -703,13 +703,15 @@ pub fn write_frames(
 }
 
 /// What differs from the first frame in each frame of an animation (the first included): the
-/// points, the mesh points and the attributes that change anywhere.
+/// points, the mesh points, the attributes that change anywhere and which prims are hidden.
 struct FrameChanges {
     points: Vec<Vec<Vec3>>,
     /// Each frame's mesh points when they differ from the first frame's.
     meshes: Vec<Option<Vec<Vec<Vec3>>>>,
     /// Each frame's attributes whose values differ from the first frame's.
     attributes: Vec<Vec<crate::groom::Attribute>>,
+    /// Each frame's hidden groups and meshes (a file's animated visibility).
+    hidden: Vec<usd_stage::Hidden>,
 }
 
 impl FrameChanges {
@@ -718,9 +720,11 @@ impl FrameChanges {
             points: vec![first.points.clone()],
             meshes: vec![None],
             attributes: vec![Vec::new()],
+            hidden: vec![usd_stage::Hidden::of(first)],
         };
         for groom in rest {
             let mut groom = groom?;
+            changes.hidden.push(usd_stage::Hidden::of(&groom));
             let moved = groom.meshes.iter().zip(&first.meshes).any(|(a, b)| a.points != b.points);
             changes.meshes.push(
                 moved.then(|| groom.meshes.iter_mut().map(|m| std::mem::take(&mut m.points)).collect()),
@@ -773,6 +777,11 @@ impl FrameChanges {
             points: self.points.iter().map(Vec::as_slice).collect(),
             meshes,
             attributes: if names.is_empty() { Vec::new() } else { attributes },
+            hidden: if self.hidden.iter().all(|h| *h == self.hidden[0]) {
+                Vec::new()
+            } else {
+                self.hidden.clone()
+            },
         }
     }
 }
@@ -840,6 +849,7 @@ fn write_usd_stage(
             points: a.points.clone(),
             meshes: Vec::new(),
             attributes: renamed.iter().map(|f| f.iter().collect()).collect(),
+            hidden: a.hidden.clone(),
         });
         let mut stage = usd_stage::plan(&unreal_groom, animation.as_ref())?;
         usd_stage::add_unreal_groom_properties(&mut stage);

@@ -6,7 +6,8 @@
 //! The stage: layer metadata (`defaultPrim`, `doc`, `metersPerUnit`, `upAxis`, and the time codes
 //! when animated), then one `BasisCurves` prim per curve group at the group's path
 //! (`/Groom/Strands` for a groom without groups) with `Xform`s above. Each curve prim holds
-//! `basis` (cubic only), `purpose` (when the group has one), `visibility` (when invisible),
+//! `basis` (cubic only), `purpose` (when the group has one), `visibility` (when invisible; sampled
+//! when that changes over an animation),
 //! `type`, `wrap`,
 //! `curveVertexCounts`, `widths` (per vertex, or at the rate the file gave them while they fit
 //! it), the primvars, `points` and `extent` — default values, or time samples of `points`, `extent` and of every primvar that changes when animated. Then
@@ -59,6 +60,25 @@ pub struct Animation<'g> {
     /// lists the same names, each as the groom's attribute of that name is laid out); empty
     /// when none does.
     pub attributes: Vec<Vec<&'g Attribute>>,
+    /// Every frame's hidden curve groups and meshes when any changes over the animation; empty
+    /// when none does (each prim is then as the groom has it).
+    pub hidden: Vec<Hidden>,
+}
+
+/// Which curve groups (by index) and meshes are hidden in one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hidden {
+    pub groups: Vec<bool>,
+    pub meshes: Vec<bool>,
+}
+
+impl Hidden {
+    pub fn of(groom: &Groom) -> Self {
+        Hidden {
+            groups: (0..groom.group_count()).map(|g| groom.group(g).invisible).collect(),
+            meshes: groom.meshes.iter().map(|m| m.invisible).collect(),
+        }
+    }
 }
 
 impl<'g> Animation<'g> {
@@ -69,6 +89,7 @@ impl<'g> Animation<'g> {
             points: frames.iter().map(Vec::as_slice).collect(),
             meshes: Vec::new(),
             attributes: Vec::new(),
+            hidden: Vec::new(),
         }
     }
 
@@ -245,6 +266,17 @@ pub fn check_animation(groom: &Groom, animation: &Animation, path: &Path) -> Res
     if !animation.meshes.is_empty() && animation.meshes.len() != frames.len() {
         return changed(animation.meshes.len(), "no mesh points".into());
     }
+    if !animation.hidden.is_empty() && animation.hidden.len() != frames.len() {
+        return changed(animation.hidden.len(), "no visibility".into());
+    }
+    let prims = Hidden::of(groom);
+    if let Some(k) = animation
+        .hidden
+        .iter()
+        .position(|h| (h.groups.len(), h.meshes.len()) != (prims.groups.len(), prims.meshes.len()))
+    {
+        return changed(k, "the visibility of other prims than the groom's".into());
+    }
     if !animation.attributes.is_empty() && animation.attributes.len() != frames.len() {
         return changed(animation.attributes.len(), "no attribute values".into());
     }
@@ -349,7 +381,7 @@ fn plan_curves<'g>(groom: &'g Groom, animation: Option<&Animation<'g>>) -> Resul
             *components.last_mut().unwrap() = format!("{last}_{n}");
         }
         taken.push(components.clone());
-        let curves = curves_prim(groom, &group, &strands, animation);
+        let curves = curves_prim(groom, g, &strands, animation);
         insert(&mut roots, &components, curves);
     }
     let default_prim = roots.first().map(|p| p.name.clone()).unwrap_or_else(|| "Groom".into());
@@ -402,10 +434,11 @@ fn vec3s(points: Cow<'_, [Vec3]>) -> Cow<'_, [f32]> {
 /// One group's `BasisCurves` prim.
 fn curves_prim<'g>(
     groom: &'g Groom,
-    group: &CurveGroup,
+    index: usize,
     strands: &Strands,
     animation: Option<&Animation<'g>>,
 ) -> Prim<'g> {
+    let group = &groom.group(index);
     let mut properties = Vec::new();
     let (curve_type, basis) = curve_type_and_basis(group.basis);
     if let Some(basis) = basis {
@@ -414,9 +447,7 @@ fn curves_prim<'g>(
     if let Some(purpose) = &group.purpose {
         properties.push(Property::uniform_token("purpose", purpose.clone()));
     }
-    if group.invisible {
-        properties.push(invisible());
-    }
+    properties.extend(visibility(group.invisible, animation, |h| h.groups[index]));
     let wrap = match group.wrap {
         CurveWrap::Nonperiodic => "nonperiodic",
         CurveWrap::Pinned => "pinned",
@@ -513,15 +544,26 @@ fn mesh_prim<'g>(mesh: &'g SurfaceMesh, index: usize, animation: Option<&Animati
     properties.extend(mesh.primvars.iter().flat_map(mesh_primvar));
     properties.push(Property::uniform_token("orientation", "rightHanded"));
     properties.push(Property::uniform_token("subdivisionScheme", "none"));
-    if mesh.invisible {
-        properties.push(invisible());
-    }
+    properties.extend(visibility(mesh.invisible, animation, |h| h.meshes[index]));
     Prim { name: String::new(), type_name: "Mesh", properties, children: Vec::new() }
 }
 
-/// `visibility = "invisible"`: a prim hidden in the file it came from.
-fn invisible<'g>() -> Property<'g> {
-    Property::new("visibility", "token", Value::Default(Data::Token("invisible".into())))
+/// `visibility`: `"invisible"` for a prim hidden in the file it came from (`hidden`), nothing
+/// for a visible one; time samples (`"invisible"` / `"inherited"`, held as pxr holds tokens) when
+/// the animation hides it in some frames only (`of` picks the prim's flag from a frame's).
+fn visibility<'g>(
+    hidden: bool,
+    animation: Option<&Animation<'g>>,
+    of: impl Fn(&Hidden) -> bool,
+) -> Option<Property<'g>> {
+    let token = |hidden: bool| Data::Token(if hidden { "invisible" } else { "inherited" }.into());
+    let frames = animation.map_or(&[][..], |a| a.hidden.as_slice());
+    if frames.iter().any(|h| of(h) != hidden) {
+        let animation = animation.expect("frames come from an animation");
+        let samples = frames.iter().enumerate().map(|(k, h)| (animation.time(k), token(of(h)))).collect();
+        return Some(Property::new("visibility", "token", Value::TimeSamples(samples)));
+    }
+    hidden.then(|| Property::new("visibility", "token", Value::Default(token(true))))
 }
 
 /// A mesh primvar as USD properties: `primvars:NAME` (the mesh's plain `normals` attribute for

@@ -92,17 +92,18 @@ pub(crate) fn stage_transform(layer: &Layer, path: &Path, options: &ImportOption
     Ok(stage)
 }
 
-/// Whether anything that places a curve or mesh prim (its points, the transforms above it) has
-/// time samples: a stage whose `startTimeCode`…`endTimeCode` is only the scene's frame range
-/// holds one moment.
+/// Whether anything that places or shows a curve or mesh prim (its points, the transforms
+/// above it, its or an ancestor's `visibility`: a keyframed hide) has time samples: a stage
+/// whose `startTimeCode`…`endTimeCode` is only the scene's frame range holds one moment.
 pub fn places_with_time_samples(layer: &Layer) -> bool {
     fn visit(prim: &Prim, sampled_above: bool) -> bool {
         if !prim.is_defined_and_active() {
             return false;
         }
         let sampled = |a: &Attribute| !a.samples.is_empty();
-        let transforms = prim.attributes.iter().filter(|a| a.name.starts_with("xformOp"));
-        let moved = sampled_above || transforms.into_iter().any(sampled);
+        let inherited =
+            prim.attributes.iter().filter(|a| a.name.starts_with("xformOp") || a.name == "visibility");
+        let moved = sampled_above || inherited.into_iter().any(sampled);
         let placed = matches!(prim.type_name.as_str(), "BasisCurves" | "NurbsCurves" | "Mesh")
             && (moved || prim.attribute("points").is_some_and(sampled));
         placed || prim.children.iter().any(|child| visit(child, moved))
