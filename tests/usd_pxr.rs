@@ -797,3 +797,60 @@ stage.Save()
     }
 }
 
+/// Widths a DCC samples per frame (Houdini writes a `pscale` that changes over a shot: tips
+/// thinning, a groom growing in) convert frame by frame to `.usda` and `.usdc`: pxr reads each
+/// frame's widths at the file's interpolation (per vertex, constant) as it reads the original's,
+/// and each frame's extent is the one pxr computes from that frame's points and widths (the
+/// `.abc` carried them already). Before, USD output held the first frame's widths for every frame.
+#[test]
+fn widths_sampled_per_frame_convert_frame_by_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("growing.usda");
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Gf
+stage = Usd.Stage.CreateNew(sys.argv[1])
+stage.SetStartTimeCode(1)
+stage.SetEndTimeCode(3)
+UsdGeom.SetStageMetersPerUnit(stage, 1)
+UsdGeom.SetStageUpAxis(stage, 'Y')
+for name, interpolation, x in (('hair', 'vertex', 0.0), ('fur', 'constant', 0.02)):
+    c = UsdGeom.BasisCurves.Define(stage, '/groom/' + name)
+    c.CreateTypeAttr('linear')
+    c.CreateCurveVertexCountsAttr([3, 3])
+    c.SetWidthsInterpolation(interpolation)
+    for t in (1, 2, 3):
+        c.GetPointsAttr().Set([Gf.Vec3f(x + 0.01 * i, -0.05 * j * t, 0) for i in range(2) for j in range(3)], t)
+        widths = [0.0001 * t * (1 + 0.25 * j) for j in range(6)] if interpolation == 'vertex' else [0.0002 * t]
+        c.GetWidthsAttr().Set(widths, t)
+stage.Save()
+"#;
+    run_pxr_script(script, &source);
+    // Each prim's path, widths interpolation and widths at frame `t`; coif's extents (`written`)
+    // are pxr's computed from that frame's points and widths.
+    let widths_at = |path: &std::path::Path, t: f64, written: bool| -> Vec<(String, String, Vec<f32>)> {
+        let dump = pxr_dump(path, Some(t));
+        let curves = dump["curves"].as_array().unwrap();
+        for c in curves.iter().filter(|_| written) {
+            let (extent, computed) = (f32s(&c["extent"]), f32s(&c["computedExtent"]));
+            let off = extent.iter().zip(&computed).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            assert!(
+                off < 1e-7 && extent.len() == 6,
+                "{path:?} at {t}: extent {extent:?}, pxr's {computed:?}"
+            );
+        }
+        let widths =
+            |c: &Value| (c["path"].to_string(), c["widthsInterpolation"].to_string(), f32s(&c["widths"]));
+        curves.iter().map(widths).collect()
+    };
+    for ext in ["usda", "usdc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(run.status.success(), "{ext}: {}", stderr(&run));
+        for t in [1.0, 2.0, 3.0] {
+            let want = widths_at(&source, t, false);
+            assert_eq!(want.len(), 2);
+            assert_eq!(widths_at(&out, t, true), want, "{ext} at frame {t}");
+        }
+    }
+}
