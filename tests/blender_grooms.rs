@@ -1525,3 +1525,57 @@ fn guides_without_a_scalp_mesh_collide_with_the_whole_grooms_head() {
         }
     }
 }
+
+/// Blender's keyframed hide (the Guides object's `hide_viewport` and `hide_render` keyed hidden
+/// at frame 2 of 1–3, tests/blender/bpy_keyframed_hide.py) is an animated AbcGeom `visible` on
+/// the object; converted, the guides are hidden at the frames Blender's file hides them (its own
+/// samples, read by ogawa-rs, an ancestor's hiding what is below it): pxr computes so on the
+/// `.usda`, and the `.abc` holds a `visible` sample per frame saying so (ogawa-rs). Before, the
+/// first frame's visibility was written for every frame.
+#[test]
+fn a_hide_blender_keyframed_converts_frame_by_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let exported = dir.path().join("hide.abc");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_groom.abc");
+    let Some(python) = bpy_python("Blender's keyframed hide") else { return };
+    let made = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_keyframed_hide.py", source.to_str().unwrap(), exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(made.status.success() && exported.exists(), "{}", String::from_utf8_lossy(&made.stderr));
+    // Blender's own samples: an object is hidden at a frame where it or an object above it is
+    // (one sample holds for every frame).
+    let blenders = common::visibility_via_ogawa_rs(&exported);
+    let hidden_in_blender = |path: &str| -> Vec<bool> {
+        (0..3)
+            .map(|k| {
+                blenders.iter().any(|(at, samples)| {
+                    path.starts_with(&format!("{at}/")) && samples[k.min(samples.len() - 1)] == 0
+                })
+            })
+            .collect()
+    };
+    let groom = load_path(&exported);
+    let paths: Vec<String> = (0..groom.group_count()).map(|g| groom.group(g).name.clone()).collect();
+    let want: std::collections::BTreeMap<String, Vec<bool>> =
+        paths.iter().map(|p| (p.clone(), hidden_in_blender(p))).collect();
+    let guides = want.iter().find(|(p, _)| p.contains("Guides")).map(|(_, h)| h.clone());
+    assert_eq!(guides, Some(vec![false, true, false]), "Blender's file: {blenders:?}");
+
+    let usda = dir.path().join("hide.usda");
+    let abc = dir.path().join("hide_converted.abc");
+    for out in [&usda, &abc] {
+        let run = common::coif(&["convert", exported.to_str().unwrap(), out.to_str().unwrap()]);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+    }
+    let pxr = common::usd::pxr_hidden_by_frame(&usda);
+    for (path, frames) in &want {
+        assert_eq!(pxr.get(path), Some(frames), "{path} in pxr: {pxr:?}");
+    }
+    let written = common::visibility_via_ogawa_rs(&abc);
+    for (path, frames) in &want {
+        let samples = written.iter().find(|(at, _)| at == path).map_or(&[][..], |(_, s)| s.as_slice());
+        let hidden: Vec<bool> = (0..3).map(|k| samples.get(k).is_some_and(|&v| v == 0)).collect();
+        assert_eq!(&hidden, frames, "{path} in coif's .abc: {written:?}");
+    }
+}

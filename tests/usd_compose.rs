@@ -822,6 +822,41 @@ fn a_moving_stage_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
     assert!(String::from_utf8_lossy(&info.stdout).contains("not animated"));
 }
 
+/// The same for a stage whose only time samples are a prim's `visibility` (a hide keyed in a
+/// layer without a frame range, as pxr confirms): pxr reads the fallback (`inherited`) at its
+/// default time, coif the earliest sample (`invisible`); it did so without a word. Now `info`
+/// and `convert` warn naming the attribute and how to read the animation.
+#[test]
+fn a_keyed_hide_without_a_frame_range_is_read_as_one_moment_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let stage = dir.path().join("hide.usda");
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Gf
+stage = Usd.Stage.CreateNew(sys.argv[1])
+UsdGeom.SetStageMetersPerUnit(stage, 1)
+c = UsdGeom.BasisCurves.Define(stage, '/hair')
+c.CreateTypeAttr('linear')
+c.CreateCurveVertexCountsAttr([2])
+c.CreatePointsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(0, -0.1, 0)])
+c.CreateVisibilityAttr().Set('invisible', 1)
+c.GetVisibilityAttr().Set('inherited', 2)
+stage.Save()
+stage = Usd.Stage.Open(sys.argv[1])
+assert not stage.HasAuthoredTimeCodeRange()
+assert stage.GetPrimAtPath('/hair').GetAttribute('visibility').GetTimeSamples() == [1.0, 2.0]
+"#;
+    run_pxr_script(script, &stage);
+    let warned = |text: &str| {
+        text.contains("hide.usda: '/hair.visibility' is time-sampled but the stage authors no frame range")
+            && text.contains("--frame-range FIRST:LAST")
+    };
+    let info = coif(&["info", path_str(&stage)]);
+    assert!(info.status.success() && warned(&stderr(&info)), "{}", stderr(&info));
+    let converted = coif(&["convert", path_str(&stage), path_str(&dir.path().join("out.usda"))]);
+    assert!(converted.status.success() && warned(&stderr(&converted)), "{}", stderr(&converted));
+}
+
 /// A stage that authors `framesPerSecond` but no `timeCodesPerSecond` (as some exporters write)
 /// counts its time codes at `framesPerSecond` in pxr; coif read it at 24, so `convert` wrote its
 /// animation a quarter slower and `--time` picked the wrong frame. Each stage below, as text, as

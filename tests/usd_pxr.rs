@@ -736,3 +736,122 @@ stage.Save()
         assert!(!styled.exists() && !image.exists(), "{args:?} wrote its output");
     }
 }
+
+/// A hide keyframed in a USD stage (`visibility` time-sampled on a curves prim, on the Xform
+/// above another, on a head mesh; nothing else moves, as in a shot that hides the guides at a
+/// frame) converts frame by frame: pxr computes the same visibility of every prim at every frame
+/// of the converted `.usda` and `.usdc` as of the original, and the `.abc` holds a `visible`
+/// sample per frame saying the same (read by ogawa-rs). Before, the stage read as one moment
+/// (nothing that places the curves is sampled): the first frame's visibility, written once.
+#[test]
+fn a_keyframed_visibility_converts_frame_by_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("hide.usda");
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Gf
+stage = Usd.Stage.CreateNew(sys.argv[1])
+stage.SetStartTimeCode(1)
+stage.SetEndTimeCode(3)
+UsdGeom.SetStageMetersPerUnit(stage, 1)
+UsdGeom.SetStageUpAxis(stage, 'Y')
+def curves(path, x):
+    c = UsdGeom.BasisCurves.Define(stage, path)
+    c.CreateTypeAttr('linear')
+    c.CreateCurveVertexCountsAttr([3])
+    c.CreatePointsAttr([Gf.Vec3f(x, 0, 0), Gf.Vec3f(x, -0.1, 0), Gf.Vec3f(x, -0.2, 0)])
+    return c
+UsdGeom.Xform.Define(stage, '/groom')
+guides = curves('/groom/guides', 0)
+for t, v in ((1, 'invisible'), (2, 'inherited'), (3, 'invisible')):
+    guides.CreateVisibilityAttr().Set(v, t)
+above = UsdGeom.Xform.Define(stage, '/groom/set')
+curves('/groom/set/hair', 0.01)
+for t, v in ((1, 'inherited'), (2, 'invisible')):
+    above.CreateVisibilityAttr().Set(v, t)
+head = UsdGeom.Mesh.Define(stage, '/head')
+head.CreatePointsAttr([Gf.Vec3f(0, 0, 0), Gf.Vec3f(1, 0, 0), Gf.Vec3f(0, 1, 0)])
+head.CreateFaceVertexCountsAttr([3])
+head.CreateFaceVertexIndicesAttr([0, 1, 2])
+for t, v in ((1, 'inherited'), (3, 'invisible')):
+    head.CreateVisibilityAttr().Set(v, t)
+stage.Save()
+"#;
+    run_pxr_script(script, &source);
+    let want = pxr_hidden_by_frame(&source);
+    assert_eq!(want.len(), 3, "{want:?}");
+    assert!(want.values().all(|frames| frames.contains(&true) && frames.contains(&false)), "{want:?}");
+    for ext in ["usda", "usdc", "abc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(run.status.success(), "{ext}: {}", stderr(&run));
+        if ext == "abc" {
+            let visible = visibility_via_ogawa_rs(&out);
+            for (path, frames) in &want {
+                let samples = visible.iter().find(|(name, _)| name == path).map(|(_, s)| s.as_slice());
+                let hidden: Vec<bool> = samples.unwrap_or(&[]).iter().map(|&v| v == 0).collect();
+                assert_eq!(&hidden, frames, "{path} in the .abc: {visible:?}");
+            }
+        } else {
+            assert_eq!(pxr_hidden_by_frame(&out), want, "{ext}");
+        }
+    }
+}
+
+/// Widths a DCC samples per frame (Houdini writes a `pscale` that changes over a shot: tips
+/// thinning, a groom growing in) convert frame by frame to `.usda` and `.usdc`: pxr reads each
+/// frame's widths at the file's interpolation (per vertex, constant) as it reads the original's,
+/// and each frame's extent is the one pxr computes from that frame's points and widths (the
+/// `.abc` carried them already). Before, USD output held the first frame's widths for every frame.
+#[test]
+fn widths_sampled_per_frame_convert_frame_by_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let source = dir.path().join("growing.usda");
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Gf
+stage = Usd.Stage.CreateNew(sys.argv[1])
+stage.SetStartTimeCode(1)
+stage.SetEndTimeCode(3)
+UsdGeom.SetStageMetersPerUnit(stage, 1)
+UsdGeom.SetStageUpAxis(stage, 'Y')
+for name, interpolation, x in (('hair', 'vertex', 0.0), ('fur', 'constant', 0.02)):
+    c = UsdGeom.BasisCurves.Define(stage, '/groom/' + name)
+    c.CreateTypeAttr('linear')
+    c.CreateCurveVertexCountsAttr([3, 3])
+    c.SetWidthsInterpolation(interpolation)
+    for t in (1, 2, 3):
+        c.GetPointsAttr().Set([Gf.Vec3f(x + 0.01 * i, -0.05 * j * t, 0) for i in range(2) for j in range(3)], t)
+        widths = [0.0001 * t * (1 + 0.25 * j) for j in range(6)] if interpolation == 'vertex' else [0.0002 * t]
+        c.GetWidthsAttr().Set(widths, t)
+stage.Save()
+"#;
+    run_pxr_script(script, &source);
+    // Each prim's path, widths interpolation and widths at frame `t`; coif's extents (`written`)
+    // are pxr's computed from that frame's points and widths.
+    let widths_at = |path: &std::path::Path, t: f64, written: bool| -> Vec<(String, String, Vec<f32>)> {
+        let dump = pxr_dump(path, Some(t));
+        let curves = dump["curves"].as_array().unwrap();
+        for c in curves.iter().filter(|_| written) {
+            let (extent, computed) = (f32s(&c["extent"]), f32s(&c["computedExtent"]));
+            let off = extent.iter().zip(&computed).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            assert!(
+                off < 1e-7 && extent.len() == 6,
+                "{path:?} at {t}: extent {extent:?}, pxr's {computed:?}"
+            );
+        }
+        let widths =
+            |c: &Value| (c["path"].to_string(), c["widthsInterpolation"].to_string(), f32s(&c["widths"]));
+        curves.iter().map(widths).collect()
+    };
+    for ext in ["usda", "usdc"] {
+        let out = dir.path().join(format!("out.{ext}"));
+        let run = coif(&["convert", path_str(&source), path_str(&out)]);
+        assert!(run.status.success(), "{ext}: {}", stderr(&run));
+        for t in [1.0, 2.0, 3.0] {
+            let want = widths_at(&source, t, false);
+            assert_eq!(want.len(), 2);
+            assert_eq!(widths_at(&out, t, true), want, "{ext} at frame {t}");
+        }
+    }
+}

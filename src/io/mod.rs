@@ -728,13 +728,17 @@ pub fn write_frames(
 }
 
 /// What differs from the first frame in each frame of an animation (the first included): the
-/// points, the mesh points and the attributes that change anywhere.
+/// points, the mesh points, the attributes that change anywhere and which prims are hidden.
 struct FrameChanges {
     points: Vec<Vec<Vec3>>,
     /// Each frame's mesh points when they differ from the first frame's.
     meshes: Vec<Option<Vec<Vec<Vec3>>>>,
     /// Each frame's attributes whose values differ from the first frame's.
     attributes: Vec<Vec<crate::groom::Attribute>>,
+    /// Each frame's widths when they differ from the first frame's.
+    widths: Vec<Option<Vec<f32>>>,
+    /// Each frame's hidden groups and meshes (a file's animated visibility).
+    hidden: Vec<usd_stage::Hidden>,
 }
 
 impl FrameChanges {
@@ -743,9 +747,14 @@ impl FrameChanges {
             points: vec![first.points.clone()],
             meshes: vec![None],
             attributes: vec![Vec::new()],
+            widths: vec![None],
+            hidden: vec![usd_stage::Hidden::of(first)],
         };
         for groom in rest {
             let mut groom = groom?;
+            changes.hidden.push(usd_stage::Hidden::of(&groom));
+            let widths = std::mem::take(&mut groom.widths);
+            changes.widths.push((widths != first.widths).then_some(widths));
             let moved = groom.meshes.iter().zip(&first.meshes).any(|(a, b)| a.points != b.points);
             changes.meshes.push(
                 moved.then(|| groom.meshes.iter_mut().map(|m| std::mem::take(&mut m.points)).collect()),
@@ -798,6 +807,16 @@ impl FrameChanges {
             points: self.points.iter().map(Vec::as_slice).collect(),
             meshes,
             attributes: if names.is_empty() { Vec::new() } else { attributes },
+            widths: if self.widths.iter().any(Option::is_some) {
+                self.widths.iter().map(|w| w.as_deref().unwrap_or(&first.widths)).collect()
+            } else {
+                Vec::new()
+            },
+            hidden: if self.hidden.iter().all(|h| *h == self.hidden[0]) {
+                Vec::new()
+            } else {
+                self.hidden.clone()
+            },
         }
     }
 }
@@ -865,6 +884,8 @@ fn write_usd_stage(
             points: a.points.clone(),
             meshes: Vec::new(),
             attributes: renamed.iter().map(|f| f.iter().collect()).collect(),
+            widths: a.widths.clone(),
+            hidden: a.hidden.clone(),
         });
         let mut stage = usd_stage::plan(&unreal_groom, animation.as_ref())?;
         usd_stage::add_unreal_groom_properties(&mut stage);

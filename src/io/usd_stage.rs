@@ -6,7 +6,8 @@
 //! The stage: layer metadata (`defaultPrim`, `doc`, `metersPerUnit`, `upAxis`, and the time codes
 //! when animated), then one `BasisCurves` prim per curve group at the group's path
 //! (`/Groom/Strands` for a groom without groups) with `Xform`s above. Each curve prim holds
-//! `basis` (cubic only), `purpose` (when the group has one), `visibility` (when invisible),
+//! `basis` (cubic only), `purpose` (when the group has one), `visibility` (when invisible; sampled
+//! when that changes over an animation),
 //! `type`, `wrap`,
 //! `curveVertexCounts`, `widths` (per vertex, or at the rate the file gave them while they fit
 //! it), the primvars, `points` and `extent` — default values, or time samples of `points`, `extent` and of every primvar that changes when animated. Then
@@ -59,6 +60,28 @@ pub struct Animation<'g> {
     /// lists the same names, each as the groom's attribute of that name is laid out); empty
     /// when none does.
     pub attributes: Vec<Vec<&'g Attribute>>,
+    /// Every frame's widths (per vertex, as the groom's) when they change over the animation
+    /// (Houdini samples a `pscale` that grows); empty when they do not.
+    pub widths: Vec<&'g [f32]>,
+    /// Every frame's hidden curve groups and meshes when any changes over the animation; empty
+    /// when none does (each prim is then as the groom has it).
+    pub hidden: Vec<Hidden>,
+}
+
+/// Which curve groups (by index) and meshes are hidden in one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hidden {
+    pub groups: Vec<bool>,
+    pub meshes: Vec<bool>,
+}
+
+impl Hidden {
+    pub fn of(groom: &Groom) -> Self {
+        Hidden {
+            groups: (0..groom.group_count()).map(|g| groom.group(g).invisible).collect(),
+            meshes: groom.meshes.iter().map(|m| m.invisible).collect(),
+        }
+    }
 }
 
 impl<'g> Animation<'g> {
@@ -69,6 +92,8 @@ impl<'g> Animation<'g> {
             points: frames.iter().map(Vec::as_slice).collect(),
             meshes: Vec::new(),
             attributes: Vec::new(),
+            widths: Vec::new(),
+            hidden: Vec::new(),
         }
     }
 
@@ -245,6 +270,26 @@ pub fn check_animation(groom: &Groom, animation: &Animation, path: &Path) -> Res
     if !animation.meshes.is_empty() && animation.meshes.len() != frames.len() {
         return changed(animation.meshes.len(), "no mesh points".into());
     }
+    if !animation.widths.is_empty() && animation.widths.len() != frames.len() {
+        return changed(animation.widths.len(), "no widths".into());
+    }
+    if let Some(k) = animation.widths.iter().position(|w| w.len() != groom.vertex_count()) {
+        return changed(
+            k,
+            format!("{} widths; the groom has {} points", animation.widths[k].len(), groom.vertex_count()),
+        );
+    }
+    if !animation.hidden.is_empty() && animation.hidden.len() != frames.len() {
+        return changed(animation.hidden.len(), "no visibility".into());
+    }
+    let prims = Hidden::of(groom);
+    if let Some(k) = animation
+        .hidden
+        .iter()
+        .position(|h| (h.groups.len(), h.meshes.len()) != (prims.groups.len(), prims.meshes.len()))
+    {
+        return changed(k, "the visibility of other prims than the groom's".into());
+    }
     if !animation.attributes.is_empty() && animation.attributes.len() != frames.len() {
         return changed(animation.attributes.len(), "no attribute values".into());
     }
@@ -349,7 +394,7 @@ fn plan_curves<'g>(groom: &'g Groom, animation: Option<&Animation<'g>>) -> Resul
             *components.last_mut().unwrap() = format!("{last}_{n}");
         }
         taken.push(components.clone());
-        let curves = curves_prim(groom, &group, &strands, animation);
+        let curves = curves_prim(groom, g, &strands, animation);
         insert(&mut roots, &components, curves);
     }
     let default_prim = roots.first().map(|p| p.name.clone()).unwrap_or_else(|| "Groom".into());
@@ -402,10 +447,11 @@ fn vec3s(points: Cow<'_, [Vec3]>) -> Cow<'_, [f32]> {
 /// One group's `BasisCurves` prim.
 fn curves_prim<'g>(
     groom: &'g Groom,
-    group: &CurveGroup,
+    index: usize,
     strands: &Strands,
     animation: Option<&Animation<'g>>,
 ) -> Prim<'g> {
+    let group = &groom.group(index);
     let mut properties = Vec::new();
     let (curve_type, basis) = curve_type_and_basis(group.basis);
     if let Some(basis) = basis {
@@ -414,9 +460,7 @@ fn curves_prim<'g>(
     if let Some(purpose) = &group.purpose {
         properties.push(Property::uniform_token("purpose", purpose.clone()));
     }
-    if group.invisible {
-        properties.push(invisible());
-    }
+    properties.extend(visibility(group.invisible, animation, |h| h.groups[index]));
     let wrap = match group.wrap {
         CurveWrap::Nonperiodic => "nonperiodic",
         CurveWrap::Pinned => "pinned",
@@ -428,28 +472,36 @@ fn curves_prim<'g>(
     let counts: Vec<usize> = vertex_counts.iter().map(|&c| c as usize).collect();
     let vertex_counts = Data::Ints { values: Cow::Owned(vertex_counts), components: 1 };
     properties.push(Property::new("curveVertexCounts", "int[]", Value::Default(vertex_counts)));
-    let widths = strands.per_vertex(groom, &groom.widths, 1);
-    let half_width = widths.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5;
-    let (interpolation, widths) = match primvar_rates::widths_at(
-        group.width_interpolation,
-        group.basis,
-        group.wrap,
-        &counts,
-        &widths,
-    ) {
-        Some((interpolation, values)) => (interpolation.usd_name(), Cow::Owned(values)),
-        None => ("vertex", widths),
+    let sampled = animation.filter(|a| !a.widths.is_empty());
+    let frames: Vec<Cow<[f32]>> = match sampled {
+        Some(a) => a.widths.iter().map(|w| strands.per_vertex(groom, w, 1)).collect(),
+        None => vec![strands.per_vertex(groom, &groom.widths, 1)],
     };
-    properties.push(
-        Property::new("widths", "float[]", Value::Default(floats(widths, 1))).interpolated(interpolation),
-    );
+    let half_widths: Vec<f32> =
+        frames.iter().map(|w| w.iter().fold(0.0f32, |m, &w| m.max(w)) * 0.5).collect();
+    // The file's rate while every frame's widths fit it, else per vertex.
+    let at_rate: Option<Vec<(Interpolation, Vec<f32>)>> = frames
+        .iter()
+        .map(|w| primvar_rates::widths_at(group.width_interpolation, group.basis, group.wrap, &counts, w))
+        .collect();
+    let (interpolation, frames) = match at_rate {
+        Some(rated) => (rated[0].0.usd_name(), rated.into_iter().map(|(_, w)| Cow::Owned(w)).collect()),
+        None => ("vertex", frames),
+    };
+    let widths = match sampled {
+        Some(a) => Value::TimeSamples(
+            frames.into_iter().enumerate().map(|(k, w)| (a.time(k), floats(w, 1))).collect(),
+        ),
+        None => Value::Default(floats(frames.into_iter().next().expect("one frame"), 1)),
+    };
+    properties.push(Property::new("widths", "float[]", widths).interpolated(interpolation));
     properties.extend(primvars(groom, group, strands, animation).0);
 
     let positions = match animation {
         Some(a) => Positions::Frames(a, a.points.iter().map(|f| strands.per_vertex(groom, f, 1)).collect()),
         None => Positions::Still(strands.per_vertex(groom, &groom.points, 1)),
     };
-    properties.extend(points_and_extent(positions, half_width));
+    properties.extend(points_and_extent(positions, &half_widths));
     Prim { name: String::new(), type_name: "BasisCurves", properties, children: Vec::new() }
 }
 
@@ -459,10 +511,11 @@ enum Positions<'a, 'g> {
     Frames(&'a Animation<'g>, Vec<Cow<'g, [Vec3]>>),
 }
 
-/// `points` and `extent` (the bounds grown by `half_width`): default values, or a time sample
-/// per frame.
-fn points_and_extent<'g>(positions: Positions<'_, 'g>, half_width: f32) -> Vec<Property<'g>> {
-    let extent = |points: &[Vec3]| -> Option<Data<'g>> {
+/// `points` and `extent` (the bounds grown by half the widest width, `half_widths` of each
+/// frame, the last holding for the frames after it): default values, or a time sample per frame.
+fn points_and_extent<'g>(positions: Positions<'_, 'g>, half_widths: &[f32]) -> Vec<Property<'g>> {
+    let extent = |points: &[Vec3], k: usize| -> Option<Data<'g>> {
+        let half_width = half_widths[k.min(half_widths.len() - 1)];
         let (lo, hi) = bounds(points)?;
         let grown = [lo - Vec3::splat(half_width), hi + Vec3::splat(half_width)];
         Some(floats(Cow::Owned(bytemuck::cast_slice(&grown).to_vec()), 3))
@@ -470,7 +523,7 @@ fn points_and_extent<'g>(positions: Positions<'_, 'g>, half_width: f32) -> Vec<P
     let mut properties = Vec::with_capacity(2);
     match positions {
         Positions::Still(still) => {
-            let extent = extent(&still);
+            let extent = extent(&still, 0);
             properties.push(Property::new("points", "point3f[]", Value::Default(floats(vec3s(still), 3))));
             if let Some(extent) = extent {
                 properties.push(Property::new("extent", "float3[]", Value::Default(extent)));
@@ -480,7 +533,7 @@ fn points_and_extent<'g>(positions: Positions<'_, 'g>, half_width: f32) -> Vec<P
             let mut points = Vec::with_capacity(frames.len());
             let mut extents = Vec::with_capacity(frames.len());
             for (k, frame) in frames.into_iter().enumerate() {
-                extents.extend(extent(&frame).map(|e| (animation.time(k), e)));
+                extents.extend(extent(&frame, k).map(|e| (animation.time(k), e)));
                 points.push((animation.time(k), floats(vec3s(frame), 3)));
             }
             properties.push(Property::new("points", "point3f[]", Value::TimeSamples(points)));
@@ -509,19 +562,30 @@ fn mesh_prim<'g>(mesh: &'g SurfaceMesh, index: usize, animation: Option<&Animati
         Some(a) => Positions::Frames(a, a.meshes.iter().map(|f| Cow::Borrowed(f[index])).collect()),
         None => Positions::Still(Cow::Borrowed(&mesh.points)),
     };
-    properties.extend(points_and_extent(positions, 0.0));
+    properties.extend(points_and_extent(positions, &[0.0]));
     properties.extend(mesh.primvars.iter().flat_map(mesh_primvar));
     properties.push(Property::uniform_token("orientation", "rightHanded"));
     properties.push(Property::uniform_token("subdivisionScheme", "none"));
-    if mesh.invisible {
-        properties.push(invisible());
-    }
+    properties.extend(visibility(mesh.invisible, animation, |h| h.meshes[index]));
     Prim { name: String::new(), type_name: "Mesh", properties, children: Vec::new() }
 }
 
-/// `visibility = "invisible"`: a prim hidden in the file it came from.
-fn invisible<'g>() -> Property<'g> {
-    Property::new("visibility", "token", Value::Default(Data::Token("invisible".into())))
+/// `visibility`: `"invisible"` for a prim hidden in the file it came from (`hidden`), nothing
+/// for a visible one; time samples (`"invisible"` / `"inherited"`, held as pxr holds tokens) when
+/// the animation hides it in some frames only (`of` picks the prim's flag from a frame's).
+fn visibility<'g>(
+    hidden: bool,
+    animation: Option<&Animation<'g>>,
+    of: impl Fn(&Hidden) -> bool,
+) -> Option<Property<'g>> {
+    let token = |hidden: bool| Data::Token(if hidden { "invisible" } else { "inherited" }.into());
+    let frames = animation.map_or(&[][..], |a| a.hidden.as_slice());
+    if frames.iter().any(|h| of(h) != hidden) {
+        let animation = animation.expect("frames come from an animation");
+        let samples = frames.iter().enumerate().map(|(k, h)| (animation.time(k), token(of(h)))).collect();
+        return Some(Property::new("visibility", "token", Value::TimeSamples(samples)));
+    }
+    hidden.then(|| Property::new("visibility", "token", Value::Default(token(true))))
 }
 
 /// A mesh primvar as USD properties: `primvars:NAME` (the mesh's plain `normals` attribute for

@@ -302,3 +302,45 @@ fn curves_via_ogawa_rs<T>(
 }
 
 pub mod usd;
+
+/// Every object's AbcGeom `visible` samples (int8: 0 hidden, 1 visible, -1 deferred) as
+/// ogawa-rs (an independent Alembic reader) reads them, by the object's full name, in name
+/// order; objects without the property are left out.
+#[allow(dead_code)]
+pub fn visibility_via_ogawa_rs(path: &Path) -> Vec<(String, Vec<i8>)> {
+    use ogawa_rs::{Archive, FileReader, PodArray, PropertyReader};
+    let mut reader = FileReader::new(std::fs::File::open(path).unwrap()).unwrap();
+    let archive = Archive::new(&mut reader).unwrap();
+    let mut found = Vec::new();
+    let mut stack = vec![archive.load_root_object(&mut reader).unwrap()];
+    while let Some(object) = stack.pop() {
+        let top = object.properties();
+        if let Some(index) = top.and_then(|p| p.find_sub_property_index("visible")) {
+            let property = top.unwrap().load_sub_property(index, &mut reader, &archive).unwrap();
+            let PropertyReader::Scalar(mut visible) = property else { panic!("visible is not a scalar") };
+            // A header without explicit changes means "every sample after the first changes":
+            // Alembic's first changed sample is then 1; ogawa-rs 0.4 takes 0 and reads each
+            // sample from the next one's slot.
+            let header = &mut visible.header;
+            if header.first_changed_index == 0 && header.last_changed_index > 0 {
+                header.first_changed_index = 1;
+            }
+            let samples = (0..visible.sample_count())
+                .map(|k| match visible.load_sample(k, &mut reader).unwrap() {
+                    PodArray::I8(v) => v[0],
+                    other => panic!("{}: visible is {other:?}, not int8", object.header.full_name),
+                })
+                .collect();
+            found.push((object.header.full_name.clone(), samples));
+        }
+        for i in 0..object.child_count() {
+            stack.push(
+                object
+                    .load_child(i, &mut reader, &archive.indexed_meta_data, &archive.time_samplings)
+                    .unwrap(),
+            );
+        }
+    }
+    found.sort();
+    found
+}

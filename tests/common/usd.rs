@@ -129,3 +129,16 @@ pub fn rich_groom(basis: CurveBasis) -> Groom {
     groom.validate().expect("the test groom is valid");
     groom
 }
+
+/// Every curve and mesh prim's visibility at frames 1, 2 and 3 as pxr computes it (an
+/// ancestor's `invisible` hides it), by prim path: `true` where hidden.
+pub fn pxr_hidden_by_frame(path: &Path) -> std::collections::BTreeMap<String, Vec<bool>> {
+    let script = r#"
+import json, sys
+from pxr import Usd, UsdGeom
+stage = Usd.Stage.Open(sys.argv[1])
+print(json.dumps({str(p.GetPath()): [UsdGeom.Imageable(p).ComputeVisibility(t) == 'invisible' for t in (1, 2, 3)]
+                  for p in stage.Traverse() if p.IsA(UsdGeom.BasisCurves) or p.IsA(UsdGeom.Mesh)}))
+"#;
+    serde_json::from_slice(&run_pxr_script(script, path)).unwrap()
+}

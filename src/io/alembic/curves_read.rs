@@ -130,7 +130,9 @@ impl<'a> CurvesArchive<'a> {
     }
 
     /// Every property with more than one sample that places the curves or meshes: their
-    /// positions and the transforms above them. A single sample holds at every time.
+    /// positions and the transforms above them; and every `visible` on them or above them whose
+    /// value changes (Blender's keyframed hide; a writer may sample a still one every frame).
+    /// A single sample holds at every time.
     fn animated_properties(&self) -> OgawaResult<Vec<&Sampled<'a>>> {
         let mut animated = Vec::new();
         for (path, xform_paths) in self.curves.iter().chain(&self.meshes) {
@@ -138,6 +140,8 @@ impl<'a> CurvesArchive<'a> {
             let positions = object.geom.sampled("P").into_iter();
             let transforms = object.xforms.iter().filter_map(|x| x.sampled(".vals"));
             animated.extend(positions.chain(transforms).filter(|p| p.num_samples > 1));
+            let visible = self.visibilities(path).into_iter().map(|(_, v)| v);
+            animated.extend(visible.filter(|v| v.num_samples > 1 && v.last_changed > 0));
         }
         Ok(animated)
     }
@@ -603,16 +607,26 @@ impl<'a> CurvesArchive<'a> {
         Ok((groom, ids_given))
     }
 
+    /// The `visible` properties of the object at `path` and of the objects above it, the
+    /// topmost first, each with its object's path.
+    fn visibilities(&self, path: &str) -> Vec<(String, &Sampled<'a>)> {
+        let names: Vec<&str> = path.split('/').filter(|p| !p.is_empty()).collect();
+        (1..=names.len())
+            .filter_map(|depth| {
+                let at = names[..depth].join("/");
+                let visible = find(&self.archive.top, &at)?.properties.sampled(VISIBLE)?;
+                Some((at, visible))
+            })
+            .collect()
+    }
+
     /// Whether the object at `path` is hidden at `time` by AbcGeom's `visible` property: its own
     /// value, or while that is deferred (-1) or absent, its nearest ancestor's.
     fn hidden(&self, path: &str, time: f64) -> OgawaResult<bool> {
-        let names: Vec<&str> = path.split('/').filter(|p| !p.is_empty()).collect();
-        for depth in (1..=names.len()).rev() {
-            let Some(object) = find(&self.archive.top, &names[..depth].join("/")) else { continue };
-            let Some(visible) = object.properties.sampled(VISIBLE) else { continue };
+        for (at, visible) in self.visibilities(path).into_iter().rev() {
             let value = visible
                 .read_f64(&self.archive.ogawa, self.index_at(visible, time))
-                .map_err(|e| OgawaError(format!("/{}: {}", names[..depth].join("/"), e.0)))?;
+                .map_err(|e| OgawaError(format!("/{at}: {}", e.0)))?;
             match value.first() {
                 Some(&v) if v == VISIBILITY_HIDDEN as f64 => return Ok(true),
                 Some(&v) if v > 0.0 => return Ok(false),

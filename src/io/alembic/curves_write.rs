@@ -31,6 +31,7 @@ pub const DEFAULT_OBJECT_NAME: &str = "curves";
 /// 0 hidden, 1 visible.
 pub const VISIBLE: &str = "visible";
 pub const VISIBILITY_HIDDEN: i8 = 0;
+pub const VISIBILITY_VISIBLE: i8 = 1;
 
 /// Epic's groom attribute names, and the spec version coif follows in Unreal mode.
 pub mod epic {
@@ -109,8 +110,8 @@ struct CurveProperties {
     velocities: Option<PropertyId>,
     uv: Option<PropertyId>,
     width: PropertyId,
-    /// Alembic's `visible` (int8: 0 hidden), on objects of invisible groups only.
-    hidden: Option<PropertyId>,
+    /// Alembic's `visible`, on objects of groups hidden in some frame only.
+    visibility: Visibility,
     /// The rate of `width` (and Unreal's `groom_width`) when not per vertex: the file's, which
     /// the first frame's widths fit (see [`primvar_rates::widths_at`]).
     width_rate: Option<Interpolation>,
@@ -138,8 +139,52 @@ struct MeshObject {
     face_counts: PropertyId,
     /// The faces wound clockwise (the file's convention), fixed by the first frame.
     clockwise_indices: Vec<i32>,
-    /// Alembic's `visible` of a hidden mesh.
-    hidden: Option<PropertyId>,
+    /// Alembic's `visible`, on meshes hidden in some frame only.
+    visibility: Visibility,
+}
+
+/// An object's Alembic `visible`: made with the object when its first frame is hidden, else
+/// when a later frame first hides it (the frames before then say visible), so a hide animated
+/// in the file read (Blender's keyframed hide) is written frame by frame.
+struct Visibility {
+    object: ObjectId,
+    property: Option<PropertyId>,
+}
+
+impl Visibility {
+    fn new<W: Write + Seek>(archive: &mut ArchiveWriter<W>, object: ObjectId, hidden: bool, ts: u32) -> Self {
+        Visibility { object, property: hidden.then(|| hidden_property(archive, object, ts)) }
+    }
+
+    /// The property a frame `hidden` or not samples, after the `written` frames before it
+    /// (`None`: visible in every frame so far).
+    fn for_frame<W: Write + Seek>(
+        &mut self,
+        archive: &mut ArchiveWriter<W>,
+        hidden: bool,
+        written: usize,
+        ts: u32,
+    ) -> io::Result<Option<PropertyId>> {
+        if self.property.is_none() && hidden {
+            let id = hidden_property(archive, self.object, ts);
+            for _ in 0..written {
+                archive.set_sample(id, &[VISIBILITY_VISIBLE as u8], 1)?;
+            }
+            self.property = Some(id);
+        }
+        Ok(self.property)
+    }
+}
+
+/// A frame's `visible` sample.
+fn visibility_byte(hidden: bool) -> &'static [u8] {
+    const HIDDEN: [u8; 1] = [VISIBILITY_HIDDEN as u8];
+    const VISIBLE: [u8; 1] = [VISIBILITY_VISIBLE as u8];
+    if hidden {
+        &HIDDEN
+    } else {
+        &VISIBLE
+    }
 }
 
 /// The curves object of one group: its properties, the group's index and its strands.
@@ -220,6 +265,9 @@ pub struct CurvesWriter<W: Write + Seek> {
     previous_points: Option<Vec<Vec3>>,
     pending: Option<Groom>,
     frames: usize,
+    /// Frames whose samples are written (frames lag one behind while velocities need the next).
+    written: usize,
+    time_sampling: u32,
 }
 
 impl<W: Write + Seek> CurvesWriter<W> {
@@ -316,6 +364,8 @@ impl<W: Write + Seek> CurvesWriter<W> {
             previous_points: None,
             pending: None,
             frames: 0,
+            written: 0,
+            time_sampling,
         })
     }
 
@@ -372,7 +422,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
     }
 
     fn write_sample(&mut self, groom: &Groom, velocities: Option<&[Vec3]>) -> io::Result<()> {
-        for object in &self.meshes {
+        for object in &mut self.meshes {
             let mesh = &groom.meshes[object.mesh];
             let points: Vec<Vec3> = mesh.points.iter().map(|p| *p * self.scale).collect();
             let samples: [(PropertyId, Cow<[u8]>, u64); 4] = [
@@ -392,8 +442,13 @@ impl<W: Write + Seek> CurvesWriter<W> {
             for (id, bytes, elements) in samples {
                 self.archive.set_sample(id, &bytes, elements)?;
             }
-            if let Some(id) = object.hidden {
-                self.archive.set_sample(id, &[VISIBILITY_HIDDEN as u8], 1)?;
+            if let Some(id) = object.visibility.for_frame(
+                &mut self.archive,
+                mesh.invisible,
+                self.written,
+                self.time_sampling,
+            )? {
+                self.archive.set_sample(id, visibility_byte(mesh.invisible), 1)?;
             }
         }
         for k in 0..self.objects.len() {
@@ -402,6 +457,7 @@ impl<W: Write + Seek> CurvesWriter<W> {
             let velocities = velocities.map(|v| strands.per_vertex(groom, v, 1));
             self.write_object_sample(k, &part, velocities.as_deref())?;
         }
+        self.written += 1;
         Ok(())
     }
 
@@ -417,6 +473,13 @@ impl<W: Write + Seek> CurvesWriter<W> {
         } else {
             Cow::Owned(part.points.iter().map(|p| *p * scale).collect())
         };
+        let hidden = part.group.invisible;
+        let visible = self.objects[object].properties.visibility.for_frame(
+            &mut self.archive,
+            hidden,
+            self.written,
+            self.time_sampling,
+        )?;
         let p = &self.objects[object].properties;
         let counts = &part.counts;
         let velocities: Vec<Vec3> = velocities.unwrap_or(&[]).iter().map(|v| *v * scale).collect();
@@ -460,8 +523,8 @@ impl<W: Write + Seek> CurvesWriter<W> {
         }
         let (bytes, elements) = param_bytes(part, &ParamSource::Widths, &widths, scale);
         samples.push((p.width, bytes, elements));
-        if let Some(id) = p.hidden {
-            samples.push((id, Cow::Borrowed(&[VISIBILITY_HIDDEN as u8][..]), 1));
+        if let Some(id) = visible {
+            samples.push((id, Cow::Borrowed(visibility_byte(hidden)), 1));
         }
         // Keys are pure functions of the bytes: hash on every core, then write in order.
         let keys: Vec<[u8; 16]> = samples.par_iter().map(|(_, bytes, _)| sample_key(bytes)).collect();
@@ -711,7 +774,7 @@ fn add_curves<W: Write + Seek>(
     });
     let width =
         archive.add_array(geom, "width", geom_param_metadata(width_scope, Pod::F32, 1, ""), Pod::F32, 1, ts);
-    let hidden = part.group.invisible.then(|| hidden_property(archive, object, ts));
+    let visibility = Visibility::new(archive, object, part.group.invisible, ts);
     let properties = CurveProperties {
         bounds,
         positions,
@@ -720,7 +783,7 @@ fn add_curves<W: Write + Seek>(
         velocities,
         uv,
         width,
-        hidden,
+        visibility,
         width_rate,
         params,
     };
@@ -855,7 +918,7 @@ fn add_polymesh<W: Write + Seek>(
         };
         add_mesh_param(archive, parent, name, primvar)
     });
-    let hidden = mesh.invisible.then(|| hidden_property(archive, object, ts));
+    let visibility = Visibility::new(archive, object, mesh.invisible, ts);
     let made = written.map(|()| MeshObject {
         mesh: index,
         bounds,
@@ -863,13 +926,13 @@ fn add_polymesh<W: Write + Seek>(
         face_indices,
         face_counts,
         clockwise_indices,
-        hidden,
+        visibility,
     });
     (object, made)
 }
 
 /// An object's `visible` property, beside `.geom` as AbcGeom's `CreateVisibilityProperty`
-/// places it; its samples say hidden.
+/// places it.
 fn hidden_property<W: Write + Seek>(archive: &mut ArchiveWriter<W>, object: ObjectId, ts: u32) -> PropertyId {
     let top = archive.properties(object);
     archive.add_scalar(top, VISIBLE, MetaData::new(), Pod::I8, 1, ts)

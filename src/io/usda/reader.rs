@@ -92,17 +92,21 @@ pub(crate) fn stage_transform(layer: &Layer, path: &Path, options: &ImportOption
     Ok(stage)
 }
 
-/// Whether anything that places a curve or mesh prim (its points, the transforms above it) has
-/// time samples: a stage whose `startTimeCode`…`endTimeCode` is only the scene's frame range
-/// holds one moment.
+/// Whether anything that places or shows a curve or mesh prim (its points, the transforms
+/// above it, its or an ancestor's `visibility`: a keyframed hide) has time samples: a stage
+/// whose `startTimeCode`…`endTimeCode` is only the scene's frame range holds one moment.
 pub fn places_with_time_samples(layer: &Layer) -> bool {
     fn visit(prim: &Prim, sampled_above: bool) -> bool {
         if !prim.is_defined_and_active() {
             return false;
         }
         let sampled = |a: &Attribute| !a.samples.is_empty();
-        let transforms = prim.attributes.iter().filter(|a| a.name.starts_with("xformOp"));
-        let moved = sampled_above || transforms.into_iter().any(sampled);
+        let shows = Imageable::is_imageable(&prim.type_name);
+        let inherited = prim
+            .attributes
+            .iter()
+            .filter(|a| a.name.starts_with("xformOp") || (shows && a.name == "visibility"));
+        let moved = sampled_above || inherited.into_iter().any(sampled);
         let placed = matches!(prim.type_name.as_str(), "BasisCurves" | "NurbsCurves" | "Mesh")
             && (moved || prim.attribute("points").is_some_and(sampled));
         placed || prim.children.iter().any(|child| visit(child, moved))
@@ -135,8 +139,16 @@ pub fn groom_from_layer_in(
     let ranged = layer.timeline.frame_range().is_some();
     let sources = std::mem::take(&mut layer.sources);
     let files = SiteFiles::new(path, &sources);
-    let mut walker =
-        Walker { files, arrays, time, stage, found: Vec::new(), meshes: Vec::new(), first_sample: None };
+    let mut walker = Walker {
+        files,
+        arrays,
+        time,
+        stage,
+        found: Vec::new(),
+        meshes: Vec::new(),
+        first_sample: None,
+        first_visibility: None,
+    };
     for prim in layer.prims {
         walker.visit(prim, "", DMat4::IDENTITY, None, Imageable::default())?;
     }
@@ -161,7 +173,8 @@ pub fn groom_from_layer_in(
     // Time samples without a frame range: every reader sees one moment (`coif convert` writes a
     // static file, `info` finds no frames), which the user should hear about.
     let mut warnings = Vec::new();
-    if let (None, false, Some(first)) = (time, ranged, &walker.first_sample) {
+    let sampled = walker.first_sample.as_ref().or(walker.first_visibility.as_ref());
+    if let (None, false, Some(first)) = (time, ranged, sampled) {
         warnings.push(format!(
             "{}: '{}' is time-sampled but the stage authors no frame range (startTimeCode < \
              endTimeCode): read as one moment, each value's default or else its earliest sample; \
@@ -184,6 +197,9 @@ struct Walker<'a> {
     meshes: Vec<SurfaceMesh>,
     /// The earliest time sample kept of anything that places a curve or mesh prim read.
     first_sample: Option<FirstSample>,
+    /// The earliest time sample of an imageable prim's `visibility` (it shows or hides, but
+    /// does not place, what is below it).
+    first_visibility: Option<FirstSample>,
 }
 
 /// The earliest time sample (kept by the parser) of an attribute, and which attribute it is.
@@ -263,6 +279,10 @@ impl Walker<'_> {
         let imageable = if Imageable::is_imageable(&prim.type_name) {
             let purpose = self.token(&prim, &prim_path, "purpose")?;
             let visibility = self.token(&prim, &prim_path, "visibility")?;
+            if let Some(sampled) = prim.attribute("visibility") {
+                self.first_visibility =
+                    FirstSample::earlier(self.first_visibility.take(), &prim_path, sampled);
+            }
             Imageable {
                 purpose: purpose.or(inherited.purpose),
                 invisible: inherited.invisible || visibility.as_deref() == Some("invisible"),
