@@ -49,12 +49,12 @@
 //! **Limits.** The pinned root frame clamps the whole first edge, so the discrete clamp sits half
 //! an edge out (a cantilever of n segments sags `(1 − 1/(2n))⁴` of beam theory for its full
 //! length: 0.77 for 8 segments, 0.94 for 32); a bending hinge of half length between the root's
-//! orientation and a free first frame would remove it. Quasi-static frames with a capped inertia
-//! still act as a drag on bending that depends on Δt, so dynamic stages (press, blow-dry) bake
-//! slightly different shapes at different Δt (`cargo bench --bench accuracy -- invariance`). The
-//! direct solve of stretch–shear and bend–twist together (Deul et al. 2018, [`StrandSolver::Direct`])
-//! converges with frames ten times lighter, which removes that dependence on the bed-head preset
-//! ([`StrandSolver::frame_inertia_factor`]).
+//! orientation and a free first frame would remove it. Quasi-static frames act as a drag on
+//! bending; their inertia is scaled with the step ([`FRAME_DRAG_DT`]) so that the drag is a rate
+//! per second and dynamic stages (press, wind, blow-dry) bake the same rest shapes at any Δt
+//! (`cargo bench --bench accuracy -- invariance`). The direct solve of stretch–shear and
+//! bend–twist together (Deul et al. 2018, [`StrandSolver::Direct`]) converges with frames ten
+//! times lighter ([`StrandSolver::frame_inertia_factor`]).
 //!
 //! # Speed
 //! Groups of 8 consecutive strands with equal vertex counts are solved together, one strand per
@@ -121,12 +121,22 @@ pub struct SimParams {
     pub damping: f32,
     pub material: Material,
     pub influences: BondInfluences,
-    /// Frame inverse inertia relative to the vertices' (see [`Rods::update_inverse_masses`]).
+    /// Frame inverse inertia relative to the vertices' at Δt [`FRAME_DRAG_DT`] (see
+    /// [`Rods::update_inverse_masses`]); at other steps it is scaled by `FRAME_DRAG_DT / Δt`.
     pub frame_inertia_factor: f32,
     /// How each iteration solves a strand's constraints.
     #[serde(default)]
     pub solver: StrandSolver,
 }
+
+/// The time step at which [`SimParams::frame_inertia_factor`] is the frames' inverse inertia.
+/// Frames are quasi-static: a frame turns by `w_q·τ·Δt²` a step under a torque `τ` (until the
+/// bending compliance caps it), a turn rate of `w_q·τ·Δt` — a drag on every bend whose rate
+/// would shrink with Δt at a fixed inertia. Scaling `w_q` by `FRAME_DRAG_DT / Δt` makes the drag a
+/// rate per second, the same at every Δt. At a fixed inertia the water set baked rest curves
+/// 2.0 % (mean) of the strand length apart at Δt 1/240 and 1/720, 1.8 % at 1/720 and 1/1440 and 1.3 %
+/// at 1/1440 and 1/2880: the look drifted further with every halving of the step.
+pub const FRAME_DRAG_DT: f32 = 1.0 / 360.0;
 
 /// How each solver iteration solves a strand's constraints.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -144,12 +154,11 @@ pub enum StrandSolver {
 
 impl StrandSolver {
     /// The frame inertia each solver runs with by default ([`SimParams::frame_inertia_factor`]).
-    /// Frames are quasi-static, so their inertia drags on every bend by `I/Δt`: the lighter the
-    /// frames, the less the look of a dynamic stage depends on Δt. Gauss–Seidel needs heavy frames
+    /// Frames are quasi-static, so their inertia drags on every bend: the lighter the frames, the
+    /// faster a bend relaxes during a dynamic stage. Gauss–Seidel needs heavy frames
     /// to converge (with `1.0` a straight sag-free groom moved 3.9 mm in 2 s instead of < 1 mm);
-    /// the direct solve converges with frames as heavy as their edge's vertices, where the
-    /// bed-head preset settles to the same shape within 0.13 % (mean) / 0.87 % (worst) of the
-    /// strand length at Δt 1/240 … 1/1440 and 5 … 20 iterations (`0.1`: 1.3 % / 3.3 %).
+    /// the direct solve converges with frames as heavy as their edge's vertices. Both at
+    /// Δt [`FRAME_DRAG_DT`]; the inertia scales with the step.
     pub fn frame_inertia_factor(self) -> f32 {
         match self {
             StrandSolver::GaussSeidel => 0.1,
@@ -414,7 +423,8 @@ impl Simulation {
     /// Advances one time step with callbacks.
     pub fn step_with(&mut self, hooks: &dyn Hooks) {
         if self.masses_dirty || self.coefficients_dt != self.params.dt {
-            self.rods.update_inverse_masses(self.params.frame_inertia_factor);
+            self.rods
+                .update_inverse_masses(self.params.frame_inertia_factor * FRAME_DRAG_DT / self.params.dt);
             self.rods.update_coefficients(self.params.dt);
             self.masses_dirty = false;
             self.coefficients_dt = self.params.dt;
