@@ -479,6 +479,34 @@ fn presets_resample_coarse_grooms_by_their_head_and_leave_fine_ones_as_they_come
         // An explicit max_segment stays (the perm's 4 mm).
         assert_eq!(default_max_segment(&parse("perm_scene3"), &groom, Some(&scalp)).unwrap(), Some(0.004));
     }
+    // 1 cm curls (3 cm pitch) cut in 2.3 cm segments turn 103° from one segment to the next:
+    // resampled to eight segments a turn of the circle through their vertices, 1.36 cm across
+    // (l / (2 sin(θ/2)) for segments l turning θ, whatever the preset); cut in 7.4 mm segments
+    // (37° a vertex) they are styled as they come.
+    let curly = |vertices| {
+        coif::generate::generate(&coif::generate::GenerateParams {
+            strands: 20,
+            vertices_per_strand: vertices,
+            length: 0.35,
+            seed: 5,
+            style: coif::generate::Style::Curly { radius: 0.01, pitch: 0.03 },
+            ..Default::default()
+        })
+        .unwrap()
+    };
+    let coarse = curly(16);
+    let strand = coarse.strand_points(0);
+    let segment = strand.windows(2).map(|w| w[0].distance(w[1])).sum::<f32>() / 15.0;
+    let mut turns: Vec<f32> = strand.windows(3).map(|w| (w[1] - w[0]).angle_between(w[2] - w[1])).collect();
+    turns.sort_by(f32::total_cmp);
+    let radius = segment / (2.0 * (0.5 * turns[turns.len() / 2]).sin());
+    let expected = 2.0 * radius * (std::f32::consts::PI / 8.0).sin();
+    for name in ["water_set", "bedhead_scene1", "blowdry_scene2"] {
+        let max = default_max_segment(&parse(name), &coarse, None).unwrap().expect("resampled");
+        eprintln!("{name}: coarse curls resampled to {max} m ({expected} m expected)");
+        assert!((max / expected - 1.0).abs() < 0.02, "{name}: {max} m segments");
+        assert_eq!(default_max_segment(&parse(name), &curly(48), None).unwrap(), None, "{name}");
+    }
     // The seed grooms the presets are tuned on (3 cm segments) are styled as they come.
     for seed in ["grooms/seed_200x24cm.hair", "grooms/seed_100x48cm.hair"] {
         let groom = read_groom(Path::new(seed), &ImportOptions::default()).unwrap().groom;

@@ -24,21 +24,22 @@ fn style(recipe: &Path, groom: &Path, output: &Path) -> (serde_json::Value, Groo
 #[test]
 fn water_set_settles_within_its_cap_to_a_shape_that_no_longer_moves() {
     // The water set's 24 cm strands come off 2.5 cm rollers with their curls far from the shape
-    // their bonds now hold; the static solve must reach its residual (net force and torque a
-    // thousandth of gravity's) within 8 s (the preset allows 90 s for slower grooms). Before
+    // their bonds now hold; the static solve must reach its residual (net force and torque
+    // 2.5e-4 of gravity's) within 16 s (the preset allows 90 s for slower grooms; measured 12.3 s,
+    // 4.7 s to the 1e-3 the preset asked before 60 cm hair needed more). Before
     // settling used light frames, they crept open at ~1 cm/s for the whole 8 s.
     let dir = tempfile::tempdir().unwrap();
     let groom = repo("grooms/seed_200x24cm.hair");
     let text = std::fs::read_to_string(repo("grooms/recipes/water_set.toml")).unwrap();
-    let text = text.replace("max_seconds = 90.0", "max_seconds = 8.0");
-    assert!(text.contains("max_seconds = 8.0") && text.contains("tolerance = 1e-3"));
+    let text = text.replace("max_seconds = 90.0", "max_seconds = 16.0");
+    assert!(text.contains("max_seconds = 16.0") && text.contains("tolerance = 2.5e-4"));
     let recipe = dir.path().join("water_set.toml");
     std::fs::write(&recipe, &text).unwrap();
     let (settle, settled) = style(&recipe, &groom, &dir.path().join("settled.usda"));
     eprintln!("water set settle: {settle}");
     assert_eq!(settle["converged"], true, "{settle}");
-    assert!(settle["force_residual"].as_f64().unwrap() <= 1e-3, "{settle}");
-    assert!(settle["torque_residual"].as_f64().unwrap() <= 1e-3, "{settle}");
+    assert!(settle["force_residual"].as_f64().unwrap() <= 2.5e-4, "{settle}");
+    assert!(settle["torque_residual"].as_f64().unwrap() <= 2.5e-4, "{settle}");
 
     // An equilibrium also stays put: simulated again for 2 s with its exported rest state and the
     // recipe's head, no strand moves 1 mm (measured: the worst 0.4 mm; 9 mm when the force
