@@ -7,7 +7,8 @@ use std::io::Read;
 
 use glam::Vec3;
 
-use super::bulk::U64Bits;
+use super::bulk::Integer;
+use super::integer::IntType;
 use super::lexer::{describe, LexError, LexResult, Lexer};
 use crate::io::usd_compose::arcs::{self, Arcs, AssetArc, LayerOffset, ListEdit, SubLayer};
 
@@ -88,9 +89,8 @@ impl Value {
 pub enum Kind {
     F32,
     F64,
-    Int,
-    /// `uint64`: the one integer type past `i64` (its values are stored as `i64` bits).
-    UInt64,
+    /// An integer or flag type (a `uint64` is stored as `i64` bits).
+    Int(IntType),
     Text,
     Other,
 }
@@ -107,8 +107,9 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
     match (base, components) {
         ("float" | "half", _) => (Kind::F32, components),
         ("double" | "timecode", _) => (Kind::F64, components),
-        ("uint64", _) => (Kind::UInt64, 1),
-        ("int" | "uint" | "int64" | "uchar" | "bool", _) => (Kind::Int, components),
+        ("int" | "uint" | "int64" | "uint64" | "uchar" | "bool", _) => {
+            (Kind::Int(IntType::of(base).expect("an integer type")), components)
+        }
         ("string" | "token" | "asset", 1) => (Kind::Text, 1),
         ("quatf" | "quath", 1) => (Kind::F32, 4),
         ("quatd", 1) => (Kind::F64, 4),
@@ -890,16 +891,24 @@ impl Parser<'_> {
             }
         };
         if self.lexer.eat(b'=') {
+            // A value's errors name its attribute (an out-of-range `uchar` among many).
+            let named = |error| match error {
+                ParseError::Syntax(LexError { line, message }) => {
+                    ParseError::Syntax(LexError { line, message: format!("attribute '{name}': {message}") })
+                }
+                other => other,
+            };
             match suffix.as_deref() {
                 None | Some("default") => {
                     let reserve = if keep { vertex_hint(prim) } else { 0 };
-                    let value = self.typed_value(kind, components, array, keep, reserve)?;
+                    let value = self.typed_value(kind, components, array, keep, reserve).map_err(named)?;
                     prim.attributes[index].default = Some(value);
                     prim.attributes[index].site = Site::line(line);
                 }
                 Some("timeSamples") => {
                     let reserve = if keep { vertex_hint(prim) } else { 0 };
-                    self.time_samples(&mut prim.attributes[index], kind, components, array, keep, reserve)?
+                    self.time_samples(&mut prim.attributes[index], kind, components, array, keep, reserve)
+                        .map_err(named)?
                 }
                 Some("connect") | Some("spline") => self.skip_value()?,
                 Some(other) => {
@@ -979,7 +988,7 @@ impl Parser<'_> {
             if kind == Kind::Text && !array {
                 return Ok(Value::Text(vec![word]));
             }
-            if kind == Kind::Int && !array && (word == "true" || word == "false") {
+            if kind == Kind::Int(IntType::Bool) && !array && (word == "true" || word == "false") {
                 return Ok(Value::Int(vec![(word == "true") as i64]));
             }
             if kind == Kind::Other {
@@ -991,7 +1000,7 @@ impl Parser<'_> {
             self.skip_value()?;
             return Ok(Value::Ignored);
         }
-        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int | Kind::UInt64) {
+        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int(_)) {
             self.lexer.expect(b'[', "'[' to open an array")?;
             let value = match (kind, components) {
                 (Kind::F32, 3) => {
@@ -1007,17 +1016,8 @@ impl Parser<'_> {
                     data.shrink_to_fit();
                     Value::F32(data)
                 }
-                (Kind::UInt64, _) => {
-                    let mut data = Vec::new();
-                    self.lexer
-                        .bulk_array(components, |v: Vec<U64Bits>| data.extend(v.iter().map(|u| u.0)))?;
-                    Value::Int(data)
-                }
-                _ => {
-                    let mut data = Vec::new();
-                    self.lexer.bulk_array(components, |v: Vec<i64>| data.extend_from_slice(&v))?;
-                    Value::Int(data)
-                }
+                (Kind::Int(int_type), _) => Value::Int(self.integer_array(int_type, components)?),
+                _ => unreachable!("only floats and integers are read in bulk"),
             };
             return Ok(if keep { value } else { Value::Ignored });
         }
@@ -1039,10 +1039,10 @@ impl Parser<'_> {
                 })?;
                 Value::F64(data)
             }
-            Kind::Int | Kind::UInt64 => {
+            Kind::Int(int_type) => {
                 let mut data = Vec::new();
                 self.numbers(components, array, &mut |lexer| {
-                    data.push(if kind == Kind::UInt64 { lexer.u64_bits()? } else { lexer.i64()? });
+                    data.push(lexer.integer(int_type)?);
                     Ok(())
                 })?;
                 Value::Int(data)
@@ -1072,6 +1072,24 @@ impl Parser<'_> {
             Kind::Other => unreachable!("handled above"),
         };
         Ok(if keep { value } else { Value::Ignored })
+    }
+
+    /// After an array's `[`: its values of integer type `int_type`, read in bulk.
+    fn integer_array(&mut self, int_type: IntType, components: usize) -> ParseResult<Vec<i64>> {
+        fn read<const T: u8>(lexer: &mut Lexer, components: usize) -> LexResult<Vec<i64>> {
+            let mut data = Vec::new();
+            lexer.bulk_array(components, |v: Vec<Integer<T>>| data.extend(v.iter().map(|i| i.0)))?;
+            Ok(data)
+        }
+        let lexer = &mut self.lexer;
+        Ok(match int_type {
+            IntType::Bool => read::<{ IntType::Bool.code() }>(lexer, components),
+            IntType::UChar => read::<{ IntType::UChar.code() }>(lexer, components),
+            IntType::Int => read::<{ IntType::Int.code() }>(lexer, components),
+            IntType::UInt => read::<{ IntType::UInt.code() }>(lexer, components),
+            IntType::Int64 => read::<{ IntType::Int64.code() }>(lexer, components),
+            IntType::UInt64 => read::<{ IntType::UInt64.code() }>(lexer, components),
+        }?)
     }
 
     /// Numbers of a value with `components` per element, as a scalar/tuple or an array of them.
@@ -1337,9 +1355,9 @@ mod tests {
 
     #[test]
     fn type_info_reads_64_bit_integers_as_one_integer() {
-        assert_eq!(type_info("int64"), (Kind::Int, 1));
-        assert_eq!(type_info("uint64"), (Kind::UInt64, 1));
-        assert_eq!(type_info("int4"), (Kind::Int, 4));
+        assert_eq!(type_info("int64"), (Kind::Int(IntType::Int64), 1));
+        assert_eq!(type_info("uint64"), (Kind::Int(IntType::UInt64), 1));
+        assert_eq!(type_info("int4"), (Kind::Int(IntType::Int), 4));
         assert_eq!(type_info("half2"), (Kind::F32, 2));
         assert_eq!(type_info("point3f"), (Kind::F32, 3));
     }
