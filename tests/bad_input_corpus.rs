@@ -1100,6 +1100,13 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         ("partition with a space", &["--partition", "a b"], "--partition"),
         ("no cpus", &["--cpus", "0"], "--cpus 0"),
         ("no parallel tasks", &["--max-parallel", "0"], "--max-parallel 0"),
+        // Written into the script as %4294967297, which Slurm holds in 32 bits.
+        (
+            "2^32 + 1 parallel tasks",
+            &["--max-parallel", "4294967297"],
+            "--max-parallel 4294967297 must be 1 to 100000",
+        ),
+        ("more parallel tasks than a manifest has", &["--max-parallel", "100001"], "--max-parallel 100001"),
     ] {
         cases.push(case(
             &format!("farm submit: {label}"),
