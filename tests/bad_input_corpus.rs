@@ -613,6 +613,16 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             &["in.usda", "'-1'"],
         ));
     }
+    // A negative width was shown in metres without a unit (-0.000040000003, from -0.004 cm).
+    let width = "#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
+                 int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+                 float[] widths = [0.008, 0.008, -0.004, 0.008] (interpolation = \"vertex\")\n}\n";
+    cases.push(convert(
+        ".usda negative width in centimetres".into(),
+        "in.usda",
+        width.as_bytes().to_vec(),
+        &["in.usda", "strand 1, vertex 0: width -4", "e-5 m (the file's units converted to metres)"],
+    ));
     // A NaN root UV (`st`, per curve) was read and written on into every output, exit 0.
     let uv = "#usda 1.0\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
               int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
