@@ -716,6 +716,8 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         ("NaN", &["--frame-range", "nan:3"], &["--frame-range", "nan"]),
         ("infinite", &["--frame-range", "1:inf"], &["--frame-range", "inf"]),
         ("huge", &["--frame-range", "1:1e8"], &["--frame-range", "more than"]),
+        // Written out in 301 digits.
+        ("astronomical", &["--frame-range", "1:1e300"], &["--frame-range '1:1e300': frame 1e300 is outside"]),
         ("not a range", &["--frame-range", "12"], &["--frame-range", "FIRST:LAST"]),
         ("before the first sample", &["--frame-range", "0:3"], &["in.abc", "frame 0"]),
         ("with --frame", &["--frame-range", "1:3", "--frame", "2"], &["--frame"]),

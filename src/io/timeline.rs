@@ -46,6 +46,7 @@ pub fn parse_range(text: &str, flag: &str) -> Result<(f64, f64)> {
     let number = |s: &str| -> Result<f64> {
         let v: f64 = s.trim().parse().map_err(|_| bad(&format!("'{s}' is not a frame number")))?;
         if !(v.is_finite() && v.abs() <= MAX_FRAME_NUMBER) {
+            let v = crate::validate::shortest(v);
             return Err(bad(&format!("frame {v} is outside -1e9 to 1e9")));
         }
         Ok(v)
@@ -166,7 +167,8 @@ pub fn frame_at_time(path: &Path, seconds: f64, flag: &str) -> Result<f64> {
     let frame = seconds * rate;
     if !(frame.is_finite() && frame.abs() <= MAX_FRAME_NUMBER) {
         return Err(Error::Usage(format!(
-            "{flag} {seconds}: frame {frame} at {rate} fps is outside -1e9 to 1e9"
+            "{flag} {seconds}: frame {} at {rate} fps is outside -1e9 to 1e9",
+            crate::validate::shortest(frame)
         )));
     }
     if let Some(timeline) = read_timeline(path)? {
