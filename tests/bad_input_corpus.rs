@@ -898,7 +898,13 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
     ));
     // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
     // refused before anything is written, whatever the output.
-    for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {
+    // Its frame count and rate are written as numbers are: 1e300 frames were counted as
+    // 18446744073709551615, a rate of 1e-300 printed in 300 digits.
+    for (start, end, names) in [
+        ("1", "1e15", &["1e15"][..]),
+        ("-1e9", "2", &["-1e9"]),
+        ("1", "1e300\n timeCodesPerSecond = 1e-300", &["to 1e300 (1e300 frames at 1e-300 fps)"]),
+    ] {
         let text = animated_usda().replacen(
             "#usda 1.0\n",
             &format!("#usda 1.0\n(\n startTimeCode = {start}\n endTimeCode = {end}\n)\n"),

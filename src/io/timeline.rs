@@ -25,8 +25,13 @@ pub struct Timeline {
 impl Timeline {
     /// How many whole frames the range holds (at least one).
     pub fn frame_count(&self) -> u64 {
+        self.frames_spanned() as u64
+    }
+
+    /// [`frame_count`](Self::frame_count) as a float, for a range too long to count (1 to 1e300).
+    pub fn frames_spanned(&self) -> f64 {
         // A millionth of a frame of rounding in a file's sample times does not drop the last frame.
-        ((self.last - self.first + 1e-6).floor().max(0.0) as u64).saturating_add(1)
+        (self.last - self.first + 1e-6).floor().max(0.0) + 1.0
     }
 
     /// The `index`-th frame number.
