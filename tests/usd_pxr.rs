@@ -978,3 +978,81 @@ fn integer_values_out_of_their_type_are_refused_as_pxr_refuses_them() {
         }
     }
 }
+
+/// `.usda` `half` values are the halves pxr reads: coif read the text as `f32` (`half 0.1` was
+/// 0.1, pxr's 0.0999755859375; `half 70000` 70000, pxr's inf) and wrote those on. Each value,
+/// in a `half[]`, a `half3[]` and a `half` scalar, reads back through coif's output as pxr
+/// reads it in the input.
+#[test]
+fn half_values_are_rounded_to_half_as_pxr_reads_them() {
+    const READ_PY: &str = r#"
+import json, sys
+from pxr import Usd
+stage = Usd.Stage.Open(sys.argv[1])
+prim = stage.GetPrimAtPath("/c")
+seen = {}
+for name in ["primvars:h", "primvars:h3", "primvars:one"]:
+    value = prim.GetAttribute(name).Get()
+    flat = [value] if isinstance(value, float) else [float(x) for v in value for x in (v if hasattr(v, "__len__") else [v])]
+    seen[name] = [repr(float(x)) for x in flat]
+print(json.dumps(seen))
+"#;
+    let values = [
+        "0.1",
+        "65504",
+        "65519",
+        "-65519",
+        "1e-9",
+        "-1e-10",
+        "1e-8",
+        "3e-8",
+        "2.5e-5",
+        "-6.1e-5",
+        "1.0009765625",
+        "0.333333",
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.usda"), dir.path().join("out.usda"));
+    let list = values.join(", ");
+    let triples: Vec<String> = values.chunks(3).map(|c| format!("({})", c.join(", "))).collect();
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+         int[] curveVertexCounts = [{counts}]\n    point3f[] points = [{points}]\n    \
+         half[] primvars:h = [{list}] (interpolation = \"vertex\")\n    \
+         half3[] primvars:h3 = [{triples}] (interpolation = \"uniform\")\n    \
+         half primvars:one = 0.1 (interpolation = \"constant\")\n}}\n",
+        counts = ["3"; 4].join(", "),
+        points = (0..12).map(|k| format!("(0, {}, {})", k % 3, k / 3)).collect::<Vec<_>>().join(", "),
+        triples = triples.join(", "),
+    );
+    std::fs::write(&input, text).unwrap();
+    let out = coif(&["convert", path_str(&input), path_str(&output)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let read =
+        |path: &std::path::Path| -> Value { serde_json::from_slice(&run_pxr_script(READ_PY, path)).unwrap() };
+    let (pxr_in, pxr_out) = (read(&input), read(&output));
+    assert_eq!(pxr_in["primvars:h"][0], "0.0999755859375", "pxr's half of 0.1");
+    for name in ["primvars:h", "primvars:h3", "primvars:one"] {
+        assert_eq!(pxr_out[name], pxr_in[name], "{name}: coif's output as pxr reads the input");
+    }
+    // Past 65504 by half a step pxr reads inf, which coif refuses in any attribute: refused
+    // naming the line and attribute (70000 was read as 70000 with exit 0).
+    for value in ["65520", "-70000", "1e10"] {
+        let text = std::fs::read_to_string(&input)
+            .unwrap()
+            .replace("half primvars:one = 0.1", &format!("half primvars:one = {value}"));
+        let bad = dir.path().join("bad.usda");
+        std::fs::write(&bad, text).unwrap();
+        let script = "import sys; from pxr import Usd; \
+                      s = Usd.Stage.Open(sys.argv[1]); print(s.GetPrimAtPath('/c').GetAttribute('primvars:one').Get())";
+        let pxr = String::from_utf8(run_pxr_script(script, &bad)).unwrap();
+        assert_eq!(pxr.trim().trim_start_matches('-'), "inf", "pxr's half of {value}");
+        let out = coif(&["convert", path_str(&bad), path_str(&dir.path().join("bad_out.usda"))]);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{value}: {message}");
+        for culprit in ["bad.usda", "line 12", "'primvars:one'", "half's range"] {
+            assert!(message.contains(culprit), "{value}: names {culprit}: {message}");
+        }
+        assert!(!dir.path().join("bad_out.usda").exists());
+    }
+}

@@ -88,6 +88,8 @@ impl Value {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     F32,
+    /// IEEE half precision, held as `f32`s rounded to it (`half 70000` is `inf`, as pxr reads it).
+    Half,
     F64,
     /// An integer or flag type (a `uint64` is stored as `i64` bits).
     Int(IntType),
@@ -105,13 +107,15 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
         _ => (type_name, 1),
     };
     match (base, components) {
-        ("float" | "half", _) => (Kind::F32, components),
+        ("float", _) => (Kind::F32, components),
+        ("half", _) => (Kind::Half, components),
         ("double" | "timecode", _) => (Kind::F64, components),
         ("int" | "uint" | "int64" | "uint64" | "uchar" | "bool", _) => {
             (Kind::Int(IntType::of(base).expect("an integer type")), components)
         }
         ("string" | "token" | "asset", 1) => (Kind::Text, 1),
-        ("quatf" | "quath", 1) => (Kind::F32, 4),
+        ("quatf", 1) => (Kind::F32, 4),
+        ("quath", 1) => (Kind::Half, 4),
         ("quatd", 1) => (Kind::F64, 4),
         ("matrix2d", 1) => (Kind::F64, 4),
         ("matrix3d", 1) => (Kind::F64, 9),
@@ -125,7 +129,8 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
                     if bytes.len() == 2 && (b'2'..=b'4').contains(&bytes[0]) {
                         let n = (bytes[0] - b'0') as usize;
                         match bytes[1] {
-                            b'f' | b'h' => return (Kind::F32, n),
+                            b'f' => return (Kind::F32, n),
+                            b'h' => return (Kind::Half, n),
                             b'd' => return (Kind::F64, n),
                             _ => {}
                         }
@@ -980,6 +985,28 @@ impl Parser<'_> {
         keep: bool,
         reserve: usize,
     ) -> ParseResult<Value> {
+        if kind == Kind::Half {
+            let line = self.lexer.line;
+            let value = self.typed_value(Kind::F32, components, array, keep, reserve)?;
+            let value = match value {
+                Value::F32(v) => Value::F32(v.into_iter().map(round_to_half).collect()),
+                Value::Vec3(v) => Value::Vec3(v.into_iter().map(|p| p.map(round_to_half)).collect()),
+                other => other,
+            };
+            // pxr reads these as inf, which coif refuses in any attribute: say why here.
+            let floats = match &value {
+                Value::F32(v) => v.as_slice(),
+                Value::Vec3(v) => bytemuck::cast_slice(v),
+                _ => &[],
+            };
+            if floats.iter().any(|x| x.is_infinite()) {
+                return Err(ParseError::Syntax(LexError {
+                    line,
+                    message: "a half value is beyond half's range, ±65504 (pxr reads it as inf)".into(),
+                }));
+            }
+            return Ok(value);
+        }
         if self.lexer.at_identifier() && !self.lexer.at_number() {
             let word = self.lexer.identifier()?;
             if word == "None" {
@@ -1069,7 +1096,7 @@ impl Parser<'_> {
                 }
                 Value::Text(data)
             }
-            Kind::Other => unreachable!("handled above"),
+            Kind::Other | Kind::Half => unreachable!("handled above"),
         };
         Ok(if keep { value } else { Value::Ignored })
     }
@@ -1186,6 +1213,25 @@ impl Parser<'_> {
                 None => return Err(self.syntax("unexpected end of file inside a tuple")),
             }
         }
+    }
+}
+
+/// `x` rounded to the nearest IEEE half (ties to even), as pxr reads a `half` value: past
+/// 65504 by half a step or more it is infinite; below 2^-14 a multiple of 2^-24.
+fn round_to_half(x: f32) -> f32 {
+    const SMALLEST_NORMAL: f32 = 6.103_515_6e-5; // 2^-14
+    const SUBNORMAL_STEP: f32 = 5.960_464_5e-8; // 2^-24
+    if !x.is_finite() {
+        x
+    } else if x.abs() >= 65520.0 {
+        f32::INFINITY.copysign(x)
+    } else if x.abs() < SMALLEST_NORMAL {
+        (x / SUBNORMAL_STEP).round_ties_even() * SUBNORMAL_STEP
+    } else {
+        // Keep 10 of the 23 fraction bits, rounding the 13 dropped ties to even.
+        let bits = x.to_bits();
+        let rounding = 0x0fff + ((bits >> 13) & 1);
+        f32::from_bits((bits + rounding) & !0x1fff)
     }
 }
 
@@ -1358,7 +1404,7 @@ mod tests {
         assert_eq!(type_info("int64"), (Kind::Int(IntType::Int64), 1));
         assert_eq!(type_info("uint64"), (Kind::Int(IntType::UInt64), 1));
         assert_eq!(type_info("int4"), (Kind::Int(IntType::Int), 4));
-        assert_eq!(type_info("half2"), (Kind::F32, 2));
+        assert_eq!(type_info("half2"), (Kind::Half, 2));
         assert_eq!(type_info("point3f"), (Kind::F32, 3));
     }
 
