@@ -300,7 +300,11 @@ pub enum GroomError {
     NonFinite { strand: usize, vertex: usize },
     #[error("strand {strand}, segment {segment}: zero-length segment")]
     ZeroLengthSegment { strand: usize, segment: usize },
-    #[error("strand {strand}, vertex {vertex}: width {width} is negative or not finite")]
+    #[error(
+        "strand {strand}, vertex {vertex}: width {} m (the file's units converted to metres) is negative \
+         or not finite",
+        crate::validate::shortest(f64::from(*width))
+    )]
     BadWidth { strand: usize, vertex: usize, width: f32 },
     #[error(
         "strand {strand}, vertex {vertex}: width {} m is too wide to simulate as a hair (at most \

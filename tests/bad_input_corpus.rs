@@ -613,6 +613,16 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
             &["in.usda", "'-1'"],
         ));
     }
+    // A negative width was shown in metres without a unit (-0.000040000003, from -0.004 cm).
+    let width = "#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
+                 int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+                 float[] widths = [0.008, 0.008, -0.004, 0.008] (interpolation = \"vertex\")\n}\n";
+    cases.push(convert(
+        ".usda negative width in centimetres".into(),
+        "in.usda",
+        width.as_bytes().to_vec(),
+        &["in.usda", "strand 1, vertex 0: width -4", "e-5 m (the file's units converted to metres)"],
+    ));
     // A NaN root UV (`st`, per curve) was read and written on into every output, exit 0.
     let uv = "#usda 1.0\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
               int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
@@ -706,6 +716,8 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         ("NaN", &["--frame-range", "nan:3"], &["--frame-range", "nan"]),
         ("infinite", &["--frame-range", "1:inf"], &["--frame-range", "inf"]),
         ("huge", &["--frame-range", "1:1e8"], &["--frame-range", "more than"]),
+        // Written out in 301 digits.
+        ("astronomical", &["--frame-range", "1:1e300"], &["--frame-range '1:1e300': frame 1e300 is outside"]),
         ("not a range", &["--frame-range", "12"], &["--frame-range", "FIRST:LAST"]),
         ("before the first sample", &["--frame-range", "0:3"], &["in.abc", "frame 0"]),
         ("with --frame", &["--frame-range", "1:3", "--frame", "2"], &["--frame"]),
@@ -886,7 +898,13 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
     ));
     // A file's own range runs on without bound (`endTimeCode = 1e15` ran for ever writing frames):
     // refused before anything is written, whatever the output.
-    for (start, end, names) in [("1", "1e15", &["1e15"][..]), ("-1e9", "2", &["-1e9"])] {
+    // Its frame count and rate are written as numbers are: 1e300 frames were counted as
+    // 18446744073709551615, a rate of 1e-300 printed in 300 digits.
+    for (start, end, names) in [
+        ("1", "1e15", &["1e15"][..]),
+        ("-1e9", "2", &["-1e9"]),
+        ("1", "1e300\n timeCodesPerSecond = 1e-300", &["to 1e300 (1e300 frames at 1e-300 fps)"]),
+    ] {
         let text = animated_usda().replacen(
             "#usda 1.0\n",
             &format!("#usda 1.0\n(\n startTimeCode = {start}\n endTimeCode = {end}\n)\n"),
@@ -1100,6 +1118,13 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
         ("partition with a space", &["--partition", "a b"], "--partition"),
         ("no cpus", &["--cpus", "0"], "--cpus 0"),
         ("no parallel tasks", &["--max-parallel", "0"], "--max-parallel 0"),
+        // Written into the script as %4294967297, which Slurm holds in 32 bits.
+        (
+            "2^32 + 1 parallel tasks",
+            &["--max-parallel", "4294967297"],
+            "--max-parallel 4294967297 must be 1 to 100000",
+        ),
+        ("more parallel tasks than a manifest has", &["--max-parallel", "100001"], "--max-parallel 100001"),
     ] {
         cases.push(case(
             &format!("farm submit: {label}"),

@@ -457,3 +457,78 @@ fn an_output_that_is_a_directory_is_refused_before_any_work() {
     assert!(stderr(&run).contains("taken.png: the output is a directory"), "{}", stderr(&run));
     assert!(!dir.path().join("new.usda").exists());
 }
+
+/// pxr's reading of a one-prim curves stage: each strand's points (world, metres, Y up) and
+/// root width.
+fn pxr_strands(path: &Path) -> Vec<(Vec<Vec3>, f32)> {
+    use common::usd::{f32s, pxr_dump};
+    let dump = pxr_dump(path, None);
+    let curves = &dump["curves"][0];
+    let (points, widths) = (f32s(&curves["points"]), f32s(&curves["widths"]));
+    let mut vertex = 0;
+    let mut strands = Vec::new();
+    for count in curves["counts"].as_array().unwrap() {
+        let n = count.as_u64().unwrap() as usize;
+        let strand = (vertex..vertex + n).map(|v| Vec3::from_slice(&points[3 * v..3 * v + 3])).collect();
+        strands.push((strand, widths[vertex]));
+        vertex += n;
+    }
+    strands
+}
+
+/// `[settings] sag_free = true` on `coif generate`'s default groom: strands that stand above
+/// their root along more than hair's self-buckling length are balanced by their sag-free rest
+/// shape only unstably and fall (`simulate --sag-free` warns once they have), but `style` said
+/// nothing. The report now warns of them, their number as Greenhill predicts it from pxr's
+/// reading of the groom (1.99·(E·r²/(4ρg))^⅓, 9.9 cm for 80 µm), and those strands do fall in
+/// 2 s of `simulate --sag-free`; the 8 cm groom, which holds, gets no warning.
+#[test]
+fn a_sag_free_recipe_warns_of_strands_no_rest_shape_holds_standing() {
+    let dir = tempfile::tempdir().unwrap();
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(
+        &recipe,
+        "[settings]\nsag_free = true\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n",
+    )
+    .unwrap();
+    let (youngs, density, gravity) = (3.9e9f32, 1300.0f32, 9.81f32);
+    for length in [None, Some("0.08")] {
+        let input = dir.path().join(format!("in{}.usda", length.unwrap_or("")));
+        let mut generate = vec!["generate", "-o", path_str(&input)];
+        generate.extend(length.map(|l| ["--length", l]).iter().flatten());
+        let generated = coif(&generate);
+        assert!(generated.status.success(), "{}", stderr(&generated));
+        let strands = pxr_strands(&input);
+        let unstable: Vec<usize> = (0..strands.len())
+            .filter(|&s| {
+                let (points, width) = &strands[s];
+                let buckling = 1.99 * (youngs * (width / 2.0).powi(2) / (4.0 * density * gravity)).cbrt();
+                let highest = (0..points.len()).max_by(|&a, &b| points[a].y.total_cmp(&points[b].y)).unwrap();
+                let rising: f32 = points[..=highest].windows(2).map(|w| w[0].distance(w[1])).sum();
+                points[highest].y > points[0].y + 0.01 && rising > buckling
+            })
+            .collect();
+        let output = dir.path().join("out.usda");
+        let styled = style(&recipe, &input, &output);
+        let warnings: Vec<&str> =
+            styled["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap()).collect();
+        if length.is_some() {
+            assert!(unstable.is_empty(), "{unstable:?}");
+            assert!(warnings.is_empty(), "{warnings:?}");
+            continue;
+        }
+        let said = format!("sag_free: {} of {} strands rise above their root", unstable.len(), strands.len());
+        assert!(unstable.len() >= 10, "{unstable:?}");
+        assert!(warnings.iter().any(|w| w.contains(&said) && w.contains("self-buckling")), "{warnings:?}");
+        // They fall: most move more than 1 cm in 2 s of a sag-free simulation.
+        let simulated = dir.path().join("sim.usda");
+        let run = coif(&["simulate", path_str(&input), path_str(&simulated), "--sag-free", "--seconds", "2"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let after = pxr_strands(&simulated);
+        let fell = unstable
+            .iter()
+            .filter(|&&s| strands[s].0.iter().zip(&after[s].0).any(|(a, b)| a.distance(*b) > 0.01))
+            .count();
+        assert!(fell * 5 >= unstable.len() * 4, "{fell} of {} predicted strands fell", unstable.len());
+    }
+}

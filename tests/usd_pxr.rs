@@ -855,3 +855,204 @@ stage.Save()
         }
     }
 }
+
+/// Reads `primvars:n` of every `*.usda` in the folder `sys.argv[1]` with pxr: its values as
+/// integers, or null where pxr refuses to open the layer.
+const READ_N_PY: &str = r#"
+import json, os, sys
+from pxr import Usd, Tf
+seen = {}
+for name in sorted(os.listdir(sys.argv[1])):
+    if not name.endswith(".usda"):
+        continue
+    try:
+        stage = Usd.Stage.Open(os.path.join(sys.argv[1], name))
+        value = stage.GetPrimAtPath("/c").GetAttribute("primvars:n").Get()
+        seen[name] = [int(v) for v in value]
+    except Tf.ErrorException:
+        seen[name] = None
+print(json.dumps(seen))
+"#;
+
+/// `.usda` integer and flag values are read as pxr reads them: out of their type's range
+/// (`uchar` -1 or 256, `int` 2^31, `uint` -1, `int64` 2^63, `uint64` 2^64, a tuple's `int`,
+/// or `true` for an integer) pxr refuses the layer, and coif, which read `uchar` 256 as 256 with
+/// exit 0, now refuses it (exit 2, naming the file, line, attribute and value; nothing written),
+/// also in an attribute it does not use; pxr's truncation of fractions (`int` 2.9 is 2) and its
+/// `bool`s (any number, non-zero true: 2, 0.5, nan), which coif refused as bad numbers, read as
+/// pxr reads them.
+#[test]
+fn integer_values_out_of_their_type_are_refused_as_pxr_refuses_them() {
+    let cases: &[(&str, &str)] = &[
+        ("uchar[]", "256"),
+        ("uchar[]", "-1"),
+        ("uchar[]", "-1.5"),
+        ("uchar[]", "-0.5"),
+        ("uchar[]", "255.9"),
+        ("uchar[]", "true"),
+        ("int[]", "2147483648"),
+        ("int[]", "-2147483649"),
+        ("int[]", "2.9"),
+        ("int[]", "1e10"),
+        ("int[]", "1e3"),
+        ("int[]", "true"),
+        ("int[]", "nan"),
+        ("uint[]", "4294967296"),
+        ("uint[]", "-1"),
+        ("uint[]", "4294967295.5"),
+        ("int64[]", "9223372036854775808"),
+        ("int64[]", "1e19"),
+        ("int64[]", "-1e10"),
+        ("uint64[]", "18446744073709551616"),
+        ("uint64[]", "1e19"),
+        ("bool[]", "2"),
+        ("bool[]", "-1"),
+        ("bool[]", "0.5"),
+        ("bool[]", "nan"),
+        ("bool[]", "1e30"),
+        ("bool[]", "false"),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let inputs = dir.path().join("in");
+    let outputs = dir.path().join("out");
+    std::fs::create_dir_all(&inputs).unwrap();
+    std::fs::create_dir_all(&outputs).unwrap();
+    let stage = |declaration: &str| {
+        format!(
+            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+             {declaration}\n}}\n"
+        )
+    };
+    // (file, the attribute and value a refusal must name, text): arrays, a tuple, and scalars
+    // of attributes coif does not read beside a valid primvar.
+    let mut files = Vec::new();
+    for (k, (type_name, value)) in cases.iter().enumerate() {
+        let declaration = format!("{type_name} primvars:n = [1, {value}] (interpolation = \"uniform\")");
+        files.push((format!("{k:02}.usda"), ("primvars:n", *value), stage(&declaration)));
+    }
+    let valid = "int[] primvars:n = [1, 2] (interpolation = \"uniform\")";
+    for (k, (declaration, culprit)) in [
+        (
+            "int2[] primvars:n = [(1, 2), (3, 2147483648)] (interpolation = \"uniform\")".to_string(),
+            ("primvars:n", "2147483648"),
+        ),
+        (format!("uchar other = 300\n    {valid}"), ("other", "300")),
+        (format!("bool flag = 2\n    {valid}"), ("flag", "2")),
+        (format!("int other = 1.5\n    {valid}"), ("other", "1.5")),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        files.push((format!("s{k}.usda"), culprit, stage(&declaration)));
+    }
+    for (name, _, text) in &files {
+        std::fs::write(inputs.join(name), text).unwrap();
+    }
+    let read_n = |folder: &std::path::Path| -> Value {
+        serde_json::from_slice(&run_pxr_script(READ_N_PY, folder)).expect("the script prints JSON")
+    };
+    let pxr_in = read_n(&inputs);
+    let mut refused = 0;
+    for (name, (attribute, value), _) in &files {
+        let output = outputs.join(name);
+        let out = coif(&["convert", path_str(&inputs.join(name)), path_str(&output)]);
+        let message = stderr(&out);
+        if pxr_in[name].is_null() {
+            refused += 1;
+            assert_eq!(out.status.code(), Some(2), "{name} (pxr refuses it): {message}");
+            for culprit in [name.as_str(), "line 7", &format!("'{attribute}'"), &format!("'{value}'")] {
+                assert!(message.contains(culprit), "{name}: names {culprit}: {message}");
+            }
+            assert!(!message.contains("panicked"), "{message}");
+            assert!(!output.exists(), "{name}: nothing written");
+        } else {
+            assert!(out.status.success(), "{name} (pxr reads {}): {message}", pxr_in[name]);
+        }
+    }
+    assert!(refused >= 15 && refused < files.len() - 8, "{refused} of {} refused by pxr", files.len());
+    let pxr_out = read_n(&outputs);
+    for (name, _, _) in &files {
+        if !pxr_in[name].is_null() {
+            assert_eq!(pxr_out[name], pxr_in[name], "{name}: pxr reads coif's output as it reads the input");
+        }
+    }
+}
+
+/// `.usda` `half` values are the halves pxr reads: coif read the text as `f32` (`half 0.1` was
+/// 0.1, pxr's 0.0999755859375; `half 70000` 70000, pxr's inf) and wrote those on. Each value,
+/// in a `half[]`, a `half3[]` and a `half` scalar, reads back through coif's output as pxr
+/// reads it in the input.
+#[test]
+fn half_values_are_rounded_to_half_as_pxr_reads_them() {
+    const READ_PY: &str = r#"
+import json, sys
+from pxr import Usd
+stage = Usd.Stage.Open(sys.argv[1])
+prim = stage.GetPrimAtPath("/c")
+seen = {}
+for name in ["primvars:h", "primvars:h3", "primvars:one"]:
+    value = prim.GetAttribute(name).Get()
+    flat = [value] if isinstance(value, float) else [float(x) for v in value for x in (v if hasattr(v, "__len__") else [v])]
+    seen[name] = [repr(float(x)) for x in flat]
+print(json.dumps(seen))
+"#;
+    let values = [
+        "0.1",
+        "65504",
+        "65519",
+        "-65519",
+        "1e-9",
+        "-1e-10",
+        "1e-8",
+        "3e-8",
+        "2.5e-5",
+        "-6.1e-5",
+        "1.0009765625",
+        "0.333333",
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.usda"), dir.path().join("out.usda"));
+    let list = values.join(", ");
+    let triples: Vec<String> = values.chunks(3).map(|c| format!("({})", c.join(", "))).collect();
+    let text = format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n)\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+         int[] curveVertexCounts = [{counts}]\n    point3f[] points = [{points}]\n    \
+         half[] primvars:h = [{list}] (interpolation = \"vertex\")\n    \
+         half3[] primvars:h3 = [{triples}] (interpolation = \"uniform\")\n    \
+         half primvars:one = 0.1 (interpolation = \"constant\")\n}}\n",
+        counts = ["3"; 4].join(", "),
+        points = (0..12).map(|k| format!("(0, {}, {})", k % 3, k / 3)).collect::<Vec<_>>().join(", "),
+        triples = triples.join(", "),
+    );
+    std::fs::write(&input, text).unwrap();
+    let out = coif(&["convert", path_str(&input), path_str(&output)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let read =
+        |path: &std::path::Path| -> Value { serde_json::from_slice(&run_pxr_script(READ_PY, path)).unwrap() };
+    let (pxr_in, pxr_out) = (read(&input), read(&output));
+    assert_eq!(pxr_in["primvars:h"][0], "0.0999755859375", "pxr's half of 0.1");
+    for name in ["primvars:h", "primvars:h3", "primvars:one"] {
+        assert_eq!(pxr_out[name], pxr_in[name], "{name}: coif's output as pxr reads the input");
+    }
+    // Past 65504 by half a step pxr reads inf, which coif refuses in any attribute: refused
+    // naming the line and attribute (70000 was read as 70000 with exit 0).
+    for value in ["65520", "-70000", "1e10"] {
+        let text = std::fs::read_to_string(&input)
+            .unwrap()
+            .replace("half primvars:one = 0.1", &format!("half primvars:one = {value}"));
+        let bad = dir.path().join("bad.usda");
+        std::fs::write(&bad, text).unwrap();
+        let script = "import sys; from pxr import Usd; \
+                      s = Usd.Stage.Open(sys.argv[1]); print(s.GetPrimAtPath('/c').GetAttribute('primvars:one').Get())";
+        let pxr = String::from_utf8(run_pxr_script(script, &bad)).unwrap();
+        assert_eq!(pxr.trim().trim_start_matches('-'), "inf", "pxr's half of {value}");
+        let out = coif(&["convert", path_str(&bad), path_str(&dir.path().join("bad_out.usda"))]);
+        let message = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{value}: {message}");
+        for culprit in ["bad.usda", "line 12", "'primvars:one'", "half's range"] {
+            assert!(message.contains(culprit), "{value}: names {culprit}: {message}");
+        }
+        assert!(!dir.path().join("bad_out.usda").exists());
+    }
+}

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use super::manifest::MAX_TASKS;
 use crate::error::{Error, Result};
 use crate::io::atomic::write_bytes_atomically;
 
@@ -46,6 +47,12 @@ impl SubmitOptions {
         }
         if self.max_parallel == Some(0) {
             return Err(Error::Usage("--max-parallel 0: at least one task must run at a time".into()));
+        }
+        // Past a manifest's most tasks it limits nothing; past 32 bits sbatch misreads it.
+        if let Some(n) = self.max_parallel.filter(|&n| n > MAX_TASKS) {
+            return Err(Error::Usage(format!(
+                "--max-parallel {n} must be 1 to {MAX_TASKS}, the most tasks a manifest may have"
+            )));
         }
         Ok(())
     }

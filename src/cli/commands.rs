@@ -40,7 +40,7 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
                         t.first,
                         t.frame(t.frame_count() - 1),
                         t.frame_count(),
-                        t.frames_per_second
+                        shortest(t.frames_per_second)
                     ),
                     // A moving stage without a frame range is one moment too: its warning says so.
                     None if loaded.warnings.is_empty() => {
@@ -589,8 +589,8 @@ fn run_convert(
                  convert writes; --frame-range FIRST:LAST picks frames, --frame N one",
                 shortest(timeline.first),
                 shortest(timeline.last),
-                timeline.frame_count(),
-                timeline.frames_per_second,
+                shortest(timeline.frames_spanned()),
+                shortest(timeline.frames_per_second),
                 io::timeline::MAX_FRAMES
             ),
         ));
@@ -623,7 +623,7 @@ fn run_convert(
             info.vertices,
             timeline.first,
             timeline.frame(timeline.frame_count() - 1),
-            timeline.frames_per_second
+            shortest(timeline.frames_per_second)
         );
     }
     Ok(())

@@ -25,8 +25,13 @@ pub struct Timeline {
 impl Timeline {
     /// How many whole frames the range holds (at least one).
     pub fn frame_count(&self) -> u64 {
+        self.frames_spanned() as u64
+    }
+
+    /// [`frame_count`](Self::frame_count) as a float, for a range too long to count (1 to 1e300).
+    pub fn frames_spanned(&self) -> f64 {
         // A millionth of a frame of rounding in a file's sample times does not drop the last frame.
-        ((self.last - self.first + 1e-6).floor().max(0.0) as u64).saturating_add(1)
+        (self.last - self.first + 1e-6).floor().max(0.0) + 1.0
     }
 
     /// The `index`-th frame number.
@@ -46,6 +51,7 @@ pub fn parse_range(text: &str, flag: &str) -> Result<(f64, f64)> {
     let number = |s: &str| -> Result<f64> {
         let v: f64 = s.trim().parse().map_err(|_| bad(&format!("'{s}' is not a frame number")))?;
         if !(v.is_finite() && v.abs() <= MAX_FRAME_NUMBER) {
+            let v = crate::validate::shortest(v);
             return Err(bad(&format!("frame {v} is outside -1e9 to 1e9")));
         }
         Ok(v)
@@ -166,7 +172,8 @@ pub fn frame_at_time(path: &Path, seconds: f64, flag: &str) -> Result<f64> {
     let frame = seconds * rate;
     if !(frame.is_finite() && frame.abs() <= MAX_FRAME_NUMBER) {
         return Err(Error::Usage(format!(
-            "{flag} {seconds}: frame {frame} at {rate} fps is outside -1e9 to 1e9"
+            "{flag} {seconds}: frame {} at {rate} fps is outside -1e9 to 1e9",
+            crate::validate::shortest(frame)
         )));
     }
     if let Some(timeline) = read_timeline(path)? {

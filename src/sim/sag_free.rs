@@ -42,6 +42,27 @@ pub const MATERIAL_FRAME: &str = "material_frame";
 /// straight strands hold to 0.4 mm and coarse curls to 8 mm (module docs).
 pub const HELD: f32 = 0.01;
 
+/// What becomes of strands that rise above their root under a sag-free rest shape.
+const UNSTABLE: &str = "a sag-free rest shape holds a strand up there in an unstable balance, and it falls \
+                        (settle the groom first, or lay those strands down)";
+
+/// Greenhill's self-buckling length of a hair of `radius` (metres) under `gravity` (m/s²):
+/// 1.99·(E·I/(ρ·g·A))^⅓ with I = π r⁴/4 and A = π r² (9.9 cm for an 80 µm hair).
+fn self_buckling_length(material: &crate::sim::Material, gravity: f32, radius: f32) -> f32 {
+    let load = material.density * gravity;
+    if load <= 0.0 {
+        return f32::INFINITY;
+    }
+    1.99 * (material.youngs_modulus * radius * radius / (4.0 * load)).cbrt()
+}
+
+/// Arc length from a strand's root to its highest point along `up`.
+fn rising_length(points: &[Vec3], up: Vec3) -> f32 {
+    let highest =
+        (0..points.len()).fold(0, |best, i| if points[i].dot(up) > points[best].dot(up) { i } else { best });
+    points[..=highest].windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
 /// Cosine of the largest angle between a written frame's third director and its edge for the
 /// frame to be taken (5°; a settled strand's shear is a fraction of a degree).
 const MAX_FRAME_TILT_COS: f32 = 0.996_194_7;
@@ -233,7 +254,6 @@ impl Simulation {
     /// fell 10–20 cm in 2 s, while its other strands moved under 2.2 cm (most under 1 mm).
     pub fn unheld_warning(&self, initial: &Groom, seconds: f32) -> Option<String> {
         let r = &self.rods;
-        let up = -self.params.gravity.normalize_or_zero();
         let (mut moved, mut rising, mut worst) = (0usize, 0usize, (0usize, 0.0f32));
         for strand in 0..r.strand_count() {
             let range = r.strand_range(strand);
@@ -242,8 +262,7 @@ impl Simulation {
             let drift = now.iter().zip(before).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
             if drift > HELD {
                 moved += 1;
-                let root = before[0].dot(up);
-                rising += usize::from(before.iter().any(|p| p.dot(up) > root + HELD));
+                rising += usize::from(self.rises_above_root(before));
                 if drift > worst.1 {
                     worst = (strand, drift);
                 }
@@ -252,13 +271,57 @@ impl Simulation {
         (moved > 0).then(|| {
             format!(
                 "--sag-free did not hold {moved} of {} strands in {seconds} s (strand {}: {:.1} cm), {rising} of \
-                 them rising above their root: a sag-free rest shape holds a strand up there in an unstable \
-                 balance, and it falls (settle the groom first, or lay those strands down)",
+                 them rising above their root: {UNSTABLE}",
                 r.strand_count(),
                 worst.0,
                 worst.1 * 100.0
             )
         })
+    }
+
+    /// [`unheld_warning`](Self::unheld_warning) foretold, for a run that moves the hair by design
+    /// (styling, where a fall cannot be told from the style): the strands of `initial` (the groom
+    /// the simulation was built from) that rise above their root along more than hair's
+    /// self-buckling length, which no rest shape holds standing. On `coif generate`'s default
+    /// groom, 18 of its 1,000 (23 fell more than 1 cm in 2 s of `simulate --sag-free`); none of
+    /// the 8 cm groom that holds.
+    pub fn unstable_warning(&self, initial: &Groom) -> Option<String> {
+        let material = &self.params.material;
+        let gravity = self.params.gravity.length();
+        let buckling = |strand: usize| {
+            let range = initial.strand_range(strand);
+            let width = match initial.widths[range.start] {
+                w if w > 0.0 => w,
+                _ => material.fallback_width,
+            };
+            self_buckling_length(material, gravity, 0.5 * width)
+        };
+        let mut unstable = (0..initial.strand_count()).filter_map(|strand| {
+            let points = initial.strand_points(strand);
+            let length = buckling(strand);
+            (self.rises_above_root(points) && rising_length(points, self.up()) > length)
+                .then_some((strand, length))
+        });
+        let (first, length) = unstable.next()?;
+        Some(format!(
+            "sag_free: {} of {} strands rise above their root along more than hair's self-buckling length \
+             ({:.1} cm at strand {first}'s width), which no rest shape holds standing: {UNSTABLE}",
+            1 + unstable.count(),
+            initial.strand_count(),
+            length * 100.0
+        ))
+    }
+
+    /// The way up: against gravity (zero without it).
+    fn up(&self) -> Vec3 {
+        -self.params.gravity.normalize_or_zero()
+    }
+
+    /// Whether a strand's points rise more than [`HELD`] above its root, against gravity.
+    fn rises_above_root(&self, points: &[Vec3]) -> bool {
+        let up = self.up();
+        let root = points[0].dot(up);
+        points.iter().any(|p| p.dot(up) > root + HELD)
     }
 
     /// `1 − β`: the influence-weighted share of intact bonds at a pair.

@@ -425,8 +425,10 @@ impl Session {
         let recipe = placed.recipe;
         let settings = &recipe.settings;
         let mut sim = Simulation::new(&groom, sim_params(&recipe))?;
+        let mut warnings = Vec::new();
         if settings.sag_free {
             sim.make_sag_free();
+            warnings.extend(sim.unstable_warning(&groom));
         } else {
             sim.adopt_rest_state(&groom)?;
         }
@@ -499,7 +501,7 @@ impl Session {
             steps_per_frame,
             penetration: 0.0,
             head_frame: placed.frame,
-            warnings: Vec::new(),
+            warnings,
             radii,
             groom,
         };

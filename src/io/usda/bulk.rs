@@ -12,6 +12,8 @@
 //! are the same.
 use rayon::prelude::*;
 
+use super::integer::IntType;
+
 /// Pieces smaller than this are not worth a thread.
 const MIN_PIECE: usize = 64 * 1024;
 
@@ -37,8 +39,8 @@ pub trait Number: Copy + Send + Default {
     /// A plain decimal at the start of `bytes` and its length in bytes; `None` sends the token
     /// through [`Number::token`].
     fn prefix(bytes: &[u8]) -> Option<(Self, usize)>;
-    /// A whole token as the element-by-element reader reads it (`None`: not a number).
-    fn token(token: &str) -> Option<Self>;
+    /// A whole token as the element-by-element reader reads it, or the error it gives.
+    fn token(token: &str) -> Result<Self, String>;
 }
 
 impl Number for f32 {
@@ -101,8 +103,8 @@ impl Number for f32 {
         (len == decimal.len).then_some((value, len))
     }
 
-    fn token(token: &str) -> Option<f32> {
-        super::lexer::parse_f32(token)
+    fn token(token: &str) -> Result<f32, String> {
+        super::lexer::parse_f32(token).ok_or_else(|| format!("bad number '{token}'"))
     }
 }
 
@@ -279,8 +281,13 @@ fn leading_digits(word: u64) -> (u64, usize) {
     (value, count)
 }
 
-impl Number for i64 {
-    fn prefix(bytes: &[u8]) -> Option<(i64, usize)> {
+/// A value of the USD integer or flag type whose [`IntType::code`] is `TYPE`, read as pxr reads
+/// it ([`IntType::read`]; a `uint64` as its bits).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Integer<const TYPE: u8>(pub i64);
+
+impl<const TYPE: u8> Number for Integer<TYPE> {
+    fn prefix(bytes: &[u8]) -> Option<(Self, usize)> {
         let (negative, digits) = match bytes.first()? {
             b'-' => (true, &bytes[1..]),
             _ => (false, bytes),
@@ -293,27 +300,16 @@ impl Number for i64 {
         let magnitude = digits[..count].iter().fold(0i64, |n, &d| n * 10 + i64::from(d - b'0'));
         let len = count + usize::from(negative);
         let value = if negative { -magnitude } else { magnitude };
-        (!continues_token(bytes.get(len))).then_some((value, len))
+        if continues_token(bytes.get(len)) {
+            return None;
+        }
+        // Out of range: the token path says so.
+        let value = IntType::from_code(TYPE).take(value)?;
+        Some((Integer(value), len))
     }
 
-    fn token(token: &str) -> Option<i64> {
-        super::lexer::parse_i64(token)
-    }
-}
-
-/// A `uint64` value held as the bits of an `i64`, the way coif stores one (see
-/// `AttributeKind::UInt64`): 0 to 2^64 − 1, as pxr reads them; a sign or more is not one
-/// (an `i64` read took `-1` for 2^64 − 1 and refused 2^63 and up).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct U64Bits(pub i64);
-
-impl Number for U64Bits {
-    fn prefix(_bytes: &[u8]) -> Option<(U64Bits, usize)> {
-        None
-    }
-
-    fn token(token: &str) -> Option<U64Bits> {
-        super::lexer::parse_u64_bits(token).map(U64Bits)
+    fn token(token: &str) -> Result<Self, String> {
+        IntType::from_code(TYPE).read(token).map(Integer)
     }
 }
 
@@ -501,11 +497,11 @@ fn read_number<N: Number>(text: &[u8], at: usize, values: &mut Vec<N>) -> Result
     // Letters, digits and signs only: always UTF-8.
     let token = std::str::from_utf8(&text[at..at + len]).unwrap_or_default();
     match N::token(token) {
-        Some(value) => {
+        Ok(value) => {
             values.push(value);
             Ok(at + len)
         }
-        None => Err(error(at, format!("bad number '{token}'"))),
+        Err(message) => Err(error(at, message)),
     }
 }
 
@@ -927,26 +923,57 @@ mod tests {
         );
     }
 
+    /// Each integer type's array values, read in one pass or through the token path, are the
+    /// ones `IntType::read` gives, and a value it refuses is refused with its message.
     #[test]
     fn integers_read_in_one_pass_or_through_the_token_path() {
-        let text = "0, -7, 42, +5, true, false, 007, 999999999999999999, -9223372036854775808";
-        let values = parse_all::<i64>(text, 1).unwrap();
-        assert_eq!(values, [0, -7, 42, 5, 1, 0, 7, 999_999_999_999_999_999, i64::MIN]);
-        for bad in ["9223372036854775808", "1.5", "12a", "-", "1e3", "99999999999999999999"] {
-            let error = parse_all::<i64>(&format!("1, {bad}"), 1).unwrap_err();
-            assert_eq!(error, format!("at 3: bad number '{bad}'"), "{bad}");
+        fn check<const T: u8>() {
+            let int_type = IntType::from_code(T);
+            let tokens = [
+                "0",
+                "-7",
+                "42",
+                "+5",
+                "true",
+                "false",
+                "007",
+                "255",
+                "256",
+                "-1",
+                "2.9",
+                "-0.5",
+                "1e3",
+                "2147483648",
+                "999999999999999999",
+                "-9223372036854775808",
+                "9223372036854775808",
+                "18446744073709551615",
+                "18446744073709551616",
+                "99999999999999999999",
+                "12a",
+                "-",
+                "nan",
+            ];
+            for token in tokens {
+                let read = parse_all::<Integer<T>>(&format!("1, {token}"), 1);
+                let expected = int_type.read(token);
+                match (read, expected) {
+                    (Ok(values), Ok(value)) => {
+                        assert_eq!(values, [Integer(1), Integer(value)], "{int_type:?} {token}")
+                    }
+                    (Err(error), Err(message)) => {
+                        assert_eq!(error, format!("at 3: {message}"), "{int_type:?}")
+                    }
+                    (read, expected) => panic!("{int_type:?} '{token}': {read:?}, expected {expected:?}"),
+                }
+            }
         }
-    }
-
-    #[test]
-    fn uint64_reads_to_two_to_the_64_and_refuses_signs() {
-        let values = parse_all::<U64Bits>("0, 18446744073709551615, 9223372036854775808, +3", 1).unwrap();
-        let unsigned: Vec<u64> = values.iter().map(|v| v.0 as u64).collect();
-        assert_eq!(unsigned, [0, u64::MAX, 1 << 63, 3]);
-        for bad in ["-1", "18446744073709551616", "1.5", "true"] {
-            let error = parse_all::<U64Bits>(&format!("1, {bad}"), 1).unwrap_err();
-            assert_eq!(error, format!("at 3: bad number '{bad}'"), "{bad}");
-        }
+        check::<{ IntType::Bool.code() }>();
+        check::<{ IntType::UChar.code() }>();
+        check::<{ IntType::Int.code() }>();
+        check::<{ IntType::UInt.code() }>();
+        check::<{ IntType::Int64.code() }>();
+        check::<{ IntType::UInt64.code() }>();
     }
 
     /// A comment anywhere in a window makes every cut check for comments; a window without one

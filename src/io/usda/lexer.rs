@@ -3,6 +3,8 @@
 //! pieces of the grammar — identifiers, strings, numbers, paths and asset paths.
 use std::io::Read;
 
+use super::integer::IntType;
+
 /// Bytes read from the input at a time.
 const WINDOW: usize = 1 << 20;
 /// A large array's read window: each is cut into pieces for the threads, and a thread left
@@ -334,27 +336,12 @@ impl<'a> Lexer<'a> {
         }
     }
 
-    /// An integer; `true`/`false` count as 1/0 (bool values).
-    pub fn i64(&mut self) -> LexResult<i64> {
+    /// A value of USD integer or flag type `int_type`, as pxr reads it ([`IntType::read`]).
+    pub fn integer(&mut self, int_type: IntType) -> LexResult<i64> {
         let token = self.number_token()?;
-        match parse_i64(token) {
-            Some(value) => Ok(value),
-            None => {
-                let message = format!("bad integer '{token}'");
-                self.error(message)
-            }
-        }
-    }
-
-    /// A `uint64`, as the bits of an `i64` (see [`parse_u64_bits`]).
-    pub fn u64_bits(&mut self) -> LexResult<i64> {
-        let token = self.number_token()?;
-        match parse_u64_bits(token) {
-            Some(value) => Ok(value),
-            None => {
-                let message = format!("bad uint64 '{token}': a uint64 is 0 to {}", u64::MAX);
-                self.error(message)
-            }
+        match int_type.read(token) {
+            Ok(value) => Ok(value),
+            Err(message) => self.error(message),
         }
     }
 
@@ -496,22 +483,9 @@ pub fn parse_f32(token: &str) -> Option<f32> {
     parse_float(token)
 }
 
-/// An integer token; `true`/`false` are 1/0.
-pub fn parse_i64(token: &str) -> Option<i64> {
-    match token {
-        "true" => Some(1),
-        "false" => Some(0),
-        _ => token.parse().ok(),
-    }
-}
-
-/// A `uint64` value, 0 to 2^64 − 1 (pxr refuses a sign and anything more), as the bits of an
-/// `i64`, the way `AttributeKind::UInt64` stores it.
-pub fn parse_u64_bits(token: &str) -> Option<i64> {
-    if token.starts_with('-') {
-        return None;
-    }
-    token.parse::<u64>().ok().map(|v| v as i64)
+/// `f64` from a number token as USD writes it.
+pub fn parse_f64(token: &str) -> Option<f64> {
+    parse_float(token)
 }
 
 /// USD writes `inf`, `-inf` and `nan`; Rust's parser accepts those and plain decimal forms but
@@ -560,7 +534,7 @@ mod tests {
         assert_eq!(lexer.f32().unwrap(), 1.5e-3);
         assert_eq!(lexer.f32().unwrap(), f32::NEG_INFINITY);
         assert!(lexer.f32().unwrap().is_nan());
-        assert_eq!(lexer.i64().unwrap(), 7);
+        assert_eq!(lexer.integer(IntType::Int).unwrap(), 7);
         let error = lexer.f32().unwrap_err();
         assert_eq!(error.line, 3);
         assert!(error.message.contains("1.2.3"), "{}", error.message);

@@ -9,6 +9,7 @@
 //! variants…) is reported as [`ReadOutcome::NeedsComposition`] with its parsed layer, which
 //! `io::usd_compose` composes natively.
 mod bulk;
+mod integer;
 mod lexer;
 mod parser;
 mod reader;

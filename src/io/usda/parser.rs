@@ -7,7 +7,8 @@ use std::io::Read;
 
 use glam::Vec3;
 
-use super::bulk::U64Bits;
+use super::bulk::Integer;
+use super::integer::IntType;
 use super::lexer::{describe, LexError, LexResult, Lexer};
 use crate::io::usd_compose::arcs::{self, Arcs, AssetArc, LayerOffset, ListEdit, SubLayer};
 
@@ -87,10 +88,11 @@ impl Value {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     F32,
+    /// IEEE half precision, held as `f32`s rounded to it (`half 70000` is `inf`, as pxr reads it).
+    Half,
     F64,
-    Int,
-    /// `uint64`: the one integer type past `i64` (its values are stored as `i64` bits).
-    UInt64,
+    /// An integer or flag type (a `uint64` is stored as `i64` bits).
+    Int(IntType),
     Text,
     Other,
 }
@@ -105,12 +107,15 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
         _ => (type_name, 1),
     };
     match (base, components) {
-        ("float" | "half", _) => (Kind::F32, components),
+        ("float", _) => (Kind::F32, components),
+        ("half", _) => (Kind::Half, components),
         ("double" | "timecode", _) => (Kind::F64, components),
-        ("uint64", _) => (Kind::UInt64, 1),
-        ("int" | "uint" | "int64" | "uchar" | "bool", _) => (Kind::Int, components),
+        ("int" | "uint" | "int64" | "uint64" | "uchar" | "bool", _) => {
+            (Kind::Int(IntType::of(base).expect("an integer type")), components)
+        }
         ("string" | "token" | "asset", 1) => (Kind::Text, 1),
-        ("quatf" | "quath", 1) => (Kind::F32, 4),
+        ("quatf", 1) => (Kind::F32, 4),
+        ("quath", 1) => (Kind::Half, 4),
         ("quatd", 1) => (Kind::F64, 4),
         ("matrix2d", 1) => (Kind::F64, 4),
         ("matrix3d", 1) => (Kind::F64, 9),
@@ -124,7 +129,8 @@ pub fn type_info(type_name: &str) -> (Kind, usize) {
                     if bytes.len() == 2 && (b'2'..=b'4').contains(&bytes[0]) {
                         let n = (bytes[0] - b'0') as usize;
                         match bytes[1] {
-                            b'f' | b'h' => return (Kind::F32, n),
+                            b'f' => return (Kind::F32, n),
+                            b'h' => return (Kind::Half, n),
                             b'd' => return (Kind::F64, n),
                             _ => {}
                         }
@@ -890,16 +896,24 @@ impl Parser<'_> {
             }
         };
         if self.lexer.eat(b'=') {
+            // A value's errors name its attribute (an out-of-range `uchar` among many).
+            let named = |error| match error {
+                ParseError::Syntax(LexError { line, message }) => {
+                    ParseError::Syntax(LexError { line, message: format!("attribute '{name}': {message}") })
+                }
+                other => other,
+            };
             match suffix.as_deref() {
                 None | Some("default") => {
                     let reserve = if keep { vertex_hint(prim) } else { 0 };
-                    let value = self.typed_value(kind, components, array, keep, reserve)?;
+                    let value = self.typed_value(kind, components, array, keep, reserve).map_err(named)?;
                     prim.attributes[index].default = Some(value);
                     prim.attributes[index].site = Site::line(line);
                 }
                 Some("timeSamples") => {
                     let reserve = if keep { vertex_hint(prim) } else { 0 };
-                    self.time_samples(&mut prim.attributes[index], kind, components, array, keep, reserve)?
+                    self.time_samples(&mut prim.attributes[index], kind, components, array, keep, reserve)
+                        .map_err(named)?
                 }
                 Some("connect") | Some("spline") => self.skip_value()?,
                 Some(other) => {
@@ -971,6 +985,28 @@ impl Parser<'_> {
         keep: bool,
         reserve: usize,
     ) -> ParseResult<Value> {
+        if kind == Kind::Half {
+            let line = self.lexer.line;
+            let value = self.typed_value(Kind::F32, components, array, keep, reserve)?;
+            let value = match value {
+                Value::F32(v) => Value::F32(v.into_iter().map(round_to_half).collect()),
+                Value::Vec3(v) => Value::Vec3(v.into_iter().map(|p| p.map(round_to_half)).collect()),
+                other => other,
+            };
+            // pxr reads these as inf, which coif refuses in any attribute: say why here.
+            let floats = match &value {
+                Value::F32(v) => v.as_slice(),
+                Value::Vec3(v) => bytemuck::cast_slice(v),
+                _ => &[],
+            };
+            if floats.iter().any(|x| x.is_infinite()) {
+                return Err(ParseError::Syntax(LexError {
+                    line,
+                    message: "a half value is beyond half's range, ±65504 (pxr reads it as inf)".into(),
+                }));
+            }
+            return Ok(value);
+        }
         if self.lexer.at_identifier() && !self.lexer.at_number() {
             let word = self.lexer.identifier()?;
             if word == "None" {
@@ -979,7 +1015,7 @@ impl Parser<'_> {
             if kind == Kind::Text && !array {
                 return Ok(Value::Text(vec![word]));
             }
-            if kind == Kind::Int && !array && (word == "true" || word == "false") {
+            if kind == Kind::Int(IntType::Bool) && !array && (word == "true" || word == "false") {
                 return Ok(Value::Int(vec![(word == "true") as i64]));
             }
             if kind == Kind::Other {
@@ -991,7 +1027,7 @@ impl Parser<'_> {
             self.skip_value()?;
             return Ok(Value::Ignored);
         }
-        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int | Kind::UInt64) {
+        if array && components <= 4 && matches!(kind, Kind::F32 | Kind::Int(_)) {
             self.lexer.expect(b'[', "'[' to open an array")?;
             let value = match (kind, components) {
                 (Kind::F32, 3) => {
@@ -1007,17 +1043,8 @@ impl Parser<'_> {
                     data.shrink_to_fit();
                     Value::F32(data)
                 }
-                (Kind::UInt64, _) => {
-                    let mut data = Vec::new();
-                    self.lexer
-                        .bulk_array(components, |v: Vec<U64Bits>| data.extend(v.iter().map(|u| u.0)))?;
-                    Value::Int(data)
-                }
-                _ => {
-                    let mut data = Vec::new();
-                    self.lexer.bulk_array(components, |v: Vec<i64>| data.extend_from_slice(&v))?;
-                    Value::Int(data)
-                }
+                (Kind::Int(int_type), _) => Value::Int(self.integer_array(int_type, components)?),
+                _ => unreachable!("only floats and integers are read in bulk"),
             };
             return Ok(if keep { value } else { Value::Ignored });
         }
@@ -1039,10 +1066,10 @@ impl Parser<'_> {
                 })?;
                 Value::F64(data)
             }
-            Kind::Int | Kind::UInt64 => {
+            Kind::Int(int_type) => {
                 let mut data = Vec::new();
                 self.numbers(components, array, &mut |lexer| {
-                    data.push(if kind == Kind::UInt64 { lexer.u64_bits()? } else { lexer.i64()? });
+                    data.push(lexer.integer(int_type)?);
                     Ok(())
                 })?;
                 Value::Int(data)
@@ -1069,9 +1096,27 @@ impl Parser<'_> {
                 }
                 Value::Text(data)
             }
-            Kind::Other => unreachable!("handled above"),
+            Kind::Other | Kind::Half => unreachable!("handled above"),
         };
         Ok(if keep { value } else { Value::Ignored })
+    }
+
+    /// After an array's `[`: its values of integer type `int_type`, read in bulk.
+    fn integer_array(&mut self, int_type: IntType, components: usize) -> ParseResult<Vec<i64>> {
+        fn read<const T: u8>(lexer: &mut Lexer, components: usize) -> LexResult<Vec<i64>> {
+            let mut data = Vec::new();
+            lexer.bulk_array(components, |v: Vec<Integer<T>>| data.extend(v.iter().map(|i| i.0)))?;
+            Ok(data)
+        }
+        let lexer = &mut self.lexer;
+        Ok(match int_type {
+            IntType::Bool => read::<{ IntType::Bool.code() }>(lexer, components),
+            IntType::UChar => read::<{ IntType::UChar.code() }>(lexer, components),
+            IntType::Int => read::<{ IntType::Int.code() }>(lexer, components),
+            IntType::UInt => read::<{ IntType::UInt.code() }>(lexer, components),
+            IntType::Int64 => read::<{ IntType::Int64.code() }>(lexer, components),
+            IntType::UInt64 => read::<{ IntType::UInt64.code() }>(lexer, components),
+        }?)
     }
 
     /// Numbers of a value with `components` per element, as a scalar/tuple or an array of them.
@@ -1168,6 +1213,25 @@ impl Parser<'_> {
                 None => return Err(self.syntax("unexpected end of file inside a tuple")),
             }
         }
+    }
+}
+
+/// `x` rounded to the nearest IEEE half (ties to even), as pxr reads a `half` value: past
+/// 65504 by half a step or more it is infinite; below 2^-14 a multiple of 2^-24.
+fn round_to_half(x: f32) -> f32 {
+    const SMALLEST_NORMAL: f32 = 6.103_515_6e-5; // 2^-14
+    const SUBNORMAL_STEP: f32 = 5.960_464_5e-8; // 2^-24
+    if !x.is_finite() {
+        x
+    } else if x.abs() >= 65520.0 {
+        f32::INFINITY.copysign(x)
+    } else if x.abs() < SMALLEST_NORMAL {
+        (x / SUBNORMAL_STEP).round_ties_even() * SUBNORMAL_STEP
+    } else {
+        // Keep 10 of the 23 fraction bits, rounding the 13 dropped ties to even.
+        let bits = x.to_bits();
+        let rounding = 0x0fff + ((bits >> 13) & 1);
+        f32::from_bits((bits + rounding) & !0x1fff)
     }
 }
 
@@ -1337,10 +1401,10 @@ mod tests {
 
     #[test]
     fn type_info_reads_64_bit_integers_as_one_integer() {
-        assert_eq!(type_info("int64"), (Kind::Int, 1));
-        assert_eq!(type_info("uint64"), (Kind::UInt64, 1));
-        assert_eq!(type_info("int4"), (Kind::Int, 4));
-        assert_eq!(type_info("half2"), (Kind::F32, 2));
+        assert_eq!(type_info("int64"), (Kind::Int(IntType::Int64), 1));
+        assert_eq!(type_info("uint64"), (Kind::Int(IntType::UInt64), 1));
+        assert_eq!(type_info("int4"), (Kind::Int(IntType::Int), 4));
+        assert_eq!(type_info("half2"), (Kind::Half, 2));
         assert_eq!(type_info("point3f"), (Kind::F32, 3));
     }
 

@@ -1478,7 +1478,11 @@ mod tests {
         let errors: Vec<String> = [1, 3]
             .map(|threads| read_on_threads(&text, threads).err().expect("a bad number").to_string())
             .into();
-        assert!(errors[0].contains(&format!("line {line}: bad number '0.5x'")), "{}", errors[0]);
+        assert!(
+            errors[0].contains(&format!("line {line}: attribute 'primvars:wetness': bad number '0.5x'")),
+            "{}",
+            errors[0]
+        );
         assert_eq!(errors[0], errors[1]);
     }
 
