@@ -601,11 +601,7 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         ("array", "uint64[] primvars:n = [-1, 2]"),
         ("value", "uint64 m = -1\n    uint64[] primvars:n = [1, 2]"),
     ] {
-        let text = format!(
-            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
-             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
-             {declaration} (interpolation = \"uniform\")\n}}\n"
-        );
+        let text = two_curves("", &format!("{declaration} (interpolation = \"uniform\")"));
         cases.push(convert(
             format!(".usda uint64 -1 {name}"),
             "in.usda",
@@ -614,9 +610,10 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         ));
     }
     // A negative width was shown in metres without a unit (-0.000040000003, from -0.004 cm).
-    let width = "#usda 1.0\n(\n    metersPerUnit = 0.01\n)\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
-                 int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
-                 float[] widths = [0.008, 0.008, -0.004, 0.008] (interpolation = \"vertex\")\n}\n";
+    let width = two_curves(
+        "(\n    metersPerUnit = 0.01\n)\n",
+        "float[] widths = [0.008, 0.008, -0.004, 0.008] (interpolation = \"vertex\")",
+    );
     cases.push(convert(
         ".usda negative width in centimetres".into(),
         "in.usda",
@@ -624,9 +621,7 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         &["in.usda", "strand 1, vertex 0: width -4", "e-5 m (the file's units converted to metres)"],
     ));
     // A NaN root UV (`st`, per curve) was read and written on into every output, exit 0.
-    let uv = "#usda 1.0\ndef BasisCurves \"c\"\n{\n    uniform token type = \"linear\"\n    \
-              int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
-              texCoord2f[] primvars:st = [(0, 0), (nan, 0)] (interpolation = \"uniform\")\n}\n";
+    let uv = two_curves("", "texCoord2f[] primvars:st = [(0, 0), (nan, 0)] (interpolation = \"uniform\")");
     cases.push(convert(
         ".usda NaN root UV".into(),
         "in.usda",
@@ -638,10 +633,9 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
         ("(1, 2, 3), (1e30, 0, 0)", "strand 1: 1000000000000000000000000000000 is not"),
         ("(0.5, 0, 0), (1, 0, 0)", "strand 0: 0.5 is not"),
     ] {
-        let text = format!(
-            "#usda 1.0\ndef BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
-             int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
-             float3[] primvars:groom_closest_guides = [{ids}] (interpolation = \"uniform\")\n}}\n"
+        let text = two_curves(
+            "",
+            &format!("float3[] primvars:groom_closest_guides = [{ids}] (interpolation = \"uniform\")"),
         );
         cases.push(case(
             &format!("groom_closest_guides [{ids}] to .abc"),
@@ -1667,4 +1661,14 @@ fn against_another_binary() {
     for failure in &failures {
         println!("FAILS {}", failure.replace('\n', " | "));
     }
+}
+
+/// A `.usda` layer of two linear curves of two vertices each, with `header` (layer metadata,
+/// may be empty) and one more property `declaration` on the curves prim.
+fn two_curves(header: &str, declaration: &str) -> String {
+    format!(
+        "#usda 1.0\n{header}def BasisCurves \"c\"\n{{\n    uniform token type = \"linear\"\n    \
+         int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]\n    \
+         {declaration}\n}}\n"
+    )
 }

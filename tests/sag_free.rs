@@ -93,23 +93,19 @@ fn blow_dried_long_hair_holds_still_without_the_floor_it_was_pressed_with() {
 /// is now resampled to eight segments a turn (`placement::SHARPEST_TYPICAL_TURN`).
 #[test]
 fn presets_on_long_curly_and_wavy_heads_hold_still_when_simulated_again() {
-    let curly = GenerateParams {
-        strands: 40,
-        vertices_per_strand: 16,
-        length: 0.35,
-        seed: 5,
-        style: Style::Curly { radius: 0.01, pitch: 0.03 },
-        ..Default::default()
+    let head = |vertices_per_strand, length, seed, style| {
+        generate(&GenerateParams {
+            strands: 40,
+            vertices_per_strand,
+            length,
+            seed,
+            style,
+            ..Default::default()
+        })
+        .unwrap()
     };
-    let wavy = GenerateParams {
-        strands: 40,
-        vertices_per_strand: 64,
-        length: 0.50,
-        seed: 6,
-        style: Style::Wavy { amplitude: 0.01, wavelength: 0.05 },
-        ..Default::default()
-    };
-    let (curly, wavy) = (generate(&curly).unwrap(), generate(&wavy).unwrap());
+    let curly = head(16, 0.35, 5, Style::Curly { radius: 0.01, pitch: 0.03 });
+    let wavy = head(64, 0.50, 6, Style::Wavy { amplitude: 0.01, wavelength: 0.05 });
     presets_hold_still(&[
         ("bedhead_scene1", &curly, "usdc"),
         ("water_set", &wavy, "abc"),
