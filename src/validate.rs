@@ -65,8 +65,12 @@ pub const SECONDS: Range = Range::closed(0.0, 1e5);
 pub const TIME_STEP: Range = Range::closed(1e-6, 0.1);
 /// Solver iterations per step.
 pub const ITERATIONS: Range = Range::closed(1.0, 1000.0);
-/// Metres per unit of a groom file that does not say: above zero, up to a thousand kilometres.
-pub const UNITS: Range = Range::above(0.0, 1e6);
+/// Metres per unit of a groom file (`--units`, a manifest's `units`, a USD layer's
+/// `metersPerUnit`): a micrometre to a kilometre, which holds every length unit DCC tools write
+/// (mm, cm, inch, foot, m). Outside it hair (strands of about 1 mm to 2 m) would span more than
+/// 10^6 units or less than 10^-6 of one: at 1e-30 every strand collapses to a point, at 1e30 a
+/// 1-unit strand reaches past any scene.
+pub const UNITS: Range = Range::closed(1e-6, 1e3);
 /// A frame number to read from an animated groom: negative frames are real (a simulation's
 /// pre-roll); beyond a billion is a typo.
 pub const FRAME: Range = Range::closed(-1e9, 1e9);

@@ -1053,14 +1053,12 @@ fn compose_fields(name: &str, opinions: &[Opinion], time: Option<f64>) -> Prim {
             None => specs.iter().find(|(a, _)| a.default.is_some()).or(timed),
             Some(_) => timed,
         };
+        // The strongest declaration's type.
+        let declared = specs.iter().map(|(a, _)| a).find(|a| !a.type_name.is_empty());
         let mut attribute = Attribute {
             name: attribute_name.to_string(),
-            type_name: specs
-                .iter()
-                .map(|(a, _)| &a.type_name)
-                .find(|t| !t.is_empty())
-                .cloned()
-                .unwrap_or_default(),
+            type_name: declared.map(|a| a.type_name.clone()).unwrap_or_default(),
+            array: declared.is_some_and(|a| a.array),
             interpolation: specs.iter().find_map(|(a, _)| a.interpolation.clone()),
             element_size: specs.iter().find_map(|(a, _)| a.element_size),
             ..Default::default()

@@ -126,7 +126,8 @@ impl Decimal {
     fn scan(bytes: &[u8]) -> Option<Decimal> {
         let (negative, mut at) = match bytes.first()? {
             b'-' => (true, 1),
-            b'+' => (false, 1),
+            // `+1.5` is no USD number: the token path refuses it.
+            b'+' => return None,
             _ => (false, 0),
         };
         let mut mantissa = 0u64;
@@ -699,7 +700,6 @@ mod tests {
             "0.0",
             ".5",
             "5.",
-            "+1.5",
             "-.25",
             "1e5",
             "1E5",
@@ -795,7 +795,7 @@ mod tests {
             let digits = |count: usize, r: u64| {
                 (0..count).map(|k| char::from(b'0' + ((r >> (3 * k)) % 10) as u8)).collect::<String>()
             };
-            let sign = ["", "-", "+"][((r >> 16) % 3) as usize];
+            let sign = ["", "-"][((r >> 16) % 2) as usize];
             let point = if (r >> 20) % 8 == 0 { "" } else { "." };
             spellings.push(format!(
                 "{sign}{}{point}{}",
@@ -904,8 +904,10 @@ mod tests {
     fn non_decimal_tokens_take_the_token_path() {
         let read = parse_all::<f32>("[inf, -inf, nan]".trim_matches(['[', ']']), 1).unwrap();
         assert!(read[0] == f32::INFINITY && read[1] == f32::NEG_INFINITY && read[2].is_nan());
-        for bad in ["1.5e", "1.5.3", "0x10", "infinity", "--5", "1e", "nan5", "+", "-", "1f", "1e5e5", "Inf"]
-        {
+        for bad in [
+            "1.5e", "1.5.3", "0x10", "infinity", "--5", "1e", "nan5", "+", "-", "1f", "1e5e5", "Inf", "+1.5",
+            "+0", "+inf",
+        ] {
             let error = parse_all::<f32>(&format!("1, 2,  {bad}, 3"), 1).unwrap_err();
             assert_eq!(error, format!("at 7: bad number '{bad}'"), "{bad}");
             let error = parse_all::<f32>(&format!("(1, 2, 3), (4, {bad}, 6)"), 3).unwrap_err();

@@ -491,6 +491,11 @@ pub fn parse_f64(token: &str) -> Option<f64> {
 /// USD writes `inf`, `-inf` and `nan`; Rust's parser accepts those and plain decimal forms but
 /// also words like `infinity`, which USD does not write — accept only what USD does.
 fn parse_float<T: std::str::FromStr>(token: &str) -> Option<T> {
+    // A sign is pxr's only prefix, `-`: `+1.5` is a syntax error there (an exponent's `1e+2`
+    // is not a prefix).
+    if token.starts_with('+') {
+        return None;
+    }
     // Ending in a digit or '.', only decimal forms (which both accept) remain.
     if token.ends_with(|c: char| c.is_ascii_digit() || c == '.') {
         return token.parse().ok();

@@ -161,7 +161,10 @@ impl Site {
 #[derive(Clone, Debug, Default)]
 pub struct Attribute {
     pub name: String,
+    /// The element type, as declared before any `[]`.
     pub type_name: String,
+    /// Declared an array (`int[]`), not a scalar (`int`).
+    pub array: bool,
     /// The declaration.
     pub site: Site,
     pub default: Option<Value>,
@@ -889,6 +892,7 @@ impl Parser<'_> {
                 prim.attributes.push(Attribute {
                     name: name.clone(),
                     type_name: type_name.clone(),
+                    array,
                     site: Site::line(line),
                     ..Default::default()
                 });
@@ -1352,6 +1356,7 @@ impl Attribute {
         Attribute {
             name: self.name.clone(),
             type_name: self.type_name.clone(),
+            array: self.array,
             site: self.site,
             default: self.default.clone(),
             samples,

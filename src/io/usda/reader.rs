@@ -70,9 +70,10 @@ impl<T> Bulk<T> {
 /// not say.
 pub(crate) fn stage_transform(layer: &Layer, path: &Path, options: &ImportOptions) -> Result<DMat4> {
     let meters_per_unit = match layer.meters_per_unit {
-        Some(m) if m.is_finite() && m > 0.0 => m,
         Some(m) => {
-            return Err(Error::format(path, format!("metersPerUnit is {m}; it must be a positive number")))
+            crate::validate::number("metersPerUnit", m, crate::validate::UNITS)
+                .map_err(|message| Error::format(path, message))?;
+            m
         }
         None => options.meters_per_unit.map(f64::from).unwrap_or(FALLBACK_METERS_PER_UNIT),
     };
@@ -382,6 +383,7 @@ impl Walker<'_> {
             let Some(attribute) = prim.attributes.iter_mut().find(|a| a.name == name) else {
                 return Ok(None);
             };
+            declared_int_array(attribute).map_err(|m| at_prim(attribute.site, m))?;
             match take_value(attribute, time) {
                 None => Ok(None),
                 // Branch-free: a negative value is above u32::MAX as u64 too.
@@ -445,6 +447,9 @@ impl Walker<'_> {
             Some(Value::Int(values)) => Some(values),
             _ => None,
         };
+        if let Some(attribute) = prim.attribute("order") {
+            declared_int_array(attribute).map_err(|m| fail("order", m))?;
+        }
         let Some(orders) = ints("order") else {
             return Err(fail("order", "without an int[] 'order' (the degree of each curve + 1)".into()));
         };
@@ -583,6 +588,9 @@ impl Walker<'_> {
         };
         let counts_attr = prim.attribute("curveVertexCounts");
         let counts_site = counts_attr.map_or(prim.site, |a| a.site);
+        if let Some(attribute) = counts_attr {
+            declared_int_array(attribute).map_err(|m| at_prim(counts_site, m))?;
+        }
         let counts: Vec<u32> = match counts_attr.and_then(|a| value_at(a, time)) {
             Some(Value::Int(counts)) => counts
                 .iter()
@@ -868,6 +876,21 @@ fn integer_kind(type_name: &str) -> Option<AttributeKind> {
         "uint64" => Some(AttributeKind::UInt64),
         _ => None,
     }
+}
+
+/// Refuses a topology attribute (`curveVertexCounts`, a mesh's face lists, NURBS `order`)
+/// declared other than `int[]`, the schemas' type: pxr reads no value of another type from it
+/// (a `uint[]` or `int64[]` `curveVertexCounts` gives it no curves, a scalar `int` none either).
+fn declared_int_array(attribute: &Attribute) -> std::result::Result<(), String> {
+    // An `over` may leave the type to the layer that declares it.
+    if attribute.type_name.is_empty() || (attribute.type_name == "int" && attribute.array) {
+        return Ok(());
+    }
+    let brackets = if attribute.array { "[]" } else { "" };
+    Err(format!(
+        "'{}' is declared {}{brackets}; USD reads it only as int[] (pxr finds no value in it)",
+        attribute.name, attribute.type_name
+    ))
 }
 
 /// A value of USD type `type_name` as groom data: integer types as integers (ids past 2^24 do

@@ -614,6 +614,7 @@ impl<'a> Crate<'a> {
                 // The layer model holds the element type, as `.usda` declares it before `[]`.
                 "typeName" => {
                     let name = self.text(value).map_err(fail)?;
+                    attribute.array = name.ends_with("[]");
                     attribute.type_name = name.strip_suffix("[]").unwrap_or(&name).to_string();
                 }
                 "interpolation" => attribute.interpolation = Some(self.text(value).map_err(fail)?),
