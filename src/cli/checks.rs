@@ -29,7 +29,9 @@ pub(crate) fn import(args: &ImportArgs) -> Result<()> {
 
 pub(crate) fn style(args: &StyleArgs) -> Result<()> {
     if let Some(fps) = args.frames {
-        flag("--frames", fps, Range::closed(0.0, 1e4))?;
+        // A frame a second (a long settle's time-lapse) to slow motion. At 0 no animation was
+        // written without a word; at 1e-9 a timeline of 1e-9 time codes per second.
+        flag("--frames", fps, Range::closed(1.0, 1e4))?;
     }
     if let Some(guides) = args.guides {
         // At least one; more than the groom's strands is refused once it is read.

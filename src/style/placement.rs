@@ -338,7 +338,10 @@ pub fn default_max_segment(recipe: &Recipe, groom: &Groom, frame: Option<HeadFra
     let rods: Vec<(f32, String)> = rod_radii
         .chain(layout_radii)
         .map(|(radius, what)| {
-            (COARSEST_SEGMENT_ROD_DIAMETERS * 2.0 * radius, format!("{what} ({} m across)", 2.0 * radius))
+            (
+                COARSEST_SEGMENT_ROD_DIAMETERS * 2.0 * radius,
+                format!("{what} ({} m across)", crate::validate::shortest((2.0 * radius).into())),
+            )
         })
         .collect();
     let limit = rods
@@ -357,8 +360,10 @@ pub fn default_max_segment(recipe: &Recipe, groom: &Groom, frame: Option<HeadFra
     let (rods, size) = if coarse { (rods, size) } else { (Vec::new(), None) };
     let head = size.map(|s| {
         let what = match recipe.head.size {
-            Some(_) => format!("the recipe's [head] size = {s} m"),
-            None => format!("the head fitted to the roots ({s} m in size)"),
+            Some(_) => format!("the recipe's [head] size = {} m", crate::validate::shortest(s.into())),
+            None => {
+                format!("the head fitted to the roots ({} m in size)", crate::validate::shortest(s.into()))
+            }
         };
         (DEFAULT_SEGMENT_HEAD_UNITS * s, what)
     });
@@ -369,10 +374,11 @@ pub fn default_max_segment(recipe: &Recipe, groom: &Groom, frame: Option<HeadFra
         .fold((f32::INFINITY, String::new()), |finest, next| if next.0 < finest.0 { next } else { finest });
     if target < MIN_SEGMENT {
         return Err(Error::Usage(format!(
-            "{cause} would have the groom styled at segments of {} m, finer than the {MIN_SEGMENT} m \
+            "{cause} would have the groom styled at segments of {} m, finer than the {} m \
              [settings] max_segment may be ({} vertices instead of {}); are the recipe's lengths \
              another unit's? Set [settings] max_segment to style it anyway",
             crate::validate::shortest(target.into()),
+            crate::validate::shortest(MIN_SEGMENT.into()),
             crate::validate::shortest(crate::limits::vertices_after_resampling(groom, Some(target))),
             groom.vertex_count()
         )));

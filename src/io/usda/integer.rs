@@ -73,6 +73,20 @@ impl IntType {
         }
     }
 
+    /// A finite double as this type's value, truncated toward zero as pxr reads a fraction, if
+    /// in range (not for `bool`, which takes any number).
+    /// (A `uint64` as its bits.)
+    pub fn truncated(self, number: f64) -> Option<i64> {
+        self.truncated_wide(number).map(|value| value as i64)
+    }
+
+    fn truncated_wide(self, number: f64) -> Option<i128> {
+        let (min, max) = self.range();
+        // `max + 1` is a power of two, exact as a double where `max` may not be.
+        let truncated = number.trunc();
+        (truncated >= min as f64 && truncated < (max + 1) as f64).then_some(truncated as i128)
+    }
+
     /// A number token as this type's value (a `uint64` as its bits), or why it is not one.
     pub fn read(self, token: &str) -> Result<i64, String> {
         let bad = || format!("bad {} '{token}'", self.name());
@@ -93,9 +107,7 @@ impl IntType {
             // A fraction, an exponent or too many digits: read as a double, truncated.
             Err(_) => {
                 let number = super::lexer::parse_f64(token).filter(|v| v.is_finite()).ok_or_else(bad)?;
-                // `max + 1` is a power of two, exact as a double where `max` may not be.
-                let truncated = number.trunc();
-                (truncated >= min as f64 && truncated < (max + 1) as f64).then_some(truncated as i128)
+                self.truncated_wide(number)
             }
         };
         match value {

@@ -929,11 +929,23 @@ impl Parser<'_> {
         }
         if self.lexer.next_byte() == Some(b'(') {
             let attribute = &mut prim.attributes[index];
-            self.metadata(|key, value, _| match (key, value) {
+            let mut element_size = None;
+            self.metadata(|key, value, line| match (key, value) {
                 ("interpolation", Meta::Text(v)) => attribute.interpolation = Some(v),
-                ("elementSize", Meta::Number(n)) => attribute.element_size = Some(n as i64),
+                ("elementSize", Meta::Number(n)) => element_size = Some((n, line)),
                 _ => {}
             })?;
+            if let Some((n, line)) = element_size {
+                // An `int`, read as pxr reads one (1e12 and nan refuse the layer).
+                let size = IntType::Int.truncated(n).ok_or_else(|| {
+                    let message = format!(
+                        "attribute '{name}': elementSize = {} is not an int",
+                        crate::validate::shortest(n)
+                    );
+                    ParseError::Syntax(LexError { line, message })
+                })?;
+                prim.attributes[index].element_size = Some(size);
+            }
         }
         Ok(())
     }

@@ -714,11 +714,12 @@ impl Walker<'_> {
         let has_st = prim.attribute(&format!("primvars:{}", names::ST)).is_some();
         for (full_name, name) in primvar_names {
             let is_primvar = full_name.starts_with("primvars:");
-            let indices = prim
-                .attribute(&format!("primvars:{name}:indices"))
-                .filter(|_| is_primvar)
-                .and_then(|a| value_at(a, time))
-                .map(|v| v.to_f64());
+            let indices_attribute =
+                prim.attribute(&format!("primvars:{name}:indices")).filter(|_| is_primvar);
+            if let Some(attribute) = indices_attribute {
+                declared_int_array(attribute).map_err(|m| at_prim(attribute.site, m))?;
+            }
+            let indices = indices_attribute.and_then(|a| value_at(a, time)).map(|v| v.to_f64());
             let attr = prim.attributes.iter_mut().find(|a| a.name == full_name).unwrap();
             let site = attr.site;
             let type_name = attr.type_name.trim_end_matches("[]").to_string();
@@ -843,18 +844,21 @@ fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<Mesh
         if !(1..=4).contains(&components) {
             continue; // more components than coif's data model holds (as for curve primvars)
         }
-        let indices =
-            match prim.attribute(&format!("primvars:{name}:indices")).and_then(|a| value_at(a, time)) {
-                None => None,
-                Some(Value::Int(indices)) => Some(
-                    indices
-                        .iter()
-                        .map(|&i| u32::try_from(i).ok())
-                        .collect::<Option<Vec<u32>>>()
-                        .ok_or_else(|| fail("an index is negative".into()))?,
-                ),
-                Some(_) => return Err(fail("its indices must be int[]".into())),
-            };
+        let indices_attribute = prim.attribute(&format!("primvars:{name}:indices"));
+        if let Some(attribute) = indices_attribute {
+            declared_int_array(attribute).map_err(fail)?;
+        }
+        let indices = match indices_attribute.and_then(|a| value_at(a, time)) {
+            None => None,
+            Some(Value::Int(indices)) => Some(
+                indices
+                    .iter()
+                    .map(|&i| u32::try_from(i).ok())
+                    .collect::<Option<Vec<u32>>>()
+                    .ok_or_else(|| fail("an index is negative".into()))?,
+            ),
+            Some(_) => return Err(fail("its indices must be int[]".into())),
+        };
         primvars.push(MeshPrimvar {
             name: name.to_string(),
             kind: attribute_kind(type_name, name, components),
@@ -878,9 +882,10 @@ fn integer_kind(type_name: &str) -> Option<AttributeKind> {
     }
 }
 
-/// Refuses a topology attribute (`curveVertexCounts`, a mesh's face lists, NURBS `order`)
-/// declared other than `int[]`, the schemas' type: pxr reads no value of another type from it
-/// (a `uint[]` or `int64[]` `curveVertexCounts` gives it no curves, a scalar `int` none either).
+/// Refuses a topology attribute (`curveVertexCounts`, a mesh's face lists, NURBS `order`, a
+/// primvar's `:indices`) declared other than `int[]`, the schemas' type: pxr reads no value of
+/// another type from it (a `uint[]` or `int64[]` `curveVertexCounts` gives it no curves, a
+/// scalar `int` none either; `int64[]` indices are "no indices authored").
 fn declared_int_array(attribute: &Attribute) -> std::result::Result<(), String> {
     // An `over` may leave the type to the layer that declares it.
     if attribute.type_name.is_empty() || (attribute.type_name == "int" && attribute.array) {
