@@ -160,6 +160,8 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
     for (label, recipe, culprit) in [
         ("rod 1e-6 m", format!("[[rods]]\nname = \"r\"\na = [0, 0.05, 0.1]\nb = [0.1, 0.05, 0.1]\nradius = 1e-6\n{wrap}"), "rod 'r'"),
         ("[head] size = 1e-5", format!("frame = \"head\"\n[head]\nsize = 1e-5\n{wrap}layout = \"rows\"\ndiameter = 0.24\nspacing = 0.4\n"), "[head] size"),
+        // As written: it said "size = 0.000000000000000000000000000001 m" and "the 0.00001 m".
+        ("[head] size = 1e-30", format!("frame = \"head\"\n[head]\nsize = 1e-30\n{wrap}layout = \"rows\"\ndiameter = 0.24\nspacing = 0.4\n"), "[head] size = 1e-30 m"),
     ] {
         cases.push(style_case(&format!("resolution for a {label}"), &recipe, hair, &[culprit, "max_segment"]));
     }
@@ -1243,6 +1245,8 @@ fn manifest_cases(hair: &[u8]) -> Vec<Case> {
     for (what, line, expected) in [
         ("units zero", "units = 0.0", "units = 0 must be"),
         ("units NaN", "units = nan", "units = NaN must be"),
+        // A groom collapsed to points, read before.
+        ("units 1e-30", "units = 1e-30", "units = 1e-30 must be"),
         ("frame 1e12", "frame = 1e12", "frame = 1e12 must be"),
         ("up x", "up = \"x\"", "unknown variant `x`"),
     ] {
@@ -1412,6 +1416,122 @@ fn all_cases() -> Vec<Case> {
     cases.extend(directory_cases(&inputs.hair));
     cases.extend(fuzz_found_cases(&inputs.hair));
     cases.extend(usdz_cases());
+    cases.extend(unit_and_type_cases(&inputs.hair));
+    cases
+}
+
+/// Units that collapse or blow up a groom, and numbers and types pxr refuses or cannot read:
+/// every one was read (exit 0) before.
+fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
+    let mut cases = Vec::new();
+    // At 1e-30 m per unit a 24 cm strand was 2.4e-31 m long, and 1e30 m per unit in a layer was
+    // read as well as 1e-40 (a denormal f32) given as a flag.
+    for units in ["1e-30", "1e-40", "1e-9", "1e4", "1e30"] {
+        let args = ["convert", "g.hair", "out.usda", "--units", units];
+        cases.push(case(
+            &format!("convert --units {units}"),
+            vec![("g.hair", hair.to_vec())],
+            &args,
+            2,
+            &["--units"],
+        ));
+        let header = format!("(\n    metersPerUnit = {units}\n)\n");
+        let file = vec![("in.usda", two_curves(&header, "").into_bytes())];
+        let names = ["in.usda", "metersPerUnit", "[1e-6, 1000]"];
+        cases.push(case(
+            &format!("metersPerUnit {units}"),
+            file,
+            &["convert", "in.usda", "out.usda"],
+            2,
+            &names,
+        ));
+    }
+    // pxr's number has no `+` prefix: `+1` is a syntax error in a point, a width or metadata.
+    let plus = [
+        ("point", two_curves("", "").replace("(1, 1, 0)", "(1, +1, 0)"), "'+1'"),
+        ("width", two_curves("", "float[] widths = [0.1, +0.1] (interpolation = \"uniform\")"), "'+0.1'"),
+        ("metersPerUnit", two_curves("(\n    metersPerUnit = +1\n)\n", ""), "+1"),
+    ];
+    for (what, text, culprit) in plus {
+        let file = vec![("in.usda", text.into_bytes())];
+        cases.push(case(
+            &format!("+ on a {what}"),
+            file,
+            &["convert", "in.usda", "out.usda"],
+            2,
+            &["in.usda", culprit],
+        ));
+    }
+    // An elementSize is an `int`: pxr refuses the layer for 1e12 or nan; coif took 1e12 as 1.
+    for (size, written) in [("1e12", "1e12"), ("nan", "NaN"), ("-3e9", "-3e9")] {
+        let text = two_curves(
+            "",
+            &format!("float[] primvars:x = [1, 2, 3, 4] (interpolation = \"vertex\"\n elementSize = {size})"),
+        );
+        let file = vec![("in.usda", text.into_bytes())];
+        let names = ["in.usda", "line 8", &format!("elementSize = {written} is not an int")];
+        cases.push(case(
+            &format!("elementSize {size}"),
+            file,
+            &["convert", "in.usda", "out.usda"],
+            2,
+            &names,
+        ));
+    }
+    // Indices declared int64[]: pxr has "no indices authored" and 2 values for 4 vertices.
+    let text = two_curves("", "float[] primvars:x = [1, 2] (interpolation = \"vertex\")\n    int64[] primvars:x:indices = [0, 1, 0, 1]");
+    let names = ["in.usda", "line 8", "'primvars:x:indices' is declared int64[]"];
+    cases.push(case(
+        "int64[] indices",
+        vec![("in.usda", text.into_bytes())],
+        &["convert", "in.usda", "out.usda"],
+        2,
+        &names,
+    ));
+    // Frames per second: 0 wrote no animation without a word, 1e-9 a timeline of 1e-9 codes a second.
+    for fps in ["0", "1e-9", "0.5"] {
+        let files = vec![("r.toml", BASE.as_bytes().to_vec()), ("g.hair", hair.to_vec())];
+        let args = ["style", "r.toml", "--groom", "g.hair", "-o", "out.usda", "--frames", fps];
+        cases.push(case(&format!("style --frames {fps}"), files, &args, 2, &["--frames", "[1, 10000]"]));
+    }
+    // Topology declared other than int[]: pxr's GetCurveCount and meshes read nothing from it.
+    for declared in [
+        "int64[] curveVertexCounts = [2, 2]",
+        "uint[] curveVertexCounts = [2, 2]",
+        "int curveVertexCounts = 4",
+    ] {
+        let text = two_curves("", "").replace("int[] curveVertexCounts = [2, 2]", declared);
+        let file = vec![("in.usda", text.into_bytes())];
+        let names = ["in.usda", "line 5", "'curveVertexCounts' is declared"];
+        cases.push(case(&format!("usda {declared}"), file, &["convert", "in.usda", "out.usda"], 2, &names));
+    }
+    let mesh = usda_with_mesh("[3]", "[0, 1, 2]", "(0, 0, 0), (1, 0, 0), (0, 1, 0)")
+        .replace("int[] faceVertexCounts", "uint[] faceVertexCounts");
+    let names = ["in.usda", "</head>", "'faceVertexCounts' is declared uint[]"];
+    cases.push(case(
+        "usda uint[] faceVertexCounts",
+        vec![("in.usda", mesh.into_bytes())],
+        &["convert", "in.usda", "out.usda"],
+        2,
+        &names,
+    ));
+    // The same layers written by pxr as crate files (tests/data/pxr_written_bad/make.py).
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/pxr_written_bad");
+    for (name, culprit) in [
+        ("counts_int64.usdc", "'curveVertexCounts' is declared int64[]"),
+        ("counts_uint.usdc", "'curveVertexCounts' is declared uint[]"),
+        ("counts_scalar.usdc", "'curveVertexCounts' is declared int;"),
+        ("meters_per_unit_1e-30.usdc", "metersPerUnit = 1e-30"),
+    ] {
+        let file = vec![(name, std::fs::read(folder.join(name)).unwrap())];
+        cases.push(case(
+            &format!("pxr-written {name}"),
+            file,
+            &["convert", name, "out.usda"],
+            2,
+            &[name, culprit],
+        ));
+    }
     cases
 }
 

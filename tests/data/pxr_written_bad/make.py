@@ -1,0 +1,25 @@
+# Writes the crate files beside it with pxr (run from the repository root with pxr's python):
+# layers coif must refuse as pxr reads them: curveVertexCounts declared int64[], uint[] or a
+# scalar int (pxr finds no curves), and metersPerUnit 1e-30 (outside coif's units).
+from pxr import Sdf
+def layer(meta, decl):
+    return f'''#usda 1.0
+(
+    metersPerUnit = {meta}
+)
+def BasisCurves "c"
+{{
+    uniform token type = "linear"
+    {decl}
+    point3f[] points = [(0, 0, 0), (0, 1, 0), (1, 0, 0), (1, 1, 0)]
+}}
+'''
+cases = {
+  'counts_int64.usdc': layer(1, 'int64[] curveVertexCounts = [2, 2]'),
+  'counts_uint.usdc': layer(1, 'uint[] curveVertexCounts = [2, 2]'),
+  'counts_scalar.usdc': layer(1, 'int curveVertexCounts = 4'),
+  'meters_per_unit_1e-30.usdc': layer('1e-30', 'int[] curveVertexCounts = [2, 2]'),
+}
+for name, text in cases.items():
+    l = Sdf.Layer.CreateAnonymous('x.usda'); l.ImportFromString(text)
+    l.Export('tests/data/pxr_written_bad/' + name)
