@@ -1522,6 +1522,14 @@ fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
         ("counts_uint.usdc", "'curveVertexCounts' is declared uint[]"),
         ("counts_scalar.usdc", "'curveVertexCounts' is declared int;"),
         ("meters_per_unit_1e-30.usdc", "metersPerUnit = 1e-30"),
+        (
+            "counts_int_holding_int64.usdc",
+            "</c.curveVertexCounts>: default: declared int[] but holds int64[] values",
+        ),
+        (
+            "counts_int_holding_uint.usdc",
+            "</c.curveVertexCounts>: default: declared int[] but holds uint[] values",
+        ),
     ] {
         let file = vec![(name, std::fs::read(folder.join(name)).unwrap())];
         cases.push(case(

@@ -37,8 +37,8 @@ pub(crate) fn run(cli: Cli) -> Result<()> {
                 let frames = match timeline {
                     Some(t) => format!(
                         "frames       {} to {} ({} frames at {} fps)\n",
-                        t.first,
-                        t.frame(t.frame_count() - 1),
+                        shortest(t.first),
+                        shortest(t.frame(t.frame_count() - 1)),
                         t.frame_count(),
                         shortest(t.frames_per_second)
                     ),

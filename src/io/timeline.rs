@@ -179,10 +179,13 @@ pub fn frame_at_time(path: &Path, seconds: f64, flag: &str) -> Result<f64> {
     if let Some(timeline) = read_timeline(path)? {
         if frame < timeline.first - 1e-6 {
             return Err(Error::Usage(format!(
-                "{}: {flag} {seconds} is frame {frame} at {rate} fps, before the file's first frame {} ({} s)",
+                "{}: {flag} {} is frame {} at {} fps, before the file's first frame {} ({} s)",
                 path.display(),
-                timeline.first,
-                timeline.first / rate
+                crate::validate::shortest(seconds),
+                crate::validate::shortest(frame),
+                crate::validate::shortest(rate),
+                crate::validate::shortest(timeline.first),
+                crate::validate::seconds_text(timeline.first / rate)
             )));
         }
     }

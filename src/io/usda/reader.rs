@@ -164,9 +164,11 @@ pub fn groom_from_layer_in(
             return Err(files.error(
                 first.site,
                 format!(
-                    "frame {at} is before the first time sample ({}) of '{}' and of everything else that \
+                    "frame {} is before the first time sample ({}) of '{}' and of everything else that \
                      places the groom",
-                    first.time, first.attribute
+                    crate::validate::shortest(at),
+                    crate::validate::shortest(first.time),
+                    first.attribute
                 ),
             ));
         }

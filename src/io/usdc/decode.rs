@@ -608,6 +608,10 @@ impl<'a> Crate<'a> {
     fn attribute(&self, name: String, spec: &Spec, time: Option<f64>) -> Checked<Attribute> {
         let keep = usda::wanted(&name);
         let mut attribute = Attribute { name, ..Default::default() };
+        let declared = match self.spec_fields(spec).find(|(field, _)| *field == "typeName") {
+            Some((_, value)) => Some(self.text(value).map_err(|e| format!("typeName: {e}"))?),
+            None => None,
+        };
         for (field, value) in self.spec_fields(spec) {
             let fail = |e: String| format!("{field}: {e}");
             match field {
@@ -620,6 +624,9 @@ impl<'a> Crate<'a> {
                 "interpolation" => attribute.interpolation = Some(self.text(value).map_err(fail)?),
                 "elementSize" => attribute.element_size = self.number(value).map_err(fail)?.map(|n| n as i64),
                 "default" => {
+                    if let Some(declared) = &declared {
+                        Self::held_as_declared(declared, value).map_err(fail)?;
+                    }
                     let in_file =
                         self.leave_in_file && matches!(attribute.name.as_str(), "points" | "widths");
                     attribute.default = Some(if !keep {
@@ -630,7 +637,9 @@ impl<'a> Crate<'a> {
                         self.value(value).map_err(fail)?
                     })
                 }
-                "timeSamples" if keep => attribute.samples = self.time_samples(value, time).map_err(fail)?,
+                "timeSamples" if keep => {
+                    attribute.samples = self.time_samples(value, time, declared.as_deref()).map_err(fail)?
+                }
                 _ => {}
             }
         }
@@ -683,7 +692,12 @@ impl<'a> Crate<'a> {
     }
 
     /// Time samples: the ones `time` needs (see [`usda::offer_sample`]), decoded.
-    fn time_samples(&self, value: u64, time: Option<f64>) -> Checked<Vec<(f64, Value)>> {
+    fn time_samples(
+        &self,
+        value: u64,
+        time: Option<f64>,
+        declared: Option<&str>,
+    ) -> Checked<Vec<(f64, Value)>> {
         if Self::kind(value)? != Type::TimeSamples || rep::is_inline(value) {
             return Err("expected time samples".into());
         }
@@ -713,9 +727,48 @@ impl<'a> Crate<'a> {
                 if Self::kind(sample)? == Type::TimeSamples {
                     return Err("time samples nested in time samples".into());
                 }
+                if let Some(declared) = declared {
+                    Self::held_as_declared(declared, sample)
+                        .map_err(|e| format!("the sample at {t}: {e}"))?;
+                }
                 Ok((t, self.value(sample)?))
             })
             .collect()
+    }
+
+    /// Refuses an integer-typed attribute's value stored as another type: a crate holds each
+    /// value with its own type, and pxr's typed reads find nothing in a `curveVertexCounts`
+    /// declared `int[]` that holds `int64[]` or `uint[]` values (no curves), nor in an `int`
+    /// primvar holding `int64`s; coif read them as if they were the declared type.
+    fn held_as_declared(declared: &str, value: u64) -> Checked<()> {
+        let (base, array) = match declared.strip_suffix("[]") {
+            Some(base) => (base, true),
+            None => (declared, false),
+        };
+        const INTEGERS: [(&str, Type); 9] = [
+            ("bool", Type::Bool),
+            ("uchar", Type::Uchar),
+            ("int", Type::Int),
+            ("uint", Type::Uint),
+            ("int64", Type::Int64),
+            ("uint64", Type::Uint64),
+            ("int2", Type::Vec2i),
+            ("int3", Type::Vec3i),
+            ("int4", Type::Vec4i),
+        ];
+        let Some(&(_, expected)) = INTEGERS.iter().find(|(name, _)| *name == base) else {
+            return Ok(());
+        };
+        let held = Self::kind(value)?;
+        if held == Type::ValueBlock || (held == expected && rep::is_array(value) == array) {
+            return Ok(());
+        }
+        let held_name =
+            INTEGERS.iter().find(|(_, t)| *t == held).map_or(format!("{held:?}"), |(n, _)| n.to_string());
+        let brackets = if rep::is_array(value) { "[]" } else { "" };
+        Err(format!(
+            "declared {declared} but holds {held_name}{brackets} values (pxr reads no value from it)"
+        ))
     }
 
     fn f64s(&self, value: u64) -> Checked<Vec<f64>> {

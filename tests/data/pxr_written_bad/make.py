@@ -23,3 +23,10 @@ cases = {
 for name, text in cases.items():
     l = Sdf.Layer.CreateAnonymous('x.usda'); l.ImportFromString(text)
     l.Export('tests/data/pxr_written_bad/' + name)
+# Declared int[] but holding another type's values (a crate keeps each value's own type; pxr's
+# typed reads find no curves in them).
+from pxr import Vt
+for name, held in [('int64', Vt.Int64Array([2, 2])), ('uint', Vt.UIntArray([2, 2]))]:
+    l = Sdf.Layer.CreateAnonymous('x.usda'); l.ImportFromString(layer(1, 'int[] curveVertexCounts = [2, 2]'))
+    l.GetAttributeAtPath('/c.curveVertexCounts').SetInfo('default', held)
+    l.Export(f'tests/data/pxr_written_bad/counts_int_holding_{name}.usdc')
