@@ -298,7 +298,11 @@ pub enum GroomError {
     TooFewVertices { strand: usize, count: usize },
     #[error("strand {strand}, vertex {vertex}: coordinate is not finite")]
     NonFinite { strand: usize, vertex: usize },
-    #[error("strand {strand}, segment {segment}: zero-length segment")]
+    #[error(
+        "strand {strand}, segment {segment}: zero-length segment (its points are within {} m: a \
+         duplicated point, or the file's units are another unit's)",
+        crate::validate::shortest(f64::from(MIN_SEGMENT_LENGTH))
+    )]
     ZeroLengthSegment { strand: usize, segment: usize },
     #[error(
         "strand {strand}, vertex {vertex}: width {} m (the file's units converted to metres) is negative \

@@ -1446,6 +1446,12 @@ fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
             &names,
         ));
     }
+    // A micrometre unit is allowed, but points 1e-4 units apart are 1e-10 m: a simulation was
+    // refused for a "zero-length segment" with no hint at the units.
+    let tiny = two_curves("(\n    metersPerUnit = 1e-6\n)\n", "").replace("(0, 1, 0)", "(0, 1e-4, 0)");
+    let args = ["simulate", "in.usda", "out.usda", "--seconds", "0.01"];
+    let names = ["in.usda", "zero-length segment", "within 1e-9 m", "units"];
+    cases.push(case("segments of 1e-10 m", vec![("in.usda", tiny.into_bytes())], &args, 2, &names));
     // pxr's number has no `+` prefix: `+1` is a syntax error in a point, a width or metadata.
     let plus = [
         ("point", two_curves("", "").replace("(1, 1, 0)", "(1, +1, 0)"), "'+1'"),
