@@ -1452,6 +1452,18 @@ fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
     let args = ["simulate", "in.usda", "out.usda", "--seconds", "0.01"];
     let names = ["in.usda", "zero-length segment", "within 1e-9 m", "units"];
     cases.push(case("segments of 1e-10 m", vec![("in.usda", tiny.into_bytes())], &args, 2, &names));
+    // A frame before the first sample, as written: it printed 5e-302 with 300 digits.
+    let slow = "#usda 1.0\n(\n    metersPerUnit = 1\n    timeCodesPerSecond = 1e-300\n)\ndef BasisCurves \"c\"\n{\n    \
+                uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    point3f[] points.timeSamples = {\n        \
+                1: [(0, 0, 0), (0, 1, 0)],\n        2: [(0, 0, 0), (0, 2, 0)],\n    }\n}\n";
+    let names = ["in.usda", "frame 5e-302 is before the first time sample (1)"];
+    cases.push(case(
+        "a frame of 5e-302",
+        vec![("in.usda", slow.into())],
+        &["info", "in.usda", "--time", "0.05"],
+        2,
+        &names,
+    ));
     // pxr's number has no `+` prefix: `+1` is a syntax error in a point, a width or metadata.
     let plus = [
         ("point", two_curves("", "").replace("(1, 1, 0)", "(1, +1, 0)"), "'+1'"),
