@@ -307,8 +307,8 @@ pub(crate) struct StyleArgs {
     /// Progress on stderr: auto (a bar on a terminal), log (plain lines with an ETA) or never.
     #[arg(long, value_enum, default_value_t)]
     pub(crate) progress: ProgressArg,
-    /// Also write the whole process as time samples, this many frames per simulated second
-    /// (USD or Alembic output).
+    /// Also write the whole process as time samples, this many frames per simulated second, 1 to
+    /// 10,000 (USD or Alembic output).
     #[arg(value_parser = number, long, value_name = "FPS")]
     pub(crate) frames: Option<f32>,
     /// Style only this curve group (a prim or object path, or its last name); repeatable. The
