@@ -11,7 +11,6 @@ use common::median;
 use std::path::Path;
 use std::time::Instant;
 
-
 use coif::generate::{generate, GenerateParams};
 use coif::style::{recipe, style, StyleOptions};
 
@@ -110,7 +109,8 @@ mod children {
         for preset in presets.split(',') {
             let path = format!("grooms/recipes/{preset}.toml");
             let text = std::fs::read_to_string(&path).unwrap();
-            let guided = recipe::parse(&format!("{text}\n[guides]\ncount = {GUIDES}\n"), Path::new(&path)).unwrap();
+            let guided =
+                recipe::parse(&format!("{text}\n[guides]\ncount = {GUIDES}\n"), Path::new(&path)).unwrap();
             let full = recipe::parse(&text, Path::new(&path)).unwrap();
             for (name, style_kind) in heads {
                 let unstyled = generate(&GenerateParams {
@@ -124,8 +124,14 @@ mod children {
                 .unwrap();
                 let styled = style(&unstyled, &guided, &StyleOptions::default()).unwrap().groom;
                 let flags = styled.guides.clone().unwrap();
-                let closest: Vec<u32> =
-                    styled.attribute(CLOSEST_GUIDES).unwrap().floats().iter().step_by(3).map(|&g| g as u32).collect();
+                let closest: Vec<u32> = styled
+                    .attribute(CLOSEST_GUIDES)
+                    .unwrap()
+                    .floats()
+                    .iter()
+                    .step_by(3)
+                    .map(|&g| g as u32)
+                    .collect();
                 let line = |what: &str, groom: &Groom| {
                     let m = Measures::of(&unstyled, groom, &flags, &closest);
                     println!(
@@ -169,7 +175,8 @@ mod children {
                 let p = styled.strand_points(s);
                 curl_radius(&p[p.len() * 2 / 5..])
             };
-            let radii = |guide: bool| median((0..strands).filter(|&s| flags[s] == guide).filter_map(curl).collect());
+            let radii =
+                |guide: bool| median((0..strands).filter(|&s| flags[s] == guide).filter_map(curl).collect());
             let children: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
             let root = |s: usize| unstyled.strand_points(s)[0];
             let mid = |g: &Groom, s: usize| g.strand_points(s)[g.strand_range(s).len() / 2];
