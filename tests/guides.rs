@@ -588,7 +588,7 @@ fn children_in_every_frame_stay_out_of_the_rods_their_guides_are_wound_on() {
 /// straight one) left children looser than their guides. The seam ratio compares neighbouring
 /// children bound to different first guides with neighbours bound to the same one, at mid-length
 /// (1 = no seam); measured (`cargo bench --bench guides -- children`): main 1.07 / 1.26, now
-/// 0.99 / 1.48, every strand simulated 1.12 / 1.07.
+/// 0.99 / 1.47, every strand simulated 1.12 / 1.07.
 #[test]
 fn children_curl_like_their_guides_on_curly_and_wavy_heads() {
     use coif::generate::Style;
