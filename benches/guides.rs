@@ -3,6 +3,9 @@
 //! to end (generate, style, interpolate, export USD). Prints wall seconds per phase and the peak
 //! resident memory. One run per configuration by default (each takes minutes on 2 cores);
 //! `COIF_BENCH_RUNS=3` for medians. `cargo bench --bench guides [-- FILTER]`.
+//!
+//! `cargo bench --bench guides -- children` measures instead how children look beside their
+//! guides on small curly, wavy and straight heads (see [`children`]).
 mod common;
 use common::median;
 use std::path::Path;
@@ -33,6 +36,9 @@ fn peak_rss_mb() -> Option<f64> {
 
 fn main() {
     let filter = std::env::args().skip(1).find(|a| !a.starts_with('-'));
+    if filter.as_deref() == Some("children") {
+        return children::run();
+    }
     let runs: usize = std::env::var("COIF_BENCH_RUNS").ok().and_then(|r| r.parse().ok()).unwrap_or(1);
     let mut recipe = recipe::load(Path::new("grooms/recipes/perm_full_head.toml")).unwrap();
     let out = tempfile::tempdir().unwrap();
@@ -63,5 +69,152 @@ fn main() {
             peak_rss_mb().unwrap_or(f64::NAN),
             runs
         );
+    }
+}
+
+/// Children beside their guides on small generated heads (curly, wavy, straight): styled through
+/// guides, and a control where every strand is simulated (what children should look like).
+/// Per head and preset it prints, for the guided run and the control:
+/// - curl: the children's median curl radius over the guides' (the rods' part of each strand,
+///   from 40 % of its length to the tip, as `tests/guides.rs` measures it), as a % difference;
+/// - no-collapse: the mean distance at mid-length between each child and its nearest (by root)
+///   child of the same first guide, styled over unstyled (issue 16 asks ≥ 0.5);
+/// - seam: the mean distance at mid-length between each child and its nearest (by root) child,
+///   over pairs bound to different first guides, divided by the same over pairs bound to the
+///   same one (1 = no seam where the guides change);
+/// - the largest change of a child's length, and child vertices inside the head.
+///
+/// The control uses the guided run's guide flags and bindings. `COIF_BENCH_CONTROL=0` skips it.
+mod children {
+    use std::path::Path;
+
+    use coif::analysis::curl_radius;
+    use coif::generate::{generate, GenerateParams, Style};
+    use coif::groom::Groom;
+    use coif::guides::CLOSEST_GUIDES;
+    use coif::head::Head;
+    use coif::style::{recipe, style, StyleOptions};
+
+    const STRANDS: usize = 300;
+    const GUIDES: usize = 30;
+
+    pub fn run() {
+        let control = std::env::var("COIF_BENCH_CONTROL").map_or(true, |v| v != "0");
+        let heads = [
+            ("curly", Style::Curly { radius: 0.01, pitch: 0.03 }),
+            ("wavy", Style::Wavy { amplitude: 0.008, wavelength: 0.06 }),
+            ("straight", Style::Straight),
+        ];
+        let presets = std::env::var("COIF_BENCH_PRESETS").unwrap_or("perm_full_head,water_set".into());
+        for preset in presets.split(',') {
+            let path = format!("grooms/recipes/{preset}.toml");
+            let text = std::fs::read_to_string(&path).unwrap();
+            let guided =
+                recipe::parse(&format!("{text}\n[guides]\ncount = {GUIDES}\n"), Path::new(&path)).unwrap();
+            let full = recipe::parse(&text, Path::new(&path)).unwrap();
+            for (name, style_kind) in heads {
+                let unstyled = generate(&GenerateParams {
+                    strands: STRANDS,
+                    vertices_per_strand: 32,
+                    length: 0.30,
+                    seed: 21,
+                    style: style_kind,
+                    ..GenerateParams::default()
+                })
+                .unwrap();
+                let styled = style(&unstyled, &guided, &StyleOptions::default()).unwrap().groom;
+                let flags = styled.guides.clone().unwrap();
+                let closest: Vec<u32> = styled
+                    .attribute(CLOSEST_GUIDES)
+                    .unwrap()
+                    .floats()
+                    .iter()
+                    .step_by(3)
+                    .map(|&g| g as u32)
+                    .collect();
+                let line = |what: &str, groom: &Groom| {
+                    let m = Measures::of(&unstyled, groom, &flags, &closest);
+                    println!(
+                        "{preset:<15} {name:<9} {what:<8} curl {:+6.1} % (guides {:.2} cm)   no-collapse {:.2}   \
+                         seam {:.2}   length change {:.2} %   inside head {}",
+                        100.0 * (m.children_curl / m.guides_curl - 1.0),
+                        100.0 * m.guides_curl,
+                        m.no_collapse,
+                        m.seam,
+                        100.0 * m.stretch,
+                        m.inside
+                    );
+                };
+                line("guided", &styled);
+                if control {
+                    line("control", &style(&unstyled, &full, &StyleOptions::default()).unwrap().groom);
+                }
+            }
+        }
+    }
+
+    struct Measures {
+        guides_curl: f32,
+        children_curl: f32,
+        no_collapse: f32,
+        seam: f32,
+        stretch: f32,
+        inside: usize,
+    }
+
+    fn median(mut values: Vec<f32>) -> f32 {
+        values.sort_by(f32::total_cmp);
+        values[values.len() / 2]
+    }
+
+    impl Measures {
+        /// `closest[s]`: the first guide of strand `s` (a guide names itself).
+        fn of(unstyled: &Groom, styled: &Groom, flags: &[bool], closest: &[u32]) -> Measures {
+            let strands = styled.strand_count();
+            let curl = |s: usize| {
+                let p = styled.strand_points(s);
+                curl_radius(&p[p.len() * 2 / 5..])
+            };
+            let radii =
+                |guide: bool| median((0..strands).filter(|&s| flags[s] == guide).filter_map(curl).collect());
+            let children: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
+            let root = |s: usize| unstyled.strand_points(s)[0];
+            let mid = |g: &Groom, s: usize| g.strand_points(s)[g.strand_range(s).len() / 2];
+            let nearest = |c: usize, same: bool| {
+                children
+                    .iter()
+                    .copied()
+                    .filter(|&o| o != c && (!same || closest[o] == closest[c]))
+                    .min_by(|&a, &b| root(a).distance(root(c)).total_cmp(&root(b).distance(root(c))))
+            };
+            let (mut before, mut after) = (0.0, 0.0);
+            let (mut across, mut within) = ((0.0, 0), (0.0, 0));
+            for &c in &children {
+                if let Some(n) = nearest(c, true) {
+                    before += mid(unstyled, c).distance(mid(unstyled, n));
+                    after += mid(styled, c).distance(mid(styled, n));
+                }
+                if let Some(n) = nearest(c, false) {
+                    let sum = if closest[n] == closest[c] { &mut within } else { &mut across };
+                    sum.0 += mid(styled, c).distance(mid(styled, n));
+                    sum.1 += 1;
+                }
+            }
+            let head = Head::default();
+            Measures {
+                guides_curl: radii(true),
+                children_curl: radii(false),
+                no_collapse: after / before,
+                seam: (across.0 / across.1 as f32) / (within.0 / within.1 as f32),
+                stretch: children
+                    .iter()
+                    .map(|&s| (styled.strand_length(s) / unstyled.strand_length(s) - 1.0).abs())
+                    .fold(0.0, f32::max),
+                inside: children
+                    .iter()
+                    .flat_map(|&s| styled.strand_points(s)[1..].iter().filter(|p| head.implicit(**p) < 1.0))
+                    .count(),
+            }
+        }
     }
 }

@@ -19,6 +19,8 @@ pub struct Curves {
     /// Fraction of length at each edge's middle (1 for the last vertex).
     middles: Vec<f32>,
     frames: Vec<Quat>,
+    /// Per vertex, how the strand turns there per unit length ([`strand_bends`]).
+    bends: Vec<Vec3>,
 }
 
 impl Curves {
@@ -31,13 +33,21 @@ impl Curves {
         let mut frames = vec![Quat::IDENTITY; points.len()];
         // Disjoint per-strand slices, filled in parallel.
         let mut frac_parts = split_mut(&mut fractions, &offsets);
+        let mut bends = vec![Vec3::ZERO; points.len()];
         let mut frame_parts = split_mut(&mut frames, &offsets);
-        frac_parts.par_iter_mut().zip(frame_parts.par_iter_mut()).enumerate().for_each(|(s, (fr, fm))| {
-            let p = &points[offsets[s] as usize..offsets[s + 1] as usize];
-            strand_fractions(p, fr);
-            let root = root_frames.map_or_else(|| initial_frame(p[1] - p[0]), |r| r[s]);
-            strand_frames(p, root, fm);
-        });
+        let mut bend_parts = split_mut(&mut bends, &offsets);
+        frac_parts
+            .par_iter_mut()
+            .zip(frame_parts.par_iter_mut())
+            .zip(bend_parts.par_iter_mut())
+            .enumerate()
+            .for_each(|(s, ((fr, fm), bd))| {
+                let p = &points[offsets[s] as usize..offsets[s + 1] as usize];
+                strand_fractions(p, fr);
+                let root = root_frames.map_or_else(|| initial_frame(p[1] - p[0]), |r| r[s]);
+                strand_frames(p, root, fm);
+                strand_bends(p, fm, bd);
+            });
         debug_assert_eq!(frac_parts.len(), strands);
         let middles = (0..points.len())
             .map(|i| match offsets.binary_search(&(i as u32 + 1)) {
@@ -45,7 +55,7 @@ impl Curves {
                 Err(_) => 0.5 * (fractions[i] + fractions[i + 1]),
             })
             .collect();
-        Curves { points, offsets, fractions, middles, frames }
+        Curves { points, offsets, fractions, middles, frames, bends }
     }
 
     /// Each guide's root frame after its first edge turned from `self`'s to `posed`'s by the
@@ -86,6 +96,17 @@ impl Curves {
         self.frames[range.start + j - 1].slerp(self.frames[range.start + j], t)
     }
 
+    /// The guide's frame at its root.
+    fn root_frame(&self, guide: usize) -> Quat {
+        self.frames[self.offsets[guide] as usize]
+    }
+
+    /// The guide's bend per unit length at fraction `u`, in its frame there.
+    fn bend(&self, guide: usize, u: f32) -> Vec3 {
+        let (i, t) = self.locate(guide, u);
+        self.bends[i].lerp(self.bends[i + 1], t)
+    }
+
     /// A per-vertex scalar of the guide (`values` indexed like the points) at fraction `u`.
     fn sample_scalar(&self, values: &[f32], components: usize, guide: usize, u: f32, out: &mut [f32]) {
         let (i, t) = self.locate(guide, u);
@@ -115,38 +136,136 @@ impl Children<'_> {
     }
 }
 
-/// The children's points after their guides moved from `before` to `after`: every edge of a
-/// child turns by its guides' frame rotations at the same fraction of length (weighted), keeps
-/// its length, and the edges are chained from the child's root. Curvature and twist follow
-/// the guides exactly; lengths are kept; a child whose shape differs from its guide's keeps
-/// that difference as a turned direction, never as an offset that could swing out.
+/// The children's points after their guides moved from `before` to `after`. A child's first
+/// edge turns by its guides' rotations at the root (weighted). Along the rest of it the child
+/// bends as its guides do after, less the part of their bend before that `after` kept, plus
+/// that kept part of its own bend before ([`kept_fraction`]): bends are read in each guide's
+/// transport frame, turned about the child's first edge into the child's frame, and chained from
+/// the child's root with the child's edge lengths. So a child curls with the curvature and twist
+/// of its guides' curls whatever the phase of its own input curl (a perm keeps only part of it),
+/// and keeps the part of its own shape the style kept.
 pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3> {
+    let kept = kept_fraction(children.bindings, before, after);
     let mut out = vec![Vec3::ZERO; children.points.len()];
     let mut parts = split_mut(&mut out, children.offsets);
     parts.par_iter_mut().enumerate().for_each(|(c, out)| {
         let start = children.offsets[c] as usize;
         let rest = &children.points[start..start + out.len()];
+        out[0] = rest[0];
+        if out.len() < 2 {
+            return;
+        }
         let fractions = children.fractions(c);
         let binding = &children.bindings[c];
-        out[0] = rest[0];
-        for k in 1..out.len() {
-            let edge = rest[k] - rest[k - 1];
-            let u = 0.5 * (fractions[k - 1] + fractions[k]);
-            let mut turned = Vec3::ZERO;
-            for (&g, &w) in binding.guides.iter().zip(&binding.weights) {
-                if w == 0.0 {
-                    continue;
-                }
-                let g = g as usize;
-                let rotation = after.frame(g, u) * before.frame(g, u).inverse();
-                turned += w * (rotation * edge);
-            }
-            // Guides turning opposite ways can cancel: keep the rest direction then.
-            let direction = turned.try_normalize().unwrap_or_else(|| edge.normalize());
-            out[k] = out[k - 1] + direction * edge.length();
+        let weighted = || binding.guides.iter().zip(&binding.weights).filter(|(_, &w)| w != 0.0);
+        let first = rest[1] - rest[0];
+        let u = 0.5 * fractions[1];
+        let turned: Vec3 = weighted()
+            .map(|(&g, &w)| w * (after.frame(g as usize, u) * before.frame(g as usize, u).inverse() * first))
+            .sum();
+        let tangent = turned.try_normalize().unwrap_or_else(|| first.normalize());
+        // The child's frames: after, its heaviest guide's root frame turned onto its first edge;
+        // before, that frame turned back onto its first edge before.
+        let heaviest = weighted().max_by(|a, b| a.1.total_cmp(b.1)).map_or(binding.guides[0], |(&g, _)| g);
+        let frame_after = aligned(after.root_frame(heaviest as usize), tangent);
+        let frame_before = Quat::from_rotation_arc(tangent, first.normalize()) * frame_after;
+        // Each guide's frame turned onto the child's first edge differs from the child's by a
+        // turn about that edge.
+        let to_child =
+            binding.guides.map(|g| frame_after.inverse() * aligned(after.root_frame(g as usize), tangent));
+        let mut frames = vec![Quat::IDENTITY; rest.len()];
+        let mut own = vec![Vec3::ZERO; rest.len()];
+        strand_frames(rest, frame_before, &mut frames);
+        strand_bends(rest, &frames, &mut own);
+        let mut frame = frame_after;
+        out[1] = out[0] + tangent * first.length();
+        for k in 1..out.len() - 1 {
+            let u = fractions[k];
+            let style = blend_bends(
+                binding
+                    .guides
+                    .iter()
+                    .zip(&binding.weights)
+                    .zip(&to_child)
+                    .filter(|((_, &w), _)| w != 0.0)
+                    .map(|((&g, &w), turn)| {
+                        (w, *turn * (after.bend(g as usize, u) - kept * before.bend(g as usize, u)))
+                    }),
+            );
+            let bend = style + kept * own[k];
+            let (previous, next) = (rest[k].distance(rest[k - 1]), rest[k + 1].distance(rest[k]));
+            frame = (frame * Quat::from_scaled_axis(bend * 0.5 * (previous + next))).normalize();
+            out[k + 1] = out[k] + frame * Vec3::X * next;
         }
     });
     out
+}
+
+/// The most a blend of bends is scaled up to the weighted mean of their sizes.
+const MAX_BEND_GAIN: f32 = 3.0;
+
+/// Weighted bends blended so that the child bends as much as its guides do: the weighted sum's
+/// direction, at the weighted mean of their sizes. Their plain sum cancels in part where guides
+/// curl in different phases and flattens the child's curl (median curl radius +15 % on a straight
+/// head, +35 % on a wavy one, 300 strands through 30 guides); where they nearly cancel the
+/// direction is uncertain, so the sum is scaled up at most [`MAX_BEND_GAIN`] times.
+fn blend_bends(weighted: impl Iterator<Item = (f32, Vec3)>) -> Vec3 {
+    let (mut sum, mut size) = (Vec3::ZERO, 0.0);
+    for (w, bend) in weighted {
+        sum += w * bend;
+        size += w * bend.length();
+    }
+    let length = sum.length();
+    if length > 0.0 {
+        sum * (size / length).min(MAX_BEND_GAIN)
+    } else {
+        sum
+    }
+}
+
+/// How much of the differences between neighbouring guides' bends before survives in their bends
+/// after, from 0 (the style sets the shape: a perm on rods) to 1 (the style adds to it: hair
+/// that only moved): the least-squares factor over pairs of guides that share a child, sampled
+/// along their length, each pair compared in the first guide's frames.
+pub fn kept_fraction(bindings: &[Binding], before: &Curves, after: &Curves) -> f32 {
+    const SAMPLES: usize = 32;
+    let pairs: std::collections::BTreeSet<(u32, u32)> = bindings
+        .iter()
+        .flat_map(|b| {
+            let first = b.guides[0];
+            b.guides
+                .iter()
+                .zip(&b.weights)
+                .filter(move |(&g, &w)| w != 0.0 && g != first)
+                .map(move |(&g, _)| (first.min(g), first.max(g)))
+        })
+        .collect();
+    let (mut along, mut across) = (0.0f64, 0.0f64);
+    for &(g, h) in &pairs {
+        let (g, h) = (g as usize, h as usize);
+        let to_g = |curves: &Curves| {
+            let root = curves.root_frame(g);
+            root.inverse() * aligned(curves.root_frame(h), root * Vec3::X)
+        };
+        let (before_h, after_h) = (to_g(before), to_g(after));
+        for j in 0..SAMPLES {
+            let u = (j as f32 + 0.5) / SAMPLES as f32;
+            let was = before.bend(g, u) - before_h * before.bend(h, u);
+            let is = after.bend(g, u) - after_h * after.bend(h, u);
+            along += was.dot(is) as f64;
+            across += was.length_squared() as f64;
+        }
+    }
+    if across > 0.0 {
+        (along / across).clamp(0.0, 1.0) as f32
+    } else {
+        1.0
+    }
+}
+
+/// `frame` turned by the smallest rotation that brings its x axis onto `tangent`.
+fn aligned(frame: Quat, tangent: Vec3) -> Quat {
+    (Quat::from_rotation_arc((frame * Vec3::X).normalize(), tangent) * frame).normalize()
 }
 
 /// A per-vertex attribute of the guides (`components` floats per vertex) carried to the
@@ -204,6 +323,26 @@ fn strand_frames(points: &[Vec3], root: Quat, out: &mut [Quat]) {
         previous_tangent = tangent;
     }
     out[n - 1] = out[n - 2];
+}
+
+/// Per vertex of a strand, the turn from the edge before it to the edge after it per unit length
+/// (the mean of the two edges' lengths), as a rotation vector in the frame of the edge before
+/// (`frames` from [`strand_frames`]); zero at the root and the tip. A frame turned by each bend
+/// times the length in turn, edge by edge, rebuilds the strand.
+fn strand_bends(points: &[Vec3], frames: &[Quat], out: &mut [Vec3]) {
+    let n = points.len();
+    out[0] = Vec3::ZERO;
+    out[n - 1] = Vec3::ZERO;
+    for i in 1..n - 1 {
+        let (a, b) = (points[i] - points[i - 1], points[i + 1] - points[i]);
+        let length = 0.5 * (a.length() + b.length());
+        out[i] = match (a.try_normalize(), b.try_normalize()) {
+            (Some(a), Some(b)) if length > 0.0 => {
+                frames[i - 1].inverse() * Quat::from_rotation_arc(a, b).to_scaled_axis() / length
+            }
+            _ => Vec3::ZERO,
+        };
+    }
 }
 
 /// Cuts `data` into the per-strand slices `offsets` describes.
