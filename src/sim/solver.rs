@@ -1,5 +1,5 @@
 //! The time stepper: per strand, rest shapes and forces (`begin_step`) → prediction → per
-//! iteration a direct solve of stretch–shear along the strand's free tail and a Gauss–Seidel
+//! iteration a direct solve of stretch–shear along the strand and a Gauss–Seidel
 //! sweep along the strand
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`; sweeps alternate
 //! direction) → velocity update. Lane groups of 8 strands run the same sequence in `lanes`.
@@ -568,5 +568,40 @@ fn finish_step_direct_lanes(
     }
     for s in views.iter_mut() {
         update_velocities(s, k);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stretches asked of a strand of 6 unit edges along x, its root and vertex 4 held: the
+    /// span between them is stretched only when its ends lie further apart than 0.98 of its rest
+    /// length (measured from the first edge's end when the root frame is pinned), the free tail
+    /// never.
+    #[test]
+    fn only_spans_held_taut_at_both_ends_are_stretched() {
+        let kinematic = [true, false, false, false, true, false, false];
+        let stretches = |held: Vec3, clamp: Option<Vec3>| {
+            let x = |v: usize| if v == 4 { held } else { Vec3::new(v as f32, 0.0, 0.0) };
+            let mut spans = HeldSpans::new(|v| kinematic[v], x, |_| 1.0, 6, clamp);
+            (0..6).map(|e| spans.stretch(e)).collect::<Vec<f32>>()
+        };
+        // Slack: 3.5 apart, rest length 4.
+        assert_eq!(stretches(Vec3::new(3.5, 0.0, 0.0), None), vec![1.0; 6]);
+        // Taut: 4.2 apart; edges 0–3 stretched to leave 2 % slack, the tail not.
+        let taut = stretches(Vec3::new(4.2, 0.0, 0.0), None);
+        let factor = 4.2 / (0.98 * 4.0);
+        assert!(taut[..4].iter().all(|&f| (f - factor).abs() < 1e-6), "{taut:?}");
+        assert_eq!(taut[4..], [1.0, 1.0]);
+        // A pinned root frame holding vertex 1 at (0, 1, 0): vertex 4 at (3, 1, 0) is 3 from it,
+        // the rest length after the first edge is 3, so edges 1–3 stretch by 1/0.98 and edge 0
+        // keeps its length.
+        let clamped = stretches(Vec3::new(3.0, 1.0, 0.0), Some(Vec3::new(0.0, 1.0, 0.0)));
+        assert_eq!(clamped[0], 1.0);
+        assert!(clamped[1..4].iter().all(|&f| (f - 1.0 / 0.98).abs() < 1e-6), "{clamped:?}");
+        // An edge between two held vertices is no span: nothing to stretch, however far apart.
+        let mut spans = HeldSpans::new(|v| v <= 1, |v| Vec3::new(5.0 * v as f32, 0.0, 0.0), |_| 1.0, 2, None);
+        assert_eq!([spans.stretch(0), spans.stretch(1)], [1.0, 1.0]);
     }
 }
