@@ -295,8 +295,8 @@ pub struct Scratch {
     lambda: Vec<V3>,
     inverse: Vec<S3>,
     values: Vec<V3>,
-    /// Per lane, the first edge of the free tail.
-    free_tail: [usize; LANES],
+    /// Per edge, the stretch the direct stretch–shear solve asks of it (`solver::HeldSpans`).
+    stretch: Vec<F>,
     edge_k: Vec<EdgeK>,
     pair_k: Vec<PairK>,
     /// One lane's positions, handed to the obstacle hook.
@@ -415,16 +415,29 @@ fn finish_step_impl(
         }
     }
 
-    for (l, st) in strands.iter().enumerate() {
-        s.free_tail[l] = super::solver::free_tail(st.kinematic);
-    }
-
     // Prediction.
     let dt_f = F::splat(dt);
     for i in 0..n {
         s.x_prev[i] = s.x[i];
         s.x[i] = V3::select(s.kinematic[i], s.target[i], s.x[i] + s.v[i].scale(dt_f));
         s.lambda[i] = V3::default();
+    }
+    // Kinematic vertices stay where the prediction put them for the whole step.
+    resize(&mut s.stretch, n);
+    for (l, st) in strands.iter().enumerate() {
+        let x = &s.x;
+        let clamp = (st.wq[0] == 0.0 && st.kinematic[0])
+            .then(|| x[0].get(l) + st.length[0] * super::constraints::director3(s.q[0].get(l)));
+        let mut spans = super::solver::HeldSpans::new(
+            |v| st.kinematic[v],
+            |v| x[v].get(l),
+            |e| st.length[e],
+            edges,
+            clamp,
+        );
+        for e in 0..edges {
+            s.stretch[e].0[l] = spans.stretch(e);
+        }
     }
     for iteration in 0..iterations {
         solve_stretch_shear(s, edges);
@@ -508,16 +521,14 @@ fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
     let one = F::splat(1.0);
     let w = &s.w;
     for e in 0..edges {
-        // Edges before the lane's free tail (`solver::free_tail`) are left out: μ = 0.
-        let in_tail = F(from_fn(|l| if e >= s.free_tail[l] { 1.0 } else { 0.0 }));
         let d = s.q[e].director3();
         let l = s.edge_k[e].length;
+        let target = l * s.stretch[e];
         let vertices = w[e] + w[e + 1];
         let frame = F::splat(4.0) * s.wq[e] * l * l;
         let mut block = S3::identity_minus_outer((vertices + frame) * F::splat(1.0 + 1e-6), frame, d);
-        let mut rhs = d.scale(l) - (s.x[e + 1] - s.x[e]);
+        let mut rhs = d.scale(target) - (s.x[e + 1] - s.x[e]);
         if e > 0 {
-            // Zero where the lane's tail starts at `e`: its vertex `e` is kinematic (w = 0).
             block = block.minus_scaled(s.inverse[e - 1], w[e] * w[e]);
             rhs = rhs + s.values[e - 1].scale(w[e]);
         }
@@ -525,7 +536,7 @@ fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
         let frame_only = S3::select(frame, S3::identity_minus_outer(inv_frame, inv_frame, d), S3::default());
         // Lanes where the block is not invertible compute a discarded inverse.
         let safe = S3::select(vertices, block, S3::identity_minus_outer(one, zero, d));
-        s.inverse[e] = S3::select(in_tail, S3::select(vertices, safe.inverse(), frame_only), S3::default());
+        s.inverse[e] = S3::select(vertices, safe.inverse(), frame_only);
         s.values[e] = s.inverse[e].times(rhs);
     }
     for e in (0..edges.saturating_sub(1)).rev() {
@@ -548,8 +559,7 @@ fn solve_stretch_shear(s: &mut Scratch, edges: usize) {
         let across = mu - d.scale(mu.dot(d));
         let dq = Q::pure(across).mul(q.times_e_bar());
         let turned = q.add_scaled(dq, -(F::splat(2.0) * s.wq[e] * s.edge_k[e].length)).normalize();
-        let turning = F(from_fn(|l| if e >= s.free_tail[l] { s.wq[e].0[l] } else { 0.0 }));
-        s.q[e] = Q::select(turning, turned, q);
+        s.q[e] = Q::select(s.wq[e], turned, q);
     }
 }
 

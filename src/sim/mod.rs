@@ -12,7 +12,7 @@
 //! * [`bonds`]: the four bond kinds, S1-15 rest shape, S1-16 breaking and re-forming.
 //! * [`cuticle`]: S1-13/14 stiffness gradient.
 //! * [`solver`]: the stepper: per iteration a direct (block-tridiagonal) solve of every edge's
-//!   stretch–shear along the strand's free tail, then Gauss–Seidel sweeps of stretch–shear and
+//!   stretch–shear along the strand, then Gauss–Seidel sweeps of stretch–shear and
 //!   bend–twist along each strand, alternating direction; strands in parallel. With
 //!   [`StrandSolver::Direct`] each iteration instead solves both constraints of the free tail
 //!   together (`strand_solve`, 6×6 blocks), and the sweeps cover only the held span before it.
@@ -36,12 +36,13 @@
 //! iterations, and strands hanging at Δt 1/30 stretched to 3× their length. Now the cantilever
 //! matches Euler–Bernoulli for its discrete clamp (half an edge out, see below) within 2 % for 2 mm
 //! to 3 cm segments at 5, 10 and 20 iterations, and hanging strands stretch 2e-6 at Δt 1/30
-//! (`cargo bench --bench accuracy`, `tests/sim_invariance.rs`). The solve covers the strand's
-//! free tail, from its last kinematic vertex to the tip: a span between two kinematic vertices
-//! (a root and a winding held on a curler rod) can be shorter than its gap, and hard constraints
-//! solved exactly would then pull it apart at metres per second; there the Gauss–Seidel sweep's
-//! bounded local projections leave a compromise, as before. Bend–twist stays Gauss–Seidel: the
-//! frame inertia is a conditioning parameter ([`SimParams::frame_inertia_factor`]), capped at
+//! (`cargo bench --bench accuracy`, `tests/sim_invariance.rs`). The solve covers the whole strand,
+//! spans held at both ends included (a root and a winding held on a curler rod): such a span can be
+//! shorter than its gap, and hard constraints solved exactly would then pull it apart at metres
+//! per second, so a span tauter than 0.98 of its rest length (`solver::HELD_SPAN_SLACK`) is
+//! stretched evenly for the solve; left to Gauss–Seidel it stretched under its load by an amount
+//! that depended on Δt, and the perm baked that into its rest curves. Bend–twist stays
+//! Gauss–Seidel: the frame inertia is a conditioning parameter ([`SimParams::frame_inertia_factor`]), capped at
 //! the bending compliance `α/Δt²`, which keeps the bend–twist system well conditioned (extra
 //! bend–twist sweeps change a cantilever's sag by < 1 %). Frames are quasi-static (no angular
 //! velocity): integrating frame angular velocities made resting curls creep.

@@ -1,5 +1,5 @@
 //! The time stepper: per strand, rest shapes and forces (`begin_step`) → prediction → per
-//! iteration a direct solve of stretch–shear along the strand's free tail and a Gauss–Seidel
+//! iteration a direct solve of stretch–shear along the strand and a Gauss–Seidel
 //! sweep along the strand
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`; sweeps alternate
 //! direction) → velocity update. Lane groups of 8 strands run the same sequence in `lanes`.
@@ -250,23 +250,28 @@ pub(crate) fn step_all(
 /// block Thomas elimination solves it in linear time. Gauss–Seidel alone carries a correction one
 /// edge per sweep, so under a load the strand keeps a stretch and a shear that shrink only like
 /// 1/iterations: finely cut strands sagged several times beam theory at 5 iterations and a strand
-/// hanging at Δt 1/30 stretched to three times its length.
+/// hanging at Δt 1/30 stretched to three times its length. The solve covers spans held at both
+/// ends too (a root and a winding on a curler, [`HeldSpans`]): left to Gauss–Seidel,
+/// such a span stretched under its load by an amount that depended on Δt and the iteration count,
+/// and the perm baked that into its rest curves.
 fn solve_stretch_shear(s: &mut Strand<'_>) {
     let edges = s.x.len() - 1;
-    let start = free_tail(s.kinematic);
-    s.values[..start].fill(Vec3::ZERO);
     let w: &[f32] = s.w;
+    let (x, kinematic, length) = (&*s.x, s.kinematic, s.length);
+    let clamp = (s.wq[0] == 0.0 && kinematic[0]).then(|| x[0] + length[0] * director3(s.q[0]));
+    let mut spans = HeldSpans::new(|v| kinematic[v], |v| x[v], |e| length[e], edges, clamp);
     // Forward elimination: P_e = B_e − w_e²·P_{e−1}⁻¹, z_e = P_e⁻¹·(−C_e + w_e·z_{e−1}).
-    for e in start..edges {
+    for e in 0..edges {
         let d = director3(s.q[e]);
-        let l = s.length[e];
+        let l = length[e];
+        let target = l * spans.stretch(e);
         let vertices = w[e] + w[e + 1];
         let frame = 4.0 * s.wq[e] * l * l;
         // A span held at both ends has no stretch mode of its own: a relative 1e-6 on the
         // diagonal keeps its pivot invertible without changing any solvable system measurably.
         let mut block = Sym3::identity_minus_outer((vertices + frame) * (1.0 + 1e-6), frame, d);
-        let mut rhs = (l * d) - (s.x[e + 1] - s.x[e]);
-        if e > start {
+        let mut rhs = (target * d) - (x[e + 1] - x[e]);
+        if e > 0 {
             block = block.minus_scaled(s.inverse[e - 1], w[e] * w[e]);
             rhs += w[e] * s.values[e - 1];
         }
@@ -282,16 +287,16 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
         s.values[e] = s.inverse[e].times(rhs);
     }
     // Back substitution: μ_e = z_e + w_{e+1}·P_e⁻¹·μ_{e+1}.
-    for e in (start..edges.saturating_sub(1)).rev() {
+    for e in (0..edges.saturating_sub(1)).rev() {
         s.values[e] += s.inverse[e].times(w[e + 1] * s.values[e + 1]);
     }
     // Δx_j = w_j·(μ_{j−1} − μ_j); each frame turns its d3 along the shear part of its μ.
-    for (j, &wj) in w.iter().enumerate().take(edges + 1).skip(start) {
+    for (j, &wj) in w.iter().enumerate().take(edges + 1) {
         let before = if j > 0 { s.values[j - 1] } else { Vec3::ZERO };
         let after = if j < edges { s.values[j] } else { Vec3::ZERO };
         s.x[j] += wj * (before - after);
     }
-    for e in start..edges {
+    for e in 0..edges {
         let wq = s.wq[e];
         if wq > 0.0 {
             let d = director3(s.q[e]);
@@ -303,10 +308,70 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
     }
 }
 
-/// The first edge of the strand's free tail: edges from the last kinematic vertex on. A span
-/// between two kinematic vertices (a root and a held winding) can be over-constrained — its rest
-/// length shorter than the gap — and a direct solve of hard constraints would then pull it
-/// apart at metres per second; Gauss–Seidel's bounded local projections leave it a compromise.
+/// How far apart the ends of a span held at both ends may be, as a share of its rest length,
+/// before the direct stretch–shear solve stretches its edges: a span pulled taut or beyond
+/// (winding targets pushed out of an obstacle) has no solution with its rest lengths, and a
+/// linearised solve of hard constraints nearly straight has a near-singular stretch mode.
+pub(super) const HELD_SPAN_SLACK: f32 = 0.98;
+
+/// Walks a strand's edges root to tip and tells for each the stretch the direct stretch–shear
+/// solve asks of it: 1, except in a span held at both ends (between two kinematic vertices with
+/// free ones between, like a root and the first vertex wound on a curler) whose ends lie further
+/// apart than [`HELD_SPAN_SLACK`] of its rest length, where every edge is stretched alike to
+/// leave it that slack. A pinned root frame fixes the first edge too, so a span from the root is
+/// measured from the first edge's end. Kinematic vertices and pinned frames do not move within a
+/// step, so every iteration gets the same factors.
+pub(super) struct HeldSpans<K, X, L> {
+    kinematic: K,
+    x: X,
+    length: L,
+    edges: usize,
+    /// The end of the first edge when the root frame is pinned.
+    root_clamp: Option<Vec3>,
+    /// The span the last edge asked about ends at this vertex; its edges from `from` on have
+    /// this stretch.
+    end: usize,
+    from: usize,
+    factor: f32,
+}
+
+impl<K: Fn(usize) -> bool, X: Fn(usize) -> Vec3, L: Fn(usize) -> f32> HeldSpans<K, X, L> {
+    /// A strand of `edges` edges: whether vertex `v` is kinematic and where it is, the rest
+    /// length of edge `e`, and where a pinned root frame holds the first edge's end.
+    pub(super) fn new(kinematic: K, x: X, length: L, edges: usize, root_clamp: Option<Vec3>) -> Self {
+        HeldSpans { kinematic, x, length, edges, root_clamp, end: 0, from: 0, factor: 1.0 }
+    }
+
+    /// The stretch of edge `e`; edges must be asked about in ascending order.
+    pub(super) fn stretch(&mut self, e: usize) -> f32 {
+        if e >= self.end {
+            // A span starts at vertex `e` and runs to the next kinematic vertex.
+            let end = (e + 1..=self.edges).find(|&v| (self.kinematic)(v)).unwrap_or(self.edges);
+            self.factor = 1.0;
+            let (from, start) = match self.root_clamp {
+                Some(clamp) if e == 0 => (1, clamp),
+                _ => (e, (self.x)(e)),
+            };
+            self.from = from;
+            if end >= from + 2 && (self.kinematic)(e) && (self.kinematic)(end) {
+                let gap = start.distance((self.x)(end));
+                let rest: f32 = (from..end).map(|k| (self.length)(k)).sum();
+                if gap > HELD_SPAN_SLACK * rest {
+                    self.factor = gap / (HELD_SPAN_SLACK * rest);
+                }
+            }
+            self.end = end;
+        }
+        if e >= self.from {
+            self.factor
+        } else {
+            1.0
+        }
+    }
+}
+
+/// The first edge of the strand's free tail: edges from the last kinematic vertex on, which the
+/// direct strand solve (`strand_solve`) covers; the span before it is left to Gauss–Seidel.
 pub(super) fn free_tail(kinematic: &[bool]) -> usize {
     kinematic.iter().rposition(|&k| k).unwrap_or(0).min(kinematic.len() - 1)
 }
@@ -503,5 +568,40 @@ fn finish_step_direct_lanes(
     }
     for s in views.iter_mut() {
         update_velocities(s, k);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stretches asked of a strand of 6 unit edges along x, its root and vertex 4 held: the
+    /// span between them is stretched only when its ends lie further apart than 0.98 of its rest
+    /// length (measured from the first edge's end when the root frame is pinned), the free tail
+    /// never.
+    #[test]
+    fn only_spans_held_taut_at_both_ends_are_stretched() {
+        let kinematic = [true, false, false, false, true, false, false];
+        let stretches = |held: Vec3, clamp: Option<Vec3>| {
+            let x = |v: usize| if v == 4 { held } else { Vec3::new(v as f32, 0.0, 0.0) };
+            let mut spans = HeldSpans::new(|v| kinematic[v], x, |_| 1.0, 6, clamp);
+            (0..6).map(|e| spans.stretch(e)).collect::<Vec<f32>>()
+        };
+        // Slack: 3.5 apart, rest length 4.
+        assert_eq!(stretches(Vec3::new(3.5, 0.0, 0.0), None), vec![1.0; 6]);
+        // Taut: 4.2 apart; edges 0–3 stretched to leave 2 % slack, the tail not.
+        let taut = stretches(Vec3::new(4.2, 0.0, 0.0), None);
+        let factor = 4.2 / (0.98 * 4.0);
+        assert!(taut[..4].iter().all(|&f| (f - factor).abs() < 1e-6), "{taut:?}");
+        assert_eq!(taut[4..], [1.0, 1.0]);
+        // A pinned root frame holding vertex 1 at (0, 1, 0): vertex 4 at (3, 1, 0) is 3 from it,
+        // the rest length after the first edge is 3, so edges 1–3 stretch by 1/0.98 and edge 0
+        // keeps its length.
+        let clamped = stretches(Vec3::new(3.0, 1.0, 0.0), Some(Vec3::new(0.0, 1.0, 0.0)));
+        assert_eq!(clamped[0], 1.0);
+        assert!(clamped[1..4].iter().all(|&f| (f - 1.0 / 0.98).abs() < 1e-6), "{clamped:?}");
+        // An edge between two held vertices is no span: nothing to stretch, however far apart.
+        let mut spans = HeldSpans::new(|v| v <= 1, |v| Vec3::new(5.0 * v as f32, 0.0, 0.0), |_| 1.0, 2, None);
+        assert_eq!([spans.stretch(0), spans.stretch(1)], [1.0, 1.0]);
     }
 }

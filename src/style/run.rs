@@ -338,6 +338,27 @@ impl Winding {
     }
 }
 
+/// Where the line from `root` touches the circle of `radius` around `axis` (both relative to
+/// the circle's centre, in the plane across `axis`), on the side away from `head`: the unit
+/// direction to that point, and the winding direction (±1 about `axis`) that carries the strand on
+/// from the root around the circle. `None` when the root lies inside the circle.
+fn outer_tangent(root: Vec3, axis: Vec3, radius: f32, head: Vec3) -> Option<(Vec3, f32)> {
+    let across = root - axis * root.dot(axis);
+    let distance = across.length();
+    if distance <= radius * (1.0 + 1e-3) {
+        return None;
+    }
+    let u = across / distance;
+    let v = axis.cross(u);
+    let (cos, sin) = (radius / distance, (1.0 - (radius / distance).powi(2)).sqrt());
+    let touch = |side: f32| cos * u + side * sin * v;
+    let side = if touch(1.0).dot(head) <= touch(-1.0).dot(head) { 1.0 } else { -1.0 };
+    let e1 = touch(side);
+    // The strand arrives along the tangent, `e1·radius − root`, and winds on the same way.
+    let arriving = e1 * radius - across;
+    Some((e1, if arriving.dot(axis.cross(e1)) >= 0.0 { 1.0 } else { -1.0 }))
+}
+
 /// Where a recipe obstacle is during a style.
 #[derive(Clone, Copy, Debug)]
 enum ObstaclePose {
@@ -359,6 +380,8 @@ struct Session {
     sim: Simulation,
     /// Unit direction from the head centre to each strand's root (for masks).
     root_dirs: Vec<Vec3>,
+    /// The head's centre (world): curlers are wound on their side away from it.
+    head_center: Vec3,
     /// The rotation from coif's head axes (X side, Y up, Z front) to the head's: what is random
     /// in a direction is drawn in the head's axes, so a turned groom gets the same style.
     head_rotation: Quat,
@@ -469,6 +492,7 @@ impl Session {
             recipe,
             sim,
             root_dirs,
+            head_center: placed.mask_center,
             head_rotation: placed.mask_rotation,
             obstacles,
             poses,
@@ -971,22 +995,38 @@ impl Session {
             let Some((_, r, mut first)) = best else { continue };
             let Shape::Capsule { a, b, radius } = self.rods[r] else { unreachable!("rods are capsules") };
             let axis = (b - a).normalize();
-            // Feet on the rod's cylinder, and directions away from its axis (not from a foot on
-            // an end cap, which would tilt the helix into the cap).
+            // Directions away from the rod's axis (not from a foot on an end cap, which would tilt
+            // the helix into the cap).
             let length = a.distance(b);
-            let foot = |p: Vec3| a + axis * (p - a).dot(axis).clamp(0.0, length);
             let away = |p: Vec3| {
                 let d = p - a;
                 (d - axis * d.dot(axis)).try_normalize().unwrap_or_else(|| axis.any_orthonormal_vector())
             };
-            let on_rod = |v: usize| foot(positions[v]) + away(positions[v]) * (radius + self.radii[v]);
+            // The winding starts where the line from the root touches the rod on its outer side
+            // (away from the head) and turns on from there: where it starts and which way it
+            // turns depend on the root and the rod alone. Taken from the strand's pre-wound shape
+            // (the side of the rod it passes, the way it heads there) they were coin flips for a
+            // strand hanging through the rod near its axis, and a flip moved its tip by the
+            // curl's diameter between runs at different Δt.
+            let root = range.start;
+            let along = (positions[first] - a).dot(axis).clamp(0.0, length);
+            let centre = a + axis * along;
+            let winding_radius = radius + self.radii[first];
+            let (e1, turn) =
+                outer_tangent(positions[root] - centre, axis, winding_radius, self.head_center - centre)
+                    .unwrap_or_else(|| {
+                        // A root inside the winding circle: the side and the way the strand heads.
+                        let e1 = away(positions[first]);
+                        let heading = positions[(first + 1).min(range.end - 1)] - positions[first];
+                        (e1, if heading.dot(axis.cross(e1)) >= 0.0 { 1.0 } else { -1.0 })
+                    });
+            let contact = centre + e1 * winding_radius;
             // The free part between root and rod must reach the rod: start winding further
             // along the strand until its rest length spans the gap (else the vertices between
             // a pinned root and a held winding are pulled apart and shake).
-            let root = range.start;
             while first + 1 < range.end {
                 let slack: f32 = self.sim.rods().rest_lengths()[root..first].iter().sum();
-                if positions[root].distance(on_rod(first)) <= 0.95 * slack {
+                if positions[root].distance(contact) <= 0.95 * slack {
                     break;
                 }
                 first += 1;
@@ -994,13 +1034,7 @@ impl Session {
             if first + 1 >= range.end {
                 continue; // only the tip reaches the rod: nothing to wind
             }
-            let winding_radius = radius + self.radii[first];
-            let along = (positions[first] - a).dot(axis).clamp(0.0, length);
-            let e1 = away(positions[first]);
             let e2 = axis.cross(e1);
-            // Wind the way the strand already heads, and advance along the rod towards its middle.
-            let heading = positions[first + 1] - positions[first];
-            let turn = if heading.dot(e2) >= 0.0 { 1.0 } else { -1.0 };
             let advance = if along < 0.5 * length { 1.0 } else { -1.0 };
             // Turns a few hair widths apart: a tight, nearly planar curl.
             let pitch = 8.0 * self.radii[first];
