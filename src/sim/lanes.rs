@@ -426,8 +426,13 @@ fn finish_step_impl(
     resize(&mut s.stretch, n);
     for (l, st) in strands.iter().enumerate() {
         let x = &s.x;
-        let clamp = (st.wq[0] == 0.0 && st.kinematic[0])
-            .then(|| x[0].get(l) + st.length[0] * super::constraints::director3(s.q[0].get(l)));
+        let clamp = super::solver::pinned_first_edge_end(
+            st.kinematic[0],
+            st.wq[0],
+            x[0].get(l),
+            st.length[0],
+            s.q[0].get(l),
+        );
         let mut spans = super::solver::HeldSpans::new(
             |v| st.kinematic[v],
             |v| x[v].get(l),

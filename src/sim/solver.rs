@@ -258,7 +258,7 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
     let edges = s.x.len() - 1;
     let w: &[f32] = s.w;
     let (x, kinematic, length) = (&*s.x, s.kinematic, s.length);
-    let clamp = (s.wq[0] == 0.0 && kinematic[0]).then(|| x[0] + length[0] * director3(s.q[0]));
+    let clamp = pinned_first_edge_end(kinematic[0], s.wq[0], x[0], length[0], s.q[0]);
     let mut spans = HeldSpans::new(|v| kinematic[v], |v| x[v], |e| length[e], edges, clamp);
     // Forward elimination: P_e = B_e − w_e²·P_{e−1}⁻¹, z_e = P_e⁻¹·(−C_e + w_e·z_{e−1}).
     for e in 0..edges {
@@ -313,6 +313,18 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
 /// (winding targets pushed out of an obstacle) has no solution with its rest lengths, and a
 /// linearised solve of hard constraints nearly straight has a near-singular stretch mode.
 pub(super) const HELD_SPAN_SLACK: f32 = 0.98;
+
+/// Where a pinned root frame (a kinematic root whose frame does not turn) holds the end of the
+/// first edge, for [`HeldSpans::new`]; `None` when the root frame is free.
+pub(super) fn pinned_first_edge_end(
+    kinematic_root: bool,
+    root_wq: f32,
+    root: Vec3,
+    first_length: f32,
+    root_frame: Quat,
+) -> Option<Vec3> {
+    (kinematic_root && root_wq == 0.0).then(|| root + first_length * director3(root_frame))
+}
 
 /// Walks a strand's edges root to tip and tells for each the stretch the direct stretch–shear
 /// solve asks of it: 1, except in a span held at both ends (between two kinematic vertices with
