@@ -13,7 +13,8 @@ pub enum Error {
     Format { path: PathBuf, message: String },
 
     /// The groom read fine but breaks an invariant of the groom model; `origin` says which curve
-    /// of which prim or object the strand at fault is ([`crate::Groom::strand_origin`]).
+    /// of which prim or object the strand at fault is ([`crate::Groom::strand_origin`]), or how
+    /// the file was read ([`Error::read_at_units`]).
     #[error("{path}: {source}{}", origin.as_ref().map_or(String::new(), |o| format!(" ({o})")))]
     InvalidGroom {
         path: PathBuf,
@@ -62,6 +63,20 @@ impl Error {
         match self {
             Error::Groom(source) => Error::InvalidGroom { path: path.to_path_buf(), source, origin: None },
             other => other,
+        }
+    }
+
+    /// An error from working on a groom read at `units` (metres per unit, given as `key`: the
+    /// flag or the manifest's key): a size no hair has names them, as they may have scaled the
+    /// strands there.
+    pub fn read_at_units(self, key: &str, units: Option<f32>) -> Self {
+        match (self, units) {
+            (Error::InvalidGroom { path, source, origin }, Some(units)) if source.is_a_size() => {
+                let flag = format!("read at {key} {}", crate::validate::shortest(f64::from(units)));
+                let origin = Some(origin.map_or(flag.clone(), |o| format!("{o}; {flag}")));
+                Error::InvalidGroom { path, source, origin }
+            }
+            (other, _) => other,
         }
     }
 

@@ -350,6 +350,11 @@ pub enum GroomError {
         crate::validate::shortest(f64::from(*coordinate))
     )]
     TooFar { strand: usize, vertex: usize, coordinate: f32, max: f32 },
+    #[error(
+        "strand {strand} is {length:.2} m long, longer than the {max} m a hair is simulated at (the longest \
+         on record is 5.6 m); are the file's units another unit's?"
+    )]
+    TooLong { strand: usize, length: f32, max: f32 },
     #[error("{what} has {found} entries, expected {expected}")]
     Length { what: String, expected: usize, found: usize },
     #[error("attribute '{name}' has {components} components; 1 to 4 are allowed")]
@@ -364,6 +369,19 @@ pub enum GroomError {
 }
 
 impl GroomError {
+    /// Whether the error is a size no hair has (a width, length or distance), which the units
+    /// the file was read in may explain.
+    pub fn is_a_size(&self) -> bool {
+        matches!(
+            self,
+            GroomError::ZeroLengthSegment { .. }
+                | GroomError::TooWide { .. }
+                | GroomError::TooThin { .. }
+                | GroomError::TooFar { .. }
+                | GroomError::TooLong { .. }
+        )
+    }
+
     /// The strand at fault, for the errors that name one.
     pub fn strand(&self) -> Option<usize> {
         match *self {
@@ -373,7 +391,8 @@ impl GroomError {
             | GroomError::BadWidth { strand, .. }
             | GroomError::TooWide { strand, .. }
             | GroomError::TooThin { strand, .. }
-            | GroomError::TooFar { strand, .. } => Some(strand),
+            | GroomError::TooFar { strand, .. }
+            | GroomError::TooLong { strand, .. } => Some(strand),
             _ => None,
         }
     }

@@ -376,6 +376,12 @@ fn mesh_cases(hair: &[u8]) -> Vec<Case> {
         mesh_case("mesh band nan", cube, "band = nan", &["line 1", "band"]),
         mesh_case("mesh face index", &cube.replace("f 2 3 4", "f 2 3 9"), "", &["m.obj"]),
         mesh_case("mesh no faces", "v 0 0 0\n", "", &["m.obj", "no triangles"]),
+        // A line tobj cannot read was not named ("position parse error", no line).
+        mesh_case("mesh bad number", &cube.replace("v 0 1 0", "v 0 x 0"), "", &["m.obj: line 3 ('v 0 x 0')"]),
+        // Triangles without area (all corners on a line, or on a point) were a mesh with no
+        // surface, exit 0.
+        mesh_case("mesh collinear", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "", &["m.obj", "no area"]),
+        mesh_case("mesh one point", "v 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\n", "", &["m.obj", "no area"]),
         mesh_case("mesh binary", "\u{0}\u{1}\u{2}garbage", "", &["m.obj"]),
         // An empty path was the recipe's folder: ": No such file or directory", no key named.
         style_case("mesh path empty", &recipe("").replace("m.obj", ""), hair, &["line 1", "path = \"\""]),
@@ -392,6 +398,13 @@ fn mesh_cases(hair: &[u8]) -> Vec<Case> {
             let mut c = style_case("--scalp flat", &recipe, hair, &["flat.obj:", "scalp mesh"]);
             c.args.extend(["--scalp".into(), "flat.obj".into()]);
             c.files.push(("flat.obj".into(), flat.as_bytes().to_vec()));
+            c
+        },
+        // A world-frame recipe with a scalp of no area: read and collided with, exit 0.
+        {
+            let mut c = style_case("--scalp collinear", BASE, hair, &["line.obj: the mesh has no area"]);
+            c.args.extend(["--scalp".into(), "line.obj".into()]);
+            c.files.push(("line.obj".into(), b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n".to_vec()));
             c
         },
     ]
@@ -1452,6 +1465,27 @@ fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
     let args = ["simulate", "in.usda", "out.usda", "--seconds", "0.01"];
     let names = ["in.usda", "zero-length segment", "within 1e-9 m", "units"];
     cases.push(case("segments of 1e-10 m", vec![("in.usda", tiny.into_bytes())], &args, 2, &names));
+    // A groom of 24 cm strands read at --units 1000 (a kilometre a unit) was styled as 240 m
+    // strands, each resampled to thousands of segments: refused naming the flag; a file's own
+    // 20 m strand (in metres) is refused too, naming its strand.
+    let files = || vec![("g.hair", hair.to_vec()), ("r.toml", BASE.as_bytes().to_vec())];
+    for (args, names) in [
+        (
+            &["style", "r.toml", "--groom", "g.hair", "-o", "out.usda", "--units", "1000"][..],
+            &["g.hair: strand 0 is 240.00 m long", "10 m", "(read at --units 1000)"][..],
+        ),
+        (
+            &["style", "r.toml", "--groom", "g.hair", "-o", "out.usda", "--units", "100", "--guides", "2"],
+            &["g.hair: strand 0 is 24.00 m long", "(read at --units 100)"],
+        ),
+        (&["simulate", "g.hair", "out.hair", "--units", "1000"], &["strand 0 is 240.00 m", "--units 1000"]),
+    ] {
+        cases.push(case(&format!("240 m strands: {}", args.join(" ")), files(), args, 2, names));
+    }
+    let long = two_curves("(\n    metersPerUnit = 1\n)\n", "").replace("(1, 1, 0)", "(1, 20, 0)");
+    let args = ["simulate", "in.usda", "out.usda", "--seconds", "0.01"];
+    let names = ["in.usda: strand 1 is 20.00 m long"];
+    cases.push(case("a 20 m strand", vec![("in.usda", long.into_bytes())], &args, 2, &names));
     // A frame before the first sample, as written: it printed 5e-302 with 300 digits.
     let slow = "#usda 1.0\n(\n    metersPerUnit = 1\n    timeCodesPerSecond = 1e-300\n)\ndef BasisCurves \"c\"\n{\n    \
                 uniform token type = \"linear\"\n    int[] curveVertexCounts = [2]\n    point3f[] points.timeSamples = {\n        \

@@ -177,7 +177,9 @@ pub fn run(task: &Task) -> Result<Outcome> {
     let groom = &loaded.groom;
     // A task's stderr is its log (logs/NAME.log, the scheduler's output file): plain lines.
     let options = StyleOptions { progress: crate::progress::ProgressMode::Log, ..Default::default() };
-    let styled = style(groom, &recipe, &options).map_err(|e| e.in_file(&task.groom))?;
+    let styled = style(groom, &recipe, &options).map_err(|e| {
+        e.in_file(&task.groom).read_at_units("the manifest's units =", task.import.meters_per_unit)
+    })?;
     // The log says what the report would: a farm's artist reads it, not the JSON.
     let unsettled = styled.report.unconverged_settle();
     // Required, an unconverged settle is the task's error instead.

@@ -98,7 +98,7 @@ fn run_style(args: StyleArgs) -> Result<()> {
     }
     .map_err(|e| match (e, &args.scalp) {
         (e @ Error::Groom(coif::groom::GroomError::ScalpNotFitted), Some(scalp)) => e.in_file(scalp),
-        (e, _) => e.in_file(&args.groom),
+        (e, _) => e.in_file(&args.groom).read_at_units("--units", args.import.units),
     })?;
     let (groom, report) = (&styled.groom, &styled.report);
     let warnings = io::write_animated(
@@ -247,7 +247,8 @@ fn run_simulate(args: SimulateArgs) -> Result<()> {
         colliders,
         hair_contacts,
     };
-    let (groom, summary) = simulate(&loaded.groom, &options).map_err(|e| e.in_file(&args.input))?;
+    let (groom, summary) = simulate(&loaded.groom, &options)
+        .map_err(|e| e.in_file(&args.input).read_at_units("--units", args.import.units))?;
     let unsettled = summary.settle.and_then(|settle| settle.shortfall());
     for warning in loaded.warnings.iter().chain(&summary.warnings) {
         eprintln!("coif: warning: {warning}");

@@ -29,9 +29,14 @@ pub const MIN_WIDTH: f32 = 1e-6;
 /// overflow to infinity within a step. Such a file is in another unit, or broken.
 pub const MAX_COORDINATE: f32 = 1e3;
 
+/// The longest strand simulated, metres: the longest human hair on record is 5.6 m, a horse's
+/// tail a few metres. A strand of tens of metres is a file in another unit (a 24 cm groom read
+/// at `--units 1000` was styled as 240 m strands, resampled to thousands of segments each).
+pub const MAX_LENGTH: f32 = 10.0;
+
 /// Refuses a groom the rods cannot represent: a strand wider than [`MAX_WIDTH`] or thinner than
-/// [`MIN_WIDTH`] (but not 0), or a vertex farther than [`MAX_COORDINATE`] from the origin on an
-/// axis, naming the first. Styling checks the groom as it was read, so that the strand named is
+/// [`MIN_WIDTH`] (but not 0), a vertex farther than [`MAX_COORDINATE`] from the origin on an
+/// axis, or a strand longer than [`MAX_LENGTH`], naming the first. Styling checks the groom as it was read, so that the strand named is
 /// the file's (not a resampled vertex or the index of a guide among guides).
 pub fn check_simulable(groom: &Groom) -> Result<(), GroomError> {
     if let Some(i) = groom.widths.iter().position(|&w| w > MAX_WIDTH) {
@@ -46,6 +51,12 @@ pub fn check_simulable(groom: &Groom) -> Result<(), GroomError> {
         let (strand, vertex) = groom.strand_and_vertex(i);
         let coordinate = groom.points[i].abs().max_element();
         return Err(GroomError::TooFar { strand, vertex, coordinate, max: MAX_COORDINATE });
+    }
+    for strand in 0..groom.strand_count() {
+        let length: f32 = groom.strand_points(strand).windows(2).map(|s| s[0].distance(s[1])).sum();
+        if length > MAX_LENGTH {
+            return Err(GroomError::TooLong { strand, length, max: MAX_LENGTH });
+        }
     }
     Ok(())
 }
