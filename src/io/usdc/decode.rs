@@ -736,16 +736,19 @@ impl<'a> Crate<'a> {
             .collect()
     }
 
-    /// Refuses an integer-typed attribute's value stored as another type: a crate holds each
-    /// value with its own type, and pxr's typed reads find nothing in a `curveVertexCounts`
-    /// declared `int[]` that holds `int64[]` or `uint[]` values (no curves), nor in an `int`
-    /// primvar holding `int64`s; coif read them as if they were the declared type.
+    /// Refuses a number-typed attribute's value stored as another type: a crate holds each value
+    /// with its own type, and pxr's typed reads find nothing in a `curveVertexCounts` declared
+    /// `int[]` that holds `int64[]` or `uint[]` values (no curves), in `points` declared
+    /// `point3f[]` holding `double3[]` or `half3[]` (no points), in `widths` declared `float[]`
+    /// holding `double[]` or `half[]` (no widths: the extent pxr computes leaves them out); coif
+    /// read them as if they were the declared type.
     fn held_as_declared(declared: &str, value: u64) -> Checked<()> {
         let (base, array) = match declared.strip_suffix("[]") {
             Some(base) => (base, true),
             None => (declared, false),
         };
-        const INTEGERS: [(&str, Type); 9] = [
+        // Each type's own name first (the name a held value is given), then its roles'.
+        const NUMBERS: [(&str, Type); 43] = [
             ("bool", Type::Bool),
             ("uchar", Type::Uchar),
             ("int", Type::Int),
@@ -755,8 +758,42 @@ impl<'a> Crate<'a> {
             ("int2", Type::Vec2i),
             ("int3", Type::Vec3i),
             ("int4", Type::Vec4i),
+            ("half", Type::Half),
+            ("float", Type::Float),
+            ("double", Type::Double),
+            ("half2", Type::Vec2h),
+            ("half3", Type::Vec3h),
+            ("half4", Type::Vec4h),
+            ("float2", Type::Vec2f),
+            ("float3", Type::Vec3f),
+            ("float4", Type::Vec4f),
+            ("double2", Type::Vec2d),
+            ("double3", Type::Vec3d),
+            ("double4", Type::Vec4d),
+            ("quath", Type::Quath),
+            ("quatf", Type::Quatf),
+            ("quatd", Type::Quatd),
+            ("matrix2d", Type::Matrix2d),
+            ("matrix3d", Type::Matrix3d),
+            ("matrix4d", Type::Matrix4d),
+            ("frame4d", Type::Matrix4d),
+            ("point3h", Type::Vec3h),
+            ("point3f", Type::Vec3f),
+            ("point3d", Type::Vec3d),
+            ("normal3h", Type::Vec3h),
+            ("normal3f", Type::Vec3f),
+            ("normal3d", Type::Vec3d),
+            ("vector3h", Type::Vec3h),
+            ("vector3f", Type::Vec3f),
+            ("vector3d", Type::Vec3d),
+            ("color3f", Type::Vec3f),
+            ("color3d", Type::Vec3d),
+            ("color4f", Type::Vec4f),
+            ("texCoord2h", Type::Vec2h),
+            ("texCoord2f", Type::Vec2f),
+            ("texCoord2d", Type::Vec2d),
         ];
-        let Some(&(_, expected)) = INTEGERS.iter().find(|(name, _)| *name == base) else {
+        let Some(&(_, expected)) = NUMBERS.iter().find(|(name, _)| *name == base) else {
             return Ok(());
         };
         let held = Self::kind(value)?;
@@ -764,7 +801,7 @@ impl<'a> Crate<'a> {
             return Ok(());
         }
         let held_name =
-            INTEGERS.iter().find(|(_, t)| *t == held).map_or(format!("{held:?}"), |(n, _)| n.to_string());
+            NUMBERS.iter().find(|(_, t)| *t == held).map_or(format!("{held:?}"), |(n, _)| n.to_string());
         let brackets = if rep::is_array(value) { "[]" } else { "" };
         Err(format!(
             "declared {declared} but holds {held_name}{brackets} values (pxr reads no value from it)"
