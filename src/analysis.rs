@@ -26,7 +26,9 @@ pub fn mean_curvature(points: &[Vec3]) -> f32 {
 
 /// Radius of the curl a polyline makes: the points are projected on the plane across the curl's
 /// axis (the mean binormal, which for a helix points along its axis) and a circle is fitted to
-/// them by least squares (Kåsa). `None` for a polyline too short or too straight to tell.
+/// them by least squares (Kåsa). `None` for a polyline too short or too straight to tell: one
+/// whose fitted circle turns less than [`STRAIGHT_TURN`] along its length (a straight strand's
+/// rounding errors fitted a radius of 10¹⁰ m).
 pub fn curl_radius(points: &[Vec3]) -> Option<f32> {
     if points.len() < 4 {
         return None;
@@ -55,8 +57,13 @@ pub fn curl_radius(points: &[Vec3]) -> Option<f32> {
     }
     let [d, e, f] = solve3(m, rhs)?;
     let r2 = (d * d + e * e) / 4.0 - f;
-    (r2 > 0.0).then(|| r2.sqrt() as f32)
+    let length: f64 = p.windows(2).map(|w| w[0].distance(w[1])).sum();
+    (r2 > 0.0 && length > STRAIGHT_TURN * r2.sqrt()).then(|| r2.sqrt() as f32)
 }
+
+/// The turn, radians, below which a strand's curl is no curl: a hundredth of a radian along a
+/// 24 cm strand is a radius of 24 m.
+pub const STRAIGHT_TURN: f64 = 0.01;
 
 #[allow(clippy::needless_range_loop)] // index loops read clearest for Gaussian elimination
 fn solve3(mut m: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
@@ -207,6 +214,15 @@ mod tests {
         assert!((r - 0.05).abs() < 1e-4, "{r}");
         let straight: Vec<Vec3> = (0..10).map(|i| Vec3::X * i as f32).collect();
         assert_eq!(curl_radius(&straight), None);
+        // Straight but for f32 rounding (a generated strand, resampled): no curl of 10¹⁰ m.
+        let rounded: Vec<Vec3> = (0..100)
+            .map(|i| Vec3::new(0.013, 0.101, -0.047) + Vec3::new(0.3, -0.9, 0.1) * (0.0024 * i as f32))
+            .collect();
+        assert_eq!(curl_radius(&rounded), None);
+        // An arc of 0.02 rad is a curl; one of 0.005 rad is not.
+        let r = curl_radius(&helix(10.0, 0.0, 0.02 / std::f32::consts::TAU, 30)).unwrap();
+        assert!((r - 10.0).abs() < 0.5, "{r}");
+        assert_eq!(curl_radius(&helix(10.0, 0.0, 0.005 / std::f32::consts::TAU, 30)), None);
     }
 
     #[test]

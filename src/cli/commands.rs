@@ -129,7 +129,10 @@ fn run_style(args: StyleArgs) -> Result<()> {
         }));
     } else {
         for stage in &report.stages {
-            let cm = |radius: Option<f32>| radius.map_or("-".to_string(), |r| format!("{:.2} cm", r * 100.0));
+            // No median curl: the strands are straight (or too short to tell).
+            let cm = |radius: Option<f32>| {
+                radius.map_or("straight".to_string(), |r| format!("{:.2} cm", r * 100.0))
+            };
             let (curl, rest_curl) = (cm(stage.curl_radius), cm(stage.rest_curl_radius));
             let b = &stage.bond_rates;
             eprintln!(
@@ -295,9 +298,10 @@ fn run_render(args: RenderArgs) -> Result<()> {
     io::check_output_directory(&args.output)?;
     let (width, height) = render::parse_resolution(&args.res)?;
     coif::limits::check_render(width, height, args.spp, args.time_budget.is_some())?;
+    // Checked whatever the mode: `--range nan,1` with `--mode depth` was dropped without a word.
+    let range = args.range.as_deref().map(render::parse_range).transpose()?;
     let mode = match (args.mode, &args.attribute) {
         (RenderMode::Beauty | RenderMode::Attribute, Some(name)) => {
-            let range = args.range.as_deref().map(render::parse_range).transpose()?;
             Mode::Attribute { name: name.clone(), range }
         }
         (RenderMode::Attribute, None) => {
