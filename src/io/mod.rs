@@ -340,19 +340,17 @@ fn check_contents(groom: &Groom, path: &Path) -> Result<()> {
         }
         if let Some(index) = data.iter().position(|v| !v.is_finite()) {
             let element = index / attribute.components.max(1);
-            let (rate, strand) = match attribute.rate {
-                crate::groom::AttributeRate::Strand => ("strand", element),
-                crate::groom::AttributeRate::Vertex => (
-                    "vertex",
-                    groom.strand_offsets.partition_point(|&o| o as usize <= element).saturating_sub(1),
-                ),
+            let place = match attribute.rate {
+                crate::groom::AttributeRate::Strand => format!("strand {element}"),
+                crate::groom::AttributeRate::Vertex => {
+                    let strand =
+                        groom.strand_offsets.partition_point(|&o| o as usize <= element).saturating_sub(1);
+                    format!("vertex {element} (strand {strand})")
+                }
             };
             return Err(Error::format(
                 path,
-                format!(
-                    "attribute '{}': {rate} {element} (strand {strand}) has a non-finite value {}",
-                    attribute.name, data[index]
-                ),
+                format!("attribute '{}': {place} has a non-finite value {}", attribute.name, data[index]),
             ));
         }
     }
