@@ -208,7 +208,7 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) attribute: Option<String>,
     /// Value range mapped to blue..red, lo,hi (default: 0,1 for values in [0, 1], else min,max).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, requires = "attribute")]
     pub(crate) range: Option<String>,
     /// Hair colour as linear RGB r,g,b in [0, 1] (default: the groom's `color`, else brown).
     #[arg(long)]

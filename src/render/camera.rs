@@ -61,6 +61,11 @@ impl FromStr for CameraSpec {
         }
         let position = Vec3::new(values[0], values[1], values[2]);
         let target = Vec3::new(values[3], values[4], values[5]);
+        // Where a shot's camera may be (a camera 1e30 m out rendered an empty image, exit 0).
+        for (what, point) in [("position", position), ("target", target)] {
+            crate::validate::vector(what, point.into(), crate::validate::COORDINATE)
+                .map_err(|m| Error::Usage(format!("--camera '{text}': {m} (metres)")))?;
+        }
         if position.distance(target) < 1e-6 {
             return Err(Error::Usage(format!("--camera '{text}': position and target coincide")));
         }
