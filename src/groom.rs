@@ -344,6 +344,10 @@ pub enum GroomError {
     /// The file's guide bindings (`groom_closest_guides`, `groom_guide_weights`) are unusable.
     #[error("{0}")]
     Binding(String),
+    /// The guides asked for do not fit the groom: more than its strands, or children beyond
+    /// their reach.
+    #[error("{0}")]
+    Guides(String),
     #[error(
         "strand {strand}, vertex {vertex}: a coordinate of {} m is beyond the {max} m from the origin \
          a groom is simulated in; are the file's units another unit's?",

@@ -115,13 +115,14 @@ pub fn bind(
         .collect();
     for (&(_, nearest), &strand) in bindings.iter().zip(children) {
         if nearest > reach {
-            return Err(Error::Usage(format!(
+            // The groom's error: the command names its file.
+            return Err(Error::Groom(crate::groom::GroomError::Guides(format!(
                 "strand {strand}: its nearest guide is {nearest:.4} m away, beyond the reach of {} m \
                  ({} guides for {} children); add guides or raise [guides] reach",
                 crate::validate::shortest(reach.into()),
                 guide_roots.len(),
                 child_roots.len()
-            )));
+            ))));
         }
     }
     Ok(bindings.into_iter().map(|(b, _)| b).collect())

@@ -70,17 +70,19 @@ impl GuideSpec {
                 return Err(Error::Usage(format!("[guides] fraction = {f}: must be in (0, 1]")))
             }
             (None, None) => {
-                return Err(Error::Usage(
+                return Err(Error::Groom(crate::groom::GroomError::Guides(
                     "[guides] gives neither count nor fraction, and the groom has no guides of its own: \
                      give one"
                         .into(),
-                ))
+                )))
             }
         };
         if count == 0 || count > strands {
-            return Err(Error::Usage(format!(
-                "[guides] asks for {count} guides, but the groom has {strands} strands (1 to {strands} allowed)"
-            )));
+            // The groom's error: the command names its file.
+            return Err(Error::Groom(crate::groom::GroomError::Guides(format!(
+                "[guides] (or --guides) asks for {count} guides, but the groom has {strands} strands \
+                 (1 to {strands} allowed)"
+            ))));
         }
         Ok(count)
     }
