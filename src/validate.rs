@@ -186,3 +186,43 @@ mod tests {
         assert_eq!((shortest(1e-6f32.into()), shortest(8e-8)), ("1e-6".into(), "8e-8".into()));
     }
 }
+
+/// Reads a TOML array of exactly three numbers, as every vector of a recipe or shot is: toml's
+/// own reading of a `[f32; 3]` in a plain table stops after the third element (`gravity = [0,
+/// -9.8, 0, 5]` was read as [0, -9.8, 0], and three million elements were walked past unread).
+pub fn three<'de, D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<[f32; 3], D::Error> {
+    struct Three;
+    impl<'de> serde::de::Visitor<'de> for Three {
+        type Value = [f32; 3];
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("an array of 3 numbers")
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(
+            self,
+            mut seq: A,
+        ) -> std::result::Result<[f32; 3], A::Error> {
+            let mut value = [0.0; 3];
+            for (i, component) in value.iter_mut().enumerate() {
+                *component = seq.next_element()?.ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+            }
+            let mut length = 3;
+            while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                length += 1;
+            }
+            match length {
+                3 => Ok(value),
+                _ => Err(serde::de::Error::invalid_length(length, &self)),
+            }
+        }
+    }
+    deserializer.deserialize_seq(Three)
+}
+
+/// [`three`] for a vector that may be left out.
+pub fn optional_three<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> std::result::Result<Option<[f32; 3]>, D::Error> {
+    #[derive(serde::Deserialize)]
+    struct Three(#[serde(deserialize_with = "three")] [f32; 3]);
+    Ok(<Option<Three> as serde::Deserialize>::deserialize(deserializer)?.map(|Three(value)| value))
+}

@@ -171,8 +171,11 @@ struct SceneFile {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraTable {
+    #[serde(deserialize_with = "crate::validate::three")]
     position: [f32; 3],
+    #[serde(deserialize_with = "crate::validate::three")]
     target: [f32; 3],
+    #[serde(default, deserialize_with = "crate::validate::optional_three")]
     up: Option<[f32; 3]>,
     fov: Option<f32>,
 }
@@ -181,27 +184,36 @@ struct CameraTable {
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 enum LightTable {
     Distant {
+        #[serde(deserialize_with = "crate::validate::three")]
         direction: [f32; 3],
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         color: Option<[f32; 3]>,
         intensity: Option<f32>,
         angle: Option<f32>,
     },
     Rect {
+        #[serde(deserialize_with = "crate::validate::three")]
         position: [f32; 3],
+        #[serde(deserialize_with = "crate::validate::three")]
         target: [f32; 3],
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         up: Option<[f32; 3]>,
         width: f32,
         height: f32,
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         color: Option<[f32; 3]>,
         intensity: Option<f32>,
     },
     Sphere {
+        #[serde(deserialize_with = "crate::validate::three")]
         position: [f32; 3],
         radius: f32,
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         color: Option<[f32; 3]>,
         intensity: Option<f32>,
     },
     Dome {
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         color: Option<[f32; 3]>,
         intensity: Option<f32>,
     },
@@ -216,6 +228,7 @@ struct FloorTable {
     enabled: Option<bool>,
     height: Option<f32>,
     size: Option<f32>,
+    #[serde(default, deserialize_with = "crate::validate::optional_three")]
     albedo: Option<[f32; 3]>,
 }
 

@@ -54,6 +54,7 @@ pub struct Settings {
     /// Solver iterations per step (Table 1: 5).
     pub iterations: u32,
     /// m/s², Y up.
+    #[serde(deserialize_with = "crate::validate::three")]
     pub gravity: [f32; 3],
     /// Young's modulus of hair, Pa (bending); coif's rods use physical moduli (XPBD), so the
     /// look does not change with `dt` or `iterations`.
@@ -209,8 +210,11 @@ pub const MAX_HEAD_UNITS: f32 = 8.0;
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HeadSpec {
+    #[serde(default, deserialize_with = "crate::validate::optional_three")]
     pub center: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "crate::validate::optional_three")]
     pub up: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "crate::validate::optional_three")]
     pub front: Option<[f32; 3]>,
     pub size: Option<f32>,
     /// A `shape = "mesh"` obstacle that is the scalp: the frame is fitted to it.
@@ -226,7 +230,9 @@ pub enum Obstacle {
     /// groom's roots along the head's axes.
     Head {
         name: String,
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         center: Option<[f32; 3]>,
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         radii: Option<[f32; 3]>,
         frame: Option<Frame>,
     },
@@ -242,6 +248,7 @@ pub enum Obstacle {
     },
     Sphere {
         name: String,
+        #[serde(deserialize_with = "crate::validate::three")]
         center: [f32; 3],
         radius: f32,
         frame: Option<Frame>,
@@ -249,14 +256,18 @@ pub enum Obstacle {
     /// A floor: the half-space below the plane.
     Plane {
         name: String,
+        #[serde(deserialize_with = "crate::validate::three")]
         point: [f32; 3],
+        #[serde(deserialize_with = "crate::validate::three")]
         normal: [f32; 3],
         frame: Option<Frame>,
     },
     /// A box along the frame's axes: a pillow, a table.
     Box {
         name: String,
+        #[serde(deserialize_with = "crate::validate::three")]
         center: [f32; 3],
+        #[serde(deserialize_with = "crate::validate::three")]
         half_extents: [f32; 3],
         frame: Option<Frame>,
     },
@@ -301,7 +312,9 @@ impl Obstacle {
 pub struct Rod {
     pub name: String,
     /// The rod's two end centres, metres.
+    #[serde(deserialize_with = "crate::validate::three")]
     pub a: [f32; 3],
+    #[serde(deserialize_with = "crate::validate::three")]
     pub b: [f32; 3],
     pub radius: f32,
     #[serde(default)]
@@ -367,7 +380,9 @@ pub enum Layout {
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DryerSpec {
+    #[serde(deserialize_with = "crate::validate::three")]
     pub position: [f32; 3],
+    #[serde(deserialize_with = "crate::validate::three")]
     pub target: [f32; 3],
     /// α of S1-17, m/s².
     pub strength: f32,
@@ -450,7 +465,7 @@ pub enum Stage {
         obstacle: String,
         #[serde(default = "default_travel")]
         travel: f32,
-        #[serde(default)]
+        #[serde(default, deserialize_with = "crate::validate::optional_three")]
         direction: Option<[f32; 3]>,
     },
     /// Let go of rods and withdraw the pressed obstacles.
@@ -820,6 +835,16 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
                             return fail(why);
                         }
                     }
+                }
+                // Each listed rod is an obstacle of every vertex: a million "r" took 14 s a step.
+                // (Found within the first 1001 entries, as a recipe has at most 1000 rods.)
+                if let Some((second, twice)) = rods.iter().enumerate().find(|(i, r)| rods[..*i].contains(r)) {
+                    let first = rods.iter().position(|r| r == twice).unwrap_or(0);
+                    return fail(format!(
+                        "rods lists '{twice}' twice (entries {} and {})",
+                        first + 1,
+                        second + 1
+                    ));
                 }
                 if let Some(missing) =
                     rods.iter().find(|r| !recipe.rods.iter().any(|x| &x.get_ref().name == *r))
