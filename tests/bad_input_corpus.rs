@@ -141,7 +141,22 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         "[guides] reach alone, no guides in the groom",
         recipe,
         hair,
-        &["neither", "no guides of its own"],
+        &["g.hair: [guides] gives neither", "no guides of its own"],
+    ));
+    // Guides that do not fit the groom: the groom's file was not named.
+    let recipe = "[guides]\ncount = 2\nreach = 0.001\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
+    cases.push(style_case(
+        "[guides] reach shorter than the children's distance",
+        recipe,
+        hair,
+        &["g.hair: strand 1: its nearest guide is", "beyond the reach of 0.001 m"],
+    ));
+    let recipe = "[guides]\ncount = 7\n\n[[stages]]\nkind = \"process\"\nduration = 0.01\n";
+    cases.push(style_case(
+        "[guides] count above the strands",
+        recipe,
+        hair,
+        &["g.hair: [guides] (or --guides) asks for 7 guides, but the groom has 6 strands"],
     ));
     for value in ["0", "nan", "-1", "1e4"] {
         let recipe = format!(
@@ -318,6 +333,42 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         hair,
         &["simulation steps", "--max-steps"],
     ));
+    // Vectors of more than three numbers in a plain table: read as their first three, exit 0
+    // (three million numbers were walked past); a wrap listing one rod a million times made a
+    // million obstacles (14 s a step).
+    for (name, recipe, culprit) in [
+        (
+            "gravity of 4",
+            format!("[settings]\ngravity = [0, -9.8, 0, 5]\n{}", BASE.replace("[settings]\n", "")),
+            "line 2",
+        ),
+        ("head center of 4", format!("[head]\ncenter = [0, 0, 0, 1]\n{BASE}"), "line 2"),
+        (
+            "rod end of 4",
+            format!(
+                "[[rods]]\nname = \"r\"\na = [0, 0.05, 0.1, 4]\nb = [0.1, 0.05, 0.1]\nradius = 0.01\n{BASE}"
+            ),
+            "line 3",
+        ),
+    ] {
+        cases.push(style_case(
+            name,
+            &recipe,
+            hair,
+            &["r.toml", culprit, "invalid length 4, expected an array of 3 numbers"],
+        ));
+    }
+    let names = vec!["\"r\""; 1000].join(", ");
+    let recipe = format!(
+        "[[rods]]\nname = \"r\"\na = [0, 0.05, 0.1]\nb = [0.1, 0.05, 0.1]\nradius = 0.01\n\
+         [[stages]]\nkind = \"wrap\"\nduration = 0.01\nrods = [{names}]\n"
+    );
+    cases.push(style_case(
+        "a rod listed 1000 times",
+        &recipe,
+        hair,
+        &["r.toml", "line 6", "rods lists 'r' twice (entries 1 and 2)"],
+    ));
     // Text that is not a recipe.
     cases.push(style_case("not UTF-8", "", hair, &["r.toml", "UTF-8"]));
     cases.last_mut().unwrap().files[0].1 = b"[settings]\ndt = 0.1\n\xff\xfe\n".to_vec();
@@ -455,6 +506,15 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["render", "g.hair", "-o", "out.png", "--fov", "175"], &["--fov", "(0.5, 170)"]),
         (&["render", "g.hair", "-o", "out.png", "--camera", "0,0,1,0,0,0,175"], &["--camera", "(0.5, 170)"]),
     ];
+    // A shot's camera of four numbers was read as its first three.
+    let shot = b"[camera]\nposition = [0, 0.1, 1.5, 9]\ntarget = [0, 0, 0]\n".to_vec();
+    cases.push(case(
+        "shot camera position of 4",
+        vec![("g.hair", hair.to_vec()), ("s.toml", shot)],
+        &["render", "g.hair", "-o", "out.png", "--scene", "s.toml", "--res", "8x8"],
+        2,
+        &["s.toml", "invalid length 4, expected an array of 3 numbers"],
+    ));
     for (args, culprits) in as_written {
         cases.push(case(&format!("{args:?}"), g(), args, 2, culprits));
     }
@@ -471,6 +531,15 @@ fn cli_cases(hair: &[u8]) -> Vec<Case> {
         (&["--color", "2,0,0"], "--color"),
         (&["--light-dir", "0,0,0"], "--light-dir"),
         (&["--light-dir", "nan,1,0"], "--light-dir"),
+        // A camera a shot may not have: 1e30 m out rendered an empty image, exit 0.
+        (
+            &["--camera", "1e30,0,0,0,0,0"],
+            "--camera '1e30,0,0,0,0,0': position = [1e30, 0, 0] must have finite components in [-1000, 1000]",
+        ),
+        (&["--camera", "0,1,1,0,0,-2000"], "target = [0, 0, -2000]"),
+        // A false-colour range that is none, or given with nothing to colour: ignored, exit 0.
+        (&["--range", "nan,1"], "--range"),
+        (&["--range", "1,0", "--attribute", "wetness", "--mode", "depth"], "--range '1,0'"),
         (&["--fov", "0"], "--fov"),
         (&["--width-scale", "nan"], "--width-scale"),
         (&["--spp", "0"], "--spp"),
@@ -955,6 +1024,21 @@ fn file_cases(inputs: &Inputs) -> Vec<Case> {
     for (label, closest, weights, expected) in [
         ("weights sum to 0.5", "(0, 0, 0)", "(0.5, 0, 0)", "sum to 0.5"),
         ("a binding names a missing guide", "(7, 7, 7)", "(1, 0, 0)", "groom_id 7"),
+        // It read "strand 1 (strand 1)".
+        (
+            "a weight is NaN",
+            "(0, 0, 0)",
+            "(nan, 0, 0)",
+            "'groom_guide_weights': strand 1 has a non-finite value NaN",
+        ),
+        ("a weight is negative", "(0, 0, 0)", "(1.5, -0.5, 0)", "groom_guide_weights has weight -0.5"),
+        // Strand 1 is a child (groom_guide 0): no guide has its id.
+        (
+            "a binding names a child",
+            "(1, 0, 0)",
+            "(1, 0, 0)",
+            "groom_id 1 with weight 1, but none of the groom's 1 guides",
+        ),
     ] {
         let text = format!(
             "#usda 1.0\n(\n  metersPerUnit = 1\n)\ndef BasisCurves \"c\" {{\n  uniform token type = \"linear\"\n  int[] curveVertexCounts = [2, 2, 2]\n  \
@@ -1482,6 +1566,17 @@ fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
     ] {
         cases.push(case(&format!("240 m strands: {}", args.join(" ")), files(), args, 2, names));
     }
+    // Blender's Alembic groom at --units 1000: 390 m strands 4 to 8 cm wide, all within the
+    // widths and coordinates the rods take (styled, exit 0).
+    let blender =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender_groom.abc")).unwrap();
+    cases.push(case(
+        "Blender's groom at --units 1000",
+        vec![("b.abc", blender), ("r.toml", BASE.as_bytes().to_vec())],
+        &["style", "r.toml", "--groom", "b.abc", "-o", "out.usda", "--units", "1000"],
+        2,
+        &["b.abc: strand 0 is", "m long", "(read at --units 1000)"],
+    ));
     let long = two_curves("(\n    metersPerUnit = 1\n)\n", "").replace("(1, 1, 0)", "(1, 20, 0)");
     let args = ["simulate", "in.usda", "out.usda", "--seconds", "0.01"];
     let names = ["in.usda: strand 1 is 20.00 m long"];
@@ -1581,6 +1676,16 @@ fn unit_and_type_cases(hair: &[u8]) -> Vec<Case> {
         (
             "counts_int_holding_uint.usdc",
             "</c.curveVertexCounts>: default: declared int[] but holds uint[] values",
+        ),
+        // Floats of another float type were converted: pxr reads no widths or points from them.
+        (
+            "widths_float_holding_double.usdc",
+            "</c.widths>: default: declared float[] but holds double[] values",
+        ),
+        ("widths_float_holding_half.usdc", "</c.widths>: default: declared float[] but holds half[] values"),
+        (
+            "points_point3f_holding_double3.usdc",
+            "</c.points>: default: declared point3f[] but holds double3[] values",
         ),
     ] {
         let file = vec![(name, std::fs::read(folder.join(name)).unwrap())];

@@ -393,6 +393,25 @@ fn strands_of_one_segment_report_intact_bonds() {
     }
 }
 
+#[test]
+fn straight_strands_report_no_curl() {
+    // Two straight strands hanging under gravity: rounding fitted curls of 7 km (rest: 2e13 m),
+    // printed as 709602.00 cm (rest 2161727772819456.00 cm).
+    let dir = tempfile::tempdir().unwrap();
+    let strands: Vec<Vec<Vec3>> =
+        (0..2).map(|s| (0..7).map(|v| Vec3::new(0.01 * s as f32, -0.04 * v as f32, 0.0)).collect()).collect();
+    let groom = dir.path().join("straight.usda");
+    coif::io::write_groom(&groom, &Groom::from_strands(&strands, 80e-6)).unwrap();
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(&recipe, "[[stages]]\nkind = \"process\"\nduration = 0.01\n").unwrap();
+    let report = style(&recipe, &groom, &dir.path().join("out.usda"));
+    let stage = &report["report"]["stages"][0];
+    assert!(stage["curl_radius"].is_null() && stage["rest_curl_radius"].is_null(), "{stage}");
+    let out = dir.path().join("out2.usda");
+    let text = coif(&["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&out)]);
+    assert!(stderr(&text).contains("curl  straight (rest straight)"), "{}", stderr(&text));
+}
+
 /// `--frames FPS` captures frame k at the first step at or past its time k/FPS, so the animation plays at
 /// the rate it is labelled with for any FPS: a fixed, rounded number of steps a frame played 25
 /// fps at 25.7 and 1,000 fps at 360 (1 s of styling written as 0.36 s).
