@@ -151,42 +151,6 @@ pub fn flag_direction(key: &str, value: [f32; 3]) -> Result<()> {
     direction(key, value).map_err(Error::Usage)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_refuse_non_finite_and_respect_open_ends() {
-        let positive = Range::above(0.0, 1.0);
-        assert!(!positive.contains(0.0) && positive.contains(1.0) && !positive.contains(f64::NAN));
-        assert!(!Range::below(0.0, 1.0).contains(1.0) && Range::below(0.0, 1.0).contains(0.0));
-        assert!(!FRACTION.contains(f64::INFINITY) && !FRACTION.contains(-1e-9));
-        // The ends as f32 values reach them (0.1f32 is above 0.1, 1e-6f32 below 1e-6); the next
-        // f32 beyond does not.
-        for end in [0.1f32, 1e-6] {
-            assert!(TIME_STEP.contains(end.into()), "{end}");
-        }
-        assert!(!TIME_STEP.contains(f32::from_bits(0.1f32.to_bits() + 1).into()));
-        assert!(!TIME_STEP.contains(f32::from_bits(1e-6f32.to_bits() - 1).into()));
-    }
-
-    #[test]
-    fn refusals_name_key_value_and_range() {
-        let e = number("[water] r_max", -1.0, Range::above(0.0, 0.5)).unwrap_err();
-        assert!(e.contains("[water] r_max") && e.contains("-1") && e.contains("(0, 0.5]"), "{e}");
-        let e = number("--exposure", f32::NAN, Range::closed(-30.0, 30.0)).unwrap_err();
-        assert!(e.contains("NaN") && e.contains("[-30, 30]"), "{e}");
-        assert!(direction("normal", [0.0; 3]).unwrap_err().contains("zero length"));
-        assert!(vector("center", [0.0, f32::INFINITY, 0.0], COORDINATE).unwrap_err().contains("inf"));
-        // Large values in exponent form, as written, not 31 digits.
-        let e = number("--damping", 1e30f32, Range::closed(0.0, 1e4)).unwrap_err();
-        assert!(e.contains("--damping = 1e30 must") && e.contains("[0, 10000]"), "{e}");
-        assert!(FRAME.to_string() == "[-1e9, 1e9]" && MODULUS.to_string() == "[100000, 1e12]");
-        assert_eq!(shortest(0.001f32.into()), "0.001");
-        assert_eq!((shortest(1e-6f32.into()), shortest(8e-8)), ("1e-6".into(), "8e-8".into()));
-    }
-}
-
 /// Reads a TOML array of exactly three numbers, as every vector of a recipe or shot is: toml's
 /// own reading of a `[f32; 3]` in a plain table stops after the third element (`gravity = [0,
 /// -9.8, 0, 5]` was read as [0, -9.8, 0], and three million elements were walked past unread).
@@ -225,4 +189,40 @@ pub fn optional_three<'de, D: serde::Deserializer<'de>>(
     #[derive(serde::Deserialize)]
     struct Three(#[serde(deserialize_with = "three")] [f32; 3]);
     Ok(<Option<Three> as serde::Deserialize>::deserialize(deserializer)?.map(|Three(value)| value))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_refuse_non_finite_and_respect_open_ends() {
+        let positive = Range::above(0.0, 1.0);
+        assert!(!positive.contains(0.0) && positive.contains(1.0) && !positive.contains(f64::NAN));
+        assert!(!Range::below(0.0, 1.0).contains(1.0) && Range::below(0.0, 1.0).contains(0.0));
+        assert!(!FRACTION.contains(f64::INFINITY) && !FRACTION.contains(-1e-9));
+        // The ends as f32 values reach them (0.1f32 is above 0.1, 1e-6f32 below 1e-6); the next
+        // f32 beyond does not.
+        for end in [0.1f32, 1e-6] {
+            assert!(TIME_STEP.contains(end.into()), "{end}");
+        }
+        assert!(!TIME_STEP.contains(f32::from_bits(0.1f32.to_bits() + 1).into()));
+        assert!(!TIME_STEP.contains(f32::from_bits(1e-6f32.to_bits() - 1).into()));
+    }
+
+    #[test]
+    fn refusals_name_key_value_and_range() {
+        let e = number("[water] r_max", -1.0, Range::above(0.0, 0.5)).unwrap_err();
+        assert!(e.contains("[water] r_max") && e.contains("-1") && e.contains("(0, 0.5]"), "{e}");
+        let e = number("--exposure", f32::NAN, Range::closed(-30.0, 30.0)).unwrap_err();
+        assert!(e.contains("NaN") && e.contains("[-30, 30]"), "{e}");
+        assert!(direction("normal", [0.0; 3]).unwrap_err().contains("zero length"));
+        assert!(vector("center", [0.0, f32::INFINITY, 0.0], COORDINATE).unwrap_err().contains("inf"));
+        // Large values in exponent form, as written, not 31 digits.
+        let e = number("--damping", 1e30f32, Range::closed(0.0, 1e4)).unwrap_err();
+        assert!(e.contains("--damping = 1e30 must") && e.contains("[0, 10000]"), "{e}");
+        assert!(FRAME.to_string() == "[-1e9, 1e9]" && MODULUS.to_string() == "[100000, 1e12]");
+        assert_eq!(shortest(0.001f32.into()), "0.001");
+        assert_eq!((shortest(1e-6f32.into()), shortest(8e-8)), ("1e-6".into(), "8e-8".into()));
+    }
 }
