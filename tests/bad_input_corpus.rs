@@ -358,6 +358,19 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
             &["r.toml", culprit, "invalid length 4, expected an array of 3 numbers"],
         ));
     }
+    // Blank names (press obstacle = "" found one), exit 0.
+    for (what, table) in [
+        ("obstacle", "[[obstacles]]\nshape = \"sphere\"\nname = \"\"\ncenter = [0, 5, 0]\nradius = 0.1\n"),
+        ("rod", "[[rods]]\nname = \" \"\na = [0, 5, 0]\nb = [0.1, 5, 0]\nradius = 0.01\n"),
+    ] {
+        let recipe = format!("{table}{BASE}");
+        cases.push(style_case(
+            &format!("blank {what} name"),
+            &recipe,
+            hair,
+            &["r.toml", "line 1", "is blank"],
+        ));
+    }
     let names = vec!["\"r\""; 1000].join(", ");
     let recipe = format!(
         "[[rods]]\nname = \"r\"\na = [0, 0.05, 0.1]\nb = [0.1, 0.05, 0.1]\nradius = 0.01\n\

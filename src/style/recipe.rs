@@ -707,6 +707,10 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     for obstacle in &recipe.obstacles {
         let line = line_of(obstacle.span());
         let name = obstacle.get_ref().name();
+        // Stages name what they use: an empty name is a key left blank.
+        if name.trim().is_empty() {
+            return Err(format!("line {line}: an obstacle's name = \"{name}\" is blank; name it"));
+        }
         if names.contains(&name) {
             return Err(format!("line {line}: a second obstacle or rod named '{name}'"));
         }
@@ -759,6 +763,9 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     for rod in &recipe.rods {
         let line = line_of(rod.span());
         let r = rod.get_ref();
+        if r.name.trim().is_empty() {
+            return Err(format!("line {line}: a rod's name = \"{}\" is blank; name it", r.name));
+        }
         if names.contains(&r.name.as_str()) {
             return Err(format!("line {line}: a second obstacle or rod named '{}'", r.name));
         }
