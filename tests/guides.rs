@@ -581,29 +581,30 @@ fn children_in_every_frame_stay_out_of_the_rods_their_guides_are_wound_on() {
     assert!(deepest_child <= 1e-3, "a child {:.2} mm inside a rod", deepest_child * 1e3);
 }
 
-/// Issue 16's curls on heads that are not straight: generated curly and wavy heads (300 strands of
-/// 30 cm, random curl phases) permed through 30 guides. Children curled like their guides only on
-/// the straight head: carrying a child's own input curl in its guides' frames (main before this
-/// test: median curl radius +21.9 % on the curly head, +26.7 % on the wavy one; +15.0 % on the
-/// straight one) left children looser than their guides. The seam ratio compares neighbouring
-/// children bound to different first guides with neighbours bound to the same one, at mid-length
-/// (1 = no seam); measured (`cargo bench --bench guides -- children`) with the windings of
-/// session 39: curl −1.3 % / +8.8 %, seams 0.99 / 1.24, every strand simulated −6.1 % / +3.7 %
-/// and 1.23 / 1.09 (with the earlier windings −4.6 % / +11.1 % and 0.99 / 1.47).
+/// Issue 16's curls on generated curly, wavy and straight heads (300 strands of 30 cm, random
+/// curl phases) permed through 30 guides: the children's median curl radius within 5 % of their
+/// guides'. Carrying a child's own input curl in its guides' frames left children looser than
+/// their guides (+21.9 / +26.7 / +15.0 % before session 39); summing the bends of guides curled
+/// one way and the other still did (main before this test: −1.3 / **+8.8 / +10.3 %**; the children
+/// lost 15–22 % of their guides' torsion). The seam ratio compares neighbouring children bound to
+/// different first guides with neighbours bound to the same one, at mid-length (1 = no seam);
+/// measured (`cargo bench --bench guides -- children`): 0.96 / 1.29 / 1.50 (main before: 0.99 /
+/// 1.24 / 1.28; every strand simulated: 1.23 / 1.09 / 0.96, curl −6.1 / +3.7 / −0.2 %). Children
+/// take one handedness where their guides curl both ways, so the seams there are sharper.
 #[test]
-fn children_curl_like_their_guides_on_curly_and_wavy_heads() {
+fn children_curl_like_their_guides_on_curly_wavy_and_straight_heads() {
     use coif::generate::Style;
     let text = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
     let perm =
         recipe::parse(&format!("{text}\n[guides]\ncount = 30\n"), Path::new("perm_full_head.toml")).unwrap();
-    // (head, largest |children / guides − 1| of the median curl radius, largest seam ratio).
-    // The wavy head misses the issue's 5 % (+8.8 % measured; +11.1 % with the earlier windings)
-    // and its seams read 1.24–1.47: bounds above both, so they cannot grow unseen.
+    // (head, largest seam ratio): measured 0.96 / 1.29 / 1.50, bounds above them so that they
+    // cannot grow unseen.
     let heads = [
-        ("curly", Style::Curly { radius: 0.01, pitch: 0.03 }, 0.05, 1.2),
-        ("wavy", Style::Wavy { amplitude: 0.008, wavelength: 0.06 }, 0.15, 1.6),
+        ("curly", Style::Curly { radius: 0.01, pitch: 0.03 }, 1.2),
+        ("wavy", Style::Wavy { amplitude: 0.008, wavelength: 0.06 }, 1.6),
+        ("straight", Style::Straight, 1.7),
     ];
-    for (name, style_kind, curl_tolerance, seam_limit) in heads {
+    for (name, style_kind, seam_limit) in heads {
         let unstyled = generate(&GenerateParams {
             strands: 300,
             vertices_per_strand: 32,
@@ -657,10 +658,7 @@ fn children_curl_like_their_guides_on_curly_and_wavy_heads() {
             after / before
         );
         assert!(guides > 0.008 && guides < 0.03, "{name}: guides did not curl: {guides}");
-        assert!(
-            (children / guides - 1.0).abs() < curl_tolerance,
-            "{name}: children {children} vs guides {guides}"
-        );
+        assert!((children / guides - 1.0).abs() < 0.05, "{name}: children {children} vs guides {guides}");
         assert!(after >= 0.5 * before, "{name}: children collapsed: {after} vs {before}");
         assert!(seam < seam_limit, "{name}: seam ratio {seam}");
         assert_eq!(inside, 0, "{name}: child vertices inside the head");
