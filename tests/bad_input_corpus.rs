@@ -382,6 +382,15 @@ fn recipe_cases(hair: &[u8]) -> Vec<Case> {
         hair,
         &["r.toml", "line 6", "rods lists 'r' twice (entries 1 and 2)"],
     ));
+    // As many names, none a rod's: searched for a repeat among them first, it ran for minutes.
+    let names: Vec<String> = (0..300_000).map(|i| format!("\"x{i}\"")).collect();
+    let recipe = recipe.replace(&vec!["\"r\""; 1000].join(", "), &names.join(", "));
+    cases.push(style_case(
+        "300,000 rod names, none a rod's",
+        &recipe,
+        hair,
+        &["r.toml", "no rod named 'x0'"],
+    ));
     // Text that is not a recipe.
     cases.push(style_case("not UTF-8", "", hair, &["r.toml", "UTF-8"]));
     cases.last_mut().unwrap().files[0].1 = b"[settings]\ndt = 0.1\n\xff\xfe\n".to_vec();
