@@ -233,7 +233,21 @@ impl NeighbourGrid {
 
     /// Calls `visit(range)` for the runs of [`sorted_items`](Self::sorted_items) in the cells
     /// around `p` that come within `cell_size` of it, each run at most once, in a fixed order.
-    pub fn for_each_near_run(&self, p: Vec3, mut visit: impl FnMut(std::ops::Range<usize>)) {
+    pub fn for_each_near_run(&self, p: Vec3, visit: impl FnMut(std::ops::Range<usize>)) {
+        self.for_each_run_within(p, self.cell_size, visit);
+    }
+
+    /// Calls `visit(range)` for the runs of [`sorted_items`](Self::sorted_items) in the cells
+    /// that come within `distance` (at most `cell_size`) of `p`, each run at most once, in a
+    /// fixed order. With cells twice `distance` wide, a query visits 5 of the 27 cells on
+    /// average (21 with cells `distance` wide): where cells hold few items, the lookups of
+    /// cells cost more than the items.
+    pub fn for_each_run_within(&self, p: Vec3, distance: f32, mut visit: impl FnMut(std::ops::Range<usize>)) {
+        debug_assert!(
+            distance <= self.cell_size * (1.0 + 1e-6),
+            "{distance} beyond a cell of {}",
+            self.cell_size
+        );
         if self.len == 0 {
             return;
         }
@@ -251,7 +265,10 @@ impl NeighbourGrid {
             _ => 0.0,
         };
         // Rounding may only keep a cell, never drop one a query needs.
-        const REACH: f32 = 1.0 + 1e-4;
+        let reach = {
+            let cells = distance * self.inv_cell_size;
+            cells * cells * (1.0 + 1e-4)
+        };
         // A Morton code is the OR of its axes' spread bits: spread the 9 coordinates of the
         // 27 cells once, not 3 per cell.
         let spread = |c: i32, shift: u32| [c - 1, c, c + 1].map(|c| spread_bits(c as u32) << shift);
@@ -261,11 +278,11 @@ impl NeighbourGrid {
             let gz = gap(dz, within.z);
             for (dy, &by) in (-1..=1).zip(&sy) {
                 let gyz = gz + gap(dy, within.y);
-                if gyz > REACH {
+                if gyz > reach {
                     continue;
                 }
                 for (dx, &bx) in (-1..=1).zip(&sx) {
-                    if gyz + gap(dx, within.x) > REACH {
+                    if gyz + gap(dx, within.x) > reach {
                         continue;
                     }
                     let b = ((bx | by | bz) & mask) as usize;
@@ -503,6 +520,41 @@ mod tests {
                 (0..points.len() as u32).filter(|&i| points[i as usize].distance(*q) <= radius).collect();
             assert_eq!(found, expected);
         }
+    }
+
+    #[test]
+    fn runs_within_a_distance_hold_every_item_that_near_and_skip_cells_beyond_it() {
+        // Cells 1, 2 and 3 times the search distance wide: every point within it is in a run
+        // visited, and with wider cells fewer cells are visited per query.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        let points: Vec<Vec3> = (0..5000)
+            .map(|_| Vec3::new(rng.random(), rng.random(), rng.random()) * 0.3 - Vec3::splat(0.15))
+            .collect();
+        let distance = 0.011;
+        let mut cells_per_query = Vec::new();
+        for width in [1.0, 2.0, 3.0] {
+            let mut grid = NeighbourGrid::new(width * distance);
+            grid.rebuild(&points);
+            let mut runs = 0;
+            for q in points.iter().step_by(13) {
+                let mut found: Vec<u32> = Vec::new();
+                grid.for_each_run_within(*q, distance, |run| {
+                    runs += 1;
+                    found.extend(
+                        grid.sorted_items()[run]
+                            .iter()
+                            .filter(|&&i| points[i as usize].distance(*q) <= distance),
+                    );
+                });
+                found.sort();
+                let expected: Vec<u32> = (0..points.len() as u32)
+                    .filter(|&i| points[i as usize].distance(*q) <= distance)
+                    .collect();
+                assert_eq!(found, expected, "cells {width} searches wide");
+            }
+            cells_per_query.push(runs as f64 / points.len().div_ceil(13) as f64);
+        }
+        assert!(cells_per_query[1] < 0.5 * cells_per_query[0], "{cells_per_query:?} cells per query");
     }
 
     #[test]

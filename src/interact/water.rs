@@ -7,7 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::grid::NeighbourGrid;
+use super::grid::{NeighbourGrid, Occupancy};
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -53,6 +53,11 @@ pub struct Droplets {
     pub positions: Vec<Vec3>,
     pub velocities: Vec<Vec3>,
     hair_grid: Option<NeighbourGrid>,
+    /// Where the droplets are, and the hair vertices near one (the only ones binned) with their
+    /// points.
+    droplet_cells: Occupancy,
+    near_hair: Vec<u32>,
+    near_points: Vec<Vec3>,
     /// Per droplet: the hair vertices in range and their adhesion pulls (towards the droplet).
     touches: Vec<Vec<(u32, Vec3)>>,
     /// Hair vertices wetted this step (each takes up water once per step however many droplets
@@ -81,14 +86,28 @@ impl Droplets {
             return;
         }
         // Droplets are few and hair vertices many: each droplet finds the vertices in its range
-        // (in parallel), then the pulls are applied droplet by droplet, in a fixed order.
+        // (in parallel), then the pulls are applied droplet by droplet, in a fixed order. Only
+        // the vertices in or next to a droplet's cell are binned (one bit looked up for each of
+        // the others, which binning cost most of the step).
+        self.droplet_cells.mark(params.r_max, &self.positions, |_| true);
+        let cells = &self.droplet_cells;
+        self.near_hair.clear();
+        self.near_hair.par_extend(
+            (0..hair.len() as u32)
+                .into_par_iter()
+                .with_min_len(4096)
+                .filter(|&i| cells.near(hair[i as usize])),
+        );
+        self.near_points.clear();
+        self.near_points.extend(self.near_hair.iter().map(|&i| hair[i as usize]));
         let hair_grid = self.hair_grid.get_or_insert_with(|| NeighbourGrid::new(params.r_max));
-        hair_grid.rebuild(hair);
-        let hair_grid = &*hair_grid;
+        hair_grid.rebuild(&self.near_points);
+        let (hair_grid, near_hair) = (&*hair_grid, &self.near_hair);
         self.touches.resize_with(self.positions.len(), Vec::new);
         self.touches.par_iter_mut().zip(self.positions.par_iter()).for_each(|(touches, &x)| {
             touches.clear();
-            hair_grid.for_each_near(x, |i| {
+            hair_grid.for_each_near(x, |k| {
+                let i = near_hair[k as usize];
                 let offset = x - hair[i as usize];
                 let d = offset.length();
                 if d <= params.r_max && d > 0.0 {
