@@ -139,24 +139,6 @@ fn presets_on_60_cm_heads_hold_still_when_simulated_again() {
     presets_hold_still(&[("water_set", &straight, "usdc"), ("blowdry_scene2", &curly, "abc")]);
 }
 
-/// The full-head perm on 60 cm hair (4 mm segments, 150 a strand), a few strands with their
-/// hair–hair contacts. The settle's light-frame phase ran out of its half of the budget with
-/// strands asleep, and the second phase never woke them to relax them with the simulation's own
-/// frames: not converged (3.4e-3 after 90 s), and the output moved 2.4 mm in 2 s (20 strands:
-/// 9.6 mm). Every phase now starts with every strand awake: converged, 0.35 mm.
-#[test]
-fn full_head_perm_on_a_few_60_cm_strands_holds_still_when_simulated_again() {
-    let long = generate(&GenerateParams {
-        strands: 6,
-        vertices_per_strand: 64,
-        length: 0.60,
-        seed: 5,
-        ..Default::default()
-    })
-    .unwrap();
-    presets_hold_still(&[("perm_full_head", &long, "usda")]);
-}
-
 /// The production perm on a generated head, every strand simulated, with its hair–hair contacts:
 /// 0.55 mm in 2 s. Simulated again without the contacts its strands that rest on others fell
 /// 2.3 mm. On a 40 x 16 head the settle converged at a net force of a thousandth of a strand's

@@ -58,8 +58,8 @@ pub struct HeadFrame {
     front: Vec3,
     size: f32,
     /// The ellipsoid fitted to the roots of the groom the frame was fitted to (head
-    /// coordinates; a sphere of the frame's size when they do not determine one), shrunk clear
-    /// of its strands, so that a run styling some of the strands (the guides) collides with the
+    /// coordinates; a sphere of the frame's size clear of its strands when they do not determine
+    /// one), so that a run styling some of the strands (the guides) collides with the
     /// head the whole groom grows on.
     roots_head: Option<Ellipsoid>,
 }
@@ -204,15 +204,13 @@ impl HeadFrame {
             }
         });
         let mut frame = HeadFrame::new(center, up, front, size)?;
-        // Roots that determine no ellipsoid (a handful of strands): the fitted sphere.
-        let fitted = frame.fit_unshrunk(&roots).unwrap_or(Ellipsoid {
-            center: Vec3::ZERO,
-            radii: Vec3::ONE,
-            rotation: Quat::IDENTITY,
-        });
-        // The groom's strands, not only their roots, are where the head is not: a sphere through
-        // five roots held the hair hanging at its sides 9 mm inside it before any stage ran.
-        frame.roots_head = Some(frame.clear_of(fitted, &groom.points));
+        // Roots that determine no ellipsoid (a handful of strands) leave the fitted sphere, a
+        // guess: the strands, not only their roots, say where the head is not (a sphere through
+        // five roots held the hair hanging at its sides 9 mm inside it before any stage ran). A
+        // fitted ellipsoid is the head, though: hair a DCC tool left under it is pushed out.
+        let sphere = Ellipsoid { center: Vec3::ZERO, radii: Vec3::ONE, rotation: Quat::IDENTITY };
+        let head = frame.fit_ellipsoid(&roots).unwrap_or_else(|| frame.clear_of(sphere, &groom.points, 0.75));
+        frame.roots_head = Some(head);
         Ok(frame)
     }
 
@@ -222,35 +220,28 @@ impl HeadFrame {
         self.roots_head.or_else(|| self.fit_ellipsoid(roots))
     }
 
-    /// The ellipsoid that best fits `points` (the roots), in head coordinates, shrunk so that no
-    /// point lies inside it ([`HeadFrame::clear_of`]).
+    /// The ellipsoid that best fits `points` (the roots), in head coordinates, shrunk (by at most
+    /// 10 %) so that no point lies inside it: a general quadric when the points determine a
+    /// head-like ellipsoid (they do on an ellipsoidal scalp, whatever its tilt), else one along
+    /// the frame's axes.
     pub fn fit_ellipsoid(&self, points: &[Vec3]) -> Option<Ellipsoid> {
-        self.fit_unshrunk(points).map(|fitted| self.clear_of(fitted, points))
-    }
-
-    /// The ellipsoid that best fits `points` (world), in head coordinates: a general quadric when
-    /// the points determine a head-like ellipsoid (they do on an ellipsoidal scalp, whatever its
-    /// tilt), else one along the frame's axes.
-    fn fit_unshrunk(&self, points: &[Vec3]) -> Option<Ellipsoid> {
         let local: Vec<Vec3> = points.iter().map(|&p| self.to_head(p)).collect();
         let head_like = |e: &Ellipsoid| {
             e.center.length() < 1.0 && e.radii.min_element() > 0.3 && e.radii.max_element() < 3.0
         };
-        fit_quadric(&local).filter(head_like).or_else(|| fit_aligned(&local))
+        let fitted = fit_quadric(&local).filter(head_like).or_else(|| fit_aligned(&local))?;
+        Some(self.clear_of(fitted, points, 0.9))
     }
 
     /// `head` (head coordinates) shrunk about its centre so that no point of `points` (world)
-    /// lies inside it, by at most [`MOST_SHRINK`]: a fitted head must not start inside the hair.
-    fn clear_of(&self, head: Ellipsoid, points: &[Vec3]) -> Ellipsoid {
+    /// lies inside it, to no less than `smallest` of its size (a stray point near the centre
+    /// must not make the head vanish).
+    fn clear_of(&self, head: Ellipsoid, points: &[Vec3], smallest: f32) -> Ellipsoid {
         let innermost =
             points.iter().map(|&p| head.implicit(self.to_head(p)).sqrt()).fold(f32::INFINITY, f32::min);
-        Ellipsoid { radii: head.radii * innermost.clamp(1.0 - MOST_SHRINK, 1.0), ..head }
+        Ellipsoid { radii: head.radii * innermost.clamp(smallest, 1.0), ..head }
     }
 }
-
-/// The most a fitted head is shrunk to clear the groom: a stray vertex near the centre must not
-/// make the head vanish (a quarter of a head is 2–3 cm).
-const MOST_SHRINK: f32 = 0.25;
 
 /// An ellipsoid: semi-axes `radii` along the axes turned by `rotation`, around `center`.
 #[derive(Clone, Copy, Debug, PartialEq)]
