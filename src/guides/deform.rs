@@ -169,25 +169,19 @@ pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3>
         let heaviest = weighted().max_by(|a, b| a.1.total_cmp(b.1)).map_or(binding.guides[0], |(&g, _)| g);
         let frame_after = aligned(after.root_frame(heaviest as usize), tangent);
         let frame_before = Quat::from_rotation_arc(tangent, first.normalize()) * frame_after;
-        // Each guide's frame turned onto the child's first edge differs from the child's by a
-        // turn about that edge.
-        let to_child =
-            binding.guides.map(|g| frame_after.inverse() * aligned(after.root_frame(g as usize), tangent));
         let mut frames = vec![Quat::IDENTITY; rest.len()];
         let mut own = vec![Vec3::ZERO; rest.len()];
         strand_frames(rest, frame_before, &mut frames);
         strand_bends(rest, &frames, &mut own);
-        // Each weighted guide's style bend at the child's inner vertices, in the child's frame.
-        let styles: Vec<(f32, Vec<Vec3>)> = binding
-            .guides
-            .iter()
-            .zip(&binding.weights)
-            .zip(&to_child)
-            .filter(|((_, &w), _)| w != 0.0)
-            .map(|((&g, &w), turn)| {
+        // Each weighted guide's style bend at the child's inner vertices, in the child's frame:
+        // the guide's frame turned onto the child's first edge differs from the child's by a turn
+        // about that edge.
+        let styles: Vec<(f32, Vec<Vec3>)> = weighted()
+            .map(|(&g, &w)| {
+                let turn = frame_after.inverse() * aligned(after.root_frame(g as usize), tangent);
                 let bends = fractions[1..fractions.len() - 1]
                     .iter()
-                    .map(|&u| *turn * (after.bend(g as usize, u) - kept * before.bend(g as usize, u)))
+                    .map(|&u| turn * (after.bend(g as usize, u) - kept * before.bend(g as usize, u)))
                     .collect();
                 (w, bends)
             })

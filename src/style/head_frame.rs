@@ -208,8 +208,9 @@ impl HeadFrame {
         // guess: the strands, not only their roots, say where the head is not (a sphere through
         // five roots held the hair hanging at its sides 9 mm inside it before any stage ran). A
         // fitted ellipsoid is the head, though: hair a DCC tool left under it is pushed out.
-        let sphere = Ellipsoid { center: Vec3::ZERO, radii: Vec3::ONE, rotation: Quat::IDENTITY };
-        let head = frame.fit_ellipsoid(&roots).unwrap_or_else(|| frame.clear_of(sphere, &groom.points, 0.75));
+        let head = frame
+            .fit_ellipsoid(&roots)
+            .unwrap_or_else(|| frame.clear_of(Ellipsoid::UNIT_SPHERE, &groom.points, 0.75));
         frame.roots_head = Some(head);
         Ok(frame)
     }
@@ -252,6 +253,10 @@ pub struct Ellipsoid {
 }
 
 impl Ellipsoid {
+    /// The sphere of one head unit about the centre: the head when nothing else fits.
+    pub const UNIT_SPHERE: Ellipsoid =
+        Ellipsoid { center: Vec3::ZERO, radii: Vec3::ONE, rotation: Quat::IDENTITY };
+
     /// < 1 inside, 1 on the surface, > 1 outside.
     pub fn implicit(&self, p: Vec3) -> f32 {
         ((self.rotation.inverse() * (p - self.center)) / self.radii).length_squared()

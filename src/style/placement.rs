@@ -455,11 +455,7 @@ fn fit_frame(recipe: &Recipe, groom: &Groom, scalp: Option<&TriangleMesh>) -> Re
 /// The head as the ellipsoid fitted to the roots of the whole groom the frame was fitted to (a
 /// sphere of the frame's size, clear of the strands, when the roots do not determine one).
 fn fitted_head(frame: &HeadFrame, roots: &[Vec3]) -> Result<Shape> {
-    let e = frame.head_ellipsoid(roots).unwrap_or(Ellipsoid {
-        center: Vec3::ZERO,
-        radii: Vec3::ONE,
-        rotation: Quat::IDENTITY,
-    });
+    let e = frame.head_ellipsoid(roots).unwrap_or(Ellipsoid::UNIT_SPHERE);
     Ok(Shape::Ellipsoid {
         center: frame.point(e.center),
         radii: e.radii * frame.size(),
