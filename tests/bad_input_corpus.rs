@@ -1536,6 +1536,79 @@ fn all_cases() -> Vec<Case> {
     cases.extend(fuzz_found_cases(&inputs.hair));
     cases.extend(usdz_cases());
     cases.extend(unit_and_type_cases(&inputs.hair));
+    cases.extend(contradiction_cases(&inputs.hair));
+    cases
+}
+
+/// Inputs that were accepted though they contradict themselves or change nothing: each was
+/// read (exit 0), or its data dropped without a word, before.
+fn contradiction_cases(hair: &[u8]) -> Vec<Case> {
+    let mut cases = Vec::new();
+    // Coulomb friction: sliding is held less than rest (μ_k ≤ μ_s); the default μ_s is 0.4.
+    for (contacts, names) in [
+        (
+            "static_friction = 0.2\ndynamic_friction = 0.3",
+            &["line 3", "dynamic_friction = 0.3", "static_friction = 0.2"][..],
+        ),
+        (
+            "dynamic_friction = 0.5",
+            &["line 2", "dynamic_friction = 0.5", "static_friction = 0.4 (the default)"],
+        ),
+    ] {
+        let recipe = format!("[contacts]\n{contacts}\n{BASE}");
+        cases.push(style_case(&format!("friction {contacts}"), &recipe, hair, names));
+    }
+    // A world-frame recipe fits no head frame: its `[head]` changed nothing.
+    for head in ["size = 0.1", "center = [0, 1.7, 0]\nup = [0, 0, 1]"] {
+        let recipe = format!("frame = \"world\"\n[head]\n{head}\n{BASE}");
+        cases.push(style_case(
+            &format!("[head] {head} in a world recipe"),
+            &recipe,
+            hair,
+            &["line 2", "[head]", "frame = \"head\""],
+        ));
+    }
+    // A primvar's `elementSize` must make whole elements of its values (pxr authors any int).
+    for (declaration, culprit) in [
+        (
+            "float[] primvars:foo = [1, 2] (interpolation = \"uniform\"\n elementSize = 1000000000)",
+            "elementSize = 1000000000",
+        ),
+        (
+            "float[] primvars:foo = [1, 2] (interpolation = \"uniform\"\n elementSize = -3)",
+            "elementSize = -3",
+        ),
+        (
+            "float[] primvars:foo = [1, 2, 3, 4, 5] (interpolation = \"uniform\"\n elementSize = 2)",
+            "5 numbers",
+        ),
+        (
+            "float3[] primvars:foo = [(1, 2, 3), (4, 5, 6)] (interpolation = \"uniform\"\n elementSize = 2)",
+            "uniform interpolation needs 2",
+        ),
+    ] {
+        let file = vec![("in.usda", two_curves("", declaration).into_bytes())];
+        cases.push(case(
+            &format!("primvar {declaration}"),
+            file,
+            &["convert", "in.usda", "out.usda"],
+            2,
+            &["in.usda", "line 7", "prim </c>", "primvars:foo", culprit],
+        ));
+    }
+    let mesh = two_curves("", "").replace(
+        "\n}\n",
+        "\n}\ndef Mesh \"m\"\n{\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 2]\n    \
+         point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n    \
+         float[] primvars:foo = [1, 2] (interpolation = \"constant\"\n elementSize = 1000000000)\n}\n",
+    );
+    cases.push(case(
+        "mesh primvar elementSize = 1e9",
+        vec![("in.usda", mesh.into_bytes())],
+        &["convert", "in.usda", "out.usda"],
+        2,
+        &["in.usda", "prim </m>", "foo", "elementSize = 1000000000"],
+    ));
     cases
 }
 
