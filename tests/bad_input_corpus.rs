@@ -1859,6 +1859,47 @@ fn fifos_are_refused_without_blocking() {
     }
 }
 
+/// An output that is a symbolic link is written through it, as `cp` and a shell's `>` write: the
+/// file it leads to is replaced, or made where the link dangles, and the link stays. One that
+/// leads into a missing folder, or round in a loop, is exit 2 naming it, before any work. (A
+/// dangling link was replaced by a regular file.)
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_a_symbolic_link_is_written_through_it() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("g.hair");
+    std::fs::write(&groom, inputs().hair).unwrap();
+    std::fs::create_dir(dir.path().join("shots")).unwrap();
+    let folder = tempfile::tempdir().unwrap();
+    for (target, existing) in [("shots/v1.usda", false), ("shots/v1.usda", true)] {
+        let link = dir.path().join("latest.usda");
+        let _ = std::fs::remove_file(&link);
+        symlink(target, &link).unwrap();
+        let written = dir.path().join(target);
+        if existing {
+            std::fs::write(&written, b"old").unwrap();
+        }
+        let output = coif(&["convert", path_str(&groom), path_str(&link)]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
+        let through = coif(&["info", path_str(&written)]);
+        assert!(through.status.success(), "{target} (existing: {existing}): {}", stderr(&through));
+        assert_eq!(listing(&dir.path().join("shots")), vec!["v1.usda".to_string()], "no temporary file left");
+        std::fs::remove_file(&written).unwrap();
+    }
+    // Into a missing folder, and a loop: refused before the groom is read.
+    symlink("missing/v1.usda", folder.path().join("dangling.usda")).unwrap();
+    symlink("loop.usda", folder.path().join("loop.usda")).unwrap();
+    for (name, culprit) in [("dangling.usda", "missing"), ("loop.usda", "loop")] {
+        let output = coif(&["convert", path_str(&groom), path_str(&folder.path().join(name))]);
+        assert_eq!(output.status.code(), Some(2), "{name}: {}", stderr(&output));
+        assert!(stderr(&output).contains(name) && stderr(&output).contains(culprit), "{}", stderr(&output));
+        assert!(std::fs::symlink_metadata(folder.path().join(name)).unwrap().file_type().is_symlink());
+    }
+    assert_eq!(listing(folder.path()), vec!["dangling.usda".to_string(), "loop.usda".to_string()]);
+}
+
 /// SIGTERM and SIGINT during a write remove the temporary file and exit 143 and 130.
 #[cfg(unix)]
 #[test]
