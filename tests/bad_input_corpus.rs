@@ -1536,6 +1536,79 @@ fn all_cases() -> Vec<Case> {
     cases.extend(fuzz_found_cases(&inputs.hair));
     cases.extend(usdz_cases());
     cases.extend(unit_and_type_cases(&inputs.hair));
+    cases.extend(contradiction_cases(&inputs.hair));
+    cases
+}
+
+/// Inputs that were accepted though they contradict themselves or change nothing: each was
+/// read (exit 0), or its data dropped without a word, before.
+fn contradiction_cases(hair: &[u8]) -> Vec<Case> {
+    let mut cases = Vec::new();
+    // Coulomb friction: sliding is held less than rest (μ_k ≤ μ_s); the default μ_s is 0.4.
+    for (contacts, names) in [
+        (
+            "static_friction = 0.2\ndynamic_friction = 0.3",
+            &["line 3", "dynamic_friction = 0.3", "static_friction = 0.2"][..],
+        ),
+        (
+            "dynamic_friction = 0.5",
+            &["line 2", "dynamic_friction = 0.5", "static_friction = 0.4 (the default)"],
+        ),
+    ] {
+        let recipe = format!("[contacts]\n{contacts}\n{BASE}");
+        cases.push(style_case(&format!("friction {contacts}"), &recipe, hair, names));
+    }
+    // A world-frame recipe fits no head frame: its `[head]` changed nothing.
+    for head in ["size = 0.1", "center = [0, 1.7, 0]\nup = [0, 0, 1]"] {
+        let recipe = format!("frame = \"world\"\n[head]\n{head}\n{BASE}");
+        cases.push(style_case(
+            &format!("[head] {head} in a world recipe"),
+            &recipe,
+            hair,
+            &["line 2", "[head]", "frame = \"head\""],
+        ));
+    }
+    // A primvar's `elementSize` must make whole elements of its values (pxr authors any int).
+    for (declaration, culprit) in [
+        (
+            "float[] primvars:foo = [1, 2] (interpolation = \"uniform\"\n elementSize = 1000000000)",
+            "elementSize = 1000000000",
+        ),
+        (
+            "float[] primvars:foo = [1, 2] (interpolation = \"uniform\"\n elementSize = -3)",
+            "elementSize = -3",
+        ),
+        (
+            "float[] primvars:foo = [1, 2, 3, 4, 5] (interpolation = \"uniform\"\n elementSize = 2)",
+            "5 numbers",
+        ),
+        (
+            "float3[] primvars:foo = [(1, 2, 3), (4, 5, 6)] (interpolation = \"uniform\"\n elementSize = 2)",
+            "uniform interpolation needs 2",
+        ),
+    ] {
+        let file = vec![("in.usda", two_curves("", declaration).into_bytes())];
+        cases.push(case(
+            &format!("primvar {declaration}"),
+            file,
+            &["convert", "in.usda", "out.usda"],
+            2,
+            &["in.usda", "line 7", "prim </c>", "primvars:foo", culprit],
+        ));
+    }
+    let mesh = two_curves("", "").replace(
+        "\n}\n",
+        "\n}\ndef Mesh \"m\"\n{\n    int[] faceVertexCounts = [3]\n    int[] faceVertexIndices = [0, 1, 2]\n    \
+         point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n    \
+         float[] primvars:foo = [1, 2] (interpolation = \"constant\"\n elementSize = 1000000000)\n}\n",
+    );
+    cases.push(case(
+        "mesh primvar elementSize = 1e9",
+        vec![("in.usda", mesh.into_bytes())],
+        &["convert", "in.usda", "out.usda"],
+        2,
+        &["in.usda", "prim </m>", "foo", "elementSize = 1000000000"],
+    ));
     cases
 }
 
@@ -1784,6 +1857,47 @@ fn fifos_are_refused_without_blocking() {
         assert_eq!(output.status.code(), Some(2), "{args:?}: {}", stderr(&output));
         assert!(stderr(&output).contains("FIFO"), "{args:?}: {}", stderr(&output));
     }
+}
+
+/// An output that is a symbolic link is written through it, as `cp` and a shell's `>` write: the
+/// file it leads to is replaced, or made where the link dangles, and the link stays. One that
+/// leads into a missing folder, or round in a loop, is exit 2 naming it, before any work. (A
+/// dangling link was replaced by a regular file.)
+#[cfg(unix)]
+#[test]
+fn an_output_that_is_a_symbolic_link_is_written_through_it() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("g.hair");
+    std::fs::write(&groom, inputs().hair).unwrap();
+    std::fs::create_dir(dir.path().join("shots")).unwrap();
+    let folder = tempfile::tempdir().unwrap();
+    for (target, existing) in [("shots/v1.usda", false), ("shots/v1.usda", true)] {
+        let link = dir.path().join("latest.usda");
+        let _ = std::fs::remove_file(&link);
+        symlink(target, &link).unwrap();
+        let written = dir.path().join(target);
+        if existing {
+            std::fs::write(&written, b"old").unwrap();
+        }
+        let output = coif(&["convert", path_str(&groom), path_str(&link)]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
+        let through = coif(&["info", path_str(&written)]);
+        assert!(through.status.success(), "{target} (existing: {existing}): {}", stderr(&through));
+        assert_eq!(listing(&dir.path().join("shots")), vec!["v1.usda".to_string()], "no temporary file left");
+        std::fs::remove_file(&written).unwrap();
+    }
+    // Into a missing folder, and a loop: refused before the groom is read.
+    symlink("missing/v1.usda", folder.path().join("dangling.usda")).unwrap();
+    symlink("loop.usda", folder.path().join("loop.usda")).unwrap();
+    for (name, culprit) in [("dangling.usda", "missing"), ("loop.usda", "loop")] {
+        let output = coif(&["convert", path_str(&groom), path_str(&folder.path().join(name))]);
+        assert_eq!(output.status.code(), Some(2), "{name}: {}", stderr(&output));
+        assert!(stderr(&output).contains(name) && stderr(&output).contains(culprit), "{}", stderr(&output));
+        assert!(std::fs::symlink_metadata(folder.path().join(name)).unwrap().file_type().is_symlink());
+    }
+    assert_eq!(listing(folder.path()), vec!["dangling.usda".to_string(), "loop.usda".to_string()]);
 }
 
 /// SIGTERM and SIGINT during a write remove the temporary file and exit 143 and 130.

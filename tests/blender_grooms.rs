@@ -1607,3 +1607,35 @@ fn a_hide_blender_keyframed_converts_frame_by_frame() {
         assert_eq!(&hidden, frames, "{path} in coif's .abc: {written:?}");
     }
 }
+
+/// A legacy hair particle system (parents with interpolated children) on a head under a scaled,
+/// turned rig, as Blender exports it to Alembic and to USD (tests/blender/bpy_particle_hair.py):
+/// coif reads each file's strands with the counts and world points (metres, Y up) Blender's own
+/// importer reads back from it. (Blender's Alembic exporter writes the 36 children, its USD
+/// exporter the 12 parents.)
+#[test]
+fn blenders_particle_hair_reads_as_blender_reads_it_back_from_alembic_and_usd() {
+    let dir = tempfile::tempdir().unwrap();
+    let (abc, usd) = (dir.path().join("particles.abc"), dir.path().join("particles.usda"));
+    let Some(python) = bpy_python("Blender's particle hair") else { return };
+    let made = std::process::Command::new(&python)
+        .args(["tests/blender/bpy_particle_hair.py", abc.to_str().unwrap(), usd.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success() && abc.exists() && usd.exists(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    for (file, curves) in [(&abc, 36), (&usd, 12)] {
+        let blender = bpy_reimport(file).unwrap();
+        let hair = blender_object(&blender, "objects", "");
+        assert_eq!(hair["curves"], curves, "{}: {blender}", file.display());
+        let groom = load_path(file);
+        assert_eq!(groom.group_count(), 1, "{}", file.display());
+        assert_eq!(serde_json::json!(groom.strand_count()), hair["curves"]);
+        assert_eq!(serde_json::json!(groom.vertex_count()), hair["points"]);
+        let worst = worst_distance(&groom.points, &blender_points(&hair["positions"], 1.0));
+        assert!(worst < 1e-6, "{}: points {worst} m from Blender's", file.display());
+    }
+}

@@ -1056,3 +1056,64 @@ print(json.dumps(seen))
         assert!(!dir.path().join("bad_out.usda").exists());
     }
 }
+
+/// Primvars pxr authors with an `elementSize`, in `.usda` and `.usdc`: one of more values per
+/// element than a groom attribute holds (a 3 × 3 matrix per curve) is left out with a warning
+/// naming the prim and primvar, the others are read with pxr's values; one whose values make no
+/// whole elements (`elementSize = 1e9`, which pxr authors and reads) is refused naming both. Both
+/// were dropped without a word.
+#[test]
+fn primvars_with_an_element_size_are_read_left_out_with_a_warning_or_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = r#"
+import sys
+from pxr import Usd, UsdGeom, Sdf, Gf
+for name, size in (('wide', 9), ('huge', 1000000000)):
+    for ext in ('usda', 'usdc'):
+        stage = Usd.Stage.CreateNew(sys.argv[1] + '/' + name + '.' + ext)
+        UsdGeom.SetStageMetersPerUnit(stage, 1)
+        curves = UsdGeom.BasisCurves.Define(stage, '/groom/hair')
+        curves.CreateTypeAttr('linear')
+        curves.CreateCurveVertexCountsAttr([3, 3])
+        curves.CreatePointsAttr([Gf.Vec3f(x, -0.1 * i, 0) for x in (0, 0.01) for i in range(3)])
+        api = UsdGeom.PrimvarsAPI(curves)
+        api.CreatePrimvar('frames', Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.uniform, size).Set([float(i) for i in range(18)])
+        assert api.GetPrimvar('frames').GetElementSize() == size
+        api.CreatePrimvar('ids', Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.uniform, 2).Set([1, 2, 3, 4])
+        stage.Save()
+"#;
+    run_pxr_script(script, dir.path());
+    for ext in ["usda", "usdc"] {
+        let wide = dir.path().join(format!("wide.{ext}"));
+        let out = dir.path().join(format!("wide_out_{ext}.usda"));
+        let output = coif(&["convert", path_str(&wide), path_str(&out)]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let warning = stderr(&output);
+        assert!(
+            warning.contains("warning")
+                && warning.contains("</groom/hair>")
+                && warning.contains("primvars:frames"),
+            "{warning}"
+        );
+        let source = pxr_dump(&wide, None);
+        let written = pxr_dump(&out, None);
+        let ids = primvar(&written["curves"][0], "ids");
+        assert_eq!(ids["values"], primvar(&source["curves"][0], "ids")["values"]);
+        assert_eq!(ids["elementSize"], 2);
+        assert!(written["curves"][0]["primvars"].get("frames").is_none());
+
+        let huge = dir.path().join(format!("huge.{ext}"));
+        assert_eq!(primvar(&pxr_dump(&huge, None)["curves"][0], "frames")["elementSize"], 1_000_000_000);
+        let output = coif(&["convert", path_str(&huge), path_str(&dir.path().join("huge_out.usda"))]);
+        assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+        let error = stderr(&output);
+        assert!(
+            error.contains(&format!("huge.{ext}"))
+                && error.contains("</groom/hair>")
+                && error.contains("primvars:frames")
+                && error.contains("elementSize = 1000000000"),
+            "{error}"
+        );
+        assert!(!dir.path().join("huge_out.usda").exists());
+    }
+}

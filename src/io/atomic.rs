@@ -4,6 +4,8 @@
 //! While a file is written, the kernel is asked every [`WRITEBACK_STEP`] bytes to start putting it
 //! on disk, so the final fsync waits for the last step, not for the whole file (a groom's `.usda`
 //! is hundreds of megabytes, and its fsync alone used to take as long as formatting it).
+//! An output that is a symbolic link is written through it, as `cp` and a shell's `>` write:
+//! the file it points to is replaced (created, if the link dangles) and the link stays.
 use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -71,8 +73,9 @@ fn start_writeback(_file: &File) {}
 /// A buffered temporary file beside `path`, for writers that stream or seek (Ogawa patches its
 /// header at the end). Hand it to [`commit`] when complete; dropping it removes it.
 pub fn create_beside(path: &Path) -> Result<BufWriter<TempFile>> {
-    let dir = folder_of(path);
-    let prefix = temp_prefix(path);
+    let target = through_links(path).map_err(|e| Error::io(path, e))?;
+    let dir = folder_of(&target);
+    let prefix = temp_prefix(&target);
     let mut builder = temp_names(&prefix);
     // Temporary files are private (0600) by default; an output should get the usual 0666 & !umask.
     #[cfg(unix)]
@@ -91,6 +94,30 @@ pub fn create_beside(path: &Path) -> Result<BufWriter<TempFile>> {
     // Removed by the signal handler if the process is interrupted before `commit`.
     super::cleanup::track(temp.path());
     Ok(BufWriter::with_capacity(1 << 20, TempFile { file: temp, since_writeback: 0 }))
+}
+
+/// Symbolic links a path may pass through before it is taken for a loop (Linux's `MAXSYMLINKS`).
+const MAX_LINKS: usize = 40;
+
+/// The file writing `path` replaces: `path` itself, or where the symbolic link(s) at `path`
+/// lead, whether that file exists or not (the link's folder and the target's may differ). A
+/// loop of links is an error.
+pub fn through_links(path: &Path) -> std::io::Result<PathBuf> {
+    let mut current = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match std::fs::symlink_metadata(&current) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let target = std::fs::read_link(&current)?;
+                // A relative target is relative to the link's folder.
+                current = match current.parent() {
+                    Some(folder) if target.is_relative() => folder.join(target),
+                    _ => target,
+                };
+            }
+            _ => return Ok(current),
+        }
+    }
+    Err(std::io::Error::other(format!("a loop of symbolic links (more than {MAX_LINKS} in a row)")))
 }
 
 /// The folder `path` is in (`.` for a bare file name).
@@ -135,6 +162,7 @@ fn sync_then_rename(files: Vec<(PathBuf, BufWriter<TempFile>)>) -> Result<()> {
     let mut synced = Vec::with_capacity(files.len());
     for (path, mut writer) in files {
         writer.flush().map_err(|e| Error::io(&path, e))?;
+        let path = through_links(&path).map_err(|e| Error::io(&path, e))?;
         let temp = writer.into_inner().map_err(|e| Error::io(&path, e.into_error()))?.file;
         temp.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
         synced.push((path, temp));
@@ -226,6 +254,24 @@ mod tests {
         write_bytes_atomically(&target, b"new").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_symbolic_link_is_written_through_even_when_it_dangles() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("real")).unwrap();
+        let link = dir.path().join("out.bin");
+        std::os::unix::fs::symlink("real/target.bin", &link).unwrap();
+        for bytes in [&b"new"[..], b"newer"] {
+            write_bytes_atomically(&link, bytes).unwrap();
+            assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+            assert_eq!(std::fs::read(dir.path().join("real/target.bin")).unwrap(), bytes);
+            assert_eq!(std::fs::read_dir(dir.path().join("real")).unwrap().count(), 1);
+        }
+        let looped = dir.path().join("loop.bin");
+        std::os::unix::fs::symlink("loop.bin", &looped).unwrap();
+        assert!(through_links(&looped).unwrap_err().to_string().contains("loop"));
     }
 
     #[cfg(unix)]

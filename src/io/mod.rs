@@ -562,10 +562,23 @@ pub fn check_output_directory(path: &Path) -> Result<()> {
     if path.is_dir() || spelled_as_directory {
         return Err(Error::Usage(format!("{}: the output is a directory, not a file", path.display())));
     }
-    match path.parent() {
+    // A symbolic link is written through (`atomic`): the file it leads to must be writable.
+    let target = atomic::through_links(path).map_err(|e| {
+        Error::Usage(format!("{}: the output is a symbolic link that leads nowhere: {e}", path.display()))
+    })?;
+    let through = if target == path {
+        String::new()
+    } else {
+        format!(" (the symbolic link's target {})", target.display())
+    };
+    match target.parent() {
         Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => {
             let problem = if dir.exists() { "is not a directory" } else { "does not exist" };
-            Err(Error::Usage(format!("{}: the directory {} {problem}", path.display(), dir.display())))
+            Err(Error::Usage(format!(
+                "{}{through}: the directory {} {problem}",
+                path.display(),
+                dir.display()
+            )))
         }
         _ => Ok(()),
     }

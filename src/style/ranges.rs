@@ -16,7 +16,7 @@
 //! | `[bonds]` each influence | [0, 1000] (only ratios matter) |
 //! | `[contacts]` `hair_stiffness` | [0, 1e4] m/s² |
 //! | `sample_spacing` | [1e-4, 1] m |
-//! | `static_friction`, `dynamic_friction` | [0, 10] |
+//! | `static_friction`, `dynamic_friction` | [0, 10]; `dynamic_friction` at most `static_friction` |
 //! | `[wetness]` `diffusion` | [0, 0.01] m²/s |
 //! | `evaporation` | [0, 1000] /s; `airflow_drying` [0, 10] per m/s; `mass_gain` [0, 10] |
 //! | `[water]` `r_min` | (0, 0.1] m; `r_max` (r_min, 0.5] m |
@@ -124,6 +124,19 @@ pub fn check_numbers(recipe: &Recipe, text: &str) -> Result<(), String> {
     table("contacts", "sample_spacing", c.sample_spacing.into(), Range::closed(1e-4, 1.0))?;
     table("contacts", "static_friction", c.static_friction.into(), Range::closed(0.0, 10.0))?;
     table("contacts", "dynamic_friction", c.dynamic_friction.into(), Range::closed(0.0, 10.0))?;
+    // Coulomb: a contact that slides is held less than one at rest (μ_k ≤ μ_s). A larger dynamic
+    // friction brakes a sliding vertex harder than the static one holds it.
+    if c.dynamic_friction > c.static_friction {
+        let default =
+            if line_of_key(text, "contacts", "static_friction").is_none() { " (the default)" } else { "" };
+        let message = format!(
+            "[contacts] dynamic_friction = {} exceeds static_friction = {}{default}: sliding friction \
+             cannot be more than the friction that holds a contact at rest (μ_k ≤ μ_s)",
+            validate::shortest(c.dynamic_friction.into()),
+            validate::shortest(c.static_friction.into()),
+        );
+        return in_table("contacts", "dynamic_friction", Err(message));
+    }
     let w = &recipe.wetness;
     table("wetness", "diffusion", w.diffusion.into(), Range::closed(0.0, 0.01))?;
     table("wetness", "evaporation", w.evaporation.into(), Range::closed(0.0, 1e3))?;

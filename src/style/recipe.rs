@@ -702,6 +702,21 @@ fn check(recipe: &Recipe, text: &str) -> std::result::Result<(), String> {
     if head.size.is_some_and(|s| !positive(s)) {
         return Err("[head] size must be a positive length".into());
     }
+    // `[head]` only replaces values of a fitted head frame: a recipe with nothing in the head
+    // frame fits none, and its `[head]` changed nothing (masks' regions stayed around the analytic
+    // head's centre) without a word.
+    if *head != HeadSpec::default() && !super::placement::needs_frame(recipe) {
+        let line = text
+            .lines()
+            .position(|l| l.trim() == "[head]")
+            .map_or(String::new(), |i| format!("line {}: ", i + 1));
+        return Err(format!(
+            "{line}[head] is given, but nothing in this recipe is in the head frame (frame = \"world\", \
+             no scalp obstacle, no rows or spiral layout), so no head frame is fitted and [head] \
+             would change nothing: write frame = \"head\" at the top to place the recipe on the \
+             head, or remove [head]"
+        ));
+    }
 
     let mut names: Vec<&str> = Vec::new();
     for obstacle in &recipe.obstacles {

@@ -1,6 +1,7 @@
 //! From a parsed `.usda` layer to a [`Groom`]: walks the prim tree, composes `xformOp`
 //! transforms, gathers every `BasisCurves` prim (merging several into one groom), resolves
 //! primvar interpolation and indices, and converts to metres and Y up.
+use std::cell::RefCell;
 use std::path::Path;
 
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
@@ -149,6 +150,7 @@ pub fn groom_from_layer_in(
         meshes: Vec::new(),
         first_sample: None,
         first_visibility: None,
+        left_out: RefCell::new(Vec::new()),
     };
     for prim in layer.prims {
         walker.visit(prim, "", DMat4::IDENTITY, None, Imageable::default())?;
@@ -186,6 +188,7 @@ pub fn groom_from_layer_in(
             first.attribute
         ));
     }
+    warnings.extend(walker.left_out.take());
     let mut groom = merge(walker.found, arrays, files, path, layer_lines)?;
     groom.meshes = walker.meshes;
     Ok((groom, warnings))
@@ -203,6 +206,8 @@ struct Walker<'a> {
     /// The earliest time sample of an imageable prim's `visibility` (it shows or hides, but
     /// does not place, what is below it).
     first_visibility: Option<FirstSample>,
+    /// Warnings: primvars whose elements hold more values than a groom attribute can.
+    left_out: RefCell<Vec<String>>,
 }
 
 /// The earliest time sample (kept by the parser) of an attribute, and which attribute it is.
@@ -350,6 +355,15 @@ impl Walker<'_> {
         self.files.error(site, format!("prim <{prim_path}>: {message}"))
     }
 
+    /// Warns that a primvar is left out: its elements hold more values than a groom attribute.
+    fn leave_out(&self, site: Site, prim_path: &str, primvar: &str, components: usize) {
+        let message = format!(
+            "prim <{prim_path}>: {primvar} is left out: {components} values per element, more than \
+             the {MAX_COMPONENTS} a groom attribute holds"
+        );
+        self.left_out.borrow_mut().push(self.files.error(site, message).to_string());
+    }
+
     /// `value`, read from the file if it is still there.
     fn read(&self, value: Value) -> std::result::Result<Value, String> {
         let Value::InFile(array) = value else { return Ok(value) };
@@ -418,7 +432,11 @@ impl Walker<'_> {
             invisible: false,
             holes: ints("holeIndices")?.unwrap_or_default(),
         };
-        mesh.primvars = mesh_primvars(prim, time).map_err(|(site, m)| at_prim(site, m))?;
+        let (primvars, left_out) = mesh_primvars(prim, time).map_err(|(site, m)| at_prim(site, m))?;
+        mesh.primvars = primvars;
+        for (site, name, components) in left_out {
+            self.leave_out(site, prim_path, &format!("primvars:{name}"), components);
+        }
         let left_handed = match prim.attribute("orientation").and_then(|a| value_at(a, time)) {
             Some(Value::Text(t)) if t.len() == 1 => t[0] == "leftHanded",
             _ => false,
@@ -729,7 +747,7 @@ impl Walker<'_> {
             let fallback = if is_primvar { "constant" } else { "vertex" };
             let interpolation = attr.interpolation.clone().unwrap_or_else(|| fallback.into());
             let (kind_components, element_size) =
-                (super::parser::type_info(&attr.type_name).1, attr.element_size.unwrap_or(1));
+                (super::parser::type_info(&attr.type_name).1, attr.element_size);
             let Some(value) = take_value(attr, time) else { continue };
             let value = self.read(value).map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
             let Some(values) = attribute_data(value, &type_name) else { continue }; // strings, tokens
@@ -737,9 +755,16 @@ impl Walker<'_> {
             if !is_primvar && values.is_empty() {
                 continue; // an empty `velocities` or `normals`: none, as pxr reads it
             }
-            let components = kind_components * element_size.max(1) as usize;
-            if components > 4 {
-                continue; // the groom model carries at most 4 components per element
+            let components = element_components(kind_components, element_size, values.len())
+                .map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
+            if components > MAX_COMPONENTS {
+                // Left out, but only when its count fits the curves: else the file is wrong.
+                let elements = values.len() / components;
+                layout
+                    .resolve(vec![0i64; elements], 1, &interpolation)
+                    .map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
+                self.leave_out(site, prim_path, &full_name, components);
+                continue;
             }
             let mut values = values;
             if let Some(indices) = indices {
@@ -802,7 +827,7 @@ impl Walker<'_> {
                     if let Some(interpolation) = interpolation {
                         curves.interpolations.push((groom_name.clone(), interpolation));
                     }
-                    if kind_components == 1 && element_size > 1 {
+                    if kind_components == 1 && components > 1 {
                         curves.element_sized.push(groom_name.clone());
                     }
                     curves.attributes.push(GroomAttribute { name: groom_name, rate, components, data, kind });
@@ -822,8 +847,15 @@ impl Walker<'_> {
 /// A `Mesh` prim's primvars (and its `normals`, as the primvar `normals`; `primvars:normals`
 /// wins over them, as in USD), in file space. Strings and tokens are not mesh data and are left
 /// out. Errors carry the line.
-fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<MeshPrimvar>, (Site, String)> {
+/// Also returns the primvars left out (their site, name and values per element): those with more
+/// values per element than coif's data model holds.
+#[allow(clippy::type_complexity)]
+fn mesh_primvars(
+    prim: &Prim,
+    time: Option<f64>,
+) -> std::result::Result<(Vec<MeshPrimvar>, Vec<(Site, String, usize)>), (Site, String)> {
     let mut primvars: Vec<MeshPrimvar> = Vec::new();
+    let mut left_out = Vec::new();
     let has_primvar_normals = prim.attribute("primvars:normals").is_some();
     for attribute in &prim.attributes {
         let name = match attribute.name.strip_prefix("primvars:") {
@@ -840,11 +872,16 @@ fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<Mesh
             .ok_or_else(|| fail(format!("unknown interpolation \"{token}\"")))?;
         let Some(value) = value_at(attribute, time) else { continue };
         let type_name = attribute.type_name.trim_end_matches("[]");
-        let components = super::parser::type_info(&attribute.type_name).1
-            * attribute.element_size.unwrap_or(1).max(1) as usize;
         let Some(values) = attribute_data(value, type_name) else { continue };
-        if !(1..=4).contains(&components) {
-            continue; // more components than coif's data model holds (as for curve primvars)
+        let components = element_components(
+            super::parser::type_info(&attribute.type_name).1,
+            attribute.element_size,
+            values.len(),
+        )
+        .map_err(fail)?;
+        if components > MAX_COMPONENTS {
+            left_out.push((site, name.to_string(), components));
+            continue;
         }
         let indices_attribute = prim.attribute(&format!("primvars:{name}:indices"));
         if let Some(attribute) = indices_attribute {
@@ -870,10 +907,36 @@ fn mesh_primvars(prim: &Prim, time: Option<f64>) -> std::result::Result<Vec<Mesh
             indices,
         });
     }
-    Ok(primvars)
+    Ok((primvars, left_out))
 }
 
 /// The integer kind of a USD integer type (held exactly), `None` for others (`bool` is a flag).
+/// Values per element a groom attribute holds at most (a colour with alpha, a quaternion).
+const MAX_COMPONENTS: usize = 4;
+
+/// Values per element of a primvar of `values` values: its type's tuple (`float3`: 3) times its
+/// `elementSize`. pxr refuses to author an `elementSize` below 1, and the values must make whole
+/// elements: else the file is wrong, and the error says so (an `elementSize = 1e9` primvar was
+/// dropped without a word).
+fn element_components(
+    tuple: usize,
+    element_size: Option<i64>,
+    values: usize,
+) -> std::result::Result<usize, String> {
+    let size = element_size.unwrap_or(1);
+    if size < 1 {
+        return Err(format!("elementSize = {size} must be at least 1"));
+    }
+    let components = usize::try_from(size).ok().and_then(|s| s.checked_mul(tuple)).unwrap_or(usize::MAX);
+    if values % components != 0 {
+        let per_value = if tuple > 1 { format!(" × {tuple} numbers per value") } else { String::new() };
+        return Err(format!(
+            "{values} numbers do not make whole elements of elementSize = {size}{per_value} ({components} numbers each)"
+        ));
+    }
+    Ok(components)
+}
+
 fn integer_kind(type_name: &str) -> Option<AttributeKind> {
     match type_name {
         "int" | "int2" | "int3" | "int4" | "uchar" => Some(AttributeKind::Int),
