@@ -82,6 +82,8 @@ fn main() {
 /// - seam: the mean distance at mid-length between each child and its nearest (by root) child,
 ///   over pairs bound to different first guides, divided by the same over pairs bound to the
 ///   same one (1 = no seam where the guides change);
+/// - opposite: the share of those nearest pairs whose curls turn opposite ways (the sign of the
+///   summed torsion, from 40 % of the length to the tip);
 /// - the largest change of a child's length, and child vertices inside the head.
 ///
 /// The control uses the guided run's guide flags and bindings. `COIF_BENCH_CONTROL=0` skips it.
@@ -136,11 +138,12 @@ mod children {
                     let m = Measures::of(&unstyled, groom, &flags, &closest);
                     println!(
                         "{preset:<15} {name:<9} {what:<8} curl {:+6.1} % (guides {:.2} cm)   no-collapse {:.2}   \
-                         seam {:.2}   length change {:.2} %   inside head {}",
+                         seam {:.2}   opposite {:2.0} %   length change {:.2} %   inside head {}",
                         100.0 * (m.children_curl / m.guides_curl - 1.0),
                         100.0 * m.guides_curl,
                         m.no_collapse,
                         m.seam,
+                        100.0 * m.opposite,
                         100.0 * m.stretch,
                         m.inside
                     );
@@ -158,6 +161,7 @@ mod children {
         children_curl: f32,
         no_collapse: f32,
         seam: f32,
+        opposite: f32,
         stretch: f32,
         inside: usize,
     }
@@ -187,6 +191,16 @@ mod children {
                     .filter(|&o| o != c && (!same || closest[o] == closest[c]))
                     .min_by(|&a, &b| root(a).distance(root(c)).total_cmp(&root(b).distance(root(c))))
             };
+            // Which way a strand's curl turns: the sign of its summed torsion (triple products).
+            let hand = |s: usize| {
+                let p = styled.strand_points(s);
+                let torsion: f32 = p[p.len() * 2 / 5..]
+                    .windows(4)
+                    .map(|w| (w[1] - w[0]).cross(w[2] - w[1]).dot(w[3] - w[2]))
+                    .sum();
+                torsion > 0.0
+            };
+            let (mut pairs, mut opposite) = (0, 0);
             let (mut before, mut after) = (0.0, 0.0);
             let (mut across, mut within) = ((0.0, 0), (0.0, 0));
             for &c in &children {
@@ -195,6 +209,8 @@ mod children {
                     after += mid(styled, c).distance(mid(styled, n));
                 }
                 if let Some(n) = nearest(c, false) {
+                    pairs += 1;
+                    opposite += usize::from(hand(c) != hand(n));
                     let sum = if closest[n] == closest[c] { &mut within } else { &mut across };
                     sum.0 += mid(styled, c).distance(mid(styled, n));
                     sum.1 += 1;
@@ -206,6 +222,7 @@ mod children {
                 children_curl: radii(false),
                 no_collapse: after / before,
                 seam: (across.0 / across.1 as f32) / (within.0 / within.1 as f32),
+                opposite: opposite as f32 / pairs as f32,
                 stretch: children
                     .iter()
                     .map(|&s| (styled.strand_length(s) / unstyled.strand_length(s) - 1.0).abs())

@@ -186,7 +186,7 @@ pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3>
                 (w, bends)
             })
             .collect();
-        let style = blend_curls(&styles);
+        let style = blend_curls(&styles, handedness_draw(rest[0]));
         let mut frame = frame_after;
         out[1] = out[0] + tangent * first.length();
         for k in 1..out.len() - 1 {
@@ -225,34 +225,43 @@ fn handedness(bends: &[Vec3]) -> f32 {
 
 /// Weighted guides' bends along a child (`(weight, bends at the child's inner vertices)`, in
 /// the child's transport frames), blended so that the child bends as much as its guides and
-/// twists the same way. Guides curled the other way than the weighted majority of the child's
-/// guides are mirrored first (their bends reflected about the tangent, in the phase that agrees
-/// best with the others'): a sum of a left- and a right-handed curl's bends swings to and fro
-/// instead of turning, and such children lost 15–22 % of their guides' torsion and curled
-/// looser (median curl radius +8.8 % over the guides' on a wavy head, +10.3 % on a straight one).
+/// twists one way. A sum of a left- and a right-handed curl's bends swings to and fro instead of
+/// turning (such children lost 15–22 % of their guides' torsion and curled looser: median curl
+/// radius +8.8 % over the guides' on a wavy head, +10.3 % on a straight one), so the child takes
+/// one handedness and guides curled the other way are mirrored first (their bends reflected about
+/// the tangent, in the phase that agrees best with the others').
+///
+/// Which handedness: right-handed with the probability of the right-handed guides' share of the
+/// weighted handedness, drawn with `draw` (uniform in [0, 1), the child's own). Where all of a
+/// child's guides curl one way it does too; where they differ, neighbouring children differ as
+/// simulated strands do (in a simulated perm 45 % of strands curl against their nearest guide).
+/// Taking the weighted majority instead switched every child at once where that majority flips,
+/// on the line where the children's first guide changes: a seam (mean distance at mid-length
+/// between neighbouring children bound to different first guides over that of neighbours of the
+/// same one 1.54 on a straight head, 0.99 when every strand is simulated).
+///
 /// The blend is the weighted sum's direction at the weighted mean of the sizes: a plain sum of
 /// guides curling in different phases cancels in part and flattens the child's curl; where they
 /// nearly cancel the direction is uncertain, so the sum is scaled up at most [`MAX_BEND_GAIN`]
 /// times. A child of one guide bends as it does.
-fn blend_curls(guides: &[(f32, Vec<Vec3>)]) -> Vec<Vec3> {
+fn blend_curls(guides: &[(f32, Vec<Vec3>)], draw: f32) -> Vec<Vec3> {
     let len = guides.first().map_or(0, |g| g.1.len());
     let hands: Vec<f32> = guides.iter().map(|(_, bends)| handedness(bends)).collect();
-    // A tie goes to the first guide (the best bound).
-    let majority = match guides.iter().zip(&hands).map(|((w, _), h)| w * h).sum::<f32>() {
-        0.0 => hands.first().copied().unwrap_or(0.0),
-        majority => majority,
-    };
-    let mirrored: Vec<bool> = hands.iter().map(|&h| h * majority < 0.0).collect();
-    let majority_bends: Vec<Vec2> = (0..len)
+    let right: f32 = guides.iter().zip(&hands).map(|((w, _), h)| w * h.max(0.0)).sum();
+    let all: f32 = guides.iter().zip(&hands).map(|((w, _), h)| w * h.abs()).sum();
+    // Right-handed takes [0, right / all) of the draws: never a handedness none of the guides has.
+    let hand = if draw * all < right { 1.0 } else { -1.0 };
+    let mirrored: Vec<bool> = hands.iter().map(|&h| h * hand < 0.0).collect();
+    let agreeing_bends: Vec<Vec2> = (0..len)
         .map(|k| guides.iter().zip(&mirrored).filter(|(_, &m)| !m).map(|((w, b), _)| *w * across(b[k])).sum())
         .collect();
     let (mut sum, mut size) = (vec![Vec3::ZERO; len], vec![0.0f32; len]);
     for ((w, bends), &mirror) in guides.iter().zip(&mirrored) {
         // Mirrored bends are phase × conjugate(bend); the phase that maximises their agreement
-        // with the majority's, Σ Re(phase × conjugate(bend × majority)), is Σ bend × majority's.
+        // with the unmirrored guides' (a), Σ Re(phase × conjugate(bend × a)), is Σ bend × a.
         let phase = match mirror {
             true => {
-                bends.iter().zip(&majority_bends).map(|(b, m)| complex_product(across(*b), *m)).sum::<Vec2>()
+                bends.iter().zip(&agreeing_bends).map(|(b, m)| complex_product(across(*b), *m)).sum::<Vec2>()
             }
             false => Vec2::X,
         }
@@ -271,6 +280,19 @@ fn blend_curls(guides: &[(f32, Vec<Vec3>)]) -> Vec<Vec3> {
             _ => s,
         })
         .collect()
+}
+
+/// A child's own number in [0, 1) for [`blend_curls`]'s choice of handedness, from its root's
+/// position: the same in every pose, at any thread count and in any strand order.
+fn handedness_draw(root: Vec3) -> f32 {
+    let mut x = root.to_array().iter().fold(0x9E37_79B9_7F4A_7C15u64, |h, c| {
+        (h ^ u64::from(c.to_bits())).wrapping_mul(0x1000_0000_01B3).rotate_left(29)
+    });
+    // splitmix64's finaliser: every bit of the root moves every bit of the draw.
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^= x >> 31;
+    (x >> 40) as f32 / (1u64 << 24) as f32
 }
 
 /// How much of the differences between neighbouring guides' bends before survives in their bends
@@ -493,5 +515,72 @@ mod tests {
             let radius = crate::analysis::curl_radius(&moved).unwrap();
             assert!((radius / guide_radius - 1.0).abs() < 0.02, "weights {weights:?}: curl radius {radius}");
         }
+    }
+
+    /// Sign of a strand's summed torsion: which way its curl turns.
+    fn twists_positive(points: &[Vec3]) -> bool {
+        let torsion: f32 = points.windows(4).map(|w| (w[1] - w[0]).cross(w[2] - w[1]).dot(w[3] - w[2])).sum();
+        torsion > 0.0
+    }
+
+    /// Children between a right- and a left-handed guide, bound 0.7 / 0.3: about 70 % of them
+    /// curl right-handed and 30 % left-handed (each as tightly as the guides), not all of them
+    /// the majority's way, which lined every switch up on the line where the first guide changes.
+    /// Each child's choice is its own: the same in another run and whatever children beside it.
+    #[test]
+    fn children_of_guides_curled_both_ways_take_each_handedness_by_weight() {
+        let (n, step) = (60, 0.004);
+        let guides: Vec<Vec3> =
+            [line(Vec3::ZERO, n, step), line(Vec3::new(0.004, 0.0, 0.0), n, step)].concat();
+        let wound: Vec<Vec3> = [true, false]
+            .iter()
+            .enumerate()
+            .flat_map(|(g, &right)| {
+                let origin = Vec3::new(0.004 * g as f32, 0.0, 0.0);
+                helix(n, step, 0.01, 0.03, right).into_iter().map(move |p| p + origin)
+            })
+            .collect();
+        let offsets = vec![0, n as u32, 2 * n as u32];
+        let before = Curves::new(guides, offsets.clone(), None);
+        let roots = before.carried_root_frames(&wound);
+        let after = Curves::new(wound.clone(), offsets, Some(&roots));
+        let first_way = twists_positive(&wound[..n]);
+        assert_ne!(first_way, twists_positive(&wound[n..]), "the guides curl opposite ways");
+        let guide_radius = crate::analysis::curl_radius(&wound[..n]).unwrap();
+        // Children 0.1 mm apart along z, between the guides.
+        let count = 400;
+        let children: Vec<Vec3> =
+            (0..count).flat_map(|c| line(Vec3::new(0.002, 0.0, 1e-4 * c as f32), n, step)).collect();
+        let child_offsets: Vec<u32> = (0..=count as u32).map(|c| c * n as u32).collect();
+        let bindings = vec![Binding { guides: [0, 1, 0], weights: [0.7, 0.3, 0.0] }; count];
+        let moved = deform(
+            &Children { points: &children, offsets: &child_offsets, bindings: &bindings },
+            &before,
+            &after,
+        );
+        let strand = |c: usize| &moved[c * n..(c + 1) * n];
+        let like_first = (0..count).filter(|&c| twists_positive(strand(c)) == first_way).count();
+        let share = like_first as f32 / count as f32;
+        // Binomial: 400 draws at 0.7 are within ±0.07 but one time in ~4,000.
+        assert!((share - 0.7).abs() < 0.07, "{share} of the children curl like the first guide");
+        for c in 0..count {
+            let radius = crate::analysis::curl_radius(strand(c)).unwrap();
+            assert!((radius / guide_radius - 1.0).abs() < 0.02, "child {c}: curl radius {radius}");
+        }
+        // A child alone curls as it did among the others.
+        let alone = deform(
+            &Children {
+                points: strand_of(&children, n, 7),
+                offsets: &[0, n as u32],
+                bindings: &bindings[..1],
+            },
+            &before,
+            &after,
+        );
+        assert_eq!(alone, strand(7));
+    }
+
+    fn strand_of(points: &[Vec3], n: usize, c: usize) -> &[Vec3] {
+        &points[c * n..(c + 1) * n]
     }
 }
