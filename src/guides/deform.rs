@@ -186,7 +186,7 @@ pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3>
                 (w, bends)
             })
             .collect();
-        let style = blend_curls(&styles, handedness_draw(rest[0]));
+        let style = blend_curls(&styles, handedness_draw(c));
         let mut frame = frame_after;
         out[1] = out[0] + tangent * first.length();
         for k in 1..out.len() - 1 {
@@ -282,13 +282,13 @@ fn blend_curls(guides: &[(f32, Vec<Vec3>)], draw: f32) -> Vec<Vec3> {
         .collect()
 }
 
-/// A child's own number in [0, 1) for [`blend_curls`]'s choice of handedness, from its root's
-/// position: the same in every pose, at any thread count and in any strand order.
-fn handedness_draw(root: Vec3) -> f32 {
-    let mut x = root.to_array().iter().fold(0x9E37_79B9_7F4A_7C15u64, |h, c| {
-        (h ^ u64::from(c.to_bits())).wrapping_mul(0x1000_0000_01B3).rotate_left(29)
-    });
-    // splitmix64's finaliser: every bit of the root moves every bit of the draw.
+/// A child's own number in [0, 1) for [`blend_curls`]'s choice of handedness, from its index:
+/// the same in every pose (its rest curve and its points take the same handedness) and at any
+/// thread count, and unchanged when the groom is moved, turned or scaled (a draw from the root's
+/// coordinates changed with the last bit of a translation).
+fn handedness_draw(child: usize) -> f32 {
+    // splitmix64: every bit of the index moves every bit of the draw.
+    let mut x = (child as u64).wrapping_add(0x9E37_79B9_7F4A_7C15);
     x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     x ^= x >> 31;
@@ -526,38 +526,41 @@ mod tests {
     /// Children between a right- and a left-handed guide, bound 0.7 / 0.3: about 70 % of them
     /// curl right-handed and 30 % left-handed (each as tightly as the guides), not all of them
     /// the majority's way, which lined every switch up on the line where the first guide changes.
-    /// Each child's choice is its own: the same in another run and whatever children beside it.
+    /// Each child's choice is its own: the same whatever children are beside it, and the same
+    /// when the whole groom is moved 3 m.
     #[test]
     fn children_of_guides_curled_both_ways_take_each_handedness_by_weight() {
-        let (n, step) = (60, 0.004);
-        let guides: Vec<Vec3> =
-            [line(Vec3::ZERO, n, step), line(Vec3::new(0.004, 0.0, 0.0), n, step)].concat();
-        let wound: Vec<Vec3> = [true, false]
-            .iter()
-            .enumerate()
-            .flat_map(|(g, &right)| {
-                let origin = Vec3::new(0.004 * g as f32, 0.0, 0.0);
-                helix(n, step, 0.01, 0.03, right).into_iter().map(move |p| p + origin)
-            })
-            .collect();
-        let offsets = vec![0, n as u32, 2 * n as u32];
-        let before = Curves::new(guides, offsets.clone(), None);
-        let roots = before.carried_root_frames(&wound);
-        let after = Curves::new(wound.clone(), offsets, Some(&roots));
+        let (n, step, count) = (60, 0.004, 400);
+        let bindings = vec![Binding { guides: [0, 1, 0], weights: [0.7, 0.3, 0.0] }; count];
+        // The guides straight, then wound opposite ways; children 0.1 mm apart along z, between
+        // them; all moved by `shift`.
+        let styled = |shift: Vec3, children: std::ops::Range<usize>| {
+            let guides: Vec<Vec3> =
+                [line(shift, n, step), line(shift + Vec3::new(0.004, 0.0, 0.0), n, step)].concat();
+            let wound: Vec<Vec3> = [true, false]
+                .iter()
+                .enumerate()
+                .flat_map(|(g, &right)| {
+                    let origin = shift + Vec3::new(0.004 * g as f32, 0.0, 0.0);
+                    helix(n, step, 0.01, 0.03, right).into_iter().map(move |p| p + origin)
+                })
+                .collect();
+            let offsets = vec![0, n as u32, 2 * n as u32];
+            let before = Curves::new(guides, offsets.clone(), None);
+            let roots = before.carried_root_frames(&wound);
+            let after = Curves::new(wound.clone(), offsets, Some(&roots));
+            let points: Vec<Vec3> = children
+                .clone()
+                .flat_map(|c| line(shift + Vec3::new(0.002, 0.0, 1e-4 * c as f32), n, step))
+                .collect();
+            let offsets: Vec<u32> = (0..=children.len() as u32).map(|c| c * n as u32).collect();
+            let bindings = &bindings[children];
+            (deform(&Children { points: &points, offsets: &offsets, bindings }, &before, &after), wound)
+        };
+        let (moved, wound) = styled(Vec3::ZERO, 0..count);
         let first_way = twists_positive(&wound[..n]);
         assert_ne!(first_way, twists_positive(&wound[n..]), "the guides curl opposite ways");
         let guide_radius = crate::analysis::curl_radius(&wound[..n]).unwrap();
-        // Children 0.1 mm apart along z, between the guides.
-        let count = 400;
-        let children: Vec<Vec3> =
-            (0..count).flat_map(|c| line(Vec3::new(0.002, 0.0, 1e-4 * c as f32), n, step)).collect();
-        let child_offsets: Vec<u32> = (0..=count as u32).map(|c| c * n as u32).collect();
-        let bindings = vec![Binding { guides: [0, 1, 0], weights: [0.7, 0.3, 0.0] }; count];
-        let moved = deform(
-            &Children { points: &children, offsets: &child_offsets, bindings: &bindings },
-            &before,
-            &after,
-        );
         let strand = |c: usize| &moved[c * n..(c + 1) * n];
         let like_first = (0..count).filter(|&c| twists_positive(strand(c)) == first_way).count();
         let share = like_first as f32 / count as f32;
@@ -567,20 +570,13 @@ mod tests {
             let radius = crate::analysis::curl_radius(strand(c)).unwrap();
             assert!((radius / guide_radius - 1.0).abs() < 0.02, "child {c}: curl radius {radius}");
         }
-        // A child alone curls as it did among the others.
-        let alone = deform(
-            &Children {
-                points: strand_of(&children, n, 7),
-                offsets: &[0, n as u32],
-                bindings: &bindings[..1],
-            },
-            &before,
-            &after,
-        );
-        assert_eq!(alone, strand(7));
-    }
-
-    fn strand_of(points: &[Vec3], n: usize, c: usize) -> &[Vec3] {
-        &points[c * n..(c + 1) * n]
+        // The first child alone curls as it did among the others.
+        assert_eq!(styled(Vec3::ZERO, 0..1).0, strand(0));
+        // Moved 3 m, every child turns the same way.
+        let (far, _) = styled(Vec3::new(3.0, -1.0, 2.0), 0..count);
+        for c in 0..count {
+            let way = twists_positive(&far[c * n..(c + 1) * n]);
+            assert_eq!(way, twists_positive(strand(c)), "child {c} turns the other way 3 m away");
+        }
     }
 }
