@@ -5,7 +5,8 @@
 //!   5, 10, 20 iterations (the direct solver also at 1 and 2: `cargo bench --bench sim` finds its
 //!   single iteration as accurate per step; FILTER may name one preset). Mean and largest
 //!   distance of the settled shape and of the `rest` curves to the finest run (Δt 1/1440, 20
-//!   iterations), in % of the strand length; the largest collider penetration of any stage.
+//!   iterations), in % of the strand length, and the strand and vertex of the shape's largest
+//!   (`strand:vertex` of the thinned groom); the largest collider penetration of any stage.
 //! - `cantilever`: a clamped horizontal hair of 8 segments of 2 mm … 3 cm, settled under a gravity
 //!   scaled to a small deflection (0.5 % of its length), at the simulation's own iterations. Tip
 //!   sag over Euler–Bernoulli `q·L⁴/(8·E·I)` for the clamp at the root (`L`) and at the first
@@ -165,12 +166,14 @@ fn vec3_attribute(groom: &Groom, name: &str) -> Vec<Vec3> {
         .collect()
 }
 
-/// Mean and largest distance between two point sets, in % of `length`.
-fn difference(a: &[Vec3], b: &[Vec3], length: f32) -> (f32, f32) {
+/// Mean and largest distance between two point sets, in % of `length`, and the index of the
+/// point at the largest.
+fn difference(a: &[Vec3], b: &[Vec3], length: f32) -> (f32, f32, usize) {
     let d: Vec<f32> = a.iter().zip(b).map(|(p, q)| p.distance(*q)).collect();
     let mean = d.iter().sum::<f32>() / d.len().max(1) as f32;
-    let max = d.iter().copied().fold(0.0, f32::max);
-    (100.0 * mean / length, 100.0 * max / length)
+    let (worst, max) =
+        d.iter().copied().enumerate().fold((0, 0.0), |w, (i, x)| if x > w.1 { (i, x) } else { w });
+    (100.0 * mean / length, 100.0 * max / length, worst)
 }
 
 /// The presets the invariance figures style: recipe, groom and which strands of it (every n-th).
@@ -225,7 +228,7 @@ fn invariance_of(solver: StrandSolver, name: &str, groom_file: &str, step: usize
     let (reference, _) = styled(1440, 20);
     let (ref_shape, ref_rest) = (reference.groom.points.clone(), vec3_attribute(&reference.groom, "rest"));
     println!(
-        "  Δt      iter  shape mean/max %   rest mean/max %   deepest mm  settle (converged, s)  wall s"
+        "  Δt      iter  shape mean/max %  at s:v    rest mean/max %   deepest mm  settle (converged, s)  wall s"
     );
     let counts: &[u32] = match solver {
         StrandSolver::Direct => &[1, 2, 5, 10, 20],
@@ -246,10 +249,13 @@ fn invariance_of(solver: StrandSolver, name: &str, groom_file: &str, step: usize
             let deepest = out.report.stages.iter().map(|s| s.max_penetration).fold(0.0, f32::max);
             let settle =
                 out.report.stages.last().and_then(|s| s.settle.as_ref().map(|r| (r.converged, r.seconds)));
+            // Where the shape differs most, to look at that strand (the thinned groom's numbering).
+            let (strand, vertex) = groom.strand_and_vertex(shape.2);
             println!(
-                "  1/{rate:<5} {iterations:>3}   {:>6.2} / {:>6.2}    {:>6.2} / {:>6.2}   {:>8.2}   {settle:?}  {wall:.1}",
+                "  1/{rate:<5} {iterations:>3}   {:>6.2} / {:>6.2}  {:>8}    {:>6.2} / {:>6.2}   {:>8.2}   {settle:?}  {wall:.1}",
                 shape.0,
                 shape.1,
+                format!("{strand}:{vertex}"),
                 rest.0,
                 rest.1,
                 deepest * 1e3
