@@ -910,7 +910,6 @@ fn mesh_primvars(
     Ok((primvars, left_out))
 }
 
-/// The integer kind of a USD integer type (held exactly), `None` for others (`bool` is a flag).
 /// Values per element a groom attribute holds at most (a colour with alpha, a quaternion).
 const MAX_COMPONENTS: usize = 4;
 
@@ -937,6 +936,7 @@ fn element_components(
     Ok(components)
 }
 
+/// The integer kind of a USD integer type (held exactly), `None` for others (`bool` is a flag).
 fn integer_kind(type_name: &str) -> Option<AttributeKind> {
     match type_name {
         "int" | "int2" | "int3" | "int4" | "uchar" => Some(AttributeKind::Int),
