@@ -332,7 +332,7 @@ struct FrameMomentum {
     before: Vec<Quat>,
     /// Per edge, the last step's turn in the frame's own axes (scaled axis; empty: at rest).
     turn: Vec<Vec3>,
-    /// Per edge, this step's turn by the stepper alone.
+    /// Per edge, this step's turn by the stepper alone (awake strands only).
     plain: Vec<Vec3>,
 }
 
@@ -352,17 +352,18 @@ impl FrameMomentum {
             self.turn.clear();
             self.turn.resize(edges, Vec3::ZERO);
         }
-        self.plain.clear();
-        self.plain.extend(s.rods.frames().iter().zip(&self.before).map(|(&now, &was)| {
-            let was = if was.dot(now) < 0.0 { -was } else { was };
-            (was.conjugate() * now).to_scaled_axis()
-        }));
+        self.plain.resize(edges, Vec3::ZERO);
         for strand in 0..s.rods.strand_count() {
             let range = s.rods.strand_range(strand);
             let edges = range.start..range.end - 1;
             if s.asleep(strand) {
                 self.turn[edges].fill(Vec3::ZERO);
                 continue;
+            }
+            for e in edges.clone() {
+                let (now, was) = (s.rods.frames()[e], self.before[e]);
+                let was = if was.dot(now) < 0.0 { -was } else { was };
+                self.plain[e] = (was.conjugate() * now).to_scaled_axis();
             }
             let power: f64 = edges.clone().map(|e| self.plain[e].dot(self.turn[e]) as f64).sum();
             let restart = power < 0.0;
