@@ -2,7 +2,9 @@
 //! the same driver `coif style` uses (forces from a snapshot, solver with obstacle contacts,
 //! wetness update). Configurations from issue 4: seed 2's groom (10,000 strands × 6 vertices,
 //! 4 iterations) with 0, 100 and 1,000 droplets and contacts on (and, for reference, none and contacts off); a production groom
-//! (100,000 × 32, 5 iterations) with contacts on and off. Medians of 3 runs, 1 and 2 threads:
+//! (100,000 × 32, 5 iterations) with contacts on and off, falling from its generated shape (every
+//! step rebuilds the lists) and, as a shot starting from a settled groom, held in that shape by a
+//! sag-free rest shape ("held"). Medians of 3 runs, 1 and 2 threads:
 //! wall ms per step of the `process` stage, and CPU ms (all threads) per step of the whole
 //! `style` call (set-up and the first list build included), which stays comparable under load.
 //! Each configuration's checksum of the styled points (the same at any thread count, or the
@@ -25,10 +27,13 @@ struct Config {
     contacts: bool,
     /// `[contacts] sample_spacing`: seed 2's sparse 4.8 cm segments favour longer pieces.
     spacing: f32,
+    /// `[settings] sag_free`: the groom holds its shape under gravity from the start, as a shot
+    /// starting from a settled groom does, instead of falling from its generated shape.
+    sag_free: bool,
     steps: u32,
 }
 
-const CONFIGS: [Config; 8] = [
+const CONFIGS: [Config; 10] = [
     Config {
         name: "seed2-10000x6x4-no-contacts",
         strands: 10_000,
@@ -37,6 +42,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 0,
         contacts: false,
         spacing: 0.005,
+        sag_free: false,
         steps: 60,
     },
     Config {
@@ -47,6 +53,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 0,
         contacts: true,
         spacing: 0.005,
+        sag_free: false,
         steps: 60,
     },
     Config {
@@ -57,6 +64,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 100,
         contacts: true,
         spacing: 0.005,
+        sag_free: false,
         steps: 60,
     },
     Config {
@@ -67,6 +75,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 1000,
         contacts: true,
         spacing: 0.005,
+        sag_free: false,
         steps: 60,
     },
     Config {
@@ -77,6 +86,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 0,
         contacts: true,
         spacing: 0.002,
+        sag_free: false,
         steps: 30,
     },
     Config {
@@ -87,6 +97,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 0,
         contacts: false,
         spacing: 0.002,
+        sag_free: false,
         steps: 30,
     },
     Config {
@@ -97,6 +108,7 @@ const CONFIGS: [Config; 8] = [
         droplets: 0,
         contacts: true,
         spacing: 0.002,
+        sag_free: false,
         steps: 6,
     },
     Config {
@@ -107,7 +119,30 @@ const CONFIGS: [Config; 8] = [
         droplets: 0,
         contacts: false,
         spacing: 0.002,
+        sag_free: false,
         steps: 6,
+    },
+    Config {
+        name: "production-100000x32-held-contacts",
+        strands: 100_000,
+        vertices: 32,
+        iterations: 5,
+        droplets: 0,
+        contacts: true,
+        spacing: 0.002,
+        sag_free: true,
+        steps: 18,
+    },
+    Config {
+        name: "production-100000x32-held-no-contacts",
+        strands: 100_000,
+        vertices: 32,
+        iterations: 5,
+        droplets: 0,
+        contacts: false,
+        spacing: 0.002,
+        sag_free: true,
+        steps: 18,
     },
 ];
 
@@ -130,10 +165,10 @@ fn main() {
         };
         let seconds = config.steps as f32 / 360.0;
         let text = format!(
-            "[settings]\niterations = {}\n[contacts]\nhair_hair = {}\nsample_spacing = {}\n{water}\
+            "[settings]\niterations = {}\nsag_free = {}\n[contacts]\nhair_hair = {}\nsample_spacing = {}\n{water}\
              [[obstacles]]\nname = \"head\"\nshape = \"head\"\n\
              [[stages]]\nkind = \"wet\"\nduration = 0.0\n[[stages]]\nkind = \"process\"\nduration = {seconds}\n",
-            config.iterations, config.contacts, config.spacing
+            config.iterations, config.sag_free, config.contacts, config.spacing
         );
         let recipe = recipe::parse(&text, Path::new("bench.toml")).expect("benchmark recipe parses");
         let mut checksums = Vec::new();

@@ -1060,4 +1060,33 @@ mod tests {
             "rebuilt far from the jitter: {queries} queries"
         );
     }
+
+    #[test]
+    fn lists_outlive_hair_swaying_from_held_roots_and_stay_exact() {
+        // 300 random-walk strands of edges about a centimetre long above a "scalp" at y = 0 in
+        // a 3 × 2 × 3 cm box, thick enough to touch often. Each step every vertex sways along x by an amount
+        // growing with its height (held ones, below 2 mm, not at all), by 0.02 to 1.5 skins at
+        // the top (a smooth field, as hair swinging or falling from its roots): pairs close only
+        // by the field's change across a contact, far less than across an edge. Every step must
+        // find exactly the contacts of an all-pairs search, and lists must last several steps.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(21);
+        let extent = Vec3::new(0.03, 0.02, 0.03);
+        let (mut points, offsets) = random_walks(&mut rng, 300, 6, extent, 0.02);
+        let radii: Vec<f32> = (0..points.len()).map(|_| rng.random_range(1e-4..3e-4)).collect();
+        let fixed: Vec<bool> = points.iter().map(|p| p.y < 0.002).collect();
+        let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
+        let (steps, mut touching) = (40, 0);
+        for step in 0..steps {
+            touching += matches_brute_force(&mut contacts, &offsets, &points, &radii, &fixed, step);
+            let top = [0.02, 0.1, 0.3, 1.5][step % 4] * HairContacts::DEFAULT_SKIN;
+            for (p, _) in points.iter_mut().zip(&fixed).filter(|(_, &f)| !f) {
+                p.x += top * (p.y / extent.y).clamp(0.0, 1.0);
+            }
+        }
+        let (builds, queries) = (contacts.builds(), contacts.queries_made());
+        let movable = fixed.iter().filter(|&&f| !f).count() as u64;
+        eprintln!("{touching} contacts, lists built {builds} times in {steps} steps, {queries} queries of {movable} movable vertices");
+        assert!(touching > 200, "too few contacts to test: {touching}");
+        assert!(builds <= steps as u64 / 4, "lists built {builds} times in {steps} steps");
+    }
 }
