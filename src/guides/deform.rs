@@ -484,27 +484,35 @@ mod tests {
             .collect()
     }
 
-    /// Two straight guides wound into helices of one radius and pitch, one right-handed and one
-    /// left-handed: a child bound to both curls as tightly as they do. Summed, their bends swung
-    /// to and fro instead of turning, and the child lost the curls' torsion.
-    #[test]
-    fn a_child_of_guides_curled_both_ways_curls_like_them() {
-        let (n, step) = (60, 0.004);
-        let guides: Vec<Vec3> =
-            [line(Vec3::ZERO, n, step), line(Vec3::new(0.004, 0.0, 0.0), n, step)].concat();
-        let child = line(Vec3::new(0.002, 0.0, 0.0), n, step);
+    /// Two straight guides of `n` points `step` apart, 4 mm apart from `origin`, before and after
+    /// they are wound into helices of 1 cm radius and 3 cm pitch, the first right-handed and the
+    /// second left-handed; and the wound points.
+    fn guides_wound_both_ways(origin: Vec3, n: usize, step: f32) -> (Curves, Curves, Vec<Vec3>) {
+        let apart = Vec3::new(0.004, 0.0, 0.0);
+        let guides: Vec<Vec3> = [line(origin, n, step), line(origin + apart, n, step)].concat();
         let wound: Vec<Vec3> = [true, false]
             .iter()
             .enumerate()
             .flat_map(|(g, &right)| {
-                let origin = Vec3::new(0.004 * g as f32, 0.0, 0.0);
-                helix(n, step, 0.01, 0.03, right).into_iter().map(move |p| p + origin)
+                let root = origin + apart * g as f32;
+                helix(n, step, 0.01, 0.03, right).into_iter().map(move |p| p + root)
             })
             .collect();
         let offsets = vec![0, n as u32, 2 * n as u32];
         let before = Curves::new(guides, offsets.clone(), None);
         let roots = before.carried_root_frames(&wound);
         let after = Curves::new(wound.clone(), offsets, Some(&roots));
+        (before, after, wound)
+    }
+
+    /// Two straight guides wound into helices of one radius and pitch, one right-handed and one
+    /// left-handed: a child bound to both curls as tightly as they do. Summed, their bends swung
+    /// to and fro instead of turning, and the child lost the curls' torsion.
+    #[test]
+    fn a_child_of_guides_curled_both_ways_curls_like_them() {
+        let (n, step) = (60, 0.004);
+        let child = line(Vec3::new(0.002, 0.0, 0.0), n, step);
+        let (before, after, wound) = guides_wound_both_ways(Vec3::ZERO, n, step);
         let guide_radius = crate::analysis::curl_radius(&wound[..n]).unwrap();
         assert!((guide_radius - 0.01).abs() < 1e-4, "{guide_radius}");
         for weights in [[0.5, 0.5, 0.0], [0.7, 0.3, 0.0], [0.3, 0.7, 0.0]] {
@@ -535,20 +543,7 @@ mod tests {
         // The guides straight, then wound opposite ways; children 0.1 mm apart along z, between
         // them; all moved by `shift`.
         let styled = |shift: Vec3, children: std::ops::Range<usize>| {
-            let guides: Vec<Vec3> =
-                [line(shift, n, step), line(shift + Vec3::new(0.004, 0.0, 0.0), n, step)].concat();
-            let wound: Vec<Vec3> = [true, false]
-                .iter()
-                .enumerate()
-                .flat_map(|(g, &right)| {
-                    let origin = shift + Vec3::new(0.004 * g as f32, 0.0, 0.0);
-                    helix(n, step, 0.01, 0.03, right).into_iter().map(move |p| p + origin)
-                })
-                .collect();
-            let offsets = vec![0, n as u32, 2 * n as u32];
-            let before = Curves::new(guides, offsets.clone(), None);
-            let roots = before.carried_root_frames(&wound);
-            let after = Curves::new(wound.clone(), offsets, Some(&roots));
+            let (before, after, wound) = guides_wound_both_ways(shift, n, step);
             let points: Vec<Vec3> = children
                 .clone()
                 .flat_map(|c| line(shift + Vec3::new(0.002, 0.0, 1e-4 * c as f32), n, step))
