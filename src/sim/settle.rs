@@ -7,7 +7,10 @@
 //! frames first (a conditioning choice; at unconverged iterations it moves the fixed point, see
 //! `settle_with`), and whenever the kinetic energy
 //! passes a peak every velocity is zeroed, so the groom slides down its potential energy instead
-//! of oscillating about the minimum. The step taken right after a reset starts from rest, so its
+//! of oscillating about the minimum. Frames carry no angular velocity, so a bend or twist creeps
+//! at a rate no reset changes; while settling each frame keeps most of its last step's turn as
+//! momentum ([`FrameMomentum`]), so a long helix turning its tip gets there in seconds rather than
+//! minutes. The step taken right after a reset starts from rest (no momentum), so its
 //! displacement is the net force of the configuration: `F_i = m_i·Δx_i/Δt²` (gravity, elasticity,
 //! contacts, hair–hair and water forces, whatever the step includes), and each frame's rotation
 //! is its net torque `τ = θ/(w_q·Δt²)`. The residuals are their norms relative to gravity's. The
@@ -249,6 +252,7 @@ fn relax<C>(
     let mut per_strand = Vec::new();
     let mut disturbed = Vec::new();
     let mut asleep = 0;
+    let mut momentum = FrameMomentum::default();
     while report.steps < max_steps {
         if reset {
             let s = sim(context);
@@ -258,8 +262,17 @@ fn relax<C>(
             report.resets += 1;
             since_reset = 0;
             kinetic = 0.0;
+            momentum.stop();
+        }
+        // A probe's steps are the stepper's own, from rest: they measure its residual.
+        let pushed = since_reset >= probe_steps;
+        if pushed {
+            momentum.before_step(sim(context));
         }
         step(context);
+        if pushed {
+            momentum.after_step(sim(context));
+        }
         tick();
         report.steps += 1;
         report.strand_steps_asleep += asleep as u64;
@@ -297,6 +310,74 @@ fn relax<C>(
         let now = s.kinetic_energy();
         reset = verify || since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
         kinetic = now;
+    }
+}
+
+/// Momentum kept by the frames' turns while settling: each step adds this fraction of the last
+/// step's turn (heavy-ball). See [`FrameMomentum`].
+const FRAME_MOMENTUM: f32 = 0.98;
+
+/// Heavy-ball momentum for the quasi-static frames while settling. Frames carry no angular
+/// velocity, so under a steady torque a strand's frames turn by the same small amount every step:
+/// a soft twist (a long permed helix turning its tip about its axis) relaxed as a gradient flow
+/// that no velocity reset speeds up, its rate set by the frames' inertia (60 cm scene-3 perm: the
+/// tips circled ~3 cm in 180 s of settling, undamped or with rarer resets alike). Each step here
+/// adds `β` times the frame's last turn, so a steady turn runs `1/(1 − β)` times faster; a strand
+/// whose torque turns against its momentum (the summed turns' dot product is negative) restarts
+/// from its plain step. The steps of a probe run without it, from rest, so a converged state is a
+/// rest state of the stepper itself.
+#[derive(Default)]
+struct FrameMomentum {
+    /// Frames before the step.
+    before: Vec<Quat>,
+    /// Per edge, the last step's turn in the frame's own axes (scaled axis; empty: at rest).
+    turn: Vec<Vec3>,
+    /// Per edge, this step's turn by the stepper alone (awake strands only).
+    plain: Vec<Vec3>,
+}
+
+impl FrameMomentum {
+    fn stop(&mut self) {
+        self.turn.clear();
+    }
+
+    fn before_step(&mut self, s: &Simulation) {
+        self.before.clear();
+        self.before.extend_from_slice(s.rods.frames());
+    }
+
+    fn after_step(&mut self, s: &mut Simulation) {
+        let edges = s.rods.frames().len();
+        if self.turn.len() != edges {
+            self.turn.clear();
+            self.turn.resize(edges, Vec3::ZERO);
+        }
+        self.plain.resize(edges, Vec3::ZERO);
+        for strand in 0..s.rods.strand_count() {
+            let range = s.rods.strand_range(strand);
+            let edges = range.start..range.end - 1;
+            if s.asleep(strand) {
+                self.turn[edges].fill(Vec3::ZERO);
+                continue;
+            }
+            for e in edges.clone() {
+                let (now, was) = (s.rods.frames()[e], self.before[e]);
+                let was = if was.dot(now) < 0.0 { -was } else { was };
+                self.plain[e] = (was.conjugate() * now).to_scaled_axis();
+            }
+            let power: f64 = edges.clone().map(|e| self.plain[e].dot(self.turn[e]) as f64).sum();
+            let restart = power < 0.0;
+            for e in edges {
+                if restart || s.rods.frame_inv_inertia()[e] <= 0.0 {
+                    self.turn[e] = self.plain[e];
+                    continue;
+                }
+                let push = FRAME_MOMENTUM * self.turn[e];
+                let frame = s.rods.frames()[e];
+                s.rods.frames_mut()[e] = (frame * Quat::from_scaled_axis(push)).normalize();
+                self.turn[e] = self.plain[e] + push;
+            }
+        }
     }
 }
 
