@@ -255,6 +255,32 @@ impl HairContacts {
         if self.max_radius <= 0.0 {
             return;
         }
+        self.update_lists(points, radii, fixed);
+        let stiffness = self.stiffness;
+        self.add_over_contacts(points, radii, velocities, |offset, d, contact| {
+            offset / d * (stiffness * (contact - d) / contact * dt)
+        });
+    }
+
+    /// Moves every movable vertex (not `fixed`) out of the edges of other strands it lies within
+    /// the contact distance of: by how deep it is, summed over them, along the line from each
+    /// edge's closest point. One Jacobi projection of positions, not a force: a few of them
+    /// separate strands that were placed among each other rather than simulated. Returns how many
+    /// vertices moved.
+    pub fn project_apart(&mut self, points: &mut [Vec3], radii: &[f32], fixed: &[bool]) -> usize {
+        if self.max_radius <= 0.0 {
+            return 0;
+        }
+        self.update_lists(points, radii, fixed);
+        let mut moves = vec![Vec3::ZERO; points.len()];
+        self.add_over_contacts(points, radii, &mut moves, |offset, d, contact| offset / d * (contact - d));
+        points.par_iter_mut().zip(&moves).for_each(|(p, m)| *p += *m);
+        moves.par_iter().filter(|m| **m != Vec3::ZERO).count()
+    }
+
+    /// Builds the lists, wholly or in part, where the pairs they miss may have closed by their
+    /// skin since they were built (or the movable vertices changed).
+    fn update_lists(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
         if !self.built || fixed != self.built_fixed.as_slice() {
             self.build(points, radii, fixed, false);
         } else {
@@ -278,16 +304,26 @@ impl HairContacts {
             }
         }
         self.lifetime += 1;
-        let this = &*self;
-        velocities.par_iter_mut().enumerate().with_min_len(1024).for_each(|(i, v)| {
-            let listed = this.list_starts[i] as usize..this.list_starts[i + 1] as usize;
-            for &j in &this.list_edges[listed] {
-                let Some((offset, contact)) = this.offset_from_edge(points, radii, i, j as usize) else {
+    }
+
+    /// Adds `response(offset, distance, contact)` to each listed vertex's `out` for every edge it
+    /// touches (closer than the contact distance), in list order.
+    fn add_over_contacts(
+        &self,
+        points: &[Vec3],
+        radii: &[f32],
+        out: &mut [Vec3],
+        response: impl Fn(Vec3, f32, f32) -> Vec3 + Sync,
+    ) {
+        out.par_iter_mut().enumerate().with_min_len(1024).for_each(|(i, v)| {
+            let listed = self.list_starts[i] as usize..self.list_starts[i + 1] as usize;
+            for &j in &self.list_edges[listed] {
+                let Some((offset, contact)) = self.offset_from_edge(points, radii, i, j as usize) else {
                     continue;
                 };
                 let d = offset.length();
                 if d < contact && d > 0.0 {
-                    *v += offset / d * (this.stiffness * (contact - d) / contact * dt);
+                    *v += response(offset, d, contact);
                 }
             }
         });
