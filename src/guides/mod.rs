@@ -12,6 +12,7 @@ pub mod binding;
 pub mod clump;
 pub mod deform;
 pub mod select;
+pub mod separate;
 
 use glam::Vec3;
 use serde::Deserialize;
@@ -206,6 +207,21 @@ pub fn style(
     let (last, last_pose) = start(usize::MAX);
     let mut child_points = deform::deform(&last, last_pose, &after);
     push_out(&mut child_points, &children.strand_offsets, &radii, &styled.colliders);
+    // Placed, not settled among each other: moved apart before their rest is solved, so that a
+    // shot simulating them with the recipe's contacts finds them at rest.
+    if recipe.contacts.hair_hair {
+        let guide_radii: Vec<f32> = guides.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+        separate::separate(
+            &mut child_points,
+            &children.strand_offsets,
+            &radii,
+            &styled.groom.points,
+            &guides.strand_offsets,
+            &guide_radii,
+            &styled.colliders,
+            &recipe.contacts,
+        );
+    }
 
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
     // points, the material frames rebuilt along the children's own curves (as a reader would:
@@ -523,15 +539,7 @@ fn merge_vertex_attribute(
 /// (those children fell 34.5 and 18 mm when simulated again). Roots stay.
 fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape]) {
     use rayon::prelude::*;
-    let still = Friction { static_friction: 0.0, dynamic_friction: 0.0 };
-    let outside = |mut p: Vec3, radius: f32| {
-        for shape in shapes {
-            if let Some(q) = resolve_contact(shape, p, p, radius, still) {
-                p = q;
-            }
-        }
-        p
-    };
+    let outside = |p: Vec3, radius: f32| outside(p, radius, shapes);
     let mut strands = deform::split_mut(points, offsets);
     strands.par_iter_mut().enumerate().for_each(|(s, strand)| {
         let first = offsets[s] as usize;
@@ -568,6 +576,17 @@ fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape
             previous_edges = Some((deformed_direction, placed));
         }
     });
+}
+
+/// A point of a strand of `radius` pushed out of every collider in turn, without friction.
+fn outside(mut p: Vec3, radius: f32, shapes: &[Shape]) -> Vec3 {
+    let still = Friction { static_friction: 0.0, dynamic_friction: 0.0 };
+    for shape in shapes {
+        if let Some(q) = resolve_contact(shape, p, p, radius, still) {
+            p = q;
+        }
+    }
+    p
 }
 
 /// `direction` turned back towards `from` (unit vectors) so that it is at most `angle` from it.
