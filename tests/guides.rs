@@ -432,10 +432,12 @@ fn children_clump_in_water_as_a_full_resolution_run_does() {
 /// softer on curls) against the recipe's head and measures the children. The guides are
 /// re-simulated with the stepper they were settled with and the recipe's hair–hair contacts they
 /// were settled with, as a shot simulates them (without them a guide the settle left resting on
-/// others fell 1.64 mm in 0.5 s, 0.12 mm with them; the children, placed rather than settled
-/// among each other, are re-simulated without). Both fall under the world's gravity, as
-/// a shot simulates them, not under the recipe's placed one: the fitted head leans with the hair
-/// (3.4° here), and guides settled under gravity leaning with it moved 3.8 mm in 2 s at the median.
+/// others fell 1.64 mm in 0.5 s, 0.12 mm with them); the children with those contacts too:
+/// placed rather than settled among each other, they were pushed apart at once (one moved
+/// 2.30 mm in 0.5 s) until styling moved them apart before solving their rest
+/// (`coif::guides::separate`). Both fall under the world's gravity, as a shot simulates them, not
+/// under the recipe's placed one: the fitted head leans with the hair (3.4° here), and guides
+/// settled under gravity leaning with it moved 3.8 mm in 2 s at the median.
 #[test]
 fn children_hold_their_shape_when_simulated_again() {
     use coif::sim::driver::{simulate, SimulateOptions};
@@ -467,7 +469,7 @@ fn children_hold_their_shape_when_simulated_again() {
     assert!(recipe.contacts.hair_hair, "the perm's guides are settled with hair–hair contacts");
     let contacts = Some(recipe.contacts.hair_contact_settings());
     let guides = moved_in_half_a_second(&guides, StrandSolver::GaussSeidel, contacts);
-    let children = moved_in_half_a_second(&children, StrandSolver::Direct, None);
+    let children = moved_in_half_a_second(&children, StrandSolver::Direct, contacts);
     for (name, at) in [("guides", &guides), ("children", &children)] {
         eprintln!(
             "{name} moved in 0.5 s: median {:.4} mm, 90 % {:.3} mm, 99 % {:.3} mm, max {:.2} mm",
