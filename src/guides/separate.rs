@@ -17,6 +17,10 @@ use crate::style::recipe::Contacts;
 /// the slack a shot's first steps (a child sags by micrometres) need before contacts engage.
 pub const MARGIN: f32 = 0.5;
 
+/// Longest pieces the pass's contacts cut strands into, metres (coarser than a simulation's: the
+/// pass runs once over every strand).
+pub const SPACING: f32 = 0.008;
+
 /// Most projections the pass makes; it stops as soon as one moves nothing.
 pub const PASSES: usize = 8;
 
@@ -50,8 +54,12 @@ pub fn separate(
     for &root in &offsets[..offsets.len() - 1] {
         fixed[root as usize] = true;
     }
-    let mut pairs =
-        HairContacts::new(&all_offsets, &widened, contacts.sample_spacing, contacts.hair_stiffness);
+    let mut pairs = HairContacts::new(
+        &all_offsets,
+        &widened,
+        contacts.sample_spacing.max(SPACING),
+        contacts.hair_stiffness,
+    );
     let mut passes = 0;
     for _ in 0..PASSES {
         let before = all_points[..child_vertices].to_vec();
