@@ -227,6 +227,18 @@ pub struct Attribute {
 }
 
 impl Attribute {
+    /// Values per element an attribute holds at most (a colour with alpha, a quaternion).
+    pub const MAX_COMPONENTS: usize = 4;
+
+    /// The warning for a file's attribute that readers leave out because its elements hold
+    /// `components` values, more than [`Self::MAX_COMPONENTS`]; `what` names it in the file.
+    pub fn left_out(what: &str, components: usize) -> String {
+        format!(
+            "{what} is left out: {components} values per element, more than the {} a groom attribute holds",
+            Self::MAX_COMPONENTS
+        )
+    }
+
     /// A float attribute.
     pub fn new(name: impl Into<String>, rate: AttributeRate, components: usize, data: Vec<f32>) -> Self {
         Attribute {
@@ -632,7 +644,7 @@ impl Groom {
             self.find_fault(segments)?;
         }
         for (i, attribute) in self.attributes.iter().enumerate() {
-            if !(1..=4).contains(&attribute.components) {
+            if !(1..=Attribute::MAX_COMPONENTS).contains(&attribute.components) {
                 return Err(GroomError::AttributeComponents {
                     name: attribute.name.clone(),
                     components: attribute.components,
