@@ -32,6 +32,25 @@ pub enum CurveBasis {
     CatmullRom,
 }
 
+impl CurveBasis {
+    /// The basis that draws NURBS curves of `order` (degree + 1) as Maya's and Blender's readers
+    /// draw them: order 2 a polyline, order 4 a cubic B-spline. Other orders are refused with
+    /// what to do: the whole file, not just the object, because a groom written back without
+    /// some of its hair, or with its curves reshaped, would pass unnoticed down a pipeline.
+    pub fn of_nurbs_order(order: f64) -> std::result::Result<CurveBasis, String> {
+        match order {
+            2.0 => Ok(CurveBasis::Linear),
+            4.0 => Ok(CurveBasis::BSpline),
+            _ => Err(format!(
+                "of order {order} (degree {}): coif reads degree 1 and 3 (orders 2 and 4); give these \
+                 curves order 4 or export them as Catmull-Rom or poly curves (Blender: the curves' \
+                 type or NURBS order; Maya: rebuild them as degree 3)",
+                order - 1.0
+            )),
+        }
+    }
+}
+
 /// Whether an attribute holds one value per vertex or one per strand.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

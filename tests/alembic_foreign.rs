@@ -613,3 +613,30 @@ fn a_parameter_of_more_than_four_values_per_element_is_left_out_with_a_warning()
     assert!(converted.status.success(), "{}", stderr(&converted));
     assert!(stderr(&converted).contains(&format!("warning: {expected}")), "{}", stderr(&converted));
 }
+
+/// Curves of NURBS order 5 (degree 4) in one object of several: coif cannot simulate them and
+/// does not read the file without them (a groom written back without some of its hair would pass
+/// unnoticed); it exits 2 naming the file, the object and the orders it reads, and says what to
+/// do. pxr and Blender read order 5; Blender's NURBS hair is order 4 by default.
+#[test]
+fn an_object_of_order_5_nurbs_refuses_the_file_naming_it_and_the_remedy() {
+    let mut w = ArchiveWriter::new(Cursor::new(Vec::new()), MetaData::new()).unwrap();
+    let top = w.top();
+    curves(&mut w, top, "guides", &[4, 4], &[line(0.0, 4), line(1.0, 4)].concat(), [0, 0, 3, 3]);
+    let odd = curves(&mut w, top, "eyebrows", &[5], &line(2.0, 5), [2, 0, 2, 2]);
+    let orders = w.add_array(odd, ".orders", MetaData::new(), Pod::U8, 1, 0);
+    w.set_sample(orders, &[5], 1).unwrap();
+    let bytes = w.finish().unwrap().into_inner();
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("groom.abc");
+    std::fs::write(&input, &bytes).unwrap();
+    let out = dir.path().join("out.usda");
+    let refused = coif(&["convert", path_str(&input), path_str(&out)]);
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    let message = stderr(&refused);
+    for named in ["groom.abc", "/eyebrows", "order 5 (degree 4)", "give these curves order 4"] {
+        assert!(message.contains(named), "{named}: {message}");
+    }
+    assert!(!message.contains("/guides"), "{message}");
+    assert_eq!(dir_listing(dir.path()), vec!["groom.abc".to_string()]);
+}

@@ -1129,21 +1129,21 @@ fn curve_basis(
         (1, _) => CurveBasis::Bezier,
         (2, LINEAR_TYPE) => CurveBasis::Linear,
         (2, VARIABLE_ORDER_TYPE) => {
-            let orders = orders()?;
-            if orders.iter().all(|&order| order == 2.0) {
-                CurveBasis::Linear
-            } else if orders.iter().all(|&order| order == 4.0) {
-                CurveBasis::BSpline
-            } else if let Some(odd) = orders.iter().find(|&&order| order != 2.0 && order != 4.0) {
-                return fail(format!(
-                    "{path}: NURBS curves of order {odd} (degree {}): coif reads degree 1 and 3",
-                    odd - 1.0
-                ));
-            } else {
+            let bases = orders()?
+                .into_iter()
+                .map(|order| {
+                    CurveBasis::of_nurbs_order(order).map_err(|m| format!("{path}: NURBS curves {m}"))
+                })
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(OgawaError)?;
+            // No orders: Maya and Blender read variable-order curves as order 2.
+            let first = bases.first().copied().unwrap_or(CurveBasis::Linear);
+            if bases.iter().any(|&basis| basis != first) {
                 return fail(format!(
                     "{path}: NURBS curves of degree 1 and 3 mixed: coif needs one degree per object"
                 ));
             }
+            first
         }
         (2, _) => CurveBasis::BSpline,
         (3, _) => CurveBasis::CatmullRom,

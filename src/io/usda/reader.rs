@@ -479,12 +479,7 @@ impl Walker<'_> {
                 format!("of orders {order} and {other} mixed: coif needs one degree per prim"),
             ));
         }
-        if order != 2 && order != 4 {
-            return Err(fail(
-                "order",
-                format!("of order {order} (degree {}): coif reads degree 1 and 3", order - 1),
-            ));
-        }
+        let basis = CurveBasis::of_nurbs_order(order as f64).map_err(|m| fail("order", m))?;
         let doubles = |name: &str| -> Result<Option<Vec<f64>>> {
             match prim.attribute(name).and_then(|a| value_at(a, time)) {
                 None => Ok(None),
@@ -502,8 +497,8 @@ impl Walker<'_> {
                 ));
             }
         }
-        if order == 2 {
-            return Ok((CurveBasis::Linear, CurveWrap::Nonperiodic));
+        if basis == CurveBasis::Linear {
+            return Ok((basis, CurveWrap::Nonperiodic));
         }
         let counts = ints("curveVertexCounts").unwrap_or_default();
         let knots = doubles("knots")?.unwrap_or_default();
@@ -536,7 +531,7 @@ impl Walker<'_> {
             }
         };
         let wrap = if clamped { CurveWrap::Pinned } else { CurveWrap::Nonperiodic };
-        Ok((CurveBasis::BSpline, wrap))
+        Ok((basis, wrap))
     }
 
     /// Reads one `BasisCurves` or `NurbsCurves` prim; `None` when it has no points (an empty
