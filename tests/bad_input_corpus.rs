@@ -1602,6 +1602,18 @@ fn contradiction_cases(hair: &[u8]) -> Vec<Case> {
          point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n    \
          float[] primvars:foo = [1, 2] (interpolation = \"constant\"\n elementSize = 1000000000)\n}\n",
     );
+    // The settle's options without --settle did nothing, unchecked: `--settle-tolerance nan` ran.
+    for (flag, value) in
+        [("--settle-tolerance", "nan"), ("--settle-seconds", "5"), ("--settle-iterations", "3")]
+    {
+        cases.push(case(
+            &format!("{flag} without --settle"),
+            vec![("g.hair", hair.to_vec())],
+            &["simulate", "g.hair", "out.hair", "--seconds", "0.01", flag, value],
+            2,
+            &[flag, "--settle"],
+        ));
+    }
     // One prim of degree-4 NURBS (Blender's NURBS order 5) beside other curves: the whole file
     // is refused naming the prim and what to do, not read without the prim's hair.
     let nurbs = format!(

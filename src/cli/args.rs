@@ -371,10 +371,11 @@ pub(crate) struct SimulateArgs {
     #[arg(long)]
     pub(crate) settle: bool,
     /// Largest accepted net force on a strand (relative to its weight) and net torque over the
-    /// groom (relative to gravity's moments), 1e-5 to 0.5.
-    #[arg(value_parser = number, long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
+    /// groom (relative to gravity's moments), 1e-5 to 0.5. Like the other settle options, it
+    /// needs --settle: without it the option would do nothing, unchecked.
+    #[arg(value_parser = number, long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE, requires = "settle")]
     pub(crate) settle_tolerance: f32,
-    #[arg(value_parser = number, long, default_value_t = 30.0)]
+    #[arg(value_parser = number, long, default_value_t = 30.0, requires = "settle")]
     pub(crate) settle_seconds: f32,
     /// Solve for the rest shape that holds the groom's current shape under gravity (for grooms
     /// fresh from a DCC tool), instead of taking the shape, or a styled groom's exported
@@ -392,7 +393,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, requires = "settle")]
     pub(crate) require_converged: bool,
     /// Solver iterations while settling (default: --iterations).
-    #[arg(long)]
+    #[arg(long, requires = "settle")]
     pub(crate) settle_iterations: Option<u32>,
     #[arg(long)]
     pub(crate) json: bool,
