@@ -1628,6 +1628,16 @@ fn contradiction_cases(hair: &[u8]) -> Vec<Case> {
         2,
         &["in.usda", "line 12", "prim </odd>", "order 5 (degree 4)", "give these curves order 4"],
     ));
+    // A floor placed or coloured with --no-floor: the option did nothing.
+    for (flag, value) in [("--floor-height", "1"), ("--floor-size", "3"), ("--floor-albedo", "0.5,0.5,0.5")] {
+        cases.push(case(
+            &format!("{flag} with --no-floor"),
+            vec![("g.hair", hair.to_vec())],
+            &["render", "g.hair", "-o", "out.png", "--res", "8x8", "--spp", "1", "--no-floor", flag, value],
+            2,
+            &[flag, "--no-floor"],
+        ));
+    }
     cases.push(case(
         "mesh primvar elementSize = 1e9",
         vec![("in.usda", mesh.into_bytes())],

@@ -246,13 +246,13 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) no_floor: bool,
     /// Floor height (world Y, metres; default: just below the hair and head).
-    #[arg(value_parser = number, long, allow_hyphen_values = true)]
+    #[arg(value_parser = number, long, allow_hyphen_values = true, conflicts_with = "no_floor")]
     pub(crate) floor_height: Option<f32>,
     /// Floor edge length, metres (default: a horizon for any view).
-    #[arg(value_parser = number, long)]
+    #[arg(value_parser = number, long, conflicts_with = "no_floor")]
     pub(crate) floor_size: Option<f32>,
     /// Floor albedo, linear r,g,b in [0, 1].
-    #[arg(long)]
+    #[arg(long, conflicts_with = "no_floor")]
     pub(crate) floor_albedo: Option<String>,
     /// The shot's camera, lights and floor: a scene file (.toml) or a USD stage (.usda, .usdc)
     /// with a UsdGeom Camera and UsdLux distant, rect and dome lights. Flags given explicitly
