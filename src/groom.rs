@@ -32,6 +32,25 @@ pub enum CurveBasis {
     CatmullRom,
 }
 
+impl CurveBasis {
+    /// The basis that draws NURBS curves of `order` (degree + 1) as Maya's and Blender's readers
+    /// draw them: order 2 a polyline, order 4 a cubic B-spline. Other orders are refused with
+    /// what to do: the whole file, not just the object, because a groom written back without
+    /// some of its hair, or with its curves reshaped, would pass unnoticed down a pipeline.
+    pub fn of_nurbs_order(order: f64) -> std::result::Result<CurveBasis, String> {
+        match order {
+            2.0 => Ok(CurveBasis::Linear),
+            4.0 => Ok(CurveBasis::BSpline),
+            _ => Err(format!(
+                "of order {order} (degree {}): coif reads degree 1 and 3 (orders 2 and 4); give these \
+                 curves order 4 or export them as Catmull-Rom or poly curves (Blender: the curves' \
+                 type or NURBS order; Maya: rebuild them as degree 3)",
+                order - 1.0
+            )),
+        }
+    }
+}
+
 /// Whether an attribute holds one value per vertex or one per strand.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -227,6 +246,18 @@ pub struct Attribute {
 }
 
 impl Attribute {
+    /// Values per element an attribute holds at most (a colour with alpha, a quaternion).
+    pub const MAX_COMPONENTS: usize = 4;
+
+    /// The warning for a file's attribute that readers leave out because its elements hold
+    /// `components` values, more than [`Self::MAX_COMPONENTS`]; `what` names it in the file.
+    pub fn left_out(what: &str, components: usize) -> String {
+        format!(
+            "{what} is left out: {components} values per element, more than the {} a groom attribute holds",
+            Self::MAX_COMPONENTS
+        )
+    }
+
     /// A float attribute.
     pub fn new(name: impl Into<String>, rate: AttributeRate, components: usize, data: Vec<f32>) -> Self {
         Attribute {
@@ -632,7 +663,7 @@ impl Groom {
             self.find_fault(segments)?;
         }
         for (i, attribute) in self.attributes.iter().enumerate() {
-            if !(1..=4).contains(&attribute.components) {
+            if !(1..=Attribute::MAX_COMPONENTS).contains(&attribute.components) {
                 return Err(GroomError::AttributeComponents {
                     name: attribute.name.clone(),
                     components: attribute.components,

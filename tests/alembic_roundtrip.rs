@@ -300,7 +300,7 @@ fn an_xform_parent_is_written_and_applied_on_reading() {
     let archive = Archive::open(&bytes).unwrap();
     assert_eq!(archive.top.children[0].full_name, "/xform");
     assert_eq!(archive.top.children[0].children[0].full_name, "/xform/curves");
-    let back = alembic::read(&bytes, &path, None, false).unwrap();
+    let back = alembic::read(&bytes, &path, None, false).unwrap().0;
     for (got, p) in back.points.iter().zip(&groom.points) {
         let expected = matrix.transform_point3(p.as_dvec3()).as_vec3();
         assert!((*got - expected).length() < 1e-6, "{got} vs {expected}");

@@ -1602,6 +1602,42 @@ fn contradiction_cases(hair: &[u8]) -> Vec<Case> {
          point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n    \
          float[] primvars:foo = [1, 2] (interpolation = \"constant\"\n elementSize = 1000000000)\n}\n",
     );
+    // The settle's options without --settle did nothing, unchecked: `--settle-tolerance nan` ran.
+    for (flag, value) in
+        [("--settle-tolerance", "nan"), ("--settle-seconds", "5"), ("--settle-iterations", "3")]
+    {
+        cases.push(case(
+            &format!("{flag} without --settle"),
+            vec![("g.hair", hair.to_vec())],
+            &["simulate", "g.hair", "out.hair", "--seconds", "0.01", flag, value],
+            2,
+            &[flag, "--settle"],
+        ));
+    }
+    // One prim of degree-4 NURBS (Blender's NURBS order 5) beside other curves: the whole file
+    // is refused naming the prim and what to do, not read without the prim's hair.
+    let nurbs = format!(
+        "{}def NurbsCurves \"odd\"\n{{\n    int[] curveVertexCounts = [5]\n    int[] order = [5]\n    \
+         point3f[] points = [(0, 0, 0), (0, 1, 0), (0, 2, 0), (0, 3, 0), (0, 4, 0)]\n}}\n",
+        two_curves("", "")
+    );
+    cases.push(case(
+        "order-5 NurbsCurves beside BasisCurves",
+        vec![("in.usda", nurbs.into_bytes())],
+        &["convert", "in.usda", "out.usda"],
+        2,
+        &["in.usda", "line 12", "prim </odd>", "order 5 (degree 4)", "give these curves order 4"],
+    ));
+    // A floor placed or coloured with --no-floor: the option did nothing.
+    for (flag, value) in [("--floor-height", "1"), ("--floor-size", "3"), ("--floor-albedo", "0.5,0.5,0.5")] {
+        cases.push(case(
+            &format!("{flag} with --no-floor"),
+            vec![("g.hair", hair.to_vec())],
+            &["render", "g.hair", "-o", "out.png", "--res", "8x8", "--spp", "1", "--no-floor", flag, value],
+            2,
+            &[flag, "--no-floor"],
+        ));
+    }
     cases.push(case(
         "mesh primvar elementSize = 1e9",
         vec![("in.usda", mesh.into_bytes())],

@@ -246,13 +246,13 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) no_floor: bool,
     /// Floor height (world Y, metres; default: just below the hair and head).
-    #[arg(value_parser = number, long, allow_hyphen_values = true)]
+    #[arg(value_parser = number, long, allow_hyphen_values = true, conflicts_with = "no_floor")]
     pub(crate) floor_height: Option<f32>,
     /// Floor edge length, metres (default: a horizon for any view).
-    #[arg(value_parser = number, long)]
+    #[arg(value_parser = number, long, conflicts_with = "no_floor")]
     pub(crate) floor_size: Option<f32>,
     /// Floor albedo, linear r,g,b in [0, 1].
-    #[arg(long)]
+    #[arg(long, conflicts_with = "no_floor")]
     pub(crate) floor_albedo: Option<String>,
     /// The shot's camera, lights and floor: a scene file (.toml) or a USD stage (.usda, .usdc)
     /// with a UsdGeom Camera and UsdLux distant, rect and dome lights. Flags given explicitly
@@ -371,10 +371,11 @@ pub(crate) struct SimulateArgs {
     #[arg(long)]
     pub(crate) settle: bool,
     /// Largest accepted net force on a strand (relative to its weight) and net torque over the
-    /// groom (relative to gravity's moments), 1e-5 to 0.5.
-    #[arg(value_parser = number, long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE)]
+    /// groom (relative to gravity's moments), 1e-5 to 0.5. Like the other settle options, it
+    /// needs --settle: without it the option would do nothing, unchecked.
+    #[arg(value_parser = number, long, default_value_t = coif::sim::settle::DEFAULT_TOLERANCE, requires = "settle")]
     pub(crate) settle_tolerance: f32,
-    #[arg(value_parser = number, long, default_value_t = 30.0)]
+    #[arg(value_parser = number, long, default_value_t = 30.0, requires = "settle")]
     pub(crate) settle_seconds: f32,
     /// Solve for the rest shape that holds the groom's current shape under gravity (for grooms
     /// fresh from a DCC tool), instead of taking the shape, or a styled groom's exported
@@ -392,7 +393,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, requires = "settle")]
     pub(crate) require_converged: bool,
     /// Solver iterations while settling (default: --iterations).
-    #[arg(long)]
+    #[arg(long, requires = "settle")]
     pub(crate) settle_iterations: Option<u32>,
     #[arg(long)]
     pub(crate) json: bool,

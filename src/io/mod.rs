@@ -251,7 +251,12 @@ fn read_groom_from(
             let bytes = input::map_file(path)?;
             let mut groom = match format {
                 Format::Hair => hair::read(&bytes, path)?,
-                _ => alembic::read(&bytes, path, selection.time, options.meters_per_unit.is_some())?,
+                _ => {
+                    let keep_units = options.meters_per_unit.is_some();
+                    let groom;
+                    (groom, warnings) = alembic::read(&bytes, path, selection.time, keep_units)?;
+                    groom
+                }
             };
             apply_import_options(&mut groom, options);
             groom

@@ -50,6 +50,8 @@ pub struct CurvesArchive<'a> {
     fps: f64,
     /// The file follows Epic's groom spec (it declares `groom_version_major`): centimetres.
     pub epic_groom: bool,
+    /// Warnings for the parameters no groom attribute holds (see [`Self::left_out`]).
+    left_out: Vec<String>,
 }
 
 /// The points and widths of every curves object read so far, one object after another.
@@ -106,8 +108,16 @@ impl<'a> CurvesArchive<'a> {
                 "{path}/.geom/P: the property holds no sample: its writer left the object empty"
             ));
         }
-        let mut result =
-            CurvesArchive { archive, curves: found, meshes, times: Vec::new(), fps: 0.0, epic_groom };
+        let mut result = CurvesArchive {
+            archive,
+            curves: found,
+            meshes,
+            times: Vec::new(),
+            fps: 0.0,
+            epic_groom,
+            left_out: Vec::new(),
+        };
+        result.left_out = result.parameters_left_out()?;
         let animated = result.animated_properties()?;
         let declared: u64 = animated.iter().map(|p| p.num_samples as u64).sum();
         if declared > result.archive.ogawa.len() + MAX_TIMELINE_SAMPLES {
@@ -165,6 +175,32 @@ impl<'a> CurvesArchive<'a> {
             .filter_map(|p| find(top, p).and_then(|o| o.properties.compound(".xform")))
             .collect();
         Ok(CurvesObject { path: path.to_string(), geom, xforms })
+    }
+
+    /// Warnings, one per parameter of a curves or mesh object that reading leaves out because
+    /// its elements hold more values than a groom attribute (the same at every frame: the count
+    /// is the property's extent), each naming the object and property.
+    pub fn left_out(&self) -> &[String] {
+        &self.left_out
+    }
+
+    /// See [`Self::left_out`]: the parameters [`held_extent`] turns away for their extent.
+    fn parameters_left_out(&self) -> OgawaResult<Vec<String>> {
+        let mut warnings = Vec::new();
+        for (path, xform_paths) in self.curves.iter().chain(&self.meshes) {
+            let object = self.resolve_path(path, xform_paths)?;
+            let own = ["N", ".velocities", "uv"].into_iter().filter_map(|name| object.geom.get(name));
+            let arb = object.geom.compound(".arbGeomParams");
+            let members = arb.map(|c| c.members.iter()).into_iter().flatten();
+            for (property, compound) in own.map(|p| (p, "")).chain(members.map(|p| (p, ".arbGeomParams/"))) {
+                let extent = param_extent(property).unwrap_or(0) as usize;
+                if extent > Attribute::MAX_COMPONENTS {
+                    let what = format!("{path}/.geom/{compound}{}", property.name());
+                    warnings.push(Attribute::left_out(&what, extent));
+                }
+            }
+        }
+        Ok(warnings)
     }
 
     /// Number of distinct sample times on the archive's timeline (1 for a static file).
@@ -334,7 +370,7 @@ impl<'a> CurvesArchive<'a> {
         time: f64,
     ) -> OgawaResult<Option<MeshPrimvar>> {
         let ogawa = &self.archive.ogawa;
-        let Some(extent) = param_extent(property).filter(|e| (1..=4).contains(e)) else { return Ok(None) };
+        let Some(extent) = held_extent(property) else { return Ok(None) };
         let (vals, indices, scope) = match property {
             Property::Sampled(s) => (s, None, s.metadata.get("geoScope")),
             Property::Compound(c) => {
@@ -563,10 +599,7 @@ impl<'a> CurvesArchive<'a> {
             if name == epic::WIDTH || name == epic::ROOT_UV {
                 continue;
             }
-            let Some(extent) = param_extent(member) else { continue };
-            if !(1..=4).contains(&extent) {
-                continue; // not something a groom attribute can hold
-            }
+            let Some(extent) = held_extent(member) else { continue };
             if name == epic::ID {
                 ids_given = true;
                 if let Some(ids) = self.strand_ids(member, time, &strands) {
@@ -1044,12 +1077,19 @@ fn param_kind(property: &Property<'_>, extent: u8) -> AttributeKind {
     }
 }
 
+/// The values per element of a numeric parameter.
 fn param_extent(property: &Property<'_>) -> Option<u8> {
     match property {
         Property::Sampled(s) if s.pod.size() > 0 => Some(s.extent),
         Property::Compound(c) => c.sampled(".vals").filter(|v| v.pod.size() > 0).map(|v| v.extent),
         _ => None,
     }
+}
+
+/// The values per element of a parameter a groom attribute can hold; `None` for strings and for
+/// more values than [`Attribute::MAX_COMPONENTS`] (which [`CurvesArchive::left_out`] names).
+fn held_extent(property: &Property<'_>) -> Option<u8> {
+    param_extent(property).filter(|&extent| (1..=Attribute::MAX_COMPONENTS).contains(&(extent as usize)))
 }
 
 fn required<'o, 'a>(object: &CurvesObject<'o, 'a>, name: &str) -> OgawaResult<&'o Sampled<'a>> {
@@ -1089,21 +1129,21 @@ fn curve_basis(
         (1, _) => CurveBasis::Bezier,
         (2, LINEAR_TYPE) => CurveBasis::Linear,
         (2, VARIABLE_ORDER_TYPE) => {
-            let orders = orders()?;
-            if orders.iter().all(|&order| order == 2.0) {
-                CurveBasis::Linear
-            } else if orders.iter().all(|&order| order == 4.0) {
-                CurveBasis::BSpline
-            } else if let Some(odd) = orders.iter().find(|&&order| order != 2.0 && order != 4.0) {
-                return fail(format!(
-                    "{path}: NURBS curves of order {odd} (degree {}): coif reads degree 1 and 3",
-                    odd - 1.0
-                ));
-            } else {
+            let bases = orders()?
+                .into_iter()
+                .map(|order| {
+                    CurveBasis::of_nurbs_order(order).map_err(|m| format!("{path}: NURBS curves {m}"))
+                })
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(OgawaError)?;
+            // No orders: Maya and Blender read variable-order curves as order 2.
+            let first = bases.first().copied().unwrap_or(CurveBasis::Linear);
+            if bases.iter().any(|&basis| basis != first) {
                 return fail(format!(
                     "{path}: NURBS curves of degree 1 and 3 mixed: coif needs one degree per object"
                 ));
             }
+            first
         }
         (2, _) => CurveBasis::BSpline,
         (3, _) => CurveBasis::CatmullRom,

@@ -45,7 +45,13 @@ fn centimetres_to_metres(groom: &mut Groom) {
 /// `frame / fps`, see [`CurvesArchive::read_at_frame`]; `None`: its first sample), all curves
 /// objects merged, transforms applied. Files that declare Epic's groom spec are in centimetres
 /// and are converted to metres unless `keep_file_units` (the caller converts them itself).
-pub fn read(bytes: &[u8], path: &Path, frame: Option<f64>, keep_file_units: bool) -> Result<Groom> {
+/// Returns warnings, naming `path`, about what the reading left out.
+pub fn read(
+    bytes: &[u8],
+    path: &Path,
+    frame: Option<f64>,
+    keep_file_units: bool,
+) -> Result<(Groom, Vec<String>)> {
     let archive = CurvesArchive::open(bytes).map_err(format_error(path))?;
     let groom = match frame {
         Some(frame) => archive.read_at_frame(frame),
@@ -55,7 +61,8 @@ pub fn read(bytes: &[u8], path: &Path, frame: Option<f64>, keep_file_units: bool
     if archive.epic_groom && !keep_file_units {
         centimetres_to_metres(&mut groom);
     }
-    Ok(groom)
+    let warnings = archive.left_out().iter().map(|w| format!("{}: {w}", path.display())).collect();
+    Ok((groom, warnings))
 }
 
 /// Reads every frame of an Alembic file (see [`read`]).

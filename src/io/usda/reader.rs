@@ -357,10 +357,7 @@ impl Walker<'_> {
 
     /// Warns that a primvar is left out: its elements hold more values than a groom attribute.
     fn leave_out(&self, site: Site, prim_path: &str, primvar: &str, components: usize) {
-        let message = format!(
-            "prim <{prim_path}>: {primvar} is left out: {components} values per element, more than \
-             the {MAX_COMPONENTS} a groom attribute holds"
-        );
+        let message = format!("prim <{prim_path}>: {}", GroomAttribute::left_out(primvar, components));
         self.left_out.borrow_mut().push(self.files.error(site, message).to_string());
     }
 
@@ -482,12 +479,7 @@ impl Walker<'_> {
                 format!("of orders {order} and {other} mixed: coif needs one degree per prim"),
             ));
         }
-        if order != 2 && order != 4 {
-            return Err(fail(
-                "order",
-                format!("of order {order} (degree {}): coif reads degree 1 and 3", order - 1),
-            ));
-        }
+        let basis = CurveBasis::of_nurbs_order(order as f64).map_err(|m| fail("order", m))?;
         let doubles = |name: &str| -> Result<Option<Vec<f64>>> {
             match prim.attribute(name).and_then(|a| value_at(a, time)) {
                 None => Ok(None),
@@ -505,8 +497,8 @@ impl Walker<'_> {
                 ));
             }
         }
-        if order == 2 {
-            return Ok((CurveBasis::Linear, CurveWrap::Nonperiodic));
+        if basis == CurveBasis::Linear {
+            return Ok((basis, CurveWrap::Nonperiodic));
         }
         let counts = ints("curveVertexCounts").unwrap_or_default();
         let knots = doubles("knots")?.unwrap_or_default();
@@ -539,7 +531,7 @@ impl Walker<'_> {
             }
         };
         let wrap = if clamped { CurveWrap::Pinned } else { CurveWrap::Nonperiodic };
-        Ok((CurveBasis::BSpline, wrap))
+        Ok((basis, wrap))
     }
 
     /// Reads one `BasisCurves` or `NurbsCurves` prim; `None` when it has no points (an empty
@@ -757,7 +749,7 @@ impl Walker<'_> {
             }
             let components = element_components(kind_components, element_size, values.len())
                 .map_err(|m| at_prim(site, format!("{full_name}: {m}")))?;
-            if components > MAX_COMPONENTS {
+            if components > GroomAttribute::MAX_COMPONENTS {
                 // Left out, but only when its count fits the curves: else the file is wrong.
                 let elements = values.len() / components;
                 layout
@@ -879,7 +871,7 @@ fn mesh_primvars(
             values.len(),
         )
         .map_err(fail)?;
-        if components > MAX_COMPONENTS {
+        if components > GroomAttribute::MAX_COMPONENTS {
             left_out.push((site, name.to_string(), components));
             continue;
         }
@@ -909,9 +901,6 @@ fn mesh_primvars(
     }
     Ok((primvars, left_out))
 }
-
-/// Values per element a groom attribute holds at most (a colour with alpha, a quaternion).
-const MAX_COMPONENTS: usize = 4;
 
 /// Values per element of a primvar of `values` values: its type's tuple (`float3`: 3) times its
 /// `elementSize`. pxr refuses to author an `elementSize` below 1, and the values must make whole
