@@ -507,6 +507,12 @@ impl Groom {
         groom
     }
 
+    /// Per-vertex radii the colliders and hair–hair contacts see: half the width, at least
+    /// 0.5 µm (a zero width still collides).
+    pub fn contact_radii(&self) -> Vec<f32> {
+        self.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect()
+    }
+
     pub fn strand_count(&self) -> usize {
         self.strand_offsets.len().saturating_sub(1)
     }

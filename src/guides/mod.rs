@@ -203,21 +203,20 @@ pub fn style(
     let bound = bind(&children.points);
     let after = posed(styled.groom.points.clone());
     let placed = place(recipe, &guides, options.scalp.as_deref(), frame)?;
-    let radii: Vec<f32> = children.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+    let radii = children.contact_radii();
     let (last, last_pose) = start(usize::MAX);
     let mut child_points = deform::deform(&last, last_pose, &after);
     push_out(&mut child_points, &children.strand_offsets, &radii, &styled.colliders);
     // Placed, not settled among each other: moved apart before their rest is solved, so that a
     // shot simulating them with the recipe's contacts finds them at rest.
     if recipe.contacts.hair_hair {
-        let guide_radii: Vec<f32> = guides.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
         separate::separate(
             &mut child_points,
             &children.strand_offsets,
             &radii,
             &styled.groom.points,
             &guides.strand_offsets,
-            &guide_radii,
+            &guides.contact_radii(),
             &styled.colliders,
             &recipe.contacts,
         );

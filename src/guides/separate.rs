@@ -7,7 +7,6 @@
 //! and the styled guides (held), roots held, each followed by the colliders' push out of the
 //! vertices it moved. Deterministic, and not a simulation: vertices move by their overlap only.
 use glam::Vec3;
-use rayon::prelude::*;
 
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::obstacles::Shape;
@@ -61,19 +60,13 @@ pub fn separate(
         contacts.hair_stiffness,
     );
     let mut passes = 0;
+    // Only children move (guides are held): each moved vertex is pushed out of the colliders.
+    let out_of_colliders = |i: usize, p: Vec3| super::outside(p, radii[i], colliders);
     for _ in 0..PASSES {
-        let before = all_points[..child_vertices].to_vec();
-        if pairs.project_apart(&mut all_points, &widened, &fixed) == 0 {
+        if pairs.project_apart(&mut all_points, &widened, &fixed, out_of_colliders) == 0 {
             break;
         }
         passes += 1;
-        all_points[..child_vertices].par_iter_mut().zip(&before).zip(radii).for_each(
-            |((p, was), &radius)| {
-                if *p != *was {
-                    *p = super::outside(*p, radius, colliders);
-                }
-            },
-        );
     }
     points.copy_from_slice(&all_points[..child_vertices]);
     passes

@@ -281,9 +281,15 @@ impl HairContacts {
     /// Moves every movable vertex (not `fixed`) out of the edges of other strands it lies within
     /// the contact distance of: by how deep it is, summed over them, along the line from each
     /// edge's closest point. One Jacobi projection of positions, not a force: a few of them
-    /// separate strands that were placed among each other rather than simulated. Returns how many
-    /// vertices moved.
-    pub fn project_apart(&mut self, points: &mut [Vec3], radii: &[f32], fixed: &[bool]) -> usize {
+    /// separate strands that were placed among each other rather than simulated. Each vertex that
+    /// moves is put at `placed(index, moved position)`. Returns how many vertices moved.
+    pub fn project_apart(
+        &mut self,
+        points: &mut [Vec3],
+        radii: &[f32],
+        fixed: &[bool],
+        placed: impl Fn(usize, Vec3) -> Vec3 + Sync,
+    ) -> usize {
         if self.max_radius <= 0.0 {
             return 0;
         }
@@ -296,7 +302,11 @@ impl HairContacts {
             |offset, d, contact| offset / d * (contact - d),
             |sum, _| sum,
         );
-        points.par_iter_mut().zip(&moves).for_each(|(p, m)| *p += *m);
+        points.par_iter_mut().zip(&moves).enumerate().for_each(|(i, (p, &m))| {
+            if m != Vec3::ZERO {
+                *p = placed(i, *p + m);
+            }
+        });
         moves.par_iter().filter(|m| **m != Vec3::ZERO).count()
     }
 

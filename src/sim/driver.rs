@@ -165,7 +165,7 @@ impl Stepper {
         colliders: &[Shape],
         hair_contacts: Option<HairContactSettings>,
     ) -> Stepper {
-        let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+        let radii = groom.contact_radii();
         let hair_contacts = hair_contacts.map(|c| {
             let contacts = HairContacts::new(&groom.strand_offsets, &radii, c.spacing, c.stiffness);
             (contacts, vec![Vec3::ZERO; groom.vertex_count()])

@@ -470,7 +470,7 @@ impl Session {
         let root_dirs = (0..groom.strand_count())
             .map(|s| (to_head * (groom.strand_points(s)[0] - placed.mask_center)).normalize_or_zero())
             .collect();
-        let radii: Vec<f32> = groom.widths.iter().map(|w| 0.5 * w.max(1e-6)).collect();
+        let radii = groom.contact_radii();
         let n = groom.vertex_count();
         let wetness = match groom.attribute(wetness::WETNESS) {
             Some(a) if a.rate == AttributeRate::Vertex && a.components == 1 => a.floats().into_owned(),
