@@ -228,12 +228,33 @@ pub const FAR_ALIGNMENT: f32 = std::f32::consts::FRAC_1_SQRT_2;
 /// `stiffest` is the smallest component of the joint's `1/(wq1 + wq2 + α̃)`.
 #[inline(always)]
 pub fn far_scalar_correction(alignment: f32, w: f32, w0: f32, stiffest: f32) -> f32 {
-    let weight = (FAR_ALIGNMENT - alignment.abs()) / FAR_ALIGNMENT;
+    let weight = far_weight(alignment);
     if weight > 0.0 {
         weight * (w0 - w) * stiffest
     } else {
         0.0
     }
+}
+
+/// How far past [`FAR_ALIGNMENT`] a joint's `alignment` with its rest is: 0 nearer rest, rising
+/// linearly to 1 at half a turn. Both solvers' treatment of far joints fades in by it.
+#[inline(always)]
+pub fn far_weight(alignment: f32) -> f32 {
+    ((FAR_ALIGNMENT - alignment.abs()) / FAR_ALIGNMENT).max(0.0)
+}
+
+/// Where the direct strand solve (`strand_solve`) aims a joint far from rest: the rotation on the
+/// arc from the relative rotation `u` towards its rest rotation `rest` (unit quaternions, `rest`
+/// on `u`'s side of the double cover, further apart than [`FAR_ALIGNMENT`]) at the alignment
+/// [`FAR_ALIGNMENT`] from `u`, a 90° turn away. Its error is measured as the turn `t̄⊗u`, whose
+/// scalar part is `FAR_ALIGNMENT`, so a Newton step can shrink every part of it, and the pull
+/// towards rest keeps its strength at a 90° error however far the joint is.
+#[inline(always)]
+pub fn far_target(u: Quat, rest: Quat) -> Quat {
+    // Spherical interpolation: `rest` is at the angle ψ from `u` (as 4-vectors), the target at π/4.
+    let psi = u.dot(rest).clamp(0.0, FAR_ALIGNMENT).acos();
+    let quarter = std::f32::consts::FRAC_PI_4;
+    ((u * (psi - quarter).sin() + rest * quarter.sin()) * (1.0 / psi.sin())).normalize()
 }
 
 /// Projects the bend–twist constraint of one edge pair in XPBD form. `rest` is `Ω0`,

@@ -240,6 +240,13 @@ impl<T: Real> M3<T> {
     pub fn mul_mat(&self, o: &Self) -> Self {
         Self::from_cols(self.mul_vec(o.x_axis), self.mul_vec(o.y_axis), self.mul_vec(o.z_axis))
     }
+    /// Sets lane `l` of every entry to `m`'s.
+    #[inline(always)]
+    pub fn set_lane(&mut self, l: usize, m: &M3<f64>) {
+        self.x_axis.set_lane(l, m.x_axis.lane(0));
+        self.y_axis.set_lane(l, m.y_axis.lane(0));
+        self.z_axis.set_lane(l, m.z_axis.lane(0));
+    }
     /// The inverse by cofactors (invalid where the determinant is 0).
     #[inline(always)]
     pub fn inverse(&self) -> Self {

@@ -11,7 +11,8 @@
 //! * stretch–shear `C = x_{e+1} − x_e − l·d3(q_e)`: `∂C/∂x = ∓I`, `∂C/∂θ_e = l·[d3]×`;
 //! * bend–twist `C = Im(q̄_{e−1}⊗q_e) − Ω0`: with `u = q̄_{e−1}⊗q_e = (v, s)`,
 //!   `∂C/∂θ_e = G = ½(s·I − [v]×)·R_{e−1}ᵀ` and `∂C/∂θ_{e−1} = −G` (turning both frames alike
-//!   changes nothing).
+//!   changes nothing). A joint more than 90° from rest fades over to the error towards a nearer
+//!   target on the way to rest, which a Newton step can shrink ([`bend_twist`]).
 //!
 //! Constraints of neighbouring edges share a vertex or a frame and nothing else, so
 //! `J·W·Jᵀ + α̃` is block tridiagonal in 6×6 blocks and block Thomas elimination solves it in
@@ -28,9 +29,9 @@
 //! products, and it is a serial chain along the strand. Callgrind, a step of one iteration: 2,155
 //! instructions per vertex one strand at a time, 1,055 in lanes (of which ~800 the lane solve,
 //! half of that loads and stores of 3×3 lane matrices: 16 AVX registers hold less than two).
-use glam::{DVec3, Quat, Vec3};
+use glam::{Quat, Vec3};
 
-use super::constraints::{director3, BendTwistCoefficients};
+use super::constraints::{director3, far_target, far_weight, BendTwistCoefficients};
 use super::lane_algebra::{F64x4, Real, M3, V3};
 
 /// Two 3-vectors: `[bend–twist, stretch–shear]`.
@@ -119,11 +120,10 @@ struct Input<T> {
     length: T,
     wq4: T,
     dx: V3<T>,
-    /// Pair ending at the edge: `u = q̄_{e−1}⊗q_e` as vector and scalar part, the rest turn on
-    /// `u`'s side of the double cover, the previous frame, `α/Δt²` and the multiplier.
-    v: V3<T>,
-    uw: T,
-    rest: V3<T>,
+    /// Pair ending at the edge: the bend–twist constraint's value and `K` ([`bend_twist`]), the
+    /// previous frame, `α/Δt²` and the multiplier.
+    c: V3<T>,
+    k: M3<T>,
     q_prev: [T; 4],
     alpha: V3<T>,
     lambda: V3<T>,
@@ -247,13 +247,9 @@ fn gather<T: Real>(strands: &[StrandState<'_>], start: usize, input: &mut [Input
             i.wq4.set_lane(l, 4.0 * s.wq[e] as f64);
             i.dx.set_lane(l, (x[e + 1] - x[e]).as_dvec3());
             if has_pair(e, start) {
-                let u = q[e - 1].conjugate() * qe;
-                let rest = s.rest[e];
-                let w0 = (1.0 - rest.length_squared()).max(0.0).sqrt();
-                let rest = if u.w * w0 + Vec3::new(u.x, u.y, u.z).dot(rest) < 0.0 { -rest } else { rest };
-                i.v.set_lane(l, DVec3::new(u.x as f64, u.y as f64, u.z as f64));
-                i.uw.set_lane(l, u.w as f64);
-                i.rest.set_lane(l, rest.as_dvec3());
+                let (c, k) = bend_twist(q[e - 1].conjugate() * qe, s.rest[e]);
+                i.c.set_lane(l, c.lane(0));
+                i.k.set_lane(l, &k);
                 let p = q[e - 1].as_dquat();
                 for (c, v) in i.q_prev.iter_mut().zip([p.x, p.y, p.z, p.w]) {
                     c.set_lane(l, v);
@@ -263,6 +259,39 @@ fn gather<T: Real>(strands: &[StrandState<'_>], start: usize, input: &mut [Input
             }
         }
     }
+}
+
+/// The bend–twist constraint of a joint with relative rotation `u = q̄_{e−1}⊗q_e` and rest `Ω0`,
+/// linearised: its value `C` and `K` with `∂C/∂θ_e = K·R_{e−1}ᵀ` (see the module docs).
+///
+/// A joint further from rest than [`super::constraints::FAR_ALIGNMENT`] (a 90° error) fades
+/// over, by [`far_weight`], to the error `t̄⊗u` towards the nearer target of [`far_target`]:
+/// linearised about a joint near half a turn from rest, `Ω − Ω0` can turn the joint's axis but
+/// hardly shrink its angle, and there the side of the double cover flips between iterations, so a
+/// fold or twist the blow-dry pressed in stayed, chattering, and the bonds set it.
+/// (`∂(t̄⊗u)/∂θ_e` is that of `Ω` with `(v, s)` of `t̄⊗u`, seen from `R_{e−1}·R_t`.)
+fn bend_twist(u: Quat, rest: Vec3) -> (V3<f64>, M3<f64>) {
+    let linearised = |v: Vec3, s: f32, rest: Vec3| {
+        let v = V3::new(v.x as f64, v.y as f64, v.z as f64);
+        let rest = V3::new(rest.x as f64, rest.y as f64, rest.z as f64);
+        (v - rest, (M3::from_diagonal(V3::splat(s as f64)) - cross_matrix(v)).scale(0.5))
+    };
+    let v = Vec3::new(u.x, u.y, u.z);
+    let w0 = (1.0 - rest.length_squared()).max(0.0).sqrt();
+    let alignment = u.w * w0 + v.dot(rest);
+    let (rest, w0) = if alignment < 0.0 { (-rest, -w0) } else { (rest, w0) };
+    let near = linearised(v, u.w, rest);
+    let weight = far_weight(alignment);
+    if weight <= 0.0 {
+        return near;
+    }
+    let target = far_target(u, Quat::from_xyzw(rest.x, rest.y, rest.z, w0));
+    let error = target.conjugate() * u;
+    let (c, k) = linearised(Vec3::new(error.x, error.y, error.z), error.w, Vec3::ZERO);
+    let t = target.as_dquat();
+    let k = k.mul_mat(&M3::from_quat([t.x, t.y, t.z, t.w]).transpose());
+    let (near_share, far_share) = (1.0 - weight as f64, weight as f64);
+    (near.0.scale(near_share) + c.scale(far_share), near.1.scale(near_share) + k.scale(far_share))
 }
 
 /// Assembly, block `L·D·Lᵀ` elimination along the strand ([`Eliminated`]), back substitution, and
@@ -283,10 +312,9 @@ fn eliminate<T: Real>(start: usize, work: &mut Work<T>, n: usize) {
     for e in start..edges {
         if has_pair(e) {
             let i = &input[e];
-            c_bt[e] = i.v - i.rest;
-            let k = (M3::from_diagonal(V3::splat(i.uw)) - cross_matrix(i.v)).scale(T::splat(0.5));
+            c_bt[e] = i.c;
             let r_prev = M3::from_quat(i.q_prev);
-            g[e] = k.mul_mat(&r_prev.transpose());
+            g[e] = i.k.mul_mat(&r_prev.transpose());
         }
     }
     // Assemble, factor and eliminate forward. `schur` is what the previous edge's elimination
