@@ -177,7 +177,7 @@ fn the_penalty_keeps_crossing_strands_apart() {
     let mut closest = f32::MAX;
     for step in 0..720 {
         dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
-        contacts.apply(sim.rods().positions(), &radii, sim.rods().kinematic(), &mut dv, dt);
+        contacts.apply(sim.rods().positions(), &radii, sim.rods().kinematic(), &mut dv, dt).unwrap();
         for (a, dv) in sim.external_acceleration_mut().iter_mut().zip(&dv) {
             *a = *dv / dt;
         }

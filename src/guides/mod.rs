@@ -219,7 +219,7 @@ pub fn style(
             &guides.contact_radii(),
             &styled.colliders,
             &recipe.contacts,
-        );
+        )?;
     }
 
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like

@@ -168,14 +168,14 @@ const STANDARD_GRAVITY: f32 = 9.80665;
 /// applies). `touched` marks, one flag per strand, the strands that vertices of the strands its
 /// predicate picks touch now (the caller's hair–hair contacts; a caller without them leaves the
 /// flags empty). Calls `tick` after every step (progress bars).
-pub fn settle_with<C>(
+pub fn settle_with<C, E>(
     context: &mut C,
     sim: impl Fn(&mut C) -> &mut Simulation,
-    mut step: impl FnMut(&mut C),
+    mut step: impl FnMut(&mut C) -> Result<(), E>,
     mut touched: impl FnMut(&mut C, &(dyn Fn(usize) -> bool + Sync), &mut Vec<bool>),
     options: &SettleOptions,
     mut tick: impl FnMut(),
-) -> SettleReport {
+) -> Result<SettleReport, E> {
     let s = sim(context);
     let dt = s.params().dt;
     let own_iterations = s.params().iterations;
@@ -213,7 +213,7 @@ pub fn settle_with<C>(
         // that ran out were never relaxed with the own frames (on a 60 cm full-head perm they
         // moved 9.6 mm in 2 s when simulated again).
         s.wake_all();
-        relax(context, &sim, &mut step, &mut touched, &mut tick, options.tolerance, until, &mut report);
+        relax(context, &sim, &mut step, &mut touched, &mut tick, options.tolerance, until, &mut report)?;
     }
     let s = sim(context);
     s.wake_all();
@@ -224,21 +224,21 @@ pub fn settle_with<C>(
     report.max_speed = s.max_speed();
     s.params.iterations = own_iterations;
     s.set_frame_inertia_factor(own_frame_factor).expect("the factor the run started with");
-    report
+    Ok(report)
 }
 
 /// Kinetic damping until a probe reaches `tolerance` or the report counts `max_steps`.
 #[allow(clippy::too_many_arguments)]
-fn relax<C>(
+fn relax<C, E>(
     context: &mut C,
     sim: &impl Fn(&mut C) -> &mut Simulation,
-    step: &mut impl FnMut(&mut C),
+    step: &mut impl FnMut(&mut C) -> Result<(), E>,
     touched: &mut impl FnMut(&mut C, &(dyn Fn(usize) -> bool + Sync), &mut Vec<bool>),
     tick: &mut impl FnMut(),
     tolerance: f32,
     max_steps: u64,
     report: &mut SettleReport,
-) {
+) -> Result<(), E> {
     let dt = sim(context).params().dt;
     let probe_every = (PROBE_INTERVAL / dt).ceil().max(2.0) as u64;
     let probe_steps = probe_steps(dt);
@@ -269,7 +269,7 @@ fn relax<C>(
         if pushed {
             momentum.before_step(sim(context));
         }
-        step(context);
+        step(context)?;
         if pushed {
             momentum.after_step(sim(context));
         }
@@ -285,12 +285,12 @@ fn relax<C>(
                     s.residuals(&positions, &frames, probe_steps, &mut per_strand);
                 if report.force_residual.is_infinite() {
                     // Diverged: no number of steps brings it back (the caller says so).
-                    return;
+                    return Ok(());
                 }
                 if report.force_residual <= tolerance && report.torque_residual <= tolerance {
                     if asleep == 0 {
                         report.converged = true;
-                        return;
+                        return Ok(());
                     }
                     // Sleeping strands read zero; the next probe measures every strand.
                     s.wake_all();
@@ -311,6 +311,7 @@ fn relax<C>(
         reset = verify || since_reset >= probe_steps && (now < kinetic || since_reset >= probe_every);
         kinetic = now;
     }
+    Ok(())
 }
 
 /// Vertices beyond an edge whose distances from it [`Levers`] sums one by one.
@@ -560,7 +561,14 @@ impl Creep {
 impl Simulation {
     /// The static solve with the rod solver and `hooks` as the stepper ([`settle_with`]).
     pub fn settle(&mut self, options: &SettleOptions, hooks: &dyn Hooks) -> SettleReport {
-        settle_with(self, |s| s, |s| s.step_with(hooks), |_, _, touched| touched.clear(), options, || {})
+        let step = |s: &mut Self| -> Result<(), std::convert::Infallible> {
+            s.step_with(hooks);
+            Ok(())
+        };
+        match settle_with(self, |s| s, step, |_, _, touched| touched.clear(), options, || {}) {
+            Ok(report) => report,
+            Err(never) => match never {},
+        }
     }
 
     /// Lets the strands `rest` picks sleep (the stepper skips them), with zero velocities, where
