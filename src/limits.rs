@@ -218,6 +218,19 @@ pub fn vertices_after_resampling(groom: &Groom, max_segment: Option<f32>) -> f64
     total
 }
 
+/// Bytes hair–hair contacts hold per listed vertex–edge pair while they build lists: the new
+/// lists, the build's own copy of them, and the lists kept from before (4 bytes each).
+pub const CONTACT_BYTES_PER_PAIR: f64 = 12.0;
+
+/// Vertex–edge pairs the hair–hair contacts of `vertices` simulated vertices may list: what the
+/// memory limit leaves beside the simulation's own estimate (which counts a few pairs a vertex,
+/// as hair has). Lists grow with how densely strands lie, which no count of vertices sees: 10,000
+/// strands piled at one point list 2·10⁸ pairs. Also below 2³², as lists index them in 32 bits.
+pub fn contact_pairs_allowed(vertices: f64) -> u64 {
+    let left = max_memory() as f64 - vertices * SIM_BYTES_PER_VERTEX;
+    ((left.max(0.0) / CONTACT_BYTES_PER_PAIR) as u64).min(u32::MAX as u64)
+}
+
 /// A simulation of `vertices` vertices (and `droplets` droplets) for `steps` steps of
 /// `iterations` solver iterations.
 pub fn check_simulation(what: &str, vertices: f64, droplets: f64, steps: f64, iterations: f64) -> Result<()> {

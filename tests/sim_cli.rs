@@ -173,6 +173,49 @@ fn hair_contacts_push_overlapping_strands_apart() {
     assert!(apart > 80e-6, "with contacts the tips are still {apart} m apart");
 }
 
+/// `--max-memory` holds for hair–hair contact lists, which grow with how densely strands lie,
+/// not with how many vertices there are: 2,000 two-vertex strands piled at one point list 4·10⁶
+/// vertex–edge pairs (48 MB while building). Under a 20 MB limit the run exits 2 saying so, with the
+/// pairs, the limit and the place, before the lists outgrow it and with nothing written (it ran
+/// and wrote the output, as 10,000 such strands took 807 MB under a 300 MB limit); with the
+/// default limit the same run succeeds, and so does a groom whose strands lie apart.
+#[test]
+fn strands_piled_at_one_point_are_refused_before_their_contact_lists_outgrow_the_memory_limit() {
+    use glam::Vec3;
+    let dir = tempfile::tempdir().unwrap();
+    let pile = |spread: f32| {
+        let strands: Vec<Vec<Vec3>> = (0..2000)
+            .map(|s| (0..2).map(|k| Vec3::new(spread * s as f32, -0.01 * k as f32, 0.0)).collect())
+            .collect();
+        coif::Groom::from_strands(&strands, 80e-6)
+    };
+    let (piled, apart) = (dir.path().join("piled.usda"), dir.path().join("apart.usda"));
+    coif::io::write_groom(&piled, &pile(0.0)).unwrap();
+    coif::io::write_groom(&apart, &pile(0.01)).unwrap();
+    let output = dir.path().join("out.usda");
+    let run = |input: &std::path::Path, limit: &[&str]| {
+        let args = [
+            &["simulate", path_str(input), path_str(&output), "--seconds", "0.01", "--hair-contacts"][..],
+            limit,
+        ]
+        .concat();
+        coif(&args)
+    };
+    let refused = run(&piled, &["--max-memory", "20M"]);
+    let message = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(2), "{message}");
+    for name in
+        ["hair–hair contacts", "pairs", "--max-memory", "20.972 MB", "densest place is at (0, -0.01, 0) m"]
+    {
+        assert!(message.contains(name), "no '{name}' in: {message}");
+    }
+    assert_eq!(dir_listing(dir.path()), vec!["apart.usda".to_string(), "piled.usda".to_string()]);
+    let spread = run(&apart, &["--max-memory", "20M"]);
+    assert!(spread.status.success(), "{}", stderr(&spread));
+    let default = run(&piled, &[]);
+    assert!(default.status.success(), "{}", stderr(&default));
+}
+
 /// The work budget counts solver iterations: a run the budget takes at the default 5 iterations
 /// is refused at 1,000 (200 times the work), with its figures and before any output.
 #[test]

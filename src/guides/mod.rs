@@ -219,7 +219,7 @@ pub fn style(
             &guides.contact_radii(),
             &styled.colliders,
             &recipe.contacts,
-        );
+        )?;
     }
 
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
@@ -530,12 +530,12 @@ fn merge_vertex_attribute(
 /// Moves children out of the recipe's colliders, root to tip: each edge keeps its deformed
 /// direction from the (possibly pushed) vertex before it, turned back where it would turn from
 /// the placed edge before it by more than the deformed child turns there plus [`TURN_SLACK`]. An
-/// edge that ends inside a collider slides along its surface (its part into the collider
-/// dropped) and is placed again, [`PUSH_PASSES`] times, then pushed out. So a child that meets
-/// the head slides over it, and a curl whose loop dives into the head is laid on the scalp as a
-/// curl: pushing each vertex to the nearest surface point folded such loops back (edges turning
-/// 134° and 145° where the deformed children turned 35° and 42°), a shape no rod holds at rest
-/// (those children fell 34.5 and 18 mm when simulated again). Roots stay.
+/// edge that ends inside a collider turns just enough to end on its surface (see
+/// [`lifted_direction`]) and is placed again, [`PUSH_PASSES`] times, then pushed out. So a child
+/// that meets the head slides over it, and a curl whose loop dives into the head is laid on the
+/// scalp as a curl: pushing each vertex to the nearest surface point folded such loops back
+/// (edges turning 134° and 145° where the deformed children turned 35° and 42°), a shape no rod
+/// holds at rest (those children fell 34.5 and 18 mm when simulated again). Roots stay.
 fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape]) {
     use rayon::prelude::*;
     let outside = |p: Vec3, radius: f32| outside(p, radius, shapes);
@@ -561,14 +561,21 @@ fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape
                 }
                 None => direction,
             };
+            // Where the edge heads straight into a collider, the way the strand came (at the
+            // root, the way its next edge goes).
+            let course = match previous_edges {
+                Some((_, placed_before)) => placed_before,
+                None => strand
+                    .get(k + 1)
+                    .map_or(deformed_direction, |&next| (next - deformed).normalize_or_zero()),
+            };
             let mut direction = deformed_direction;
             for _ in 0..PUSH_PASSES {
                 direction = turned(direction);
                 let placed = strand[k - 1] + direction * length;
                 let pushed = outside(placed, radius);
                 let Some(normal) = (pushed - placed).try_normalize() else { break };
-                let along = direction - normal * direction.dot(normal).min(0.0);
-                direction = along.try_normalize().unwrap_or(direction);
+                direction = lifted_direction(strand[k - 1], pushed, length, normal, course);
             }
             strand[k] = outside(strand[k - 1] + direction * length, radius);
             let placed = (strand[k] - strand[k - 1]).try_normalize().unwrap_or(direction);
@@ -576,6 +583,34 @@ fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape
         }
     });
 }
+
+/// The direction of an edge from `start` whose end was pushed out of a collider to `pushed` (the
+/// surface's `normal` there): turned just enough to end on the surface's tangent plane there,
+/// keeping its length and the way it heads across the surface. The turn shrinks to nothing as
+/// the end comes out (sliding along the surface whatever the depth jumped by the whole angle into
+/// the surface between an end just inside and one just outside). An edge heading straight in
+/// heads across the surface by nothing, or by rounding noise (the same child in metres and in
+/// centimetres: 1.2 mm apart before the push, 30 mm at the tip after): within [`STRAIGHT_IN`] of
+/// it, the way across blends into `course`'s, all the way at straight in.
+fn lifted_direction(start: Vec3, pushed: Vec3, length: f32, normal: Vec3, course: Vec3) -> Vec3 {
+    let lifted = (pushed - start) / length;
+    let across = lifted - normal * lifted.dot(normal);
+    let remainder = across.length();
+    let along = if remainder >= STRAIGHT_IN {
+        across / remainder
+    } else {
+        let fallback =
+            (course - normal * course.dot(normal)).try_normalize().unwrap_or(normal.any_orthonormal_vector());
+        (across + fallback * (STRAIGHT_IN - remainder)).try_normalize().unwrap_or(fallback)
+    };
+    // How far the start lies over that tangent plane, in edge lengths: the edge's drop.
+    let drop = (-lifted.dot(normal)).clamp(-1.0, 1.0);
+    along * (1.0 - drop * drop).sqrt() - normal * drop
+}
+
+/// How far across the surface (as a share of the edge) an edge pushed out of a collider must end
+/// for its own direction to say which way it slides (see [`lifted_direction`]).
+const STRAIGHT_IN: f32 = 0.1;
 
 /// A point of a strand of `radius` pushed out of every collider in turn, without friction.
 fn outside(mut p: Vec3, radius: f32, shapes: &[Shape]) -> Vec3 {
@@ -642,6 +677,56 @@ mod tests {
         }
         assert!(points.iter().any(|p| p.length() < 0.095), "the curl dives into the head");
         assert!(sharpest < std::f32::consts::FRAC_PI_2, "an edge turns {:.1}°", sharpest.to_degrees());
+    }
+
+    /// The push is continuous in where a child was placed. A strand lying along the top of the
+    /// head turns straight down into it; placed with its lateral coordinates off by rounding
+    /// (±1e-7 m), it must come out the same within 1 % of its length at every vertex (it slid
+    /// towards the rounding, ±Z, 30 mm apart at the tip). And an edge ending 1 µm inside the
+    /// head or 1 µm outside it must give nearly the same strand (sliding removed the whole
+    /// angle into the surface in the first, nothing in the second).
+    #[test]
+    fn pushed_children_are_continuous_in_where_they_were_placed() {
+        let head = Shape::Sphere { center: Vec3::ZERO, radius: 0.1 };
+        let floor = Shape::Plane { point: Vec3::new(0.0, 0.1, 0.0), normal: Vec3::Y };
+        let push_from = |points: &[Vec3], shape: &Shape| {
+            let mut pushed = points.to_vec();
+            push_out(
+                &mut pushed,
+                &[0, points.len() as u32],
+                &vec![0.0; points.len()],
+                std::slice::from_ref(shape),
+            );
+            pushed
+        };
+        let push = |points: &[Vec3]| push_from(points, &head);
+        let length = |points: &[Vec3]| points.windows(2).map(|e| e[0].distance(e[1])).sum::<f32>();
+        let apart = |a: &[Vec3], b: &[Vec3]| a.iter().zip(b).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
+        // Along the top, then 5 mm edges straight down into the head at its crown, rounded sideways.
+        let diving = |dz: f32| -> Vec<Vec3> {
+            let mut points: Vec<Vec3> =
+                (0..4).map(|k| Vec3::new(0.005 * k as f32 - 0.015, 0.1005, 0.0)).collect();
+            points.extend((1..8).map(|k| Vec3::new(dz * k as f32, 0.1005 - 0.005 * k as f32, dz)));
+            points
+        };
+        let reference = push(&diving(0.0));
+        for dz in [1e-7, -1e-7] {
+            let pushed = push(&diving(dz));
+            let worst = apart(&pushed, &reference) / length(&reference);
+            assert!(worst < 0.01, "rounded by {dz:e}: {:.1} % of the length apart", 100.0 * worst);
+        }
+        assert!(reference.iter().all(|p| p.length() > 0.1 - 1e-6), "a vertex inside: {reference:?}");
+        // An edge from 1 mm over a floor, heading down at 45°, its end 1 µm either side of it.
+        let grazing = |depth: f32| -> Vec<Vec3> {
+            let start = Vec3::new(0.0, 0.101, 0.0);
+            let reach = 0.001 + depth;
+            let down = Vec3::new(1.0, -1.0, 0.0).normalize();
+            let end = start + down * (reach * std::f32::consts::SQRT_2);
+            vec![start, end, end + Vec3::new(0.005, 0.0, 0.0), end + Vec3::new(0.01, 0.0, 0.0)]
+        };
+        let (inside, outside) = (push_from(&grazing(1e-6), &floor), push_from(&grazing(-1e-6), &floor));
+        let worst = apart(&inside, &outside);
+        assert!(worst < 2e-5, "1 µm in or out of the floor: {worst:e} m apart ({inside:?} vs {outside:?})");
     }
 
     /// The rest-state solve is per strand: children solved in batches get the bits of one solve

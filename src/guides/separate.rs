@@ -8,6 +8,7 @@
 //! vertices it moved. Deterministic, and not a simulation: vertices move by their overlap only.
 use glam::Vec3;
 
+use crate::error::Result;
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::obstacles::Shape;
 use crate::style::recipe::Contacts;
@@ -26,7 +27,8 @@ pub const PASSES: usize = 8;
 /// Moves the children (`points`, strands at `offsets`, per-vertex `radii`) apart from each other
 /// and from the guides (`guide_points` at `guide_offsets`, `guide_radii`, held), roots held,
 /// keeping every moved vertex out of `colliders`. Returns how many
-/// projections moved something.
+/// projections moved something; children piled too densely for the memory limit's contact lists
+/// are an error.
 #[allow(clippy::too_many_arguments)]
 pub fn separate(
     points: &mut [Vec3],
@@ -37,10 +39,10 @@ pub fn separate(
     guide_radii: &[f32],
     colliders: &[Shape],
     contacts: &Contacts,
-) -> usize {
+) -> Result<usize> {
     let child_vertices = points.len();
     if child_vertices == 0 {
-        return 0;
+        return Ok(0);
     }
     // Children first, then the guides, as one groom.
     let mut all_offsets = offsets.to_vec();
@@ -63,13 +65,13 @@ pub fn separate(
     // Only children move (guides are held): each moved vertex is pushed out of the colliders.
     let out_of_colliders = |i: usize, p: Vec3| super::outside(p, radii[i], colliders);
     for _ in 0..PASSES {
-        if pairs.project_apart(&mut all_points, &widened, &fixed, out_of_colliders) == 0 {
+        if pairs.project_apart(&mut all_points, &widened, &fixed, out_of_colliders)? == 0 {
             break;
         }
         passes += 1;
     }
     points.copy_from_slice(&all_points[..child_vertices]);
-    passes
+    Ok(passes)
 }
 
 #[cfg(test)]
@@ -130,7 +132,8 @@ mod tests {
             &radii[..18],
             std::slice::from_ref(&head),
             &Contacts::default(),
-        );
+        )
+        .unwrap();
         assert!(passes > 0, "nothing moved");
         let mut all = children.clone();
         all.extend_from_slice(&guide_points);

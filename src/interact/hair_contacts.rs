@@ -25,10 +25,14 @@
 //! vertex–edge pair is listed once, through the piece that holds the closest point. Queries run
 //! in the grid's spatial order, and while most vertices are held only edges near movable ones
 //! are cut into pieces.
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::grid::{NeighbourGrid, NeighbourSpread, Occupancy};
+use crate::error::{Error, Result};
 
 /// Movable vertices handled per parallel task while building lists (fixed, so lists do not
 /// depend on the thread count).
@@ -83,6 +87,8 @@ fn limit_push(push: Vec3, deepest: f32, dt: f32) -> Vec3 {
 pub struct HairContacts {
     /// α, m/s²: the push at full overlap.
     pub stiffness: f32,
+    /// Most vertex–edge pairs the lists may hold (the memory limit's share for them).
+    max_pairs: u64,
     skin: f32,
     spacing: f32,
     max_radius: f32,
@@ -158,6 +164,7 @@ impl HairContacts {
         let skin = Self::DEFAULT_SKIN;
         HairContacts {
             stiffness,
+            max_pairs: crate::limits::contact_pairs_allowed(vertices as f64),
             skin,
             spacing,
             max_radius,
@@ -255,7 +262,8 @@ impl HairContacts {
     }
 
     /// Adds the penalty velocity change to every movable vertex (not `fixed`) touching another
-    /// strand, limited by [`limit_push`].
+    /// strand, limited by [`limit_push`]. Lists that would hold more pairs than the memory limit
+    /// leaves them (strands piled at one place) are an error (exit 2), before they are allocated.
     pub fn apply(
         &mut self,
         points: &[Vec3],
@@ -263,11 +271,11 @@ impl HairContacts {
         fixed: &[bool],
         velocities: &mut [Vec3],
         dt: f32,
-    ) {
+    ) -> Result<()> {
         if self.max_radius <= 0.0 {
-            return;
+            return Ok(());
         }
-        self.update_lists(points, radii, fixed);
+        self.update_lists(points, radii, fixed)?;
         let stiffness = self.stiffness;
         self.add_over_contacts(
             points,
@@ -276,24 +284,26 @@ impl HairContacts {
             |offset, d, contact| offset / d * (stiffness * (contact - d) / contact * dt),
             |push, deepest| limit_push(push, deepest, dt),
         );
+        Ok(())
     }
 
     /// Moves every movable vertex (not `fixed`) out of the edges of other strands it lies within
     /// the contact distance of: by how deep it is, summed over them, along the line from each
     /// edge's closest point. One Jacobi projection of positions, not a force: a few of them
     /// separate strands that were placed among each other rather than simulated. Each vertex that
-    /// moves is put at `placed(index, moved position)`. Returns how many vertices moved.
+    /// moves is put at `placed(index, moved position)`. Returns how many vertices moved; lists
+    /// over the memory limit are an error (see [`apply`](Self::apply)).
     pub fn project_apart(
         &mut self,
         points: &mut [Vec3],
         radii: &[f32],
         fixed: &[bool],
         placed: impl Fn(usize, Vec3) -> Vec3 + Sync,
-    ) -> usize {
+    ) -> Result<usize> {
         if self.max_radius <= 0.0 {
-            return 0;
+            return Ok(0);
         }
-        self.update_lists(points, radii, fixed);
+        self.update_lists(points, radii, fixed)?;
         let mut moves = vec![Vec3::ZERO; points.len()];
         self.add_over_contacts(
             points,
@@ -307,14 +317,14 @@ impl HairContacts {
                 *p = placed(i, *p + m);
             }
         });
-        moves.par_iter().filter(|m| **m != Vec3::ZERO).count()
+        Ok(moves.par_iter().filter(|m| **m != Vec3::ZERO).count())
     }
 
     /// Builds the lists, wholly or in part, where the pairs they miss may have closed by their
     /// skin since they were built (or the movable vertices changed).
-    fn update_lists(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
+    fn update_lists(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) -> Result<()> {
         if !self.built || fixed != self.built_fixed.as_slice() {
-            self.build(points, radii, fixed, false);
+            self.build(points, radii, fixed, false)?;
         } else {
             let closing = self.closing_since_build(points, fixed);
             let this = &*self;
@@ -332,10 +342,11 @@ impl HairContacts {
                 // it queries every movable vertex: lists renewed one at a time would each run out
                 // on their own step.
                 let movable = fixed.iter().filter(|&&f| !f).count();
-                self.build(points, radii, fixed, stale * 8 < movable && !Self::few(movable, points.len()));
+                self.build(points, radii, fixed, stale * 8 < movable && !Self::few(movable, points.len()))?;
             }
         }
         self.lifetime += 1;
+        Ok(())
     }
 
     /// Sums `response(offset, distance, contact)` over the edges each listed vertex touches
@@ -557,7 +568,7 @@ impl HairContacts {
 
     /// Builds the lists of every movable vertex, or (`partial`) only of those whose pairs may
     /// have closed by their skin left; the others keep their lists, with the skin they have left.
-    fn build(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool], partial: bool) {
+    fn build(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool], partial: bool) -> Result<()> {
         let n = points.len();
         self.skin_left.resize(n, 0.0);
         self.queried.resize(n, false);
@@ -596,6 +607,9 @@ impl HairContacts {
             }
         }));
         let this = &*self;
+        // Pairs listed so far, the kept lists included: past the budget every chunk stops. The
+        // sum only grows, so whether it passes the budget does not depend on the threads.
+        let listed = AtomicU64::new(if partial { self.list_edges.len() as u64 } else { 0 });
         let chunks: Vec<(Vec<u32>, Vec<u32>)> = this
             .packed
             .par_chunks(BUILD_CHUNK)
@@ -610,11 +624,18 @@ impl HairContacts {
                     // the result must not depend on how the grid lays out its buckets.
                     edges[before..].sort_unstable();
                     dedup_tail(&mut edges, before);
-                    counts.push((edges.len() - before) as u32);
+                    let count = (edges.len() - before) as u64;
+                    if listed.fetch_add(count, Ordering::Relaxed) + count > this.max_pairs {
+                        break;
+                    }
+                    counts.push(count as u32);
                 }
                 (counts, edges)
             })
             .collect();
+        if listed.into_inner() > self.max_pairs {
+            return Err(self.too_dense(points));
+        }
         // Gather the lists by vertex: the new ones, and the kept ones of a partial build.
         std::mem::swap(&mut self.list_starts, &mut self.kept_starts);
         std::mem::swap(&mut self.list_edges, &mut self.kept_edges);
@@ -671,6 +692,39 @@ impl HairContacts {
         self.builds += 1;
         self.queries_made += count as u64;
         self.lifetime = 0;
+        Ok(())
+    }
+
+    /// The error of lists that would hold more than `max_pairs` pairs: strands piled at one
+    /// place, named by its densest queried vertex (the most pieces within its search; the first
+    /// such in vertex order).
+    fn too_dense(&self, points: &[Vec3]) -> Error {
+        let search = Self::search_distance(self.max_radius, self.skin, self.spacing);
+        let (pieces, vertex) = self
+            .queries
+            .par_iter()
+            .map(|&query| {
+                let i = query as u32 as usize;
+                let mut pieces = 0;
+                self.grid.for_each_run_within(points[i], search, |run| pieces += run.len());
+                (pieces, std::cmp::Reverse(i))
+            })
+            .max()
+            .map_or((0, 0), |(pieces, i)| (pieces, i.0));
+        let p = points.get(vertex).copied().unwrap_or_default();
+        Error::Usage(format!(
+            "hair–hair contacts: strands lie too densely for the memory limit: their contact lists \
+             need more than {} vertex–edge pairs (about {}), more than the limit of {} \
+             (--max-memory) leaves beside the simulation; the densest place is at ({}, {}, {}) m, \
+             with {pieces} pieces of hair within {:.2} mm (strands piled at one place?)",
+            self.max_pairs,
+            crate::limits::memory_text(self.max_pairs as f64 * crate::limits::CONTACT_BYTES_PER_PAIR),
+            crate::limits::memory_text(crate::limits::max_memory() as f64),
+            shortest(p.x),
+            shortest(p.y),
+            shortest(p.z),
+            search * 1e3,
+        ))
     }
 
     /// Appends the edges of other strands within the query's search distance plus their radius,
@@ -704,9 +758,11 @@ impl HairContacts {
         }
         let mut kept = 0;
         for &(start, end) in &runs[..count] {
-            for (slot, piece) in (start..end).zip(&self.sorted_pieces[start..end]) {
-                within[kept] = slot as u32;
-                kept += ((p - piece.mid).length_squared() < farthest_squared) as usize;
+            for run in self.without_own(start..end, &own) {
+                for (slot, piece) in run.clone().zip(&self.sorted_pieces[run]) {
+                    within[kept] = slot as u32;
+                    kept += ((p - piece.mid).length_squared() < farthest_squared) as usize;
+                }
             }
         }
         // Then the exact test of those, every condition worked out.
@@ -736,6 +792,26 @@ impl HairContacts {
     }
 }
 
+impl HairContacts {
+    /// A run of the grid's pieces without those of the strand whose edges start at `own`
+    /// (never candidates), as the runs before and after them. A run holds its pieces in edge
+    /// order, so a strand's are consecutive there: where its vertices lie closer together than
+    /// the search reaches (a 100,000-vertex strand of 10 µm segments: 300 of its own pieces
+    /// around each vertex), they are found by bisection instead of read. Short runs are read
+    /// whole (the exact test drops their own pieces): bisecting them costs more than it saves.
+    #[inline(always)]
+    fn without_own(&self, run: Range<usize>, own: &Range<u32>) -> [Range<usize>; 2] {
+        const BISECTED: usize = 32;
+        if run.len() < BISECTED {
+            return [run, 0..0];
+        }
+        let pieces = &self.sorted_pieces[run.clone()];
+        let from = run.start + pieces.partition_point(|piece| piece.edge & Piece::EDGE < own.start);
+        let to = run.start + pieces.partition_point(|piece| piece.edge & Piece::EDGE < own.end);
+        [run.start..from, to..run.end]
+    }
+}
+
 /// Asks for the cache line holding `item` ahead of its use.
 #[inline(always)]
 fn prefetch<T>(item: &T) {
@@ -748,6 +824,11 @@ fn prefetch<T>(item: &T) {
     // Elsewhere no hint: the reads that follow are the same.
     #[cfg(not(target_arch = "x86_64"))]
     let _ = item;
+}
+
+/// A coordinate or distance with the digits it needs.
+fn shortest(value: f32) -> String {
+    crate::validate::shortest(f64::from(value))
 }
 
 /// Drops repeats from the sorted `list[from..]`.
@@ -789,14 +870,14 @@ mod tests {
         // At Δt = 1/3600 the push is the penalty: the crossing vertex of strand 1 is pushed +Z
         // by α (2r − 0.5r)/(2r) Δt.
         let dt = 1.0 / 3600.0;
-        contacts.apply(&points, &radii, &fixed, &mut v, dt);
+        contacts.apply(&points, &radii, &fixed, &mut v, dt).unwrap();
         let expected = 100.0 * 0.75 * dt;
         assert!((v[3].z - expected).abs() < 1e-7 && v[3].x.abs() < 1e-9, "{:?}", v[3]);
         // At 1/360 the penalty would carry it 3.9 overlaps in a step: it is limited to half the
         // overlap, 1.5 r, per step.
         let dt = 1.0 / 360.0;
         let mut v = vec![Vec3::ZERO; points.len()];
-        contacts.apply(&points, &radii, &fixed, &mut v, dt);
+        contacts.apply(&points, &radii, &fixed, &mut v, dt).unwrap();
         let expected = 0.5 * 1.5 * r / dt;
         assert!((v[3].z - expected).abs() < 1e-6 && v[3].x.abs() < 1e-9, "{:?}", v[3]);
         // Vertices far from other strands feel nothing.
@@ -807,7 +888,7 @@ mod tests {
         let mut held = fixed.clone();
         held[3] = true;
         let mut v = vec![Vec3::ZERO; points.len()];
-        contacts.apply(&points, &radii, &held, &mut v, dt);
+        contacts.apply(&points, &radii, &held, &mut v, dt).unwrap();
         assert_eq!(v[3], Vec3::ZERO);
     }
 
@@ -836,7 +917,7 @@ mod tests {
         contacts.strands_touched(&points, &radii, |_| true, &mut touched);
         assert_eq!(touched, [false; 4]);
         let mut v = vec![Vec3::ZERO; points.len()];
-        contacts.apply(&points, &radii, &vec![false; points.len()], &mut v, 1.0 / 360.0);
+        contacts.apply(&points, &radii, &vec![false; points.len()], &mut v, 1.0 / 360.0).unwrap();
         contacts.strands_touched(&points, &radii, |strand| strand == 1, &mut touched);
         assert_eq!(touched, [true, false, false, false], "strand 1 touches strand 0 only");
         contacts.strands_touched(&points, &radii, |strand| strand == 0, &mut touched);
@@ -846,7 +927,7 @@ mod tests {
         // Held vertices have no lists: a held strand 1 touches nothing, and is still touched.
         let mut held = vec![false; points.len()];
         held[3..6].fill(true);
-        contacts.apply(&points, &radii, &held, &mut v, 1.0 / 360.0);
+        contacts.apply(&points, &radii, &held, &mut v, 1.0 / 360.0).unwrap();
         contacts.strands_touched(&points, &radii, |strand| strand == 1, &mut touched);
         assert_eq!(touched, [false; 4]);
         contacts.strands_touched(&points, &radii, |strand| strand == 0, &mut touched);
@@ -947,7 +1028,7 @@ mod tests {
     ) -> usize {
         let dt = 1.0 / 360.0;
         let mut v = vec![Vec3::ZERO; points.len()];
-        contacts.apply(points, radii, fixed, &mut v, dt);
+        contacts.apply(points, radii, fixed, &mut v, dt).unwrap();
         let expected = brute_force(offsets, points, radii, contacts.stiffness, dt);
         let mut touching = 0;
         for i in 0..points.len() {
@@ -1014,7 +1095,7 @@ mod tests {
             let mut velocities = vec![Vec3::ZERO; 6];
             let mut gaps = Vec::new();
             for _ in 0..20 {
-                contacts.apply(&points, &radii, &fixed, &mut velocities, dt);
+                contacts.apply(&points, &radii, &fixed, &mut velocities, dt).unwrap();
                 points.iter_mut().zip(&velocities).for_each(|(p, v)| *p += *v * dt);
                 gaps.push(points[4].z - points[1].z);
             }
@@ -1087,7 +1168,7 @@ mod tests {
                 let mut steps = Vec::new();
                 for moves in &drift {
                     let mut v = vec![Vec3::ZERO; points.len()];
-                    contacts.apply(&points, &radii, &fixed, &mut v, dt);
+                    contacts.apply(&points, &radii, &fixed, &mut v, dt).unwrap();
                     steps.push((points.clone(), v));
                     points.iter_mut().zip(moves).for_each(|(p, m)| *p += *m);
                 }

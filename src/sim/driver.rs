@@ -100,10 +100,15 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
     };
     let mut stepper = Stepper::new(sim, groom, &options.colliders, options.hair_contacts);
     let steps = (options.seconds / options.params.dt).round().max(0.0) as u64;
-    (0..steps).for_each(|_| stepper.step());
-    let settle = options.settle.as_ref().map(|settle| {
-        settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, Stepper::touched, settle, || {})
-    });
+    for _ in 0..steps {
+        stepper.step()?;
+    }
+    let settle = match &options.settle {
+        Some(settle) => {
+            Some(settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, Stepper::touched, settle, || {})?)
+        }
+        None => None,
+    };
     let sim = stepper.sim;
     sim.check_diverged(None)?;
     // A sag-free groom is meant to hold its shape: say so when it did not.
@@ -183,12 +188,12 @@ impl Stepper {
         }
     }
 
-    fn step(&mut self) {
+    fn step(&mut self) -> Result<()> {
         if let Some((contacts, dv)) = &mut self.hair_contacts {
             let dt = self.sim.params().dt;
             dv.par_iter_mut().for_each(|v| *v = Vec3::ZERO);
             self.sim.idle_vertices(&mut self.idle);
-            contacts.apply(self.sim.rods.positions(), &self.radii, &self.idle, dv, dt);
+            contacts.apply(self.sim.rods.positions(), &self.radii, &self.idle, dv, dt)?;
             let accel = self.sim.external_acceleration_mut();
             accel.par_iter_mut().zip(dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
         }
@@ -202,6 +207,7 @@ impl Stepper {
             friction: Friction::default(),
         };
         self.sim.step_with(&hooks);
+        Ok(())
     }
 
     /// The strands that vertices of `from` strands touch now (none without hair–hair contacts).

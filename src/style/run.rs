@@ -595,21 +595,21 @@ impl Session {
     }
 
     /// One simulation step with forces, contacts and wetness.
-    fn step(&mut self) {
-        self.step_with(true);
+    fn step(&mut self) -> Result<()> {
+        self.step_with(true)
     }
 
     /// One step of a settle: the static solve finds the rest shape of the bonds and water the
     /// hair has when it starts, so wicking and drying wait. Damp hair left to them keeps changing
     /// its hydrogen bonds, and with them its shape: the blow-dry's settle never reached its
     /// residual in its 10 s.
-    fn settle_step(&mut self) {
-        self.step_with(false);
+    fn settle_step(&mut self) -> Result<()> {
+        self.step_with(false)
     }
 
-    fn step_with(&mut self, chemistry: bool) {
+    fn step_with(&mut self, chemistry: bool) -> Result<()> {
         let dt = self.sim.params().dt;
-        self.compute_forces(dt);
+        self.compute_forces(dt)?;
         self.contact_step();
         if chemistry {
             self.update_wetness(dt);
@@ -624,6 +624,7 @@ impl Session {
                 self.capture_frame();
             }
         }
+        Ok(())
     }
 
     /// The rod solver with the active obstacles' contacts.
@@ -673,7 +674,7 @@ impl Session {
 
     /// Wind, hair–hair penalty and water adhesion from this step's starting positions, handed to
     /// the solver as per-vertex accelerations.
-    fn compute_forces(&mut self, dt: f32) {
+    fn compute_forces(&mut self, dt: f32) -> Result<()> {
         let positions = &self.sim.rods().positions();
         self.dv.iter_mut().for_each(|v| *v = Vec3::ZERO);
         self.wind_dv.iter_mut().for_each(|w| *w = 0.0);
@@ -695,7 +696,7 @@ impl Session {
         }
         if let Some(contacts) = &mut self.contacts {
             self.sim.idle_vertices(&mut self.idle);
-            contacts.apply(positions, &self.radii, &self.idle, &mut self.dv, dt);
+            contacts.apply(positions, &self.radii, &self.idle, &mut self.dv, dt)?;
         }
         if let Some(water) = &self.recipe.water {
             let gravity = self.sim.params().gravity;
@@ -706,6 +707,7 @@ impl Session {
         }
         let accel = self.sim.external_acceleration_mut();
         accel.par_iter_mut().zip(self.dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
+        Ok(())
     }
 
     /// Evaporation (while drying) and wicking, then the bonds and masses that follow wetness.
@@ -741,12 +743,18 @@ impl Session {
         wetness::carry_water(&mut self.sim, &self.wetness, &self.wetness_params);
     }
 
-    fn run_steps(&mut self, steps: u64, progress: &Progress, mut each: impl FnMut(&mut Self, u64)) {
+    fn run_steps(
+        &mut self,
+        steps: u64,
+        progress: &Progress,
+        mut each: impl FnMut(&mut Self, u64),
+    ) -> Result<()> {
         for k in 0..steps {
             each(self, k);
-            self.step();
+            self.step()?;
             progress.inc(1);
         }
+        Ok(())
     }
 
     fn run_stage(
@@ -785,7 +793,7 @@ impl Session {
                     }
                     self.apply_wetness_change();
                 }
-                self.run_steps(steps, progress, |s, _| wet(s));
+                self.run_steps(steps, progress, |s, _| wet(s))?;
             }
             Stage::Wrap { rods, mask, .. } => {
                 let strands = self.masked(mask, index);
@@ -803,20 +811,20 @@ impl Session {
                 let total = steps.max(1) as f32;
                 self.run_steps(steps, progress, |s, k| {
                     s.drive(&windings, smoothstep((k + 1) as f32 / total))
-                });
+                })?;
                 self.drive(&windings, 1.0);
             }
             Stage::Lotion { breaks, mask, .. } => {
                 let vertices = self.vertex_mask(&self.masked(mask, index));
-                self.chemistry(steps, progress, breaks, -1.0, Some(&vertices));
+                self.chemistry(steps, progress, breaks, -1.0, Some(&vertices))?;
             }
-            Stage::Neutralise { reform, .. } => self.chemistry(steps, progress, reform, 1.0, None),
+            Stage::Neutralise { reform, .. } => self.chemistry(steps, progress, reform, 1.0, None)?,
             Stage::Rinse { reform, .. } => {
                 let amounts =
                     reform.unwrap_or(super::recipe::BondAmounts { ionic: Some(1.0), ..Default::default() });
-                self.chemistry(steps, progress, &amounts, 1.0, None);
+                self.chemistry(steps, progress, &amounts, 1.0, None)?;
             }
-            Stage::Process { .. } => self.run_steps(steps, progress, |_, _| {}),
+            Stage::Process { .. } => self.run_steps(steps, progress, |_, _| {})?,
             Stage::Dry { dryer, heat, .. } => {
                 self.dryer = dryer.map(|d| Dryer {
                     position: Vec3::from(d.position),
@@ -827,7 +835,7 @@ impl Session {
                     heat: *heat,
                 });
                 self.heat = *heat;
-                self.run_steps(steps, progress, |_, _| {});
+                self.run_steps(steps, progress, |_, _| {})?;
                 self.dryer = None;
                 self.heat = 0.0;
                 // Dry hair holds no droplets.
@@ -848,7 +856,7 @@ impl Session {
                     s.poses[which] =
                         ObstaclePose::Pressed(direction * travel * smoothstep((k + 1) as f32 / total));
                     s.refresh_obstacles();
-                });
+                })?;
                 self.poses[which] = ObstaclePose::Pressed(direction * travel);
                 self.refresh_obstacles();
             }
@@ -864,7 +872,7 @@ impl Session {
                     }
                 }
                 self.refresh_obstacles();
-                self.run_steps(steps, progress, |_, _| {});
+                self.run_steps(steps, progress, |_, _| {})?;
             }
             Stage::Settle { max_seconds, tolerance, gravity } => {
                 if *gravity == Some(false) {
@@ -873,7 +881,7 @@ impl Session {
                 }
                 let options =
                     SettleOptions { tolerance: *tolerance, max_seconds: *max_seconds, iterations: None };
-                return Ok(Some(self.settle(&options, progress)));
+                return Ok(Some(self.settle(&options, progress)?));
             }
         }
         Ok(None)
@@ -887,7 +895,7 @@ impl Session {
         amounts: &super::recipe::BondAmounts,
         sign: f32,
         vertices: Option<&[bool]>,
-    ) {
+    ) -> Result<()> {
         let kinds = [
             (BondKind::Hydrogen, amounts.hydrogen),
             (BondKind::Ionic, amounts.ionic),
@@ -912,17 +920,17 @@ impl Session {
         if steps == 0 {
             apply(self);
         }
-        self.run_steps(steps, progress, |s, _| apply(s));
+        self.run_steps(steps, progress, |s, _| apply(s))
     }
 
     /// The static solve (`sim::settle`) with this session's forces and contacts, its chemistry
     /// held ([`Self::settle_step`]).
-    fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> SettleReport {
+    fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> Result<SettleReport> {
         let budget = self.steps_for(options.max_seconds).max(1);
         let report =
-            settle_with(self, |s| &mut s.sim, Self::settle_step, Self::touched, options, || progress.inc(1));
+            settle_with(self, |s| &mut s.sim, Self::settle_step, Self::touched, options, || progress.inc(1))?;
         progress.inc(budget.saturating_sub(report.steps));
-        report
+        Ok(report)
     }
 
     /// The strands that vertices of `from` strands touch now (none without hair–hair contacts).
