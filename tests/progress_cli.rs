@@ -68,3 +68,31 @@ fn style_and_render_log_progress_with_an_eta_only_when_asked() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(stderr(&bad).contains("--progress"), "{}", stderr(&bad));
 }
+
+/// A styled groom's children (interpolated, moved apart, given rest shapes) take as long as its
+/// guides' stages at 100,000 strands: their part logs its own lines, in order, to 100 %.
+#[test]
+fn children_of_guides_log_their_own_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    let groom = dir.path().join("g.hair");
+    let made = coif(&["generate", "-o", path_str(&groom), "--strands", "60", "--vertices", "8"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(
+        &recipe,
+        "[settings]\ndt = 0.01\n\n[guides]\ncount = 10\n\n[contacts]\nhair_hair = true\n\n\
+         [[stages]]\nkind = \"process\"\nduration = 0.2\n",
+    )
+    .unwrap();
+    let styled = dir.path().join("s.usda");
+    let args = ["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&styled)];
+    let logged = coif(&[&args[..], &["--progress", "log"]].concat());
+    assert!(logged.status.success(), "{}", stderr(&logged));
+    let text = stderr(&logged);
+    let percentages = logged_percentages(&text, "children");
+    assert_eq!(percentages.last(), Some(&100), "{text}");
+    assert!(percentages.windows(2).all(|w| w[0] < w[1]), "{percentages:?}");
+    assert!(text.contains(" moved apart, elapsed ") || text.contains(" rest shapes, elapsed "), "{text}");
+    let done = |label: &str| text.lines().position(|l| l.starts_with(&format!("{label}: done in ")));
+    assert!(done("style") < done("children") && done("style").is_some(), "{text}");
+}

@@ -21,6 +21,7 @@ use crate::analysis::resample_groom;
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::progress::Progress;
 use crate::sim::driver::carry_groom_water;
 use crate::sim::rod::transport_frames;
 use crate::sim::sag_free::{MATERIAL_FRAME, REST_DARBOUX};
@@ -171,6 +172,12 @@ pub fn style(
     guide_recipe.settings.max_segment = None; // resampled above, with the children
     guide_recipe.guides = None;
     let styled = style_strands(&guides, &guide_recipe, options, frame, WaterSnapshots::Keep)?;
+    // The children's part takes as long as the guides' stages at 100,000 strands (mostly the
+    // separation's passes): its own progress, in placings, passes, rest batches and frames.
+    let passes = if recipe.contacts.hair_hair { separate::PASSES as u64 } else { 0 };
+    let batches = child_ids.len().div_ceil(HOLD_BATCH) as u64;
+    let progress =
+        Progress::new(options.progress, "children", 2 + passes + batches + styled.frames.len() as u64);
 
     let before = Curves::new(guides.points.clone(), guides.strand_offsets.clone(), None);
     let posed = |points: Vec<Vec3>| {
@@ -205,11 +212,14 @@ pub fn style(
     let placed = place(recipe, &guides, options.scalp.as_deref(), frame)?;
     let radii = children.contact_radii();
     let (last, last_pose) = start(usize::MAX);
+    progress.set_message("placed on their guides");
     let mut child_points = deform::deform(&last, last_pose, &after);
     push_out(&mut child_points, &children.strand_offsets, &radii, &styled.colliders);
+    progress.inc(1);
     // Placed, not settled among each other: moved apart before their rest is solved, so that a
     // shot simulating them with the recipe's contacts finds them at rest.
     if recipe.contacts.hair_hair {
+        progress.set_message("moved apart");
         separate::separate(
             &mut child_points,
             &children.strand_offsets,
@@ -219,7 +229,10 @@ pub fn style(
             &guides.contact_radii(),
             &styled.colliders,
             &recipe.contacts,
+            || progress.inc(1),
         )?;
+        // Passes it did not need.
+        progress.set_done(1 + passes);
     }
 
     // The styled guides' per-vertex attributes, carried to the children: `rest` deformed like
@@ -256,10 +269,12 @@ pub fn style(
     let mut out = groom.clone();
     scatter_points(&mut out, &guide_ids, &styled.groom.points);
     scatter_points(&mut out, &child_ids, &child_points);
+    progress.set_message("rest shapes");
     for attribute in carried(&last, last_pose, &after, &child_points, &styled.groom.attributes) {
         out.provide_attribute(attribute);
     }
-    hold_children_up(&mut out, &styled.groom, &guide_ids, &child_ids, &placed.recipe)?;
+    progress.inc(1);
+    hold_children_up(&mut out, &styled.groom, &guide_ids, &child_ids, &placed.recipe, || progress.inc(1))?;
     let (closest, weights) = binding_attributes(&groom.strand_ids, &guide_ids, &child_ids, &bindings)?;
     out.provide_attribute(closest);
     out.provide_attribute(weights);
@@ -268,6 +283,7 @@ pub fn style(
 
     let mut frames = Vec::with_capacity(styled.frames.len());
     let mut frame_attributes = Vec::with_capacity(styled.frame_attributes.len());
+    progress.set_message("frames");
     for (index, frame) in styled.frames.into_iter().enumerate() {
         let (from, from_pose) = start(index);
         let after = posed(frame.clone());
@@ -282,7 +298,9 @@ pub fn style(
         if let Some(guide_attributes) = styled.frame_attributes.get(index) {
             frame_attributes.push(carried(&from, from_pose, &after, &points, guide_attributes));
         }
+        progress.inc(1);
     }
+    progress.finish();
     let mut report = styled.report;
     report.strands = out.strand_count();
     report.vertices = out.vertex_count();
@@ -422,6 +440,7 @@ fn hold_children_up(
     guide_ids: &[usize],
     child_ids: &[usize],
     placed: &Recipe,
+    batch_done: impl Fn() + Sync,
 ) -> Result<()> {
     use rayon::prelude::*;
     if child_ids.is_empty() {
@@ -440,6 +459,7 @@ fn hold_children_up(
             let mut sim = Simulation::new(&children, params.clone())?;
             carry_groom_water(&mut sim, &children);
             sim.make_sag_free();
+            batch_done();
             Ok((flat(sim.rest_curves()), flat(sim.exported_rest_darboux())))
         })
         .collect::<Result<Vec<_>>>()?;
@@ -751,7 +771,7 @@ mod tests {
         for attribute in Simulation::new(&styled_guides, sim_params(&recipe)).unwrap().state_attributes() {
             styled_guides.set_attribute(attribute);
         }
-        hold_children_up(&mut groom, &styled_guides, &guide_ids, &child_ids, &recipe).unwrap();
+        hold_children_up(&mut groom, &styled_guides, &guide_ids, &child_ids, &recipe, || {}).unwrap();
 
         let children = subset(&groom, &child_ids);
         let mut whole = Simulation::new(&children, sim_params(&recipe)).unwrap();

@@ -26,8 +26,8 @@ pub const PASSES: usize = 8;
 
 /// Moves the children (`points`, strands at `offsets`, per-vertex `radii`) apart from each other
 /// and from the guides (`guide_points` at `guide_offsets`, `guide_radii`, held), roots held,
-/// keeping every moved vertex out of `colliders`. Returns how many
-/// projections moved something; children piled too densely for the memory limit's contact lists
+/// keeping every moved vertex out of `colliders`, calling `pass_done` after each projection.
+/// Returns how many projections moved something; children piled too densely for the memory limit's contact lists
 /// are an error.
 #[allow(clippy::too_many_arguments)]
 pub fn separate(
@@ -39,6 +39,7 @@ pub fn separate(
     guide_radii: &[f32],
     colliders: &[Shape],
     contacts: &Contacts,
+    mut pass_done: impl FnMut(),
 ) -> Result<usize> {
     let child_vertices = points.len();
     if child_vertices == 0 {
@@ -65,7 +66,9 @@ pub fn separate(
     // Only children move (guides are held): each moved vertex is pushed out of the colliders.
     let out_of_colliders = |i: usize, p: Vec3| super::outside(p, radii[i], colliders);
     for _ in 0..PASSES {
-        if pairs.project_apart(&mut all_points, &widened, &fixed, out_of_colliders)? == 0 {
+        let moved = pairs.project_apart(&mut all_points, &widened, &fixed, out_of_colliders)?;
+        pass_done();
+        if moved == 0 {
             break;
         }
         passes += 1;
@@ -132,6 +135,7 @@ mod tests {
             &radii[..18],
             std::slice::from_ref(&head),
             &Contacts::default(),
+            || {},
         )
         .unwrap();
         assert!(passes > 0, "nothing moved");
