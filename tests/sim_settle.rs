@@ -165,8 +165,8 @@ fn strands_at_rest_sleep_while_the_others_settle() {
 
 /// A settle's probes cost in proportion to the strand: a single strand of 100,000 vertices (1 m
 /// of 10 µm segments, hanging) settles for 0.05 s in about the time of the same steps without
-/// probes. Its probes summed gravity's lever over every pair of its vertices, 5·10⁹ distances
-/// each (76 % of such a settle; over 20 s with hair–hair contacts).
+/// probes (1–2× measured; 22× before). Its probes summed gravity's lever over every pair of its
+/// vertices, 5·10⁹ distances each (76 % of such a settle; over 20 s with hair–hair contacts).
 #[test]
 fn a_long_strands_settle_costs_about_its_steps() {
     use std::time::{Duration, Instant};
@@ -183,7 +183,8 @@ fn a_long_strands_settle_costs_about_its_steps() {
     eprintln!("{} steps: settle {settling:?}, plain steps {stepping:?}", report.steps);
     assert!(report.steps >= 18 && report.resets >= 2, "{report:?}");
     assert!(
-        settling < stepping * 3 + Duration::from_millis(500),
+        // Timed beside the binary's other tests: a wide margin, still a quarter of what it was.
+        settling < stepping * 5 + Duration::from_millis(500),
         "settling took {settling:?}, its steps alone {stepping:?}"
     );
 }
