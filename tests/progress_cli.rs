@@ -17,19 +17,30 @@ fn logged_percentages(stderr: &str, label: &str) -> Vec<u32> {
         .collect()
 }
 
+/// `recipe` written to `dir`, and a generated groom of `strands` strands of 8 vertices.
+fn recipe_and_groom(
+    dir: &std::path::Path,
+    recipe: &str,
+    strands: usize,
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let groom = dir.join("g.hair");
+    let strands = strands.to_string();
+    let made = coif(&["generate", "-o", path_str(&groom), "--strands", &strands, "--vertices", "8"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let path = dir.join("r.toml");
+    std::fs::write(&path, recipe).unwrap();
+    (path, groom)
+}
+
 #[test]
 fn style_and_render_log_progress_with_an_eta_only_when_asked() {
     let dir = tempfile::tempdir().unwrap();
-    let groom = dir.path().join("g.hair");
-    let made = coif(&["generate", "-o", path_str(&groom), "--strands", "20", "--vertices", "8"]);
-    assert!(made.status.success(), "{}", stderr(&made));
-    let recipe = dir.path().join("r.toml");
-    std::fs::write(
-        &recipe,
+    let (recipe, groom) = recipe_and_groom(
+        dir.path(),
         "[settings]\ndt = 0.01\n\n[[stages]]\nkind = \"process\"\nduration = 0.5\n\n\
          [[stages]]\nkind = \"process\"\nduration = 0.37\n",
-    )
-    .unwrap();
+        20,
+    );
     let styled = dir.path().join("s.usda");
     let args = ["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&styled)];
 
@@ -74,16 +85,12 @@ fn style_and_render_log_progress_with_an_eta_only_when_asked() {
 #[test]
 fn children_of_guides_log_their_own_progress() {
     let dir = tempfile::tempdir().unwrap();
-    let groom = dir.path().join("g.hair");
-    let made = coif(&["generate", "-o", path_str(&groom), "--strands", "60", "--vertices", "8"]);
-    assert!(made.status.success(), "{}", stderr(&made));
-    let recipe = dir.path().join("r.toml");
-    std::fs::write(
-        &recipe,
+    let (recipe, groom) = recipe_and_groom(
+        dir.path(),
         "[settings]\ndt = 0.01\n\n[guides]\ncount = 10\n\n[contacts]\nhair_hair = true\n\n\
          [[stages]]\nkind = \"process\"\nduration = 0.2\n",
-    )
-    .unwrap();
+        60,
+    );
     let styled = dir.path().join("s.usda");
     let args = ["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&styled)];
     let logged = coif(&[&args[..], &["--progress", "log"]].concat());

@@ -173,7 +173,8 @@ pub fn style(
     guide_recipe.guides = None;
     let styled = style_strands(&guides, &guide_recipe, options, frame, WaterSnapshots::Keep)?;
     // The children's part takes as long as the guides' stages at 100,000 strands (mostly the
-    // separation's passes): its own progress, in placings, passes, rest batches and frames.
+    // separation's passes): its own progress, counting the placing, each separation pass, the
+    // carried attributes, each rest batch and each frame.
     let passes = if recipe.contacts.hair_hair { separate::PASSES as u64 } else { 0 };
     let batches = child_ids.len().div_ceil(HOLD_BATCH) as u64;
     let progress =
