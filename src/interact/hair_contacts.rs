@@ -38,6 +38,9 @@ use crate::error::{Error, Result};
 /// depend on the thread count).
 const BUILD_CHUNK: usize = 2048;
 
+/// Queries a list build makes between adding their pairs to the memory budget's count.
+const BUDGET_FLUSH: usize = 64;
+
 /// How far past its ends (in half-lengths) a piece still claims an edge's closest point, so that
 /// rounding never leaves a point at the joint of two pieces unclaimed.
 const PIECE_JOINT: f32 = 1e-3;
@@ -608,7 +611,9 @@ impl HairContacts {
         }));
         let this = &*self;
         // Pairs listed so far, the kept lists included: past the budget every chunk stops. The
-        // sum only grows, so whether it passes the budget does not depend on the threads.
+        // sum only grows, so whether it passes the budget does not depend on the threads. Each
+        // chunk adds its count every [`BUDGET_FLUSH`] queries, not at every one: both threads
+        // writing one counter per query would pass its cache line to and fro.
         let listed = AtomicU64::new(if partial { self.list_edges.len() as u64 } else { 0 });
         let chunks: Vec<(Vec<u32>, Vec<u32>)> = this
             .packed
@@ -617,7 +622,8 @@ impl HairContacts {
                 let mut counts = Vec::with_capacity(queries.len());
                 let mut edges = Vec::new();
                 let mut within = Vec::new();
-                for query in queries {
+                let mut unflushed = 0u64;
+                for (k, query) in queries.iter().enumerate() {
                     let before = edges.len();
                     this.candidates_of(query, &mut edges, &mut within);
                     // By edge, not grid order: contact forces are summed in list order, and
@@ -625,11 +631,17 @@ impl HairContacts {
                     edges[before..].sort_unstable();
                     dedup_tail(&mut edges, before);
                     let count = (edges.len() - before) as u64;
-                    if listed.fetch_add(count, Ordering::Relaxed) + count > this.max_pairs {
-                        break;
+                    unflushed += count;
+                    if (k + 1) % BUDGET_FLUSH == 0 || unflushed > this.max_pairs {
+                        let total = listed.fetch_add(unflushed, Ordering::Relaxed) + unflushed;
+                        unflushed = 0;
+                        if total > this.max_pairs {
+                            break;
+                        }
                     }
                     counts.push(count as u32);
                 }
+                listed.fetch_add(unflushed, Ordering::Relaxed);
                 (counts, edges)
             })
             .collect();
