@@ -11,7 +11,8 @@ pub enum ProgressMode {
     Off,
     /// An indicatif bar (drawn only when stderr is a terminal).
     Bar,
-    /// One plain line per tenth of the certain work (not counting a settle's unused budget), and at least every [`LOG_INTERVAL`] in between.
+    /// One plain line per tenth of the certain work (a settle's budget is not: it may end early),
+    /// and at least every [`LOG_INTERVAL`] in between.
     Log,
 }
 
@@ -29,8 +30,8 @@ struct LogState {
     total: u64,
     done: u64,
     /// Units of the work left that are only an upper bound: a settle's budget, which the settle
-    /// ends early once it reaches rest (a 31 s run's settle is budgeted 33,192 steps and takes
-    /// 5,197; counted as certain, the ETA read 4 minutes).
+    /// ends early once it reaches rest (the demo's settle is budgeted 32,400 steps and takes about
+    /// 5,200; counted as certain, the ETA read 4 minutes for a 25 s run).
     open: u64,
     message: String,
     start: Instant,
