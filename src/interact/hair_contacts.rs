@@ -1407,6 +1407,7 @@ mod tests {
         assert!(touching > 200, "too few contacts to test: {touching}");
         assert!(builds <= steps as u64 / 4, "lists built {builds} times in {steps} steps");
     }
+
     #[test]
     fn projections_apart_keep_their_lists_where_a_few_vertices_move_far_and_stay_exact() {
         // 2,400 random-walk strands of 5 mm steps packed along a 24 × 0.5 × 0.5 cm bar, thick
