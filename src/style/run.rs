@@ -931,7 +931,6 @@ impl Session {
     }
 
     /// The static solve (`sim::settle`) with this session's forces and contacts, its chemistry
-    /// held ([`Self::settle_step`]).
     /// held ([`Self::settle_step`]). Its progress names `stage` and the residual reached so far.
     fn settle(&mut self, options: &SettleOptions, stage: &str, progress: &Progress) -> Result<SettleReport> {
         let budget = self.steps_for(options.max_seconds);
