@@ -99,20 +99,22 @@ impl Progress {
 
     /// Records `units` of the open work done, or found not needed (the rest of a budget).
     pub fn inc_open(&self, units: u64) {
-        if let Some(log) = &self.log {
-            let mut state = lock(log);
-            state.open = state.open.saturating_sub(units);
-        }
-        self.inc(units);
+        self.add(units, units);
     }
 
     /// Records `units` more units of work done.
     pub fn inc(&self, units: u64) {
+        self.add(units, 0);
+    }
+
+    /// `units` more done, `open` of them from the open work.
+    fn add(&self, units: u64, open: u64) {
         if let Some(bar) = &self.bar {
             bar.inc(units);
         }
         if let Some(log) = &self.log {
             let mut state = lock(log);
+            state.open = state.open.saturating_sub(open);
             let done = state.done + units;
             self.advance(&mut state, done);
         }
@@ -147,7 +149,7 @@ impl Progress {
         state.done = done.min(state.total);
         let finished = state.done == state.total && before < state.total;
         // Tenths of the certain work: a settle's budget would hold the lines back until it ended.
-        let certain = state.total - state.open.min(state.total - state.done);
+        let certain = state.total - state.open_left();
         let tenths = (state.done * 10).checked_div(certain).unwrap_or(10);
         let now = Instant::now();
         if tenths > state.tenths_logged || finished || now - state.last_line >= LOG_INTERVAL {
@@ -156,6 +158,13 @@ impl Progress {
             state.lines += 1;
             eprintln!("{}", line(self.label, state, now - state.start));
         }
+    }
+}
+
+impl LogState {
+    /// The open work among the work left (a settle may have run past its budget).
+    fn open_left(&self) -> u64 {
+        self.open.min(self.total.saturating_sub(self.done))
     }
 }
 
@@ -168,8 +177,7 @@ fn lock(log: &Mutex<LogState>) -> std::sync::MutexGuard<'_, LogState> {
 /// `eta 0:20 to 4:15`: the certain work left, then all of it.
 fn line(label: &str, state: &LogState, elapsed: Duration) -> String {
     let fraction = if state.total == 0 { 1.0 } else { state.done as f64 / state.total as f64 };
-    let left = state.total.saturating_sub(state.done);
-    let open = state.open.min(left);
+    let (left, open) = (state.total.saturating_sub(state.done), state.open_left());
     let time_for = |units: u64| clock(elapsed.mul_f64(units as f64 / state.done as f64));
     let eta = match (state.done, open) {
         (0, _) => "?".to_owned(),
