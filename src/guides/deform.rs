@@ -205,6 +205,75 @@ pub fn deform(children: &Children, before: &Curves, after: &Curves) -> Vec<Vec3>
     out
 }
 
+/// How high each child's weight may hang from its root: no higher than its guides' weight
+/// hangs from theirs (the elevation of the mean of a strand's points less its root, weighted
+/// over the child's guides), `up` against gravity. A child carried in its guides' frames from a
+/// root up on the crown, where the scalp turns fastest, came out tilted back against its fall
+/// and pushed out of the head higher still: its weight hung 10–30 mm higher and farther out
+/// than its guides', balanced on its arch, and simulated again it fell (on 2,000 strands through
+/// 100 guides, bed-head: 28 children moved 7–272 mm in 2 s; every child whose weight hung more
+/// than ~62 mm out fell). The guides were settled, so how high theirs hang is a balance that holds.
+pub struct HangCeilings {
+    up: Vec3,
+    ceilings: Vec<Option<f32>>,
+}
+
+impl HangCeilings {
+    pub fn new(bindings: &[Binding], guides: &Curves, up: Vec3) -> HangCeilings {
+        let elevations: Vec<Option<f32>> = (0..guides.offsets.len() - 1)
+            .map(|g| hang_elevation(&guides.points[guides.range(g)], up))
+            .collect();
+        let ceilings = bindings
+            .par_iter()
+            .map(|binding| {
+                let (mut sum, mut total) = (0.0, 0.0);
+                for (&g, &w) in binding.guides.iter().zip(&binding.weights) {
+                    if let (Some(elevation), true) = (elevations[g as usize], w != 0.0) {
+                        sum += w * elevation;
+                        total += w;
+                    }
+                }
+                (total > 0.0).then(|| sum / total)
+            })
+            .collect();
+        HangCeilings { up, ceilings }
+    }
+
+    /// Child `child` (its points, root first) turned down about its root, about the horizontal
+    /// axis across where its weight hangs, until its weight hangs no higher than its ceiling;
+    /// whether it was more than [`LOWER_TOLERANCE`] above it (and turned).
+    pub fn lower(&self, child: usize, strand: &mut [Vec3]) -> bool {
+        let (Some(ceiling), Some(elevation)) = (self.ceilings[child], hang_elevation(strand, self.up)) else {
+            return false;
+        };
+        let Some(axis) = self.up.cross(hang(strand)).try_normalize() else { return false };
+        if elevation <= ceiling + LOWER_TOLERANCE {
+            return false;
+        }
+        let turn = Quat::from_axis_angle(axis, elevation - ceiling);
+        let root = strand[0];
+        for p in &mut strand[1..] {
+            *p = root + turn * (*p - root);
+        }
+        true
+    }
+}
+
+/// How far (radians) above its ceiling a child's weight may hang before [`HangCeilings::lower`]
+/// turns it (the push out of the head lifts a lowered child a little, so they take turns).
+const LOWER_TOLERANCE: f32 = 0.25 * std::f32::consts::PI / 180.0;
+
+/// Where a strand's weight hangs from its root: the mean of its points less the root.
+fn hang(points: &[Vec3]) -> Vec3 {
+    points.iter().map(|&p| p - points[0]).sum::<Vec3>() / points.len() as f32
+}
+
+/// How far above the horizontal (radians) a strand's weight hangs from its root.
+fn hang_elevation(points: &[Vec3], up: Vec3) -> Option<f32> {
+    let hang = hang(points).try_normalize()?;
+    Some(hang.dot(up).clamp(-1.0, 1.0).asin())
+}
+
 /// The most a blend of bends is scaled up to the weighted mean of their sizes.
 const MAX_BEND_GAIN: f32 = 3.0;
 
