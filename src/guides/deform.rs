@@ -670,4 +670,29 @@ mod tests {
         eprintln!("moved 3 m: {} of {count} children turn the other way: {flipped:?}", flipped.len());
         assert!(flipped.len() <= count / 100, "moved 3 m, children {flipped:?} turn the other way");
     }
+
+    /// A child whose weight hangs higher than its guide's is turned down about its root to the
+    /// guide's elevation, keeping its root, its edges and which way it leans; one hanging lower
+    /// is left alone.
+    #[test]
+    fn a_child_hangs_no_higher_than_its_guide() {
+        let straight = |root: Vec3, degrees: f32, azimuth: f32| -> Vec<Vec3> {
+            let (e, a) = (degrees.to_radians(), azimuth.to_radians());
+            let direction = Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
+            (0..10).map(|i| root + direction * (0.01 * i as f32)).collect()
+        };
+        let guide = Curves::new(straight(Vec3::ZERO, -30.0, 0.0), vec![0, 10], None);
+        let binding = Binding { guides: [0; 3], weights: [1.0, 0.0, 0.0] };
+        let ceilings = HangCeilings::new(&[binding], &guide, Vec3::Y);
+        let root = Vec3::new(0.0, 0.1, 0.02);
+        let mut high = straight(root, 10.0, 40.0);
+        assert!(ceilings.lower(0, &mut high));
+        let want = straight(root, -30.0, 40.0);
+        let apart = high.iter().zip(&want).map(|(p, q)| p.distance(*q)).fold(0.0, f32::max);
+        assert!(apart < 1e-6, "{apart:e} m from the guide's elevation: {high:?}");
+        let mut low = straight(root, -50.0, 40.0);
+        let before = low.clone();
+        assert!(!ceilings.lower(0, &mut low));
+        assert_eq!(low, before);
+    }
 }
