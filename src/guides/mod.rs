@@ -596,8 +596,10 @@ fn push_out(
     let mut strands = deform::split_mut(points, offsets);
     strands.par_iter_mut().enumerate().for_each(|(s, strand)| {
         let radii = &radii[offsets[s] as usize..offsets[s + 1] as usize];
+        let mut lowering = false;
         for round in 0..PLACING_ROUNDS {
-            let lowered = ceilings.is_some_and(|c| c.lower(s, strand));
+            let lowered = ceilings.is_some_and(|c| c.lower(s, strand, lowering));
+            lowering |= lowered;
             if round > 0 && !lowered {
                 break;
             }
