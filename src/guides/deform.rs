@@ -262,9 +262,10 @@ impl HangCeilings {
 
 /// How far (radians) above its ceiling a child's weight may hang before [`HangCeilings::lower`]
 /// turns it: the scatter of interpolation, which does not tip a child over (on bed-head's crown
-/// children 2.7° above their guides held, 6° above fell), while turning every child down by it
-/// moved permed children's curls (median curl radius over the guides' on a curly head −2.6 →
-/// +4.6 %, `tests/guides.rs`) where the push out laid their loops on the head.
+/// children 2.7° above their guides held, 6° above fell). Turning children down moves permed
+/// children's curls where the push out lays their loops on the head (median curl radius over the
+/// guides' on a curly head, `tests/guides.rs`: −2.6 % unturned, +4.6 % turning every child
+/// above its guides, +3.9 % from this start).
 const LOWER_START: f32 = 4.0 * std::f32::consts::PI / 180.0;
 
 /// How far above its ceiling a child's weight may stay once turned down (the push out of the
