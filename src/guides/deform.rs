@@ -221,7 +221,7 @@ pub struct HangCeilings {
 impl HangCeilings {
     pub fn new(bindings: &[Binding], guides: &Curves, up: Vec3) -> HangCeilings {
         let elevations: Vec<Option<f32>> = (0..guides.offsets.len() - 1)
-            .map(|g| hang_elevation(&guides.points[guides.range(g)], up))
+            .map(|g| elevation(hang(&guides.points[guides.range(g)]), up))
             .collect();
         let ceilings = bindings
             .par_iter()
@@ -244,10 +244,11 @@ impl HangCeilings {
     /// whether it was more than [`LOWER_START`] above it (and turned), or once `started`, more
     /// than [`LOWER_TOLERANCE`].
     pub fn lower(&self, child: usize, strand: &mut [Vec3], started: bool) -> bool {
-        let (Some(ceiling), Some(elevation)) = (self.ceilings[child], hang_elevation(strand, self.up)) else {
+        let hang = hang(strand);
+        let (Some(ceiling), Some(elevation)) = (self.ceilings[child], elevation(hang, self.up)) else {
             return false;
         };
-        let Some(axis) = self.up.cross(hang(strand)).try_normalize() else { return false };
+        let Some(axis) = self.up.cross(hang).try_normalize() else { return false };
         if elevation <= ceiling + if started { LOWER_TOLERANCE } else { LOWER_START } {
             return false;
         }
@@ -277,10 +278,10 @@ fn hang(points: &[Vec3]) -> Vec3 {
     points.iter().map(|&p| p - points[0]).sum::<Vec3>() / points.len() as f32
 }
 
-/// How far above the horizontal (radians) a strand's weight hangs from its root.
-fn hang_elevation(points: &[Vec3], up: Vec3) -> Option<f32> {
-    let hang = hang(points).try_normalize()?;
-    Some(hang.dot(up).clamp(-1.0, 1.0).asin())
+/// How far above the horizontal (radians) a strand's weight hangs from its root, given its
+/// [`hang`].
+fn elevation(hang: Vec3, up: Vec3) -> Option<f32> {
+    Some(hang.try_normalize()?.dot(up).clamp(-1.0, 1.0).asin())
 }
 
 /// The most a blend of bends is scaled up to the weighted mean of their sizes.
