@@ -15,7 +15,8 @@
 //!   stretch–shear along the strand, then Gauss–Seidel sweeps of stretch–shear and
 //!   bend–twist along each strand, alternating direction; strands in parallel. With
 //!   [`StrandSolver::Direct`] each iteration instead solves both constraints of the free tail
-//!   together (`strand_solve`, 6×6 blocks), and the sweeps cover only the held span before it.
+//!   together (`strand_solve`, 6×6 blocks); the held span before it (root to a winding) gets
+//!   the direct stretch–shear solve and the sweeps.
 //! * [`settle`]: static equilibrium with a convergence report; zero-stress rest curves; export.
 //!
 //! # Stiffness: XPBD with physical moduli

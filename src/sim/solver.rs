@@ -4,7 +4,8 @@
 //! (stretch–shear of edge `e`, then bend–twist of the pair ending at `e`; sweeps alternate
 //! direction) → velocity update. Lane groups of 8 strands run the same sequence in `lanes`.
 //! With `StepConstants::direct` the free tail's stretch–shear and bend–twist are solved together
-//! (`strand_solve`), the sweeps cover only the held span before it, and a lane group's strands
+//! (`strand_solve`), the held span before it (root to winding) gets the direct stretch–shear solve
+//! and the sweeps, and a lane group's strands
 //! are solved 4 at a time in f64 lanes (`strand_solve::solve_lanes`, the scalar solve's bits).
 //! Strands run in parallel on rayon; each strand's work reads and writes only its own slices, so
 //! results are bit-identical at any thread count and any chunking.
@@ -253,9 +254,9 @@ pub(crate) fn step_all(
 /// hanging at Δt 1/30 stretched to three times its length. The solve covers spans held at both
 /// ends too (a root and a winding on a curler, [`HeldSpans`]): left to Gauss–Seidel,
 /// such a span stretched under its load by an amount that depended on Δt and the iteration count,
-/// and the perm baked that into its rest curves.
-fn solve_stretch_shear(s: &mut Strand<'_>) {
-    let edges = s.x.len() - 1;
+/// and the perm baked that into its rest curves. Solves the first `edges` edges: their last
+/// vertex must be kinematic or the strand's tip.
+fn solve_stretch_shear(s: &mut Strand<'_>, edges: usize) {
     let w: &[f32] = s.w;
     let (x, kinematic, length) = (&*s.x, s.kinematic, s.length);
     let clamp = pinned_first_edge_end(kinematic[0], s.wq[0], x[0], length[0], s.q[0]);
@@ -305,6 +306,19 @@ fn solve_stretch_shear(s: &mut Strand<'_>) {
             let q = s.q[e];
             s.q[e] = (q - pure(across) * times_e_bar(q) * (2.0 * wq * s.length[e])).normalize();
         }
+    }
+}
+
+/// With the direct strand solve, the stretch–shear of the span held at both ends before the free
+/// tail (from the root to the last kinematic vertex: a winding on a curler), solved directly as
+/// [`solve_stretch_shear`] solves a whole strand; bend–twist there stays with the sweeps. Left to
+/// the sweeps alone, the span stretched under its load by an amount that depended on Δt, as it
+/// did with Gauss–Seidel before that solve covered it: perm_scene3's strand 1, whose span from
+/// the root to its rod is 72 edges, hung 41 mm lower at the wrap's end at Δt 1/240 than at 1/1440
+/// and the perm baked it into its rest curves (3.5 % of the strand length).
+fn solve_held_span(s: &mut Strand<'_>, free_from: usize) {
+    if free_from > 0 {
+        solve_stretch_shear(s, free_from);
     }
 }
 
@@ -523,11 +537,13 @@ fn finish_step_scalar(mut s: Strand<'_>, k: &StepConstants, hooks: &dyn Hooks, s
     let swept_edges = if k.direct { free_from } else { s.x.len() - 1 };
     for iteration in 0..k.iterations {
         if k.direct {
+            solve_held_span(&mut s, free_from);
             STRAND_SCRATCH.with(|scratch| {
                 super::strand_solve::solve(&mut direct_state(&mut s), free_from, &mut scratch.borrow_mut())
             });
         } else {
-            solve_stretch_shear(&mut s);
+            let edges = s.x.len() - 1;
+            solve_stretch_shear(&mut s, edges);
         }
         sweep(&mut s, swept_edges, iteration);
         hooks.project(strand, first, s.x, s.w);
@@ -555,6 +571,9 @@ fn finish_step_direct_lanes(
     }
     let free_from: [usize; lanes::LANES] = std::array::from_fn(|l| free_tail(views[l].kinematic));
     for iteration in 0..k.iterations {
+        for (s, &free) in views.iter_mut().zip(&free_from) {
+            solve_held_span(s, free);
+        }
         STRAND_SCRATCH.with(|scratch| {
             let scratch = &mut scratch.borrow_mut();
             for (group, free) in
