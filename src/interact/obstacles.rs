@@ -377,6 +377,19 @@ pub struct ContactHooks<'a> {
     pub previous: &'a [Vec3],
     pub radii: &'a [f32],
     pub friction: Friction,
+    /// Per vertex, 0 or `1 + k`: the vertex passes through `shapes[first_threaded + k]` (hair a
+    /// curler rod appeared around, `style`); empty when none does.
+    pub threaded: &'a [u16],
+    pub first_threaded: usize,
+}
+
+/// The index in the shapes of the one `vertex` passes through ([`ContactHooks::threaded`]),
+/// `usize::MAX` for none.
+pub fn threaded_shape(threaded: &[u16], first_threaded: usize, vertex: usize) -> usize {
+    match threaded.get(vertex) {
+        Some(&k) if k > 0 => first_threaded + k as usize - 1,
+        _ => usize::MAX,
+    }
 }
 
 impl Hooks for ContactHooks<'_> {
@@ -399,8 +412,10 @@ impl Hooks for ContactHooks<'_> {
             // the rare vertex the cheap clearance test leaves.
             let start = *p;
             let mut mask = None;
+            let passes = threaded_shape(self.threaded, self.first_threaded, i);
             for (s, shape) in self.shapes.iter().enumerate() {
-                if self.culling.clear_of(s, *p, radius)
+                if s == passes
+                    || self.culling.clear_of(s, *p, radius)
                     || !ObstacleCulling::tests(
                         *mask.get_or_insert_with(|| self.culling.mask(strand, start)),
                         s,

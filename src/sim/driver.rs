@@ -205,6 +205,8 @@ impl Stepper {
             previous: &self.previous,
             radii: &self.radii,
             friction: Friction::default(),
+            threaded: &[],
+            first_threaded: 0,
         };
         self.sim.step_with(&hooks);
         Ok(())

@@ -21,7 +21,9 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::mesh_sdf::TriangleMesh;
-use crate::interact::obstacles::{segment_distance, ContactHooks, Friction, ObstacleCulling, Shape};
+use crate::interact::obstacles::{
+    segment_distance, threaded_shape, ContactHooks, Friction, ObstacleCulling, Shape,
+};
 use crate::interact::water::{Droplets, WaterParams};
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
@@ -391,6 +393,14 @@ struct Session {
     obstacles: Vec<Shape>,
     poses: Vec<ObstaclePose>,
     rods: Vec<Shape>,
+    /// Per vertex, 0 or `1 + k`: the vertex was inside rod `k` when the rods appeared and passes
+    /// through it until it has left it. Pushed out at once, a vertex 2 cm deep shot out at 2 cm
+    /// per step, a speed that depended on Δt, and which side it left by was a coin flip: strands
+    /// hanging through a water set's rods landed in other places at other steps (issue 15).
+    /// Empty when no vertex is threaded.
+    threaded: Vec<u16>,
+    /// Where the rods start in `active`.
+    first_rod: usize,
     rods_active: bool,
     active: Vec<Shape>,
     held: Vec<usize>,
@@ -498,6 +508,8 @@ impl Session {
             poses,
             rods,
             rods_active: false,
+            threaded: Vec::new(),
+            first_rod: 0,
             active: Vec::new(),
             held: Vec::new(),
             wound: vec![None; groom.strand_count()],
@@ -567,8 +579,11 @@ impl Session {
             })
             .collect();
         self.captured_active = None;
+        self.first_rod = self.active.len();
         if self.rods_active {
             self.active.extend(self.rods.iter().cloned());
+        } else {
+            self.threaded.clear();
         }
     }
 
@@ -637,9 +652,46 @@ impl Session {
             previous: &self.previous,
             radii: &self.radii,
             friction: self.friction,
+            threaded: &self.threaded,
+            first_threaded: self.first_rod,
         };
         self.sim.step_with(&hooks);
+        self.release_threaded();
         self.penetration = self.penetration.max(self.deepest_penetration());
+    }
+
+    /// Marks the free vertices whose centres lie inside a rod as it appears as passing through it.
+    fn thread_through_rods(&mut self) {
+        let positions = self.sim.rods().positions();
+        // Wound vertices follow their windings: not free.
+        let mut free: Vec<bool> = self.sim.rods().kinematic().iter().map(|&k| !k).collect();
+        self.held.iter().for_each(|&i| free[i] = false);
+        let inside = |i: usize| {
+            // Deeper than touching: a vertex that only overlaps a rod by less than its radius is
+            // pushed out slowly (< its radius a step).
+            let k = self.rods.iter().position(|rod| rod.signed_distance(positions[i]) < 0.0)?;
+            free[i].then_some(k as u16 + 1)
+        };
+        let threaded: Vec<u16> =
+            (0..positions.len()).into_par_iter().map(|i| inside(i).unwrap_or(0)).collect();
+        self.threaded = if threaded.iter().any(|&k| k > 0) { threaded } else { Vec::new() };
+    }
+
+    /// A threaded vertex that has left its rod collides with it from then on.
+    fn release_threaded(&mut self) {
+        if self.threaded.is_empty() {
+            return;
+        }
+        let positions = self.sim.rods().positions();
+        let (rods, radii) = (&self.rods, &self.radii);
+        self.threaded.par_iter_mut().enumerate().filter(|(_, k)| **k > 0).for_each(|(i, k)| {
+            if rods[*k as usize - 1].signed_distance(positions[i]) >= radii[i] {
+                *k = 0;
+            }
+        });
+        if self.threaded.iter().all(|&k| k == 0) {
+            self.threaded.clear();
+        }
     }
 
     /// How deep the deepest vertex is inside an active obstacle now. Strands a settle lets sleep
@@ -655,9 +707,11 @@ impl Session {
                     let (p, radius) = (positions[i], self.radii[i]);
                     // The culling mask, looked up once and only if a shape's clearance test leaves it.
                     let mut mask = None;
+                    let passes = threaded_shape(&self.threaded, self.first_rod, i);
                     for (k, shape) in self.active.iter().enumerate() {
                         // Clear of the shape: its distance is at least the radius.
-                        if !self.culling.clear_of(k, p, radius)
+                        if k != passes
+                            && !self.culling.clear_of(k, p, radius)
                             && ObstacleCulling::tests(
                                 *mask.get_or_insert_with(|| self.culling.mask(strand, p)),
                                 k,
@@ -806,7 +860,10 @@ impl Session {
                 };
                 let windings = self.windings(&strands, &chosen)?;
                 self.warn_of_overlapping_rods(index, &windings, &chosen);
-                self.rods_active = true;
+                if !self.rods_active {
+                    self.rods_active = true;
+                    self.thread_through_rods();
+                }
                 self.refresh_obstacles();
                 let total = steps.max(1) as f32;
                 self.run_steps(steps, progress, |s, k| {
