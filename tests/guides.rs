@@ -680,3 +680,41 @@ fn children_curl_like_their_guides_on_curly_wavy_and_straight_heads() {
         }
     }
 }
+
+/// With `--frames`, the last frame is the final state: a reader at the last time gets the output
+/// itself — children moved apart by the contacts and held up by their solved rests — not the
+/// children as first placed on their guides (their rests were 0.26 m off on this groom).
+#[test]
+fn the_last_frame_of_a_guided_style_is_its_output() {
+    let groom = generate(&GenerateParams {
+        strands: 2000,
+        vertices_per_strand: 16,
+        seed: 3,
+        ..GenerateParams::default()
+    })
+    .unwrap();
+    let text = "[settings]\ndt = 0.005\n\n[guides]\ncount = 100\n\n[contacts]\nhair_hair = true\n\n\
+                [[stages]]\nkind = \"process\"\nduration = 0.3\n\n[[stages]]\nkind = \"settle\"\nmax_seconds = 5.0\n";
+    let recipe = recipe::parse(text, Path::new("frames.toml")).unwrap();
+    let framed = StyleOptions { frames_per_second: 24.0, ..Default::default() };
+    let styled = style(&groom, &recipe, &framed).unwrap();
+    let plain = style(&groom, &recipe, &StyleOptions::default()).unwrap();
+    // The contacts moved children here: else the check below could not tell the two apart.
+    let unseparated = style(
+        &groom,
+        &recipe::parse(&text.replace("true", "false"), Path::new("f.toml")).unwrap(),
+        &StyleOptions::default(),
+    )
+    .unwrap();
+    // (`assert!`, not `assert_eq!`: a failure would print 32,000 points.)
+    assert!(plain.groom.points != unseparated.groom.points, "the contacts moved no child");
+    assert!(styled.groom.points == plain.groom.points, "frames change no output");
+    assert!(styled.frames.last() == Some(&styled.groom.points), "the last frame is not the output");
+    let last = styled.frame_attributes.last().unwrap();
+    for name in ["rest", "rest_darboux", "material_frame"] {
+        let in_frame =
+            last.iter().find(|a| a.name == name).unwrap_or_else(|| panic!("{name} in the last frame"));
+        let output = styled.groom.attribute(name).unwrap();
+        assert!(in_frame.floats() == output.floats(), "{name} in the last frame is not the output's");
+    }
+}

@@ -80,6 +80,44 @@ fn style_and_render_log_progress_with_an_eta_only_when_asked() {
     assert!(stderr(&bad).contains("--progress"), "{}", stderr(&bad));
 }
 
+/// A settle ends once at rest, usually long before its budget: the lines before it give the ETA
+/// as a range (the certain stages left, then with the whole budget), the settle's own lines its
+/// residual, and the lines come at tenths of the certain work, not of the budget.
+#[test]
+fn a_settles_budget_is_an_upper_bound_in_the_eta() {
+    let dir = tempfile::tempdir().unwrap();
+    let (recipe, groom) = recipe_and_groom(
+        dir.path(),
+        "[settings]\ndt = 0.01\n\n[[stages]]\nkind = \"process\"\nduration = 0.5\n\n\
+         [[stages]]\nkind = \"settle\"\nmax_seconds = 60.0\n",
+        20,
+    );
+    let styled = dir.path().join("s.usda");
+    let args = ["style", path_str(&recipe), "--groom", path_str(&groom), "-o", path_str(&styled)];
+    let logged = coif(&[&args[..], &["--progress", "log", "--json"]].concat());
+    assert!(logged.status.success(), "{}", stderr(&logged));
+    let report: serde_json::Value = serde_json::from_slice(&logged.stdout).unwrap();
+    let settle = &report["report"]["stages"][1]["settle"];
+    assert_eq!(settle["converged"], true, "{report}");
+    assert!(settle["steps"].as_u64().unwrap() < 3000, "the settle ended early: {report}");
+    let text = stderr(&logged);
+    let lines: Vec<&str> =
+        text.lines().filter(|l| l.starts_with("style: ") && l.contains(", eta ")).collect();
+    // 50 certain steps of 6,050: a line at each of their tenths, each with a range.
+    let process: Vec<&&str> = lines.iter().filter(|l| l.contains(" stage 1/2 process, ")).collect();
+    assert_eq!(process.len(), 10, "{text}");
+    for line in &process {
+        let eta = line.split(", eta ").nth(1).unwrap();
+        let (low, high) = eta.split_once(" to ").unwrap_or_else(|| panic!("a range: {line}"));
+        let seconds =
+            |clock: &str| clock.split(':').fold(0u64, |t, part| t * 60 + part.parse::<u64>().unwrap());
+        assert!(seconds(low) <= seconds(high), "{line}");
+    }
+    let last = lines.last().unwrap();
+    assert!(last.starts_with("style: 100% (6050/6050) stage 2/2 settle, residual "), "{text}");
+    assert!(last.contains(" of 1e-3, elapsed "), "{text}");
+}
+
 /// A styled groom's children (interpolated, moved apart, given rest shapes) take as long as its
 /// guides' stages at 100,000 strands: their part logs its own lines, in order, to 100 %.
 #[test]

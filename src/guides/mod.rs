@@ -242,6 +242,7 @@ pub fn style(
     // over every strand. Integer attributes (ids) are not blended: styling leaves them as they
     // were, the children's their own. The same for each captured frame of `--frames` output,
     // from that frame's guides.
+    let is_carried = |a: &Attribute| a.rate == AttributeRate::Vertex && !a.kind.is_integer();
     let carried = |from: &Children,
                    from_pose: &Curves,
                    after: &Curves,
@@ -249,7 +250,7 @@ pub fn style(
                    guide_attributes: &[Attribute]| {
         guide_attributes
             .iter()
-            .filter(|a| a.rate == AttributeRate::Vertex && !a.kind.is_integer())
+            .filter(|a| is_carried(a))
             .map(|attribute| {
                 let values = attribute.floats();
                 let data = if attribute.name == "rest" && attribute.components == 3 {
@@ -285,7 +286,20 @@ pub fn style(
     let mut frames = Vec::with_capacity(styled.frames.len());
     let mut frame_attributes = Vec::with_capacity(styled.frame_attributes.len());
     progress.set_message("frames");
+    let count = styled.frames.len();
     for (index, frame) in styled.frames.into_iter().enumerate() {
+        // The last frame is the final state: the output itself, children moved apart and held
+        // up by their solved rests (placed again, a reader at the last time got the children
+        // before both: rests up to 0.26 m off on a 2,000-strand groom, and the overlaps back).
+        if index + 1 == count && frame == styled.groom.points {
+            frames.push(out.points.clone());
+            if let Some(guide_attributes) = styled.frame_attributes.get(index) {
+                let final_values = guide_attributes.iter().filter(|a| is_carried(a));
+                frame_attributes.push(final_values.filter_map(|a| out.attribute(&a.name).cloned()).collect());
+            }
+            progress.inc(1);
+            continue;
+        }
         let (from, from_pose) = start(index);
         let after = posed(frame.clone());
         let mut points = deform::deform(&from, from_pose, &after);

@@ -18,6 +18,8 @@
 //! theirs, with what the motion has left of their skin (when more than an eighth must be built
 //! again, all are). The skin follows the relative motion: thick while hair creeps or is held
 //! (lists last many steps), thin while it springs or in dense hair (cheap rebuilds, short lists).
+//! Projections apart (`project_apart`) move a few vertices far and the rest hardly: their bound
+//! singles out the fast movers' edges (see `tighten_for_projections`) and their skin stays.
 //!
 //! Lists are built from a neighbour grid over pieces of the edges (at most `spacing` long), so
 //! a query searches the contact distance and skin plus half a piece however long the segments
@@ -87,6 +89,25 @@ fn limit_push(push: Vec3, deepest: f32, dt: f32) -> Vec3 {
     push.clamp_length_max(0.5 * deepest / dt)
 }
 
+/// How the hair moved between two uses of the lists, which sets how their staleness is bounded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Motion {
+    /// Steps of a simulation: smooth over neighbourhoods, at a pace.
+    Stepped,
+    /// Projections apart: each vertex by its overlaps, a few far, most hardly.
+    Projected,
+}
+
+/// Which edges a build cuts into pieces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PieceSet {
+    /// Those that may be candidates of the given number of queried vertices (flagged in
+    /// `queried`): all, or while those are few only edges near them.
+    NearQueried(usize),
+    /// Those with an end flagged in `queried` (fast vertices of a projection's bound).
+    FastEdges,
+}
+
 pub struct HairContacts {
     /// α, m/s²: the push at full overlap.
     pub stiffness: f32,
@@ -119,13 +140,14 @@ pub struct HairContacts {
     /// Per movable vertex: how far beyond contact every edge missing from its list was at the
     /// last build — the skin it was listed with, less the relative motion it has outlived since.
     skin_left: Vec<f32>,
-    /// Scratch: each vertex's displacement since the last build, a bound on how much its pairs
-    /// have closed since then (from the displacements' spread between neighbours), and whether
-    /// it is queried in this build.
+    /// Scratch: each vertex's displacement since the last build and a bound on how much its
+    /// pairs have closed since then.
     displacements: Vec<Vec3>,
     closing: Vec<f32>,
     spread: NeighbourSpread,
-    /// Scratch: the movable vertices and the held ones that have moved since the last build.
+    /// Scratch: the movable vertices and the held ones that have moved since the last build;
+    /// whether each vertex is queried in this build (or, while a projection's staleness is
+    /// bounded, is one of its fast movers).
     moved: Vec<u32>,
     queried: Vec<bool>,
     /// Scratch: the lists before this build, kept for the vertices it does not query.
@@ -278,7 +300,7 @@ impl HairContacts {
         if self.max_radius <= 0.0 {
             return Ok(());
         }
-        self.update_lists(points, radii, fixed)?;
+        self.update_lists(points, radii, fixed, Motion::Stepped)?;
         let stiffness = self.stiffness;
         self.add_over_contacts(
             points,
@@ -306,7 +328,7 @@ impl HairContacts {
         if self.max_radius <= 0.0 {
             return Ok(0);
         }
-        self.update_lists(points, radii, fixed)?;
+        self.update_lists(points, radii, fixed, Motion::Projected)?;
         let mut moves = vec![Vec3::ZERO; points.len()];
         self.add_over_contacts(
             points,
@@ -325,11 +347,14 @@ impl HairContacts {
 
     /// Builds the lists, wholly or in part, where the pairs they miss may have closed by their
     /// skin since they were built (or the movable vertices changed).
-    fn update_lists(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) -> Result<()> {
+    fn update_lists(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool], motion: Motion) -> Result<()> {
         if !self.built || fixed != self.built_fixed.as_slice() {
             self.build(points, radii, fixed, false)?;
         } else {
             let closing = self.closing_since_build(points, fixed);
+            if motion == Motion::Projected {
+                self.tighten_for_projections(points, radii, fixed);
+            }
             let this = &*self;
             let stale = (0..points.len())
                 .into_par_iter()
@@ -337,7 +362,11 @@ impl HairContacts {
                 .filter(|&i| !fixed[i] && this.closing[i] >= this.skin_left[i])
                 .count();
             if stale > 0 {
-                self.adapt_skin(closing);
+                // A projection's lists are long by nature (they hold every overlap) and its
+                // moves do not follow a pace: its skin stays as it started.
+                if motion == Motion::Stepped {
+                    self.adapt_skin(closing);
+                }
                 // Every build cuts the pieces near the vertices it queries: where much of the
                 // hair moves, a whole build costs little more and gives every list a whole skin.
                 // Where little of it may move (most strands asleep), a build costs about the same
@@ -466,6 +495,77 @@ impl HairContacts {
         }
     }
 
+    /// Tightens, for projections, the bound `closing_since_build` left on the vertices whose
+    /// lists it would have built again. A projection moves a few vertices by up to their
+    /// deepest overlaps and most by micrometres, all over the hair: a spread over
+    /// neighbourhoods an edge long (a centimetre) then reaches a fast mover almost everywhere.
+    /// So a second bound, with two levels. A pair closes by at most the vertex's displacement
+    /// plus the larger of the edge's ends' (a point of an edge moves no more than its ends).
+    /// The fastest vertices (one in `FAST_SHARE`) are singled out: every edge without one of
+    /// them at an end moved by at most `slow`, the largest displacement of the rest, so the
+    /// vertex's pairs with those closed by at most its own displacement plus `slow`. The edges
+    /// with a fast end are searched for directly: a vertex within its contact distance and what
+    /// would be left of its skin of one of them now keeps its stale bound (its list is built
+    /// again); one that is not keeps that skin left against them too.
+    fn tighten_for_projections(&mut self, points: &[Vec3], radii: &[f32], fixed: &[bool]) {
+        let (closing, skin_left) = (&self.closing, &self.skin_left);
+        let stale: Vec<u32> = (0..points.len() as u32)
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter(|&i| !fixed[i as usize] && closing[i as usize] >= skin_left[i as usize])
+            .collect();
+        if stale.is_empty() {
+            return;
+        }
+        // Lengths compare as their bits (non-negative floats), so the split is exact.
+        let mut lengths: Vec<u32> = self.displacements.par_iter().map(|d| d.length().to_bits()).collect();
+        let fast_count = points.len() / Self::FAST_SHARE;
+        let slow = f32::from_bits(*lengths.select_nth_unstable_by(fast_count, |a, b| b.cmp(a)).1);
+        let displacements = &self.displacements;
+        self.queried.resize(points.len(), false);
+        self.queried
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, fast)| *fast = displacements[i].length() > slow);
+        // The edges with a fast end, alone in the grid.
+        self.cut_pieces(points, radii, PieceSet::FastEdges);
+        let this = &*self;
+        let tightened: Vec<Option<f32>> = stale
+            .par_iter()
+            .with_min_len(256)
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |(edges, within), &i| {
+                    let i = i as usize;
+                    let bound = this.displacements[i].length() + slow;
+                    let left = this.skin_left[i] - bound;
+                    if left <= 0.0 {
+                        return None;
+                    }
+                    let strand = this.strand_of[i] as usize;
+                    let query = Query {
+                        point: points[i],
+                        near: radii[i] + left,
+                        own: [this.strand_offsets[strand], this.strand_offsets[strand + 1]],
+                    };
+                    edges.clear();
+                    this.candidates_of(&query, edges, within);
+                    edges.is_empty().then_some(bound)
+                },
+            )
+            .collect();
+        for (&i, bound) in stale.iter().zip(tightened) {
+            if let Some(bound) = bound {
+                self.closing[i as usize] = bound;
+            }
+        }
+    }
+
+    /// One vertex in this many, the fastest since the last build, has its edges searched for
+    /// directly by a projection's bound; the rest bound the others' closing by their largest
+    /// displacement.
+    const FAST_SHARE: usize = 256;
+
     /// Whether `count` of `vertices` are few enough that work over all vertices, not over
     /// them, sets the cost of a step's contacts (most strands asleep).
     fn few(count: usize, vertices: usize) -> bool {
@@ -490,10 +590,10 @@ impl HairContacts {
         a.lerp(b, (index as f32 + 0.5) / count as f32)
     }
 
-    /// Cuts the edges into pieces and sorts them into the grid. While most vertices are not
-    /// queried (held on rods, or their lists still good), only edges near a queried vertex are
-    /// cut: no other can be a candidate.
-    fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], queried: usize) {
+    /// Cuts the edges of `set` into pieces and sorts them into the grid. While most vertices are
+    /// not queried (held on rods, or their lists still good), only edges near a queried vertex
+    /// are cut: no other can be a candidate.
+    fn cut_pieces(&mut self, points: &[Vec3], radii: &[f32], set: PieceSet) {
         let longest_edge = self.longest_edge(points);
         // Edges longer than `MAX_PIECES` spacings get longer pieces, and the grid's cells grow
         // with them.
@@ -501,7 +601,8 @@ impl HairContacts {
             self.spacing = longest_edge / Self::MAX_PIECES as f32 * 1.001;
             self.set_skin(self.skin);
         }
-        let cull = queried < points.len() / 2;
+        let cull = matches!(set, PieceSet::NearQueried(queried) if queried < points.len() / 2);
+        let fast_only = set == PieceSet::FastEdges;
         if cull {
             // An edge can hold a candidate only if a queried vertex lies within the edge's length
             // plus the query's reach of both its ends on every axis: with cells wider than that,
@@ -517,6 +618,9 @@ impl HairContacts {
             .map(|&j| {
                 let j = j as usize;
                 if cull && !(this.queried_cells.near(points[j]) && this.queried_cells.near(points[j + 1])) {
+                    return 0;
+                }
+                if fast_only && !(this.queried[j] || this.queried[j + 1]) {
                     return 0;
                 }
                 this.pieces_of(points, j)
@@ -580,7 +684,7 @@ impl HairContacts {
             *q = !fixed[i] && (!partial || closing[i] >= skin_left[i]);
         });
         let count = self.queried.iter().filter(|&&q| q).count();
-        self.cut_pieces(points, radii, count);
+        self.cut_pieces(points, radii, PieceSet::NearQueried(count));
         // Query in the grid's spatial order, so consecutive queries read the same buckets.
         let grid = &self.grid;
         let queried = &self.queried;
@@ -1302,5 +1406,77 @@ mod tests {
         eprintln!("{touching} contacts, lists built {builds} times in {steps} steps, {queries} queries of {movable} movable vertices");
         assert!(touching > 200, "too few contacts to test: {touching}");
         assert!(builds <= steps as u64 / 4, "lists built {builds} times in {steps} steps");
+    }
+
+    #[test]
+    fn projections_apart_keep_their_lists_where_a_few_vertices_move_far_and_stay_exact() {
+        // 2,400 random-walk strands of 5 mm steps packed along a 24 × 0.5 × 0.5 cm bar, thick
+        // enough that an eighth of the vertices overlap, moved apart by eight projections (a fifth
+        // of the vertices held, as roots). The first moves a few vertices by more than half the
+        // skin and most by micrometres: a spread of displacements over neighbourhoods an edge
+        // long reaches a fast mover almost everywhere, so each later pass rebuilt most lists.
+        // Every pass must move every vertex exactly as lists built afresh for it do (bit for
+        // bit; those match an all-pairs search, see above), at any thread count, while at most
+        // one of the seven later passes builds every list again (the spread's bound made two,
+        // 2.0 builds' worth of queries in all, where the two-level bound makes 1.0): the fast
+        // movers are one in 256, and each lies within a contact and a skin of a few dozen
+        // other vertices at most, so the partial builds are small, until the slow movers'
+        // displacements have spent the kept lists' skin.
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(44);
+        let (start, offsets) = random_walks(&mut rng, 2400, 8, Vec3::new(0.24, 0.005, 0.005), 0.005);
+        let radii: Vec<f32> = (0..start.len()).map(|_| rng.random_range(5e-5..1.2e-4)).collect();
+        let fixed: Vec<bool> = (0..start.len()).map(|i| i % 5 == 0).collect();
+        let movable = fixed.iter().filter(|&&f| !f).count() as u64;
+        let passes = 8;
+        let project = |contacts: &mut HairContacts, points: &mut Vec<Vec3>| {
+            contacts.project_apart(points, &radii, &fixed, |_, p| p).unwrap()
+        };
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut contacts = HairContacts::new(&offsets, &radii, 0.002, 50.0);
+                let mut points = start.clone();
+                let (mut each, mut queried) = (vec![points.clone()], Vec::new());
+                for _ in 0..passes {
+                    let before = contacts.queries_made();
+                    project(&mut contacts, &mut points);
+                    queried.push(contacts.queries_made() - before);
+                    each.push(points.clone());
+                }
+                (each, contacts.builds(), queried)
+            })
+        };
+        let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        let (one, builds, queried) = run(1);
+        let (mut overlapping, mut farthest) = (Vec::new(), 0.0f32);
+        for (pass, step) in one.windows(2).enumerate() {
+            let mut fresh = step[0].clone();
+            overlapping.push(project(&mut HairContacts::new(&offsets, &radii, 0.002, 50.0), &mut fresh));
+            assert_eq!(bits(&step[1]), bits(&fresh), "pass {pass}");
+            if pass == 0 {
+                farthest = step[0].iter().zip(&step[1]).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+            }
+        }
+        eprintln!(
+            "of {movable} movable vertices {overlapping:?} overlapped in each pass, the farthest moved \
+             {:.0} µm in the first; {builds} builds queried {queried:?}",
+            farthest * 1e6
+        );
+        let whole = queried[1..].iter().filter(|&&q| q == movable).count();
+        assert!(overlapping[0] as u64 * 8 > movable, "too few overlaps to test: {overlapping:?}");
+        assert!(overlapping[passes - 1] > 0, "the passes ran out of overlaps: {overlapping:?}");
+        assert!(
+            farthest > 0.5 * HairContacts::DEFAULT_SKIN,
+            "no vertex moved past half the skin: {farthest}"
+        );
+        assert!(builds > 1, "no pass rebuilt a list: the fast movers' search is untested");
+        assert!(whole <= 1, "{whole} of the later passes built every list again: {queried:?}");
+        assert!(queried[1..].iter().sum::<u64>() < movable * 3 / 2, "the later passes queried {queried:?}");
+        for threads in [2, 3] {
+            assert!(
+                run(threads).0.iter().zip(&one).all(|(a, b)| bits(a) == bits(b)),
+                "{threads} threads differ"
+            );
+        }
     }
 }

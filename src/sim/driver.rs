@@ -105,7 +105,7 @@ pub fn simulate(groom: &Groom, options: &SimulateOptions) -> Result<(Groom, Simu
     }
     let settle = match &options.settle {
         Some(settle) => {
-            Some(settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, Stepper::touched, settle, || {})?)
+            Some(settle_with(&mut stepper, |s| &mut s.sim, Stepper::step, Stepper::touched, settle, |_| {})?)
         }
         None => None,
     };

@@ -167,14 +167,14 @@ const STANDARD_GRAVITY: f32 = 9.80665;
 /// advances the context by one step (the rod solver plus whatever forces and contacts the caller
 /// applies). `touched` marks, one flag per strand, the strands that vertices of the strands its
 /// predicate picks touch now (the caller's hair–hair contacts; a caller without them leaves the
-/// flags empty). Calls `tick` after every step (progress bars).
+/// flags empty). Calls `tick` with the report so far after every step (progress).
 pub fn settle_with<C, E>(
     context: &mut C,
     sim: impl Fn(&mut C) -> &mut Simulation,
     mut step: impl FnMut(&mut C) -> Result<(), E>,
     mut touched: impl FnMut(&mut C, &(dyn Fn(usize) -> bool + Sync), &mut Vec<bool>),
     options: &SettleOptions,
-    mut tick: impl FnMut(),
+    mut tick: impl FnMut(&SettleReport),
 ) -> Result<SettleReport, E> {
     let s = sim(context);
     let dt = s.params().dt;
@@ -234,7 +234,7 @@ fn relax<C, E>(
     sim: &impl Fn(&mut C) -> &mut Simulation,
     step: &mut impl FnMut(&mut C) -> Result<(), E>,
     touched: &mut impl FnMut(&mut C, &(dyn Fn(usize) -> bool + Sync), &mut Vec<bool>),
-    tick: &mut impl FnMut(),
+    tick: &mut impl FnMut(&SettleReport),
     tolerance: f32,
     max_steps: u64,
     report: &mut SettleReport,
@@ -273,8 +273,8 @@ fn relax<C, E>(
         if pushed {
             momentum.after_step(sim(context));
         }
-        tick();
         report.steps += 1;
+        tick(report);
         report.strand_steps_asleep += asleep as u64;
         since_reset += 1;
         let s = sim(context);
@@ -565,7 +565,7 @@ impl Simulation {
             s.step_with(hooks);
             Ok(())
         };
-        match settle_with(self, |s| s, step, |_, _, touched| touched.clear(), options, || {}) {
+        match settle_with(self, |s| s, step, |_, _, touched| touched.clear(), options, |_| {}) {
             Ok(report) => report,
             Err(never) => match never {},
         }

@@ -226,6 +226,12 @@ pub(crate) fn style_strands(
     let mut stages = Vec::with_capacity(recipe.stages.len());
     let total_steps: u64 = recipe.stages.iter().map(|s| session.steps_for(s.get_ref().duration())).sum();
     let progress = Progress::new(options.progress, "style", total_steps);
+    // A settle ends once at rest, usually long before its budget: the ETA gives it as a range.
+    let settle_budget: u64 = (recipe.stages.iter())
+        .filter(|s| matches!(s.get_ref(), Stage::Settle { .. }))
+        .map(|s| session.steps_for(s.get_ref().duration()))
+        .sum();
+    progress.add_open(settle_budget);
     // The stages placed on this groom (head-frame lengths in metres, layouts as rods).
     let placed_stages = session.recipe.stages.clone();
     for (index, spanned) in placed_stages.iter().enumerate() {
@@ -938,7 +944,8 @@ impl Session {
                 }
                 let options =
                     SettleOptions { tolerance: *tolerance, max_seconds: *max_seconds, iterations: None };
-                return Ok(Some(self.settle(&options, progress)?));
+                let stage = format!("stage {}/{} settle", index + 1, self.recipe.stages.len());
+                return Ok(Some(self.settle(&options, &stage, progress)?));
             }
         }
         Ok(None)
@@ -981,12 +988,26 @@ impl Session {
     }
 
     /// The static solve (`sim::settle`) with this session's forces and contacts, its chemistry
-    /// held ([`Self::settle_step`]).
-    fn settle(&mut self, options: &SettleOptions, progress: &Progress) -> Result<SettleReport> {
-        let budget = self.steps_for(options.max_seconds).max(1);
-        let report =
-            settle_with(self, |s| &mut s.sim, Self::settle_step, Self::touched, options, || progress.inc(1))?;
-        progress.inc(budget.saturating_sub(report.steps));
+    /// held ([`Self::settle_step`]). Its progress names `stage` and the residual reached so far.
+    fn settle(&mut self, options: &SettleOptions, stage: &str, progress: &Progress) -> Result<SettleReport> {
+        let budget = self.steps_for(options.max_seconds);
+        let mut shown = f32::NAN;
+        let mut show = |report: &SettleReport| {
+            let residual = report.force_residual.max(report.torque_residual);
+            if residual.is_finite() && residual != shown {
+                shown = residual;
+                progress
+                    .set_message(&format!("{stage}, residual {residual:.1e} of {:.0e}", report.tolerance));
+            }
+        };
+        let tick = |report: &SettleReport| {
+            show(report);
+            progress.inc_open(1);
+        };
+        let report = settle_with(self, |s| &mut s.sim, Self::settle_step, Self::touched, options, tick)?;
+        // The last probe's residual: the one the settle ended on.
+        show(&report);
+        progress.inc_open(budget.saturating_sub(report.steps));
         Ok(report)
     }
 
