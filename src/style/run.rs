@@ -399,8 +399,8 @@ struct Session {
     obstacles: Vec<Shape>,
     poses: Vec<ObstaclePose>,
     rods: Vec<Shape>,
-    /// Per vertex, 0 or `1 + k`: the vertex was inside rod `k` when the rods appeared and passes
-    /// through it until it has left it. Pushed out at once, a vertex 2 cm deep shot out at 2 cm
+    /// Per vertex, 0 or `1 + k`: the vertex, of a strand no rod winds, was inside rod `k` when
+    /// the rods appeared and passes through it until it has left it. Pushed out at once, a vertex 2 cm deep shot out at 2 cm
     /// per step, a speed that depended on Δt, and which side it left by was a coin flip: strands
     /// hanging through a water set's rods landed in other places at other steps (issue 15).
     /// Empty when no vertex is threaded.
@@ -666,12 +666,22 @@ impl Session {
         self.penetration = self.penetration.max(self.deepest_penetration());
     }
 
-    /// Marks the free vertices whose centres lie inside a rod as it appears as passing through it.
+    /// Marks the free vertices of unwound strands whose centres lie inside a rod as it appears as
+    /// passing through it.
     fn thread_through_rods(&mut self) {
         let positions = self.sim.rods().positions();
-        // Wound vertices follow their windings: not free.
         let mut free: Vec<bool> = self.sim.rods().kinematic().iter().map(|&k| !k).collect();
-        self.held.iter().for_each(|&i| free[i] = false);
+        // A wound strand is held at both ends of its free part, the root and its winding, which
+        // starts where the line from the root touches the rod's outside: a vertex of that part
+        // inside the rod cannot leave by passing through and stayed there, bending the rest shape
+        // the perm set (the full-head perm's rods lie a vertex above the scalp: 444 of its 2,000
+        // guides' first free vertices 0.3-5.7 mm deep, and their settle stalled). Held between
+        // the two, its push out cannot fling the strand: it is pushed out.
+        for (s, wound) in self.wound.iter().enumerate() {
+            if wound.is_some() {
+                free[self.groom.strand_range(s)].fill(false);
+            }
+        }
         let inside = |i: usize| {
             // Deeper than touching: a vertex that only overlaps a rod by less than its radius is
             // pushed out slowly (< its radius a step).
