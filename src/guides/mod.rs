@@ -31,7 +31,7 @@ use crate::style::placement::place;
 use crate::style::recipe::{Recipe, Stage};
 use crate::style::run::{sim_params, style_strands, StyleOptions, Styled, WaterSnapshots};
 use binding::{Binding, GUIDES_PER_CHILD};
-use deform::{Children, Curves};
+use deform::{Children, Curves, HangCeilings};
 
 /// Per strand, the strand ids (`groom_id`) of a child's guides, as Unreal's groom builder looks
 /// them up among the guides' ids: three per strand, written as float×3 in USD (exact integers
@@ -215,7 +215,16 @@ pub fn style(
     let (last, last_pose) = start(usize::MAX);
     progress.set_message("placed on their guides");
     let mut child_points = deform::deform(&last, last_pose, &after);
-    push_out(&mut child_points, &children.strand_offsets, &radii, &styled.colliders);
+    // Without gravity no balance to keep.
+    let up = -sim_params(&placed.recipe).gravity.try_normalize().unwrap_or(Vec3::ZERO);
+    let ceilings = |after: &Curves| (up != Vec3::ZERO).then(|| HangCeilings::new(&bindings, after, up));
+    push_out(
+        &mut child_points,
+        &children.strand_offsets,
+        &radii,
+        &styled.colliders,
+        ceilings(&after).as_ref(),
+    );
     progress.inc(1);
     // Placed, not settled among each other: moved apart before their rest is solved, so that a
     // shot simulating them with the recipe's contacts finds them at rest.
@@ -305,7 +314,7 @@ pub fn style(
         let mut points = deform::deform(&from, from_pose, &after);
         // The colliders where they were at that frame: a press part-way in, the rods.
         let colliders = styled.frame_colliders.get(index).map_or(styled.colliders.as_slice(), |c| c);
-        push_out(&mut points, &children.strand_offsets, &radii, colliders);
+        push_out(&mut points, &children.strand_offsets, &radii, colliders, ceilings(&after).as_ref());
         let mut all = out.points.clone();
         scatter(&mut all, &out, &guide_ids, &frame);
         scatter(&mut all, &out, &child_ids, &points);
@@ -571,52 +580,79 @@ fn merge_vertex_attribute(
 /// scalp as a curl: pushing each vertex to the nearest surface point folded such loops back
 /// (edges turning 134° and 145° where the deformed children turned 35° and 42°), a shape no rod
 /// holds at rest (those children fell 34.5 and 18 mm when simulated again). Roots stay.
-fn push_out(points: &mut [Vec3], offsets: &[u32], radii: &[f32], shapes: &[Shape]) {
+///
+/// With `ceilings`, a child first turns down about its root until its weight hangs no higher
+/// than its guides' ([`HangCeilings`]); where that turns it into a collider the push lifts it a
+/// little again, so the two take turns, up to [`PLACING_ROUNDS`] times (on bed-head's crown
+/// one round left 13 of 28 falling children falling, eight rounds one).
+fn push_out(
+    points: &mut [Vec3],
+    offsets: &[u32],
+    radii: &[f32],
+    shapes: &[Shape],
+    ceilings: Option<&HangCeilings>,
+) {
     use rayon::prelude::*;
-    let outside = |p: Vec3, radius: f32| outside(p, radius, shapes);
     let mut strands = deform::split_mut(points, offsets);
     strands.par_iter_mut().enumerate().for_each(|(s, strand)| {
-        let first = offsets[s] as usize;
-        let mut previous_deformed = strand[0];
-        // The deformed edge into the previous vertex and the placed one, as unit vectors.
-        let mut previous_edges: Option<(Vec3, Vec3)> = None;
-        for k in 1..strand.len() {
-            let deformed = strand[k];
-            let edge = deformed - previous_deformed;
-            previous_deformed = deformed;
-            let (length, radius) = (edge.length(), radii[first + k]);
-            let Some(deformed_direction) = edge.try_normalize() else {
-                strand[k] = strand[k - 1];
-                continue;
-            };
-            let turned = |direction: Vec3| match previous_edges {
-                Some((deformed_before, placed_before)) => {
-                    let allowed = deformed_before.angle_between(deformed_direction) + TURN_SLACK;
-                    turned_at_most(placed_before, direction, allowed)
-                }
-                None => direction,
-            };
-            // Where the edge heads straight into a collider, the way the strand came (at the
-            // root, the way its next edge goes).
-            let course = match previous_edges {
-                Some((_, placed_before)) => placed_before,
-                None => strand
-                    .get(k + 1)
-                    .map_or(deformed_direction, |&next| (next - deformed).normalize_or_zero()),
-            };
-            let mut direction = deformed_direction;
-            for _ in 0..PUSH_PASSES {
-                direction = turned(direction);
-                let placed = strand[k - 1] + direction * length;
-                let pushed = outside(placed, radius);
-                let Some(normal) = (pushed - placed).try_normalize() else { break };
-                direction = lifted_direction(strand[k - 1], pushed, length, normal, course);
+        let radii = &radii[offsets[s] as usize..offsets[s + 1] as usize];
+        let mut lowering = false;
+        for round in 0..PLACING_ROUNDS {
+            let lowered = ceilings.is_some_and(|c| c.lower(s, strand, lowering));
+            lowering |= lowered;
+            if round > 0 && !lowered {
+                break;
             }
-            strand[k] = outside(strand[k - 1] + direction * length, radius);
-            let placed = (strand[k] - strand[k - 1]).try_normalize().unwrap_or(direction);
-            previous_edges = Some((deformed_direction, placed));
+            push_strand_out(strand, radii, shapes);
         }
     });
+}
+
+/// Times [`push_out`] lowers a child and pushes it out again, at most.
+const PLACING_ROUNDS: usize = 8;
+
+/// One strand's part of [`push_out`] (`radii` its own), without the lowering.
+fn push_strand_out(strand: &mut [Vec3], radii: &[f32], shapes: &[Shape]) {
+    let outside = |p: Vec3, radius: f32| outside(p, radius, shapes);
+    let mut previous_deformed = strand[0];
+    // The deformed edge into the previous vertex and the placed one, as unit vectors.
+    let mut previous_edges: Option<(Vec3, Vec3)> = None;
+    for k in 1..strand.len() {
+        let deformed = strand[k];
+        let edge = deformed - previous_deformed;
+        previous_deformed = deformed;
+        let (length, radius) = (edge.length(), radii[k]);
+        let Some(deformed_direction) = edge.try_normalize() else {
+            strand[k] = strand[k - 1];
+            continue;
+        };
+        let turned = |direction: Vec3| match previous_edges {
+            Some((deformed_before, placed_before)) => {
+                let allowed = deformed_before.angle_between(deformed_direction) + TURN_SLACK;
+                turned_at_most(placed_before, direction, allowed)
+            }
+            None => direction,
+        };
+        // Where the edge heads straight into a collider, the way the strand came (at the
+        // root, the way its next edge goes).
+        let course = match previous_edges {
+            Some((_, placed_before)) => placed_before,
+            None => {
+                strand.get(k + 1).map_or(deformed_direction, |&next| (next - deformed).normalize_or_zero())
+            }
+        };
+        let mut direction = deformed_direction;
+        for _ in 0..PUSH_PASSES {
+            direction = turned(direction);
+            let placed = strand[k - 1] + direction * length;
+            let pushed = outside(placed, radius);
+            let Some(normal) = (pushed - placed).try_normalize() else { break };
+            direction = lifted_direction(strand[k - 1], pushed, length, normal, course);
+        }
+        strand[k] = outside(strand[k - 1] + direction * length, radius);
+        let placed = (strand[k] - strand[k - 1]).try_normalize().unwrap_or(direction);
+        previous_edges = Some((deformed_direction, placed));
+    }
 }
 
 /// The direction of an edge from `start` whose end was pushed out of a collider to `pushed` (the
@@ -698,7 +734,7 @@ mod tests {
             .collect();
         let mut pushed = points.clone();
         let radii = vec![0.0; points.len()];
-        push_out(&mut pushed, &[0, points.len() as u32], &radii, std::slice::from_ref(&head));
+        push_out(&mut pushed, &[0, points.len() as u32], &radii, std::slice::from_ref(&head), None);
         assert_eq!(pushed[0], points[0]);
         let mut sharpest: f32 = 0.0;
         for k in 1..points.len() {
@@ -731,6 +767,7 @@ mod tests {
                 &[0, points.len() as u32],
                 &vec![0.0; points.len()],
                 std::slice::from_ref(shape),
+                None,
             );
             pushed
         };
