@@ -377,18 +377,93 @@ pub struct ContactHooks<'a> {
     pub previous: &'a [Vec3],
     pub radii: &'a [f32],
     pub friction: Friction,
-    /// Per vertex, 0 or `1 + k`: the vertex passes through `shapes[first_threaded + k]` (hair a
-    /// curler rod appeared around, `style`); empty when none does.
-    pub threaded: &'a [u16],
+    /// Vertices leaving a rod they were inside as it appeared (`style`'s wrap).
+    pub threaded: &'a Threaded,
+    /// Where the rods start in `shapes` (a [`Threading::rod`] counts from there).
     pub first_threaded: usize,
 }
 
-/// The index in the shapes of the one `vertex` passes through ([`ContactHooks::threaded`]),
-/// `usize::MAX` for none.
-pub fn threaded_shape(threaded: &[u16], first_threaded: usize, vertex: usize) -> usize {
-    match threaded.get(vertex) {
-        Some(&k) if k > 0 => first_threaded + k as usize - 1,
-        _ => usize::MAX,
+/// A vertex that was inside a curler rod as the rods appeared: the rod is being put in place
+/// around it, so it leaves by one side at a set speed instead of at once (pushed out in one step,
+/// a vertex 2 cm deep shot out at 2 cm a step, a speed that depended on Δt). Its offset from the
+/// rod's axis along `exit` may not fall below `floor`, which rises at that speed until the vertex
+/// is outside; the rest of the rod does not push it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Threading {
+    pub vertex: usize,
+    /// The rod, counted from the first rod.
+    pub rod: usize,
+    /// A point on the rod's axis.
+    pub axis_point: Vec3,
+    /// The way out: unit, across the axis.
+    pub exit: Vec3,
+    /// The least offset along `exit` the vertex may have now (metres from the axis).
+    pub floor: f32,
+}
+
+impl Threading {
+    fn offset(&self, p: Vec3) -> f32 {
+        (p - self.axis_point).dot(self.exit)
+    }
+
+    /// `p` moved out to the floor if it lies behind it.
+    pub fn hold(&self, p: Vec3) -> Vec3 {
+        p + self.exit * self.behind(p)
+    }
+
+    /// How far `p` lies behind the floor (0 if not): the depth inside the rod as placed so far.
+    pub fn behind(&self, p: Vec3) -> f32 {
+        (self.floor - self.offset(p)).max(0.0)
+    }
+}
+
+/// The vertices passing through a rod, found by vertex.
+#[derive(Clone, Debug, Default)]
+pub struct Threaded {
+    /// Per vertex, 0 or `1 +` its index in `threads`; empty when none is threaded.
+    slots: Vec<u32>,
+    threads: Vec<Threading>,
+}
+
+impl Threaded {
+    pub fn new(vertices: usize, threads: Vec<Threading>) -> Threaded {
+        if threads.is_empty() {
+            return Threaded::default();
+        }
+        let mut slots = vec![0; vertices];
+        for (k, t) in threads.iter().enumerate() {
+            slots[t.vertex] = k as u32 + 1;
+        }
+        Threaded { slots, threads }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.threads.is_empty()
+    }
+
+    pub fn get(&self, vertex: usize) -> Option<&Threading> {
+        match self.slots.get(vertex) {
+            Some(&k) if k > 0 => Some(&self.threads[k as usize - 1]),
+            _ => None,
+        }
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &Threading> {
+        self.threads.iter()
+    }
+
+    /// Raises every floor by `by` metres (a step of the rods being put in place).
+    pub fn advance(&mut self, by: f32) {
+        self.threads.iter_mut().for_each(|t| t.floor += by);
+    }
+
+    /// Drops the threadings `left` says have left their rod (they collide with it from then on).
+    pub fn release(&mut self, mut left: impl FnMut(&Threading) -> bool) {
+        let before = self.threads.len();
+        self.threads.retain(|t| !left(t));
+        if self.threads.len() != before {
+            *self = Threaded::new(self.slots.len(), std::mem::take(&mut self.threads));
+        }
     }
 }
 
@@ -412,10 +487,14 @@ impl Hooks for ContactHooks<'_> {
             // the rare vertex the cheap clearance test leaves.
             let start = *p;
             let mut mask = None;
-            let passes = threaded_shape(self.threaded, self.first_threaded, i);
+            let threading = self.threaded.get(i);
+            let passes = threading.map_or(usize::MAX, |t| self.first_threaded + t.rod);
             for (s, shape) in self.shapes.iter().enumerate() {
-                if s == passes
-                    || self.culling.clear_of(s, *p, radius)
+                if s == passes {
+                    *p = threading.unwrap().hold(*p);
+                    continue;
+                }
+                if self.culling.clear_of(s, *p, radius)
                     || !ObstacleCulling::tests(
                         *mask.get_or_insert_with(|| self.culling.mask(strand, start)),
                         s,

@@ -22,7 +22,7 @@ use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::mesh_sdf::TriangleMesh;
 use crate::interact::obstacles::{
-    segment_distance, threaded_shape, ContactHooks, Friction, ObstacleCulling, Shape,
+    segment_distance, ContactHooks, Friction, ObstacleCulling, Shape, Threaded, Threading,
 };
 use crate::interact::water::{Droplets, WaterParams};
 use crate::interact::wetness::{self, WetnessParams};
@@ -74,9 +74,21 @@ pub struct StageReport {
     pub wetness: f32,
     pub settle: Option<SettleReport>,
     /// Deepest any vertex went inside an active obstacle or rod after any step of the stage,
-    /// metres (0: never inside; a vertex's radius counts).
+    /// metres (0: never inside; a vertex's radius counts). A vertex a rod appeared around counts
+    /// how far it lies inside the rod as put in place so far (see `threaded_max_depth`).
     pub max_penetration: f32,
+    /// Deepest a vertex a rod appeared around was inside that rod after any step of the stage
+    /// (metres, 0 for none): it leaves at [`ROD_PLACING_SPEED`].
+    pub threaded_max_depth: f32,
+    /// On the stage the last such vertex left its rod: simulated seconds from the rods appearing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub threaded_exit_seconds: Option<f32>,
 }
+
+/// How fast hair a curler rod is put in place around is moved out of it (m/s): a stylist sets
+/// the water set's 2.5 cm rods in about a quarter of a second. A speed, so the way out takes the
+/// same time at any Δt and any number of iterations.
+pub const ROD_PLACING_SPEED: f32 = 0.1;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StyleReport {
@@ -239,6 +251,8 @@ pub(crate) fn style_strands(
         progress.set_message(&format!("stage {}/{} {}", index + 1, placed_stages.len(), stage.kind()));
         let start = Instant::now();
         session.penetration = 0.0;
+        session.threaded_depth = 0.0;
+        session.threaded_exit = None;
         let steps_before = session.sim.steps_taken();
         let settle = session.run_stage(index, stage, &progress)?;
         session.sim.check_diverged(Some(format!("stage {} ({})", index + 1, stage.kind())))?;
@@ -399,12 +413,17 @@ struct Session {
     obstacles: Vec<Shape>,
     poses: Vec<ObstaclePose>,
     rods: Vec<Shape>,
-    /// Per vertex, 0 or `1 + k`: the vertex, of a strand no rod winds, was inside rod `k` when
-    /// the rods appeared and passes through it until it has left it. Pushed out at once, a vertex 2 cm deep shot out at 2 cm
+    /// The vertices, of strands no rod winds, that were inside a rod when the rods appeared and
+    /// leave it at [`ROD_PLACING_SPEED`]. Pushed out at once, a vertex 2 cm deep shot out at 2 cm
     /// per step, a speed that depended on Δt, and which side it left by was a coin flip: strands
     /// hanging through a water set's rods landed in other places at other steps (issue 15).
-    /// Empty when no vertex is threaded.
-    threaded: Vec<u16>,
+    threaded: Threaded,
+    /// The step the rods appeared at, while vertices are leaving them.
+    threaded_since: Option<u64>,
+    /// Deepest a threaded vertex is inside its rod in the current stage so far (metres).
+    threaded_depth: f32,
+    /// Simulated seconds the last threaded vertex took to leave, once it has (for the report).
+    threaded_exit: Option<f32>,
     /// Where the rods start in `active`.
     first_rod: usize,
     rods_active: bool,
@@ -514,7 +533,10 @@ impl Session {
             poses,
             rods,
             rods_active: false,
-            threaded: Vec::new(),
+            threaded: Threaded::default(),
+            threaded_since: None,
+            threaded_depth: 0.0,
+            threaded_exit: None,
             first_rod: 0,
             active: Vec::new(),
             held: Vec::new(),
@@ -589,7 +611,8 @@ impl Session {
         if self.rods_active {
             self.active.extend(self.rods.iter().cloned());
         } else {
-            self.threaded.clear();
+            self.threaded = Threaded::default();
+            self.threaded_since = None;
         }
     }
 
@@ -652,6 +675,7 @@ impl Session {
     fn contact_step(&mut self) {
         self.previous.copy_from_slice(self.sim.rods().positions());
         self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
+        self.threaded.advance(ROD_PLACING_SPEED * self.sim.params().dt);
         let hooks = ContactHooks {
             shapes: &self.active,
             culling: &self.culling,
@@ -667,7 +691,7 @@ impl Session {
     }
 
     /// Marks the free vertices of unwound strands whose centres lie inside a rod as it appears as
-    /// passing through it.
+    /// leaving it by the shortest way that does not cross another obstacle (the head).
     fn thread_through_rods(&mut self) {
         let positions = self.sim.rods().positions();
         let mut free: Vec<bool> = self.sim.rods().kinematic().iter().map(|&k| !k).collect();
@@ -682,36 +706,65 @@ impl Session {
                 free[self.groom.strand_range(s)].fill(false);
             }
         }
-        let inside = |i: usize| {
-            // Deeper than touching: a vertex that only overlaps a rod by less than its radius is
-            // pushed out slowly (< its radius a step).
-            let k = self.rods.iter().position(|rod| rod.signed_distance(positions[i]) < 0.0)?;
-            free[i].then_some(k as u16 + 1)
-        };
-        let threaded: Vec<u16> =
-            (0..positions.len()).into_par_iter().map(|i| inside(i).unwrap_or(0)).collect();
-        self.threaded = if threaded.iter().any(|&k| k > 0) { threaded } else { Vec::new() };
+        // The rods are not active yet: these are the other obstacles.
+        let others = &self.active;
+        let threads: Vec<Threading> = (0..positions.len())
+            .into_par_iter()
+            .filter(|&i| free[i])
+            .filter_map(|i| {
+                let p = positions[i];
+                // Deeper than touching: a vertex that only overlaps a rod by less than its radius
+                // is pushed out slowly (< its radius a step).
+                let rod = self.rods.iter().position(|rod| rod.signed_distance(p) < 0.0)?;
+                let Shape::Capsule { a, b, radius } = self.rods[rod] else {
+                    unreachable!("rods are capsules")
+                };
+                let axis = (b - a).normalize();
+                let along = (p - a).dot(axis).clamp(0.0, a.distance(b));
+                let foot = a + axis * along;
+                let reach = radius + self.radii[i];
+                // Across the axis towards the vertex, else (through the axis) the other way.
+                let toward = (p - foot - axis * (p - foot).dot(axis))
+                    .try_normalize()
+                    .unwrap_or_else(|| axis.any_orthonormal_vector());
+                let clear = |exit: Vec3| {
+                    let out = foot + exit * reach;
+                    (0..=8).all(|k| {
+                        let q = p.lerp(out, k as f32 / 8.0);
+                        others.iter().all(|o| o.signed_distance(q) >= self.radii[i])
+                    })
+                };
+                let exit = if clear(toward) || !clear(-toward) { toward } else { -toward };
+                Some(Threading { vertex: i, rod, axis_point: foot, exit, floor: (p - foot).dot(exit) })
+            })
+            .collect();
+        self.threaded = Threaded::new(positions.len(), threads);
+        self.threaded_since = (!self.threaded.is_empty()).then(|| self.sim.steps_taken());
     }
 
-    /// A threaded vertex that has left its rod collides with it from then on.
+    /// A threaded vertex that has left its rod, or that the floor has carried out of it, collides
+    /// with it from then on. Measures how deep the others are.
     fn release_threaded(&mut self) {
-        if self.threaded.is_empty() {
-            return;
-        }
+        let Some(since) = self.threaded_since else { return };
         let positions = self.sim.rods().positions();
         let (rods, radii) = (&self.rods, &self.radii);
-        self.threaded.par_iter_mut().enumerate().filter(|(_, k)| **k > 0).for_each(|(i, k)| {
-            if rods[*k as usize - 1].signed_distance(positions[i]) >= radii[i] {
-                *k = 0;
-            }
-        });
-        if self.threaded.iter().all(|&k| k == 0) {
-            self.threaded.clear();
+        let depth = |t: &Threading| radii[t.vertex] - rods[t.rod].signed_distance(positions[t.vertex]);
+        let full = |t: &Threading| match rods[t.rod] {
+            Shape::Capsule { radius, .. } => radius + radii[t.vertex],
+            _ => unreachable!("rods are capsules"),
+        };
+        self.threaded.release(|t| depth(t) <= 0.0 || t.floor >= full(t));
+        self.threaded_depth = self.threaded.iter().map(depth).fold(self.threaded_depth, f32::max);
+        if self.threaded.is_empty() {
+            let steps = self.sim.steps_taken() - since;
+            self.threaded_exit = Some(steps as f32 * self.sim.params().dt);
+            self.threaded_since = None;
         }
     }
 
-    /// How deep the deepest vertex is inside an active obstacle now. Strands a settle lets sleep
-    /// are left out: they have not moved since a step measured them.
+    /// How deep the deepest vertex is inside an active obstacle now (a vertex leaving a rod, how
+    /// far inside the rod as put in place so far). Strands a settle lets sleep are left out: they
+    /// have not moved since a step measured them.
     fn deepest_penetration(&self) -> f32 {
         let positions = &self.sim.rods().positions();
         (0..self.groom.strand_count())
@@ -723,11 +776,12 @@ impl Session {
                     let (p, radius) = (positions[i], self.radii[i]);
                     // The culling mask, looked up once and only if a shape's clearance test leaves it.
                     let mut mask = None;
-                    let passes = threaded_shape(&self.threaded, self.first_rod, i);
+                    let threading = self.threaded.get(i);
+                    let passes = threading.map_or(usize::MAX, |t| self.first_rod + t.rod);
                     for (k, shape) in self.active.iter().enumerate() {
-                        // Clear of the shape: its distance is at least the radius.
-                        if k != passes
-                            && !self.culling.clear_of(k, p, radius)
+                        if k == passes {
+                            deepest = deepest.max(threading.unwrap().behind(p));
+                        } else if !self.culling.clear_of(k, p, radius)
                             && ObstacleCulling::tests(
                                 *mask.get_or_insert_with(|| self.culling.mask(strand, p)),
                                 k,
@@ -1298,6 +1352,8 @@ impl Session {
             },
             wetness: self.wetness.iter().sum::<f32>() / self.wetness.len().max(1) as f32,
             max_penetration: self.penetration,
+            threaded_max_depth: self.threaded_depth,
+            threaded_exit_seconds: self.threaded_exit,
             settle,
         }
     }
