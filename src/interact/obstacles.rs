@@ -385,25 +385,25 @@ pub struct ContactHooks<'a> {
 
 /// A vertex that was inside a curler rod as the rods appeared: the rod is being put in place
 /// around it, so it leaves by one side at a set speed instead of at once (pushed out in one step,
-/// a vertex 2 cm deep shot out at 2 cm a step, a speed that depended on Δt). Its offset from the
-/// rod's axis along `exit` may not fall below `floor`, which rises at that speed until the vertex
+/// a vertex 2 cm deep shot out at 2 cm a step, a speed that depended on Δt). Its offset from
+/// `origin` along `exit` may not fall below `floor`, which rises at that speed until the vertex
 /// is outside; the rest of the rod does not push it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Threading {
     pub vertex: usize,
     /// The rod, counted from the first rod.
     pub rod: usize,
-    /// A point on the rod's axis.
-    pub axis_point: Vec3,
-    /// The way out: unit, across the axis.
+    /// Where the way out is measured from.
+    pub origin: Vec3,
+    /// The way out: unit, across the rod's axis.
     pub exit: Vec3,
-    /// The least offset along `exit` the vertex may have now (metres from the axis).
+    /// The least offset along `exit` the vertex may have now (metres from `origin`).
     pub floor: f32,
 }
 
 impl Threading {
     fn offset(&self, p: Vec3) -> f32 {
-        (p - self.axis_point).dot(self.exit)
+        (p - self.origin).dot(self.exit)
     }
 
     /// `p` moved out to the floor if it lies behind it.
@@ -459,10 +459,17 @@ impl Threaded {
 
     /// Drops the threadings `left` says have left their rod (they collide with it from then on).
     pub fn release(&mut self, mut left: impl FnMut(&Threading) -> bool) {
-        let before = self.threads.len();
-        self.threads.retain(|t| !left(t));
-        if self.threads.len() != before {
-            *self = Threaded::new(self.slots.len(), std::mem::take(&mut self.threads));
+        // Renumbered in place: the threads are few, the vertices many.
+        let slots = &mut self.slots;
+        self.threads.retain(|t| {
+            slots[t.vertex] = 0;
+            !left(t)
+        });
+        if self.threads.is_empty() {
+            *self = Threaded::default();
+        }
+        for (k, t) in self.threads.iter().enumerate() {
+            self.slots[t.vertex] = k as u32 + 1;
         }
     }
 }
@@ -513,6 +520,25 @@ impl Hooks for ContactHooks<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn threaded_vertices_are_found_held_behind_their_floor_and_released() {
+        let thread = |vertex, floor| Threading { vertex, rod: 0, origin: Vec3::ZERO, exit: Vec3::X, floor };
+        let mut threaded = Threaded::new(10, vec![thread(2, -0.5), thread(5, 0.1), thread(7, 0.3)]);
+        assert_eq!(threaded.get(5).map(|t| t.vertex), Some(5));
+        assert!(threaded.get(3).is_none() && threaded.get(11).is_none());
+        threaded.advance(0.25);
+        let t = *threaded.get(2).unwrap();
+        // Behind the floor (-0.25): moved out along the exit to it; in front: left alone.
+        assert_eq!(t.hold(Vec3::new(-1.0, 2.0, 0.0)), Vec3::new(-0.25, 2.0, 0.0));
+        assert_eq!(t.hold(Vec3::new(0.5, 2.0, 0.0)), Vec3::new(0.5, 2.0, 0.0));
+        assert!((t.behind(Vec3::new(-1.0, 0.0, 0.0)) - 0.75).abs() < 1e-6);
+        threaded.release(|t| t.vertex == 5);
+        assert!(threaded.get(5).is_none());
+        assert_eq!([2, 7].map(|v| threaded.get(v).map(|t| t.vertex)), [Some(2), Some(7)]);
+        threaded.release(|_| true);
+        assert!(threaded.is_empty() && threaded.get(2).is_none());
+    }
 
     #[test]
     fn clearance_and_exclusions_reject_only_vertices_the_exact_test_rejects() {
