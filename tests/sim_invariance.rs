@@ -268,10 +268,12 @@ fn bed_head_and_water_set_bake_the_same_rest_curves_at_any_time_step() {
 /// deep in one (the Gauss–Seidel solve's wet hair, stiffer, stays 3–15 cm clear). Pushed out in
 /// one step, those vertices shot out at depth/Δt and the strands landed elsewhere at each Δt: rest
 /// curves 0.38 / 7.07 % (mean, worst) of the strand length from the 1/1440 run's at Δt 1/240,
-/// 0.10 / 0.84 % at 1/360. Now a vertex inside a rod as it appears passes through it until it has
-/// left it: 0.24 / 0.86 % and 0.03 / 0.20 %. Not asserted: the settled shape's worst vertex at
-/// 1/240, 3.45 % (seed strand 80 lies on the scalp 7 mm further sideways; its rest curve is within
-/// 0.9 %).
+/// 0.10 / 0.84 % at 1/360. Now a vertex inside a rod as it appears is moved out at
+/// `ROD_PLACING_SPEED`, away from the head (straight out from the axis, the side was a coin flip
+/// for one strand 1 mm from it: 0.39 / 7.04 %): 0.27 / 0.90 % and 0.03 / 0.20 % (let pass through
+/// the rod and left inside it: 0.24 / 0.86 % and 0.03 / 0.20 %). Not asserted: the settled
+/// shape's worst vertex at 1/240 (3.45 % when let pass through: seed strand 80 lay on the scalp
+/// 7 mm further sideways; its rest curve was within 0.9 %).
 #[test]
 fn water_set_with_the_direct_solver_bakes_the_same_rest_curves_at_any_time_step() {
     let settings = "solver = \"direct\"";
