@@ -721,8 +721,8 @@ impl Session {
                 let foot = a + axis * (p - a).dot(axis).clamp(0.0, a.distance(b));
                 let across = |v: Vec3| v - axis * v.dot(axis);
                 // Out along the line from the rod's edge nearest the head through the vertex:
-                // the shortest way for hair on the rod's outer half, never into the head, and
-                // turning smoothly with the vertex's place. Straight out from the axis, the side
+                // about the shortest way for hair on the rod's outer half, always away from the
+                // head, and turning smoothly with the vertex's place. Straight out from the axis, the side
                 // was a coin flip for hair hanging through the rod near its axis (the water set's
                 // direct solve: one strand 1 mm from it), and the rest curves at Δt 1/240 lay
                 // 7.0 % of the strand length from 1/1440's at worst.
