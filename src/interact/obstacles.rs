@@ -377,6 +377,101 @@ pub struct ContactHooks<'a> {
     pub previous: &'a [Vec3],
     pub radii: &'a [f32],
     pub friction: Friction,
+    /// Vertices leaving a rod they were inside as it appeared (`style`'s wrap).
+    pub threaded: &'a Threaded,
+    /// Where the rods start in `shapes` (a [`Threading::rod`] counts from there).
+    pub first_threaded: usize,
+}
+
+/// A vertex that was inside a curler rod as the rods appeared: the rod is being put in place
+/// around it, so it leaves by one side at a set speed instead of at once (pushed out in one step,
+/// a vertex 2 cm deep shot out at 2 cm a step, a speed that depended on Δt). Its offset from
+/// `origin` along `exit` may not fall below `floor`, which rises at that speed until the vertex
+/// is outside; the rest of the rod does not push it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Threading {
+    pub vertex: usize,
+    /// The rod, counted from the first rod.
+    pub rod: usize,
+    /// Where the way out is measured from.
+    pub origin: Vec3,
+    /// The way out: unit, across the rod's axis.
+    pub exit: Vec3,
+    /// The least offset along `exit` the vertex may have now (metres from `origin`).
+    pub floor: f32,
+}
+
+impl Threading {
+    fn offset(&self, p: Vec3) -> f32 {
+        (p - self.origin).dot(self.exit)
+    }
+
+    /// `p` moved out to the floor if it lies behind it.
+    pub fn hold(&self, p: Vec3) -> Vec3 {
+        p + self.exit * self.behind(p)
+    }
+
+    /// How far `p` lies behind the floor (0 if not): the depth inside the rod as placed so far.
+    pub fn behind(&self, p: Vec3) -> f32 {
+        (self.floor - self.offset(p)).max(0.0)
+    }
+}
+
+/// The vertices passing through a rod, found by vertex.
+#[derive(Clone, Debug, Default)]
+pub struct Threaded {
+    /// Per vertex, 0 or `1 +` its index in `threads`; empty when none is threaded.
+    slots: Vec<u32>,
+    threads: Vec<Threading>,
+}
+
+impl Threaded {
+    pub fn new(vertices: usize, threads: Vec<Threading>) -> Threaded {
+        if threads.is_empty() {
+            return Threaded::default();
+        }
+        let mut slots = vec![0; vertices];
+        for (k, t) in threads.iter().enumerate() {
+            slots[t.vertex] = k as u32 + 1;
+        }
+        Threaded { slots, threads }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.threads.is_empty()
+    }
+
+    pub fn get(&self, vertex: usize) -> Option<&Threading> {
+        match self.slots.get(vertex) {
+            Some(&k) if k > 0 => Some(&self.threads[k as usize - 1]),
+            _ => None,
+        }
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &Threading> {
+        self.threads.iter()
+    }
+
+    /// Raises every floor by `by` metres (a step of the rods being put in place).
+    pub fn advance(&mut self, by: f32) {
+        self.threads.iter_mut().for_each(|t| t.floor += by);
+    }
+
+    /// Drops the threadings `left` says have left their rod (they collide with it from then on).
+    pub fn release(&mut self, mut left: impl FnMut(&Threading) -> bool) {
+        // Renumbered in place: the threads are few, the vertices many.
+        let slots = &mut self.slots;
+        self.threads.retain(|t| {
+            slots[t.vertex] = 0;
+            !left(t)
+        });
+        if self.threads.is_empty() {
+            *self = Threaded::default();
+        }
+        for (k, t) in self.threads.iter().enumerate() {
+            self.slots[t.vertex] = k as u32 + 1;
+        }
+    }
 }
 
 impl Hooks for ContactHooks<'_> {
@@ -399,7 +494,13 @@ impl Hooks for ContactHooks<'_> {
             // the rare vertex the cheap clearance test leaves.
             let start = *p;
             let mut mask = None;
+            let threading = self.threaded.get(i);
+            let passes = threading.map_or(usize::MAX, |t| self.first_threaded + t.rod);
             for (s, shape) in self.shapes.iter().enumerate() {
+                if s == passes {
+                    *p = threading.unwrap().hold(*p);
+                    continue;
+                }
                 if self.culling.clear_of(s, *p, radius)
                     || !ObstacleCulling::tests(
                         *mask.get_or_insert_with(|| self.culling.mask(strand, start)),
@@ -419,6 +520,25 @@ impl Hooks for ContactHooks<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn threaded_vertices_are_found_held_behind_their_floor_and_released() {
+        let thread = |vertex, floor| Threading { vertex, rod: 0, origin: Vec3::ZERO, exit: Vec3::X, floor };
+        let mut threaded = Threaded::new(10, vec![thread(2, -0.5), thread(5, 0.1), thread(7, 0.3)]);
+        assert_eq!(threaded.get(5).map(|t| t.vertex), Some(5));
+        assert!(threaded.get(3).is_none() && threaded.get(11).is_none());
+        threaded.advance(0.25);
+        let t = *threaded.get(2).unwrap();
+        // Behind the floor (-0.25): moved out along the exit to it; in front: left alone.
+        assert_eq!(t.hold(Vec3::new(-1.0, 2.0, 0.0)), Vec3::new(-0.25, 2.0, 0.0));
+        assert_eq!(t.hold(Vec3::new(0.5, 2.0, 0.0)), Vec3::new(0.5, 2.0, 0.0));
+        assert!((t.behind(Vec3::new(-1.0, 0.0, 0.0)) - 0.75).abs() < 1e-6);
+        threaded.release(|t| t.vertex == 5);
+        assert!(threaded.get(5).is_none());
+        assert_eq!([2, 7].map(|v| threaded.get(v).map(|t| t.vertex)), [Some(2), Some(7)]);
+        threaded.release(|_| true);
+        assert!(threaded.is_empty() && threaded.get(2).is_none());
+    }
 
     #[test]
     fn clearance_and_exclusions_reject_only_vertices_the_exact_test_rejects() {

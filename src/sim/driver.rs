@@ -10,7 +10,7 @@ use super::{Energy, SettleOptions, SettleReport, SimParams, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::{AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
-use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape};
+use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape, Threaded};
 use crate::interact::wetness::{carry_water, WetnessParams, WETNESS};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -205,6 +205,8 @@ impl Stepper {
             previous: &self.previous,
             radii: &self.radii,
             friction: Friction::default(),
+            threaded: &Threaded::default(),
+            first_threaded: 0,
         };
         self.sim.step_with(&hooks);
         Ok(())

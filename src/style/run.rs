@@ -21,7 +21,9 @@ use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::mesh_sdf::TriangleMesh;
-use crate::interact::obstacles::{segment_distance, ContactHooks, Friction, ObstacleCulling, Shape};
+use crate::interact::obstacles::{
+    segment_distance, ContactHooks, Friction, ObstacleCulling, Shape, Threaded, Threading,
+};
 use crate::interact::water::{Droplets, WaterParams};
 use crate::interact::wetness::{self, WetnessParams};
 use crate::interact::wind::Dryer;
@@ -72,9 +74,21 @@ pub struct StageReport {
     pub wetness: f32,
     pub settle: Option<SettleReport>,
     /// Deepest any vertex went inside an active obstacle or rod after any step of the stage,
-    /// metres (0: never inside; a vertex's radius counts).
+    /// metres (0: never inside; a vertex's radius counts). A vertex a rod appeared around counts
+    /// how far it lies inside the rod as put in place so far (see `threaded_max_depth`).
     pub max_penetration: f32,
+    /// Deepest a vertex a rod appeared around was inside that rod after any step of the stage
+    /// (metres, 0 for none): it leaves at [`ROD_PLACING_SPEED`].
+    pub threaded_max_depth: f32,
+    /// On the stage the last such vertex left its rod: simulated seconds from the rods appearing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub threaded_exit_seconds: Option<f32>,
 }
+
+/// How fast hair a curler rod is put in place around is moved out of it (m/s): across the water
+/// set's 2.5 cm rods in a quarter to half a second. A speed, so the way out takes the same time at
+/// any Δt and any number of iterations.
+pub const ROD_PLACING_SPEED: f32 = 0.1;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StyleReport {
@@ -237,6 +251,8 @@ pub(crate) fn style_strands(
         progress.set_message(&format!("stage {}/{} {}", index + 1, placed_stages.len(), stage.kind()));
         let start = Instant::now();
         session.penetration = 0.0;
+        session.threaded_depth = 0.0;
+        session.threaded_exit = None;
         let steps_before = session.sim.steps_taken();
         let settle = session.run_stage(index, stage, &progress)?;
         session.sim.check_diverged(Some(format!("stage {} ({})", index + 1, stage.kind())))?;
@@ -397,6 +413,19 @@ struct Session {
     obstacles: Vec<Shape>,
     poses: Vec<ObstaclePose>,
     rods: Vec<Shape>,
+    /// The vertices, of strands no rod winds, that were inside a rod when the rods appeared and
+    /// leave it at [`ROD_PLACING_SPEED`]. Pushed out at once, a vertex 2 cm deep shot out at 2 cm
+    /// per step, a speed that depended on Δt, and which side it left by was a coin flip: strands
+    /// hanging through a water set's rods landed in other places at other steps (issue 15).
+    threaded: Threaded,
+    /// The step the rods appeared at, while vertices are leaving them.
+    threaded_since: Option<u64>,
+    /// Deepest a threaded vertex is inside its rod in the current stage so far (metres).
+    threaded_depth: f32,
+    /// Simulated seconds the last threaded vertex took to leave, once it has (for the report).
+    threaded_exit: Option<f32>,
+    /// Where the rods start in `active`.
+    first_rod: usize,
     rods_active: bool,
     active: Vec<Shape>,
     held: Vec<usize>,
@@ -504,6 +533,11 @@ impl Session {
             poses,
             rods,
             rods_active: false,
+            threaded: Threaded::default(),
+            threaded_since: None,
+            threaded_depth: 0.0,
+            threaded_exit: None,
+            first_rod: 0,
             active: Vec::new(),
             held: Vec::new(),
             wound: vec![None; groom.strand_count()],
@@ -573,8 +607,12 @@ impl Session {
             })
             .collect();
         self.captured_active = None;
+        self.first_rod = self.active.len();
         if self.rods_active {
             self.active.extend(self.rods.iter().cloned());
+        } else {
+            self.threaded = Threaded::default();
+            self.threaded_since = None;
         }
     }
 
@@ -637,19 +675,93 @@ impl Session {
     fn contact_step(&mut self) {
         self.previous.copy_from_slice(self.sim.rods().positions());
         self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
+        self.threaded.advance(ROD_PLACING_SPEED * self.sim.params().dt);
         let hooks = ContactHooks {
             shapes: &self.active,
             culling: &self.culling,
             previous: &self.previous,
             radii: &self.radii,
             friction: self.friction,
+            threaded: &self.threaded,
+            first_threaded: self.first_rod,
         };
         self.sim.step_with(&hooks);
+        self.release_threaded();
         self.penetration = self.penetration.max(self.deepest_penetration());
     }
 
-    /// How deep the deepest vertex is inside an active obstacle now. Strands a settle lets sleep
-    /// are left out: they have not moved since a step measured them.
+    /// Marks the free vertices of unwound strands whose centres lie inside a rod as it appears as
+    /// leaving it, away from the head.
+    fn thread_through_rods(&mut self) {
+        let positions = self.sim.rods().positions();
+        let mut free: Vec<bool> = self.sim.rods().kinematic().iter().map(|&k| !k).collect();
+        // A wound strand is held at both ends of its free part, the root and its winding, which
+        // starts where the line from the root touches the rod's outside: a vertex of that part
+        // inside the rod cannot leave by passing through and stayed there, bending the rest shape
+        // the perm set (the full-head perm's rods lie a vertex above the scalp: 444 of its 2,000
+        // guides' first free vertices 0.3-5.7 mm deep, and their settle stalled). Held between
+        // the two, its push out cannot fling the strand: it is pushed out.
+        for (s, wound) in self.wound.iter().enumerate() {
+            if wound.is_some() {
+                free[self.groom.strand_range(s)].fill(false);
+            }
+        }
+        let threads: Vec<Threading> = (0..positions.len())
+            .into_par_iter()
+            .filter(|&i| free[i])
+            .filter_map(|i| {
+                let p = positions[i];
+                // Deeper than touching: a vertex that only overlaps a rod by less than its radius
+                // is pushed out slowly (< its radius a step).
+                let rod = self.rods.iter().position(|rod| rod.signed_distance(p) < 0.0)?;
+                let Shape::Capsule { a, b, radius } = self.rods[rod] else {
+                    unreachable!("rods are capsules")
+                };
+                let axis = (b - a).normalize();
+                let foot = a + axis * (p - a).dot(axis).clamp(0.0, a.distance(b));
+                let across = |v: Vec3| v - axis * v.dot(axis);
+                // Out along the line from the rod's edge nearest the head through the vertex:
+                // about the shortest way for hair on the rod's outer half, always away from the
+                // head, and turning smoothly with the vertex's place. Straight out from the axis, the side
+                // was a coin flip for hair hanging through the rod near its axis (the water set's
+                // direct solve: one strand 1 mm from it), and the rest curves at Δt 1/240 lay
+                // 7.0 % of the strand length from 1/1440's at worst.
+                let outward = across(foot - self.head_center)
+                    .try_normalize()
+                    .unwrap_or_else(|| axis.any_orthonormal_vector());
+                let origin = foot - outward * radius;
+                let exit = across(p - origin).try_normalize().unwrap_or(outward);
+                Some(Threading { vertex: i, rod, origin, exit, floor: (p - origin).dot(exit) })
+            })
+            .collect();
+        self.threaded = Threaded::new(positions.len(), threads);
+        self.threaded_since = (!self.threaded.is_empty()).then(|| self.sim.steps_taken());
+    }
+
+    /// A threaded vertex that has left its rod, or that the floor has carried out of it, collides
+    /// with it from then on. Measures how deep the others are.
+    fn release_threaded(&mut self) {
+        let Some(since) = self.threaded_since else { return };
+        let positions = self.sim.rods().positions();
+        let (rods, radii) = (&self.rods, &self.radii);
+        let depth = |t: &Threading| radii[t.vertex] - rods[t.rod].signed_distance(positions[t.vertex]);
+        // The floor past the rod's far side (a diameter from the origin on its edge).
+        let full = |t: &Threading| match rods[t.rod] {
+            Shape::Capsule { radius, .. } => 2.0 * radius + radii[t.vertex],
+            _ => unreachable!("rods are capsules"),
+        };
+        self.threaded.release(|t| depth(t) <= 0.0 || t.floor >= full(t));
+        self.threaded_depth = self.threaded.iter().map(depth).fold(self.threaded_depth, f32::max);
+        if self.threaded.is_empty() {
+            let steps = self.sim.steps_taken() - since;
+            self.threaded_exit = Some(steps as f32 * self.sim.params().dt);
+            self.threaded_since = None;
+        }
+    }
+
+    /// How deep the deepest vertex is inside an active obstacle now (a vertex leaving a rod, how
+    /// far inside the rod as put in place so far). Strands a settle lets sleep are left out: they
+    /// have not moved since a step measured them.
     fn deepest_penetration(&self) -> f32 {
         let positions = &self.sim.rods().positions();
         (0..self.groom.strand_count())
@@ -661,9 +773,12 @@ impl Session {
                     let (p, radius) = (positions[i], self.radii[i]);
                     // The culling mask, looked up once and only if a shape's clearance test leaves it.
                     let mut mask = None;
+                    let threading = self.threaded.get(i);
+                    let passes = threading.map_or(usize::MAX, |t| self.first_rod + t.rod);
                     for (k, shape) in self.active.iter().enumerate() {
-                        // Clear of the shape: its distance is at least the radius.
-                        if !self.culling.clear_of(k, p, radius)
+                        if k == passes {
+                            deepest = deepest.max(threading.unwrap().behind(p));
+                        } else if !self.culling.clear_of(k, p, radius)
                             && ObstacleCulling::tests(
                                 *mask.get_or_insert_with(|| self.culling.mask(strand, p)),
                                 k,
@@ -812,7 +927,10 @@ impl Session {
                 };
                 let windings = self.windings(&strands, &chosen)?;
                 self.warn_of_overlapping_rods(index, &windings, &chosen);
-                self.rods_active = true;
+                if !self.rods_active {
+                    self.rods_active = true;
+                    self.thread_through_rods();
+                }
                 self.refresh_obstacles();
                 let total = steps.max(1) as f32;
                 self.run_steps(steps, progress, |s, k| {
@@ -1231,6 +1349,8 @@ impl Session {
             },
             wetness: self.wetness.iter().sum::<f32>() / self.wetness.len().max(1) as f32,
             max_penetration: self.penetration,
+            threaded_max_depth: self.threaded_depth,
+            threaded_exit_seconds: self.threaded_exit,
             settle,
         }
     }
