@@ -77,6 +77,15 @@ fn main() {
 /// Per head and preset it prints, for the guided run and the control:
 /// - curl: the children's median curl radius over the guides' (the rods' part of each strand,
 ///   from 40 % of its length to the tip, as `tests/guides.rs` measures it), as a % difference;
+/// - as weighed: the median over the children of their guides' weighted curl radius, over the
+///   guides' median: what the curl above would read if every child curled exactly as its guides
+///   (children are not spread evenly over 30 guides: −9 to +15 % on curly heads over seeds 1–10);
+/// - per child: the median over the children of each one's curl radius over its own guides'
+///   (weighted by curvature, the inverse radius: a blend bends as much as its guides), which
+///   the guides' sampling does not move;
+/// - hang: the median over the children of how much higher (degrees) a child's weight hangs from
+///   its root than its guides' (weighted): the elevation over the generated head's horizontal
+///   (+y is up) of the mean of its points less its root;
 /// - no-collapse: the mean distance at mid-length between each child and its nearest (by root)
 ///   child of the same first guide, styled over unstyled (issue 16 asks ≥ 0.5);
 /// - seam: the mean distance at mid-length between each child and its nearest (by root) child,
@@ -86,14 +95,15 @@ fn main() {
 ///   summed torsion, from 40 % of the length to the tip);
 /// - the largest change of a child's length, and child vertices inside the head.
 ///
-/// The control uses the guided run's guide flags and bindings. `COIF_BENCH_CONTROL=0` skips it.
+/// The control uses the guided run's guide flags and bindings. `COIF_BENCH_CONTROL=0` skips it;
+/// `COIF_BENCH_SEEDS=1,2,3` generates the heads with those seeds (default 21).
 mod children {
     use std::path::Path;
 
     use coif::analysis::curl_radius;
     use coif::generate::{generate, GenerateParams, Style};
     use coif::groom::Groom;
-    use coif::guides::CLOSEST_GUIDES;
+    use coif::guides::{CLOSEST_GUIDES, GUIDE_WEIGHTS};
     use coif::head::Head;
     use coif::style::{recipe, style, StyleOptions};
 
@@ -108,18 +118,23 @@ mod children {
             ("straight", Style::Straight),
         ];
         let presets = std::env::var("COIF_BENCH_PRESETS").unwrap_or("perm_full_head,water_set".into());
+        let seeds = std::env::var("COIF_BENCH_SEEDS").unwrap_or("21".into());
+        let seeds: Vec<u64> =
+            seeds.split(',').map(|s| s.parse().expect("COIF_BENCH_SEEDS: numbers")).collect();
         for preset in presets.split(',') {
             let path = format!("grooms/recipes/{preset}.toml");
             let text = std::fs::read_to_string(&path).unwrap();
             let guided =
                 recipe::parse(&format!("{text}\n[guides]\ncount = {GUIDES}\n"), Path::new(&path)).unwrap();
             let full = recipe::parse(&text, Path::new(&path)).unwrap();
-            for (name, style_kind) in heads {
+            let runs =
+                heads.iter().flat_map(|&(name, kind)| seeds.iter().map(move |&seed| (name, kind, seed)));
+            for (name, style_kind, seed) in runs {
                 let unstyled = generate(&GenerateParams {
                     strands: STRANDS,
                     vertices_per_strand: 32,
                     length: 0.30,
-                    seed: 21,
+                    seed,
                     style: style_kind,
                     ..GenerateParams::default()
                 })
@@ -134,13 +149,18 @@ mod children {
                     .step_by(3)
                     .map(|&g| g as u32)
                     .collect();
+                let bindings = Bindings::of(&styled);
                 let line = |what: &str, groom: &Groom| {
-                    let m = Measures::of(&unstyled, groom, &flags, &closest);
+                    let m = Measures::of(&unstyled, groom, &flags, &closest, &bindings);
                     println!(
-                        "{preset:<15} {name:<9} {what:<8} curl {:+6.1} % (guides {:.2} cm)   no-collapse {:.2}   \
+                        "{preset:<15} {name:<9} seed {seed:<3} {what:<8} curl {:+6.1} % (guides {:.2} cm)   \
+                         as weighed {:+6.1} %   per child {:+6.1} %   hang {:+5.1}°   no-collapse {:.2}   \
                          seam {:.2}   opposite {:2.0} %   length change {:.2} %   inside head {}",
                         100.0 * (m.children_curl / m.guides_curl - 1.0),
                         100.0 * m.guides_curl,
+                        100.0 * (m.as_weighed / m.guides_curl - 1.0),
+                        100.0 * (m.per_child - 1.0),
+                        m.hang,
                         m.no_collapse,
                         m.seam,
                         100.0 * m.opposite,
@@ -156,9 +176,43 @@ mod children {
         }
     }
 
+    /// Each strand's guides as strand indices and their weights (a guide names itself).
+    struct Bindings(Vec<[(usize, f32); 3]>);
+
+    impl Bindings {
+        fn of(styled: &Groom) -> Bindings {
+            let by_id: std::collections::HashMap<u32, usize> =
+                styled.strand_ids.iter().enumerate().map(|(s, &id)| (id, s)).collect();
+            let closest = styled.attribute(CLOSEST_GUIDES).unwrap().floats();
+            let weights = styled.attribute(GUIDE_WEIGHTS).unwrap().floats();
+            Bindings(
+                (0..styled.strand_count())
+                    .map(|s| {
+                        std::array::from_fn(|k| (by_id[&(closest[3 * s + k] as u32)], weights[3 * s + k]))
+                    })
+                    .collect(),
+            )
+        }
+
+        /// Strand `s`'s guides' weighted mean of `value`, over the guides that have one.
+        fn mean(&self, s: usize, value: impl Fn(usize) -> Option<f32>) -> Option<f32> {
+            let (mut sum, mut total) = (0.0, 0.0);
+            for &(g, w) in self.0[s].iter().filter(|(_, w)| *w > 0.0) {
+                if let Some(v) = value(g) {
+                    sum += w * v;
+                    total += w;
+                }
+            }
+            (total > 0.0).then(|| sum / total)
+        }
+    }
+
     struct Measures {
         guides_curl: f32,
         children_curl: f32,
+        as_weighed: f32,
+        per_child: f32,
+        hang: f32,
         no_collapse: f32,
         seam: f32,
         opposite: f32,
@@ -173,7 +227,13 @@ mod children {
 
     impl Measures {
         /// `closest[s]`: the first guide of strand `s` (a guide names itself).
-        fn of(unstyled: &Groom, styled: &Groom, flags: &[bool], closest: &[u32]) -> Measures {
+        fn of(
+            unstyled: &Groom,
+            styled: &Groom,
+            flags: &[bool],
+            closest: &[u32],
+            bindings: &Bindings,
+        ) -> Measures {
             let strands = styled.strand_count();
             let curl = |s: usize| {
                 let p = styled.strand_points(s);
@@ -182,6 +242,20 @@ mod children {
             let radii =
                 |guide: bool| median((0..strands).filter(|&s| flags[s] == guide).filter_map(curl).collect());
             let children: Vec<usize> = (0..strands).filter(|&s| !flags[s]).collect();
+            let guide_curl = |g: usize| curl(g).filter(|_| flags[g]);
+            let per_child = children
+                .iter()
+                .filter_map(|&c| Some(curl(c)? * bindings.mean(c, |g| Some(1.0 / guide_curl(g)?))?))
+                .collect();
+            let as_weighed = children.iter().filter_map(|&c| bindings.mean(c, guide_curl)).collect();
+            // How far above the horizontal (degrees) a strand's weight hangs from its root.
+            let elevation = |s: usize| {
+                let p = styled.strand_points(s);
+                let hang = p.iter().map(|&q| q - p[0]).sum::<glam::Vec3>();
+                Some(hang.try_normalize()?.y.clamp(-1.0, 1.0).asin().to_degrees())
+            };
+            let hang =
+                children.iter().filter_map(|&c| Some(elevation(c)? - bindings.mean(c, elevation)?)).collect();
             let root = |s: usize| unstyled.strand_points(s)[0];
             let mid = |g: &Groom, s: usize| g.strand_points(s)[g.strand_range(s).len() / 2];
             let nearest = |c: usize, same: bool| {
@@ -220,6 +294,9 @@ mod children {
             Measures {
                 guides_curl: radii(true),
                 children_curl: radii(false),
+                as_weighed: median(as_weighed),
+                per_child: median(per_child),
+                hang: median(hang),
                 no_collapse: after / before,
                 seam: (across.0 / across.1 as f32) / (within.0 / within.1 as f32),
                 opposite: opposite as f32 / pairs as f32,
