@@ -8,8 +8,9 @@ use coif::interact::obstacles::Shape;
 use coif::style::placement::{head_frame, place};
 use coif::style::{recipe, style, StyleOptions};
 
-#[test]
-fn strands_held_on_the_full_head_rods_stay_still() {
+/// 300 generated strands of 24 cm and the production perm's rods and head, with a 0.2 s wrap and
+/// a hold of `hold` seconds (hair–hair contacts off).
+fn full_head_wrap(hold: f32) -> (coif::Groom, recipe::Recipe) {
     let groom = generate(&GenerateParams {
         strands: 300,
         vertices_per_strand: 32,
@@ -18,14 +19,18 @@ fn strands_held_on_the_full_head_rods_stay_still() {
         ..GenerateParams::default()
     })
     .unwrap();
-    // The production perm's rods and head, with a short wrap and hold.
     let preset = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
     let setup = &preset[..preset.find("[[stages]]").unwrap()];
     let text = format!(
-        "{}[[stages]]\nkind = \"wrap\"\nduration = 0.2\n[[stages]]\nkind = \"process\"\nduration = 0.2\n",
+        "{}[[stages]]\nkind = \"wrap\"\nduration = 0.2\n[[stages]]\nkind = \"process\"\nduration = {hold}\n",
         setup.replace("hair_hair = true", "hair_hair = false")
     );
-    let recipe = recipe::parse(&text, Path::new("perm_full_head.toml")).unwrap();
+    (groom, recipe::parse(&text, Path::new("perm_full_head.toml")).unwrap())
+}
+
+#[test]
+fn strands_held_on_the_full_head_rods_stay_still() {
+    let (groom, recipe) = full_head_wrap(0.2);
     let dt = recipe.settings.dt;
     let options = StyleOptions { frames_per_second: 1.0 / dt, ..Default::default() };
     let styled = style(&groom, &recipe, &options).unwrap();
@@ -47,21 +52,7 @@ fn strands_held_on_the_full_head_rods_stay_still() {
 /// there kinked, and the guides' settle stalled just above its tolerance. It is pushed out.
 #[test]
 fn the_free_part_of_a_wound_strand_lies_outside_the_rods() {
-    let groom = generate(&GenerateParams {
-        strands: 300,
-        vertices_per_strand: 32,
-        length: 0.24,
-        seed: 21,
-        ..GenerateParams::default()
-    })
-    .unwrap();
-    let preset = std::fs::read_to_string("grooms/recipes/perm_full_head.toml").unwrap();
-    let setup = &preset[..preset.find("[[stages]]").unwrap()];
-    let text = format!(
-        "{}[[stages]]\nkind = \"wrap\"\nduration = 0.2\n[[stages]]\nkind = \"process\"\nduration = 0.1\n",
-        setup.replace("hair_hair = true", "hair_hair = false")
-    );
-    let recipe = recipe::parse(&text, Path::new("perm_full_head.toml")).unwrap();
+    let (groom, recipe) = full_head_wrap(0.1);
     let frame = head_frame(&recipe, &groom, None).unwrap();
     let rods: Vec<Shape> = place(&recipe, &groom, None, frame)
         .unwrap()
