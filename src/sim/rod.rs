@@ -235,10 +235,6 @@ impl Rods {
             pair_coefficients: vec![BendTwistCoefficients::default(); n],
             work_units: Vec::new(),
         };
-        let radius = |i: usize| {
-            let w = groom.widths.get(i).copied().unwrap_or(0.0);
-            0.5 * if w > 0.0 { w } else { material.fallback_width }
-        };
         for strand in 0..groom.strand_count() {
             let range = groom.strand_range(strand);
             let (first, last) = (range.start, range.end - 1);
@@ -250,13 +246,46 @@ impl Rods {
             for i in first + 1..last {
                 rods.rest_darboux[i] = darboux_canonical(rods.frames[i - 1], rods.frames[i]);
             }
+            rods.kinematic[first] = true;
+        }
+        rods.weigh(groom, material);
+        rods.work_units = work_units(&groom.strand_offsets);
+        rods.update_inverse_masses(frame_inertia_factor);
+        rods.assert_layout();
+        Ok(rods)
+    }
+
+    /// Takes `lengths` (per vertex: the edge it starts; a tip's is unused) as the rest lengths,
+    /// with the masses, compliance and frame inertia that follow from them. `groom` is the groom
+    /// the rods were built from (its widths).
+    pub fn adopt_rest_lengths(
+        &mut self,
+        groom: &Groom,
+        material: &Material,
+        lengths: &[f32],
+        frame_inertia_factor: f32,
+    ) {
+        self.rest_lengths.copy_from_slice(lengths);
+        self.weigh(groom, material);
+        self.update_inverse_masses(frame_inertia_factor);
+    }
+
+    /// Masses and bend–twist compliance from the rest lengths, the groom's widths and `material`.
+    fn weigh(&mut self, groom: &Groom, material: &Material) {
+        let radius = |i: usize| {
+            let w = groom.widths.get(i).copied().unwrap_or(0.0);
+            0.5 * if w > 0.0 { w } else { material.fallback_width }
+        };
+        for strand in 0..self.strand_count() {
+            let range = self.strand_range(strand);
+            let (first, last) = (range.start, range.end - 1);
             // Masses: each vertex carries half of each adjacent edge.
             let mut distance = 0.0;
             for i in first..=last {
-                let left = if i > first { rods.rest_lengths[i - 1] } else { 0.0 };
-                let right = if i < last { rods.rest_lengths[i] } else { 0.0 };
+                let left = if i > first { self.rest_lengths[i - 1] } else { 0.0 };
+                let right = if i < last { self.rest_lengths[i] } else { 0.0 };
                 let r = radius(i);
-                rods.mass[i] = material.density * std::f32::consts::PI * r * r * 0.5 * (left + right);
+                self.mass[i] = material.density * std::f32::consts::PI * r * r * 0.5 * (left + right);
                 if i > first && i < last {
                     let mean_length = 0.5 * (left + right);
                     distance += left;
@@ -265,19 +294,14 @@ impl Rods {
                     let bend = factor * material.youngs_modulus * std::f32::consts::PI * r4 / 4.0;
                     let twist = factor * material.shear_modulus * std::f32::consts::PI * r4 / 2.0;
                     // Ω ≈ half the turning angle, so energy ½·EI·κ²·l̄ = ½·Ω²/α with α = l̄/(4·EI).
-                    rods.compliance[i] = Vec3::new(
+                    self.compliance[i] = Vec3::new(
                         mean_length / (4.0 * bend),
                         mean_length / (4.0 * bend),
                         mean_length / (4.0 * twist),
                     );
                 }
             }
-            rods.kinematic[first] = true;
         }
-        rods.work_units = work_units(&groom.strand_offsets);
-        rods.update_inverse_masses(frame_inertia_factor);
-        rods.assert_layout();
-        Ok(rods)
     }
 
     /// The layout every unsafe per-strand slice relies on. `Groom::validate` already implies it;

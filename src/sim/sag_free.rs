@@ -3,8 +3,9 @@
 //! * **Styled grooms** carry their zero-stress shape (`rest_darboux`, Ω0 per edge pair, in the
 //!   frames a reader rebuilds: [`Simulation::exported_rest_darboux`]), their material frames
 //!   (`material_frame`: a reader that takes them is in the simulated state, twist and shear
-//!   included) and bond rates (`bond_*`). [`Simulation::adopt_rest_state`] makes every bond kind
-//!   remember Ω0:
+//!   included), bond rates (`bond_*`) and zero-stress curves (`rest`, whose edges are the rest
+//!   lengths: the settled shape is strained by its load). [`Simulation::adopt_rest_state`] takes
+//!   the rest lengths and makes every bond kind remember Ω0:
 //!   with all kinds equal, S1-15's zero-stress shape is Ω0 at any rates, and the bend–twist
 //!   constraint `C = (1 − β)·(Ω − Ω0)` is exactly the one the styled groom was settled with, so
 //!   its settled shape is again an equilibrium.
@@ -33,6 +34,14 @@ use crate::groom::{Attribute, AttributeRate, Groom, GroomError};
 
 /// The attribute that carries the zero-stress Darboux vectors (written by `write_to_groom`).
 pub const REST_DARBOUX: &str = "rest_darboux";
+
+/// The attribute that carries each strand's zero-stress rest curve (written by `write_to_groom`).
+pub const REST_CURVES: &str = "rest";
+
+/// How far, relative to its own length, a written rest curve's edge may be from the strand's for
+/// the curve to give the strand its rest lengths: a settled strand's edges are strained by
+/// 1e-3 or so, a curve that differs by more is not its rest.
+const REST_LENGTH_MATCH: f32 = 0.01;
 
 /// The attribute that carries each edge's material frame, a unit quaternion `(x, y, z, w)` whose
 /// third director runs along the edge (per vertex; the tip repeats the last edge's).
@@ -108,7 +117,46 @@ impl Simulation {
             self.adopt_frames(&frames, &mut shape);
         }
         self.remember_shape(&shape);
+        self.adopt_rest_lengths(groom);
         Ok(true)
+    }
+
+    /// Takes each strand's rest lengths from its written zero-stress curve (`rest`, whose edges
+    /// run the rest lengths: [`Self::rest_curves`]) rather than from its shape: a settled strand
+    /// is stretched or pressed by its load, and read as rest lengths that strain was gone. A
+    /// blow-dried strand folded against the head (`tests/style_settle.rs`) has edges 1.5e-3 off
+    /// their rest lengths at the fold; read back without them it moved 1.9 mm when simulated
+    /// again, with them 0.03 mm. A strand whose curve's edges are not all within
+    /// [`REST_LENGTH_MATCH`] of its own keeps its own (the curve is not this shape's rest:
+    /// rescaled, resampled or edited since), as does a groom without a `rest` of a point per vertex.
+    fn adopt_rest_lengths(&mut self, groom: &Groom) {
+        let Some(rest) = groom.attribute(REST_CURVES) else { return };
+        if rest.rate != AttributeRate::Vertex
+            || rest.components != 3
+            || rest.data.len() != 3 * groom.vertex_count()
+        {
+            return;
+        }
+        let rest: Vec<Vec3> = rest.floats().chunks_exact(3).map(Vec3::from_slice).collect();
+        let mut lengths = self.rods.rest_lengths().to_vec();
+        let mut adopted = false;
+        for strand in 0..self.rods.strand_count() {
+            let edges = self.rods.strand_range(strand).start..self.rods.strand_range(strand).end - 1;
+            let written = |e: usize| rest[e].distance(rest[e + 1]);
+            let matches = edges.clone().all(|e| {
+                let own = lengths[e];
+                (written(e) - own).abs() <= REST_LENGTH_MATCH * own
+            });
+            if matches {
+                edges.for_each(|e| lengths[e] = written(e));
+                adopted = true;
+            }
+        }
+        if adopted {
+            let factor = self.params.frame_inertia_factor;
+            self.rods.adopt_rest_lengths(groom, &self.params.material, &lengths, factor);
+            self.masses_dirty = true;
+        }
     }
 
     /// The groom's attribute `name`, checked to hold `components` values per vertex (`what` says
@@ -357,6 +405,56 @@ mod tests {
 
     fn farthest(a: &[glam::Vec3], b: &[glam::Vec3]) -> f32 {
         a.iter().zip(b).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max)
+    }
+
+    /// A settled strand's edges are strained by its load, and its written `rest` curve carries
+    /// the rest lengths: a groom stretched 0.2 % along its strands, written and read back, pulls
+    /// back as the simulation itself does (the same positions ten steps on, to round-off). With
+    /// rest lengths measured on the stretched shape it stayed stretched: the two lay as far apart
+    /// as the simulation pulled back. A `rest` curve that is not the shape's (twice its size) is
+    /// not taken.
+    #[test]
+    fn a_strained_groom_is_read_back_with_its_rest_lengths() {
+        let groom = generate(&GenerateParams {
+            strands: 4,
+            vertices_per_strand: 16,
+            seed: 2,
+            ..GenerateParams::default()
+        })
+        .unwrap();
+        let params = SimParams { gravity: Vec3::ZERO, ..SimParams::default() };
+        let mut sim = Simulation::new(&groom, params.clone()).unwrap();
+        for strand in 0..sim.rods.strand_count() {
+            let range = sim.rods.strand_range(strand);
+            let root = sim.rods.positions()[range.start];
+            for p in &mut sim.rods.positions_mut()[range] {
+                *p = root + (*p - root) * 1.002;
+            }
+        }
+        let mut written = groom.clone();
+        sim.write_to_groom(&mut written);
+        let mut read = Simulation::new(&written, params.clone()).unwrap();
+        assert!(read.adopt_rest_state(&written).unwrap());
+        for (i, (a, b)) in sim.rods.rest_lengths().iter().zip(read.rods.rest_lengths()).enumerate() {
+            assert!((a - b).abs() <= 1e-5 * a, "edge {i}: rest length {a} m, read back {b} m");
+        }
+        for _ in 0..10 {
+            sim.step();
+            read.step();
+        }
+        let pulled = farthest(&written.points, sim.rods.positions());
+        let apart = farthest(sim.rods.positions(), read.rods.positions());
+        eprintln!("pulled back {:.2} µm; read back, {:.4} µm from that", pulled * 1e6, apart * 1e6);
+        assert!(pulled > 10e-6, "the stretched groom pulls back {pulled} m");
+        assert!(apart < 0.01 * pulled, "read back, the groom lies {apart} m from the simulation's");
+
+        let mut scaled = written.clone();
+        let rest = scaled.attributes.iter_mut().find(|a| a.name == REST_CURVES).unwrap();
+        rest.floats_mut().unwrap().iter_mut().for_each(|v| *v *= 2.0);
+        let mut other = Simulation::new(&scaled, params).unwrap();
+        let own = other.rods.rest_lengths().to_vec();
+        assert!(other.adopt_rest_state(&scaled).unwrap());
+        assert_eq!(other.rods.rest_lengths(), &own[..]);
     }
 
     /// Curls hanging under gravity twist their frames; a reader rebuilds untwisted frames from

@@ -42,7 +42,7 @@ use serde::Serialize;
 
 use super::bonds::BondKind;
 use super::constraints::{darboux_canonical, director3, turn_of};
-use super::sag_free::{MATERIAL_FRAME, REST_DARBOUX};
+use super::sag_free::{MATERIAL_FRAME, REST_CURVES, REST_DARBOUX};
 use super::{Hooks, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
@@ -731,7 +731,7 @@ impl Simulation {
         let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
         let frames = self.rods.frames().iter().flat_map(|q| q.to_array()).collect();
         let mut attributes = vec![
-            Attribute::new("rest", AttributeRate::Vertex, 3, flat(&self.rest_curves())),
+            Attribute::new(REST_CURVES, AttributeRate::Vertex, 3, flat(&self.rest_curves())),
             Attribute::new(REST_DARBOUX, AttributeRate::Vertex, 3, flat(&self.exported_rest_darboux())),
             Attribute::new(MATERIAL_FRAME, AttributeRate::Vertex, 4, frames),
         ];
