@@ -125,10 +125,12 @@ impl Simulation {
     /// run the rest lengths: [`Self::rest_curves`]) rather than from its shape: a settled strand
     /// is stretched or pressed by its load, and read as rest lengths that strain was gone. A
     /// blow-dried strand folded against the head (`tests/style_settle.rs`) has edges 1.5e-3 off
-    /// their rest lengths at the fold; read back without them it moved 1.9 mm when simulated
-    /// again, with them 0.03 mm. A strand whose curve's edges are not all within
-    /// [`REST_LENGTH_MATCH`] of its own keeps its own (the curve is not this shape's rest:
-    /// rescaled, resampled or edited since), as does a groom without a `rest` of a point per vertex.
+    /// their rest lengths at the fold; read back without them, its root vertex (held by friction
+    /// near the edge of the static cone) felt forces the settle never had, and with friction
+    /// summed over the step it broke loose and moved 1.9 mm. A strand whose curve's edges are not
+    /// all within [`REST_LENGTH_MATCH`] of its own keeps its own (the curve is not this shape's
+    /// rest: rescaled, resampled or edited since), as does a groom without a `rest` of a point per
+    /// vertex.
     fn adopt_rest_lengths(&mut self, groom: &Groom) {
         let Some(rest) = groom.attribute(REST_CURVES) else { return };
         if rest.rate != AttributeRate::Vertex
