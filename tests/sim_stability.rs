@@ -5,6 +5,11 @@ use coif::generate::{generate, GenerateParams, Style};
 use coif::sim::{NoHooks, SimParams, Simulation};
 use glam::Vec3;
 
+/// The exact bits of `points`, for bit-identity checks.
+fn bits(points: &[Vec3]) -> Vec<[u32; 3]> {
+    points.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+}
+
 #[test]
 fn imported_curly_groom_without_forces_stays_put() {
     let groom = generate(&GenerateParams {
@@ -73,9 +78,7 @@ fn ten_thousand_steps_are_finite_bounded_and_thread_count_independent() {
     );
     assert!(lowest < start, "gravity did nothing");
     let (two, _) = run_large(2);
-    let identical =
-        one.iter().zip(&two).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
-    assert!(identical, "1 and 2 threads disagree");
+    assert!(bits(&one) == bits(&two), "1 and 2 threads disagree");
 }
 
 /// Hooks that declare a projection (doing nothing) force the one-strand-at-a-time scalar path.
@@ -156,9 +159,7 @@ fn direct_solver_runs_are_finite_energy_bounded_and_thread_count_independent() {
     );
     assert!(energies.last().unwrap() < &start, "gravity did nothing");
     let (two, _) = run(2);
-    let identical =
-        one.iter().zip(&two).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
-    assert!(identical, "1 and 2 threads disagree");
+    assert!(bits(&one) == bits(&two), "1 and 2 threads disagree");
 }
 
 /// The direct solver gives a strand held at both ends — its pinned root and a vertex attached
@@ -193,8 +194,6 @@ fn direct_solver_gives_held_spans_the_same_bits_in_lanes_as_alone() {
     assert!(moved > 0.005, "the held spans should sag under gravity (moved {moved} m)");
     for strand in 0..groom.strand_count() {
         let alone = run(&coif::groups::assemble(&[(&groom, &[strand])]).unwrap());
-        let bits =
-            |points: &[Vec3]| points.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
         assert_eq!(bits(&alone), bits(&together[groom.strand_range(strand)]), "strand {strand}");
     }
 }
