@@ -351,7 +351,7 @@ pub(crate) struct SimulateArgs {
     /// How each iteration solves a strand: `gauss-seidel` sweeps, or `direct` (stretch–shear and
     /// bend–twist together: the static shape does not depend on Δt; one iteration costs ~0.75× a
     /// 5-sweep step and is enough for a falling groom or a bed-head, a perm needs about five).
-    #[arg(long, value_enum, default_value = "gauss-seidel")]
+    #[arg(long, value_enum, default_value_t = coif::sim::StrandSolver::default().into())]
     pub(crate) solver: SolverArg,
     /// Time step, seconds or a fraction.
     #[arg(long, default_value = "1/360", value_parser = time_step)]
@@ -563,6 +563,16 @@ impl From<HeadArg> for HeadMode {
 pub(crate) enum SolverArg {
     GaussSeidel,
     Direct,
+}
+
+/// The flag's default is the library's ([`coif::sim::StrandSolver`]'s `Default`), not a copy.
+impl From<coif::sim::StrandSolver> for SolverArg {
+    fn from(solver: coif::sim::StrandSolver) -> Self {
+        match solver {
+            coif::sim::StrandSolver::GaussSeidel => SolverArg::GaussSeidel,
+            coif::sim::StrandSolver::Direct => SolverArg::Direct,
+        }
+    }
 }
 
 impl From<SolverArg> for coif::sim::StrandSolver {

@@ -178,8 +178,8 @@ impl Default for SimParams {
             damping: 2.0,
             material: Material::default(),
             influences: BondInfluences::default(),
-            frame_inertia_factor: StrandSolver::GaussSeidel.frame_inertia_factor(),
-            solver: StrandSolver::GaussSeidel,
+            frame_inertia_factor: StrandSolver::default().frame_inertia_factor(),
+            solver: StrandSolver::default(),
         }
     }
 }

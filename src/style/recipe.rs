@@ -95,7 +95,7 @@ impl Default for Settings {
             damping: 2.0,
             seed: 1,
             sag_free: false,
-            solver: crate::sim::StrandSolver::GaussSeidel,
+            solver: crate::sim::StrandSolver::default(),
         }
     }
 }
