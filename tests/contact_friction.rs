@@ -108,7 +108,9 @@ fn below_the_friction_angle_a_dropped_strand_comes_to_rest_and_stays() {
 /// stays, whatever the solver, time step and iteration count. Over the bar the strand's tension
 /// presses it on, and a solver that converges (the direct one) passes that press to the contact a
 /// little at each iteration; judged on one iteration's push, static friction let the strand creep
-/// down the bar. Over the second second its vertices on the bar move less than 0.05 mm.
+/// down the bar. Over the second second its vertices on the bar move less than 0.05 mm along it
+/// (around it the strand may still shift while its hanging part comes to rest: that is the
+/// capstan balance between the two sides, not the friction angle).
 #[test]
 fn a_strand_draped_over_a_bar_below_the_friction_angle_comes_to_rest_and_stays() {
     let slope = 15f32.to_radians();
@@ -131,12 +133,16 @@ fn a_strand_draped_over_a_bar_below_the_friction_angle_comes_to_rest_and_stays()
                 let (later, _) = run(&groom, &bar, params, 2 * rate);
                 let on_bar: Vec<usize> =
                     (1..landed.points.len()).filter(|&i| bar.distance(landed.points[i]).0 < width).collect();
-                let moved =
+                let down = |i: usize| (later.points[i] - landed.points[i]).dot(axis);
+                let moved = on_bar.iter().map(|&i| down(i).abs()).fold(0.0, f32::max);
+                let around =
                     on_bar.iter().map(|&i| later.points[i].distance(landed.points[i])).fold(0.0, f32::max);
                 let case = format!(
-                    "{solver:?} Δt 1/{rate} × {iterations}: {} vertices on the bar moved up to {:.2} µm",
+                    "{solver:?} Δt 1/{rate} × {iterations}: {} vertices on the bar moved up to {:.2} µm along \
+                     it ({:.2} µm in all)",
                     on_bar.len(),
-                    moved * 1e6
+                    moved * 1e6,
+                    around * 1e6
                 );
                 println!("{case}");
                 assert!(on_bar.len() >= 3, "{case}");
