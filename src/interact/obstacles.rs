@@ -847,19 +847,21 @@ mod tests {
         assert!((p.x - (0.1 - 0.3 * r)).abs() < 1e-6 && (p.y - r).abs() < 1e-7, "{p:?}");
     }
 
-    /// Friction is judged on the step's summed push: ten shallow pushes of 0.1 mm hold a slide
-    /// of 0.3 mm (inside 0.4 × 1 mm) once the sum is deep enough, where each push alone (0.04 mm
-    /// of cone) would let it slip; and past the cone the kinetic part takes μk × the summed push.
+    /// Friction is judged on the step's summed push: a vertex slid 0.3 mm and pressed in by
+    /// 0.1 mm at each of ten iterations slips while the summed push's cone is smaller than the
+    /// slide, and is held back where it started once it covers it (0.4 × 0.8 mm), where each
+    /// push alone (0.04 mm of cone) would let it slip; and past the cone the kinetic part takes
+    /// μk × the summed push.
     #[test]
     fn friction_is_judged_on_the_pushes_summed_over_the_step() {
         let floor = Shape::Plane { point: Vec3::ZERO, normal: Vec3::Y };
         let (r, dt, depth) = (0.001, 1.0 / 360.0, 1e-4);
         let previous = Vec3::new(0.0, r, 0.0);
         let mut sums = ContactSums::default();
-        let mut p = previous;
+        let mut p = previous + Vec3::X * 0.0003;
         for _ in 0..10 {
-            // Each iteration the solver slides the vertex back to 0.3 mm and presses it in.
-            p = Vec3::new(0.0003, r - depth, 0.0);
+            // Each iteration the solver presses the vertex in, where the last one left it.
+            p -= Vec3::Y * depth;
             p = resolve_contact(&floor, p, previous, r, Friction::default(), &mut sums, dt).unwrap();
         }
         assert!((sums.pushed - 10.0 * depth).abs() < 1e-7 && p.abs_diff_eq(previous, 1e-7), "{p:?}");
