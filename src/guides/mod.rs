@@ -20,7 +20,7 @@ use serde::Deserialize;
 use crate::analysis::resample_groom;
 use crate::error::{Error, Result};
 use crate::groom::{Attribute, AttributeRate, Groom};
-use crate::interact::obstacles::{resolve_contact, Friction, Shape};
+use crate::interact::obstacles::{penetration, Shape};
 use crate::progress::Progress;
 use crate::sim::driver::carry_groom_water;
 use crate::sim::rod::transport_frames;
@@ -685,10 +685,9 @@ const STRAIGHT_IN: f32 = 0.1;
 
 /// A point of a strand of `radius` pushed out of every collider in turn, without friction.
 fn outside(mut p: Vec3, radius: f32, shapes: &[Shape]) -> Vec3 {
-    let still = Friction { static_friction: 0.0, dynamic_friction: 0.0 };
     for shape in shapes {
-        if let Some(q) = resolve_contact(shape, p, p, radius, still) {
-            p = q;
+        if let Some((depth, normal)) = penetration(shape, p, radius) {
+            p += normal * depth;
         }
     }
     p

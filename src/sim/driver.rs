@@ -10,7 +10,7 @@ use super::{Energy, SettleOptions, SettleReport, SimParams, Simulation};
 use crate::error::{Error, Result};
 use crate::groom::{AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
-use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape, Threaded};
+use crate::interact::obstacles::{ContactHooks, Friction, ObstacleCulling, Shape, StepContacts, Threaded};
 use crate::interact::wetness::{carry_water, WetnessParams, WETNESS};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -159,7 +159,7 @@ struct Stepper {
     offsets: Vec<u32>,
     radii: Vec<f32>,
     max_radius: f32,
-    previous: Vec<Vec3>,
+    contacts: StepContacts,
     culling: ObstacleCulling,
 }
 
@@ -182,7 +182,7 @@ impl Stepper {
             offsets: groom.strand_offsets.clone(),
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             radii,
-            previous: sim.rods.positions().to_vec(),
+            contacts: StepContacts::default(),
             culling: ObstacleCulling::default(),
             sim,
         }
@@ -197,12 +197,12 @@ impl Stepper {
             let accel = self.sim.external_acceleration_mut();
             accel.par_iter_mut().zip(dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
         }
-        self.previous.copy_from_slice(self.sim.rods.positions());
-        self.culling.update(&self.colliders, &self.offsets, &self.previous, self.max_radius);
+        self.contacts.start(self.sim.rods.positions(), self.sim.params().dt);
+        self.culling.update(&self.colliders, &self.offsets, self.contacts.previous(), self.max_radius);
         let hooks = ContactHooks {
             shapes: &self.colliders,
             culling: &self.culling,
-            previous: &self.previous,
+            contacts: &self.contacts,
             radii: &self.radii,
             friction: Friction::default(),
             threaded: &Threaded::default(),

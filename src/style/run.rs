@@ -22,7 +22,7 @@ use crate::groom::{Attribute, AttributeRate, Groom};
 use crate::interact::hair_contacts::HairContacts;
 use crate::interact::mesh_sdf::TriangleMesh;
 use crate::interact::obstacles::{
-    segment_distance, ContactHooks, Friction, ObstacleCulling, Shape, Threaded, Threading,
+    segment_distance, ContactHooks, Friction, ObstacleCulling, Shape, StepContacts, Threaded, Threading,
 };
 use crate::interact::water::{Droplets, WaterParams};
 use crate::interact::wetness::{self, WetnessParams};
@@ -448,7 +448,7 @@ struct Session {
     max_radius: f32,
     // Per-step scratch.
     culling: ObstacleCulling,
-    previous: Vec<Vec3>,
+    step_contacts: StepContacts,
     dv: Vec<Vec3>,
     /// Scratch: the vertices the next step leaves where they are (no contact forces needed).
     idle: Vec<bool>,
@@ -554,7 +554,7 @@ impl Session {
             friction,
             max_radius: radii.iter().copied().fold(0.0, f32::max),
             culling: ObstacleCulling::default(),
-            previous: vec![Vec3::ZERO; n],
+            step_contacts: StepContacts::default(),
             dv: vec![Vec3::ZERO; n],
             idle: Vec::new(),
             wind_dv: vec![0.0; n],
@@ -673,13 +673,18 @@ impl Session {
 
     /// The rod solver with the active obstacles' contacts.
     fn contact_step(&mut self) {
-        self.previous.copy_from_slice(self.sim.rods().positions());
-        self.culling.update(&self.active, &self.groom.strand_offsets, &self.previous, self.max_radius);
+        self.step_contacts.start(self.sim.rods().positions(), self.sim.params().dt);
+        self.culling.update(
+            &self.active,
+            &self.groom.strand_offsets,
+            self.step_contacts.previous(),
+            self.max_radius,
+        );
         self.threaded.advance(ROD_PLACING_SPEED * self.sim.params().dt);
         let hooks = ContactHooks {
             shapes: &self.active,
             culling: &self.culling,
-            previous: &self.previous,
+            contacts: &self.step_contacts,
             radii: &self.radii,
             friction: self.friction,
             threaded: &self.threaded,
