@@ -184,7 +184,8 @@ fn box_distance(q: Vec3, half: Vec3) -> (f32, Vec3) {
 }
 
 /// Coulomb friction for position-based contacts (Macklin et al. 2014), judged over the whole
-/// step rather than one solver iteration. Per contact (vertex and shape) the step keeps `pushed`,
+/// step rather than one solver iteration (with the direct solver; Gauss–Seidel keeps
+/// [`push_out_once`], see [`crate::sim::StrandSolver::judges_friction_over_the_step`]). Per contact (vertex and shape) the step keeps `pushed`,
 /// the contact's normal pushes summed over the step's iterations (the step's normal impulse
 /// × Δt / m), and the friction displacement already given ([`ContactSums`]). The slide the vertex
 /// would have made since the step's start without friction is held entirely (static) while it is
@@ -278,6 +279,25 @@ pub fn push_out(
     pushed - (sums.given - given)
 }
 
+/// Pushes `p` out as [`push_out`] does, with friction judged on this one push alone, the rule
+/// Gauss–Seidel keeps for now ([`crate::sim::StrandSolver::judges_friction_over_the_step`]):
+/// the vertex keeps still while its slide since the step's start is shorter than
+/// `static_friction · depth`, else the slide is shortened by `dynamic_friction · depth`.
+pub fn push_out_once(p: Vec3, (depth, normal): (f32, Vec3), previous: Vec3, friction: Friction) -> Vec3 {
+    let pushed = p + normal * depth;
+    let motion = pushed - previous;
+    let slide = motion - normal * motion.dot(normal);
+    let slide_length = slide.length();
+    let correction = if slide_length < friction.static_friction * depth {
+        slide
+    } else if slide_length > 0.0 {
+        slide * (friction.dynamic_friction * depth / slide_length).min(1.0)
+    } else {
+        Vec3::ZERO
+    };
+    pushed - correction
+}
+
 /// [`penetration`] then [`push_out`]: the corrected position, or `None` (and `sums` left) when
 /// the vertex does not touch `shape`.
 pub fn resolve_contact(
@@ -296,12 +316,15 @@ pub fn resolve_contact(
 /// slides from there), and per contact the sums [`Friction`] judges. A contact is a vertex and a
 /// shape; each vertex has [`Self::SLOTS`] contacts' room, claimed by shape in the order the
 /// vertex meets them this step. A vertex touching two or more shapes in one step is squeezed
-/// between them, and has them judged on each iteration's push alone ([`Self::find`]). Slots are written only by the task of the vertex's strand, so the result does not depend
-/// on the thread count.
+/// between them, and has them judged on each iteration's push alone ([`Self::find`]). Slots are
+/// written only by the task of the vertex's strand, so the result does not depend on the thread
+/// count.
 #[derive(Debug, Default)]
 pub struct StepContacts {
     previous: Vec<Vec3>,
     dt: f32,
+    /// Friction judged over the step; else on each push alone ([`push_out_once`]), no sums kept.
+    over_step: bool,
     /// Per vertex, `SLOTS` entries: the shape index or [`Self::FREE`].
     shapes: Vec<AtomicU32>,
     /// Per slot: `pushed` and `given`'s x, y, z, as f32 bits.
@@ -313,11 +336,16 @@ impl StepContacts {
     pub const SLOTS: usize = 2;
     const FREE: u32 = u32::MAX;
 
-    /// Starts a step of `dt` seconds from `positions`: no contact yet.
-    pub fn start(&mut self, positions: &[Vec3], dt: f32) {
+    /// Starts a step of `dt` seconds from `positions`: no contact yet. `over_step`: whether
+    /// friction is judged over the step ([`crate::sim::StrandSolver::judges_friction_over_the_step`]).
+    pub fn start(&mut self, positions: &[Vec3], dt: f32, over_step: bool) {
         self.previous.clear();
         self.previous.extend_from_slice(positions);
         self.dt = dt;
+        self.over_step = over_step;
+        if !over_step {
+            return;
+        }
         let slots = positions.len() * Self::SLOTS;
         self.shapes.resize_with(slots, || AtomicU32::new(Self::FREE));
         self.sums.resize_with(slots, Default::default);
@@ -371,15 +399,6 @@ impl StepContacts {
         for (b, v) in self.sums[slot].iter().zip(values) {
             b.store(v.to_bits(), Ordering::Relaxed);
         }
-    }
-
-    /// `vertex`'s normal pushes summed over this step's iterations and its contacts (kept ones).
-    pub fn pushed(&self, vertex: usize) -> f32 {
-        let first = vertex * Self::SLOTS;
-        (first..first + Self::SLOTS)
-            .filter(|&slot| self.shapes[slot].load(Ordering::Relaxed) != Self::FREE)
-            .map(|slot| self.load(slot).pushed)
-            .sum()
     }
 }
 
@@ -654,8 +673,12 @@ impl Hooks for ContactHooks<'_> {
                     continue;
                 }
                 if let Some(contact) = penetration(shape, *p, radius) {
-                    let (mut sums, place) = self.contacts.find(i, s);
                     let previous = self.contacts.previous[i];
+                    if !self.contacts.over_step {
+                        *p = push_out_once(*p, contact, previous, self.friction);
+                        continue;
+                    }
+                    let (mut sums, place) = self.contacts.find(i, s);
                     *p = push_out(*p, contact, previous, self.friction, &mut sums, self.contacts.dt);
                     self.contacts.keep(place, s, sums);
                 }

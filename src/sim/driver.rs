@@ -197,7 +197,12 @@ impl Stepper {
             let accel = self.sim.external_acceleration_mut();
             accel.par_iter_mut().zip(dv.par_iter()).for_each(|(a, &dv)| *a = dv / dt);
         }
-        self.contacts.start(self.sim.rods.positions(), self.sim.params().dt);
+        let params = self.sim.params();
+        self.contacts.start(
+            self.sim.rods.positions(),
+            params.dt,
+            params.solver.judges_friction_over_the_step(),
+        );
         self.culling.update(&self.colliders, &self.offsets, self.contacts.previous(), self.max_radius);
         let hooks = ContactHooks {
             shapes: &self.colliders,

@@ -673,7 +673,12 @@ impl Session {
 
     /// The rod solver with the active obstacles' contacts.
     fn contact_step(&mut self) {
-        self.step_contacts.start(self.sim.rods().positions(), self.sim.params().dt);
+        let params = self.sim.params();
+        self.step_contacts.start(
+            self.sim.rods().positions(),
+            params.dt,
+            params.solver.judges_friction_over_the_step(),
+        );
         self.culling.update(
             &self.active,
             &self.groom.strand_offsets,
