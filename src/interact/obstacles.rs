@@ -185,9 +185,10 @@ fn box_distance(q: Vec3, half: Vec3) -> (f32, Vec3) {
 
 /// Coulomb friction for position-based contacts (Macklin et al. 2014), judged over the whole
 /// step rather than one solver iteration (with the direct solver; Gauss–Seidel keeps
-/// [`push_out_once`], see [`crate::sim::StrandSolver::judges_friction_over_the_step`]). Per contact (vertex and shape) the step keeps `pushed`,
-/// the contact's normal pushes summed over the step's iterations (the step's normal impulse
-/// × Δt / m), and the friction displacement already given ([`ContactSums`]). The slide the vertex
+/// [`push_out_once`], see [`crate::sim::StrandSolver::judges_friction_over_the_step`]). Per
+/// contact (vertex and shape) the step keeps `pushed`, the contact's normal pushes summed over
+/// the step's iterations (the step's normal impulse × Δt / m), and the friction displacement
+/// already given ([`ContactSums`]). The slide the vertex
 /// would have made since the step's start without friction is held entirely (static) while it is
 /// shorter than `static_friction · pushed`; past that cone friction takes `μ · pushed` off it,
 /// where μ falls from `static_friction` to `dynamic_friction` as the slip past the cone speeds up

@@ -171,10 +171,10 @@ impl StrandSolver {
     /// Whether obstacle friction is judged on a contact's pushes summed over the step
     /// ([`crate::interact::obstacles::Friction`]) rather than on each iteration's push alone.
     /// The direct solve needs the sum: its later iterations push by almost nothing, and hair
-    /// lying on the head crept for ever. Gauss–Seidel keeps the one-iteration rule for now:
-    /// with the sum its full-head perm settles as fast (23.5 s against 24.9 s) but the guided
-    /// wavy children of `tests/guides.rs` read +5.1 % looser than their guides (bound 5 %, +4.7 %
-    /// with the one-iteration rule), a loosening issue 16 still has open.
+    /// lying on the head crept for ever. Gauss–Seidel keeps the one-iteration rule for now: with
+    /// the sum its full-head perm settles a little faster (23.5 s simulated against 24.9 s), but
+    /// the guided wavy children of `tests/guides.rs` read +5.1 % looser than their guides (bound
+    /// 5 %, +4.7 % with the one-iteration rule), a loosening issue 16 still has open.
     pub fn judges_friction_over_the_step(self) -> bool {
         self == StrandSolver::Direct
     }
