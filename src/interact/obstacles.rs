@@ -299,20 +299,6 @@ pub fn push_out_once(p: Vec3, (depth, normal): (f32, Vec3), previous: Vec3, fric
     pushed - correction
 }
 
-/// [`penetration`] then [`push_out`]: the corrected position, or `None` (and `sums` left) when
-/// the vertex does not touch `shape`.
-pub fn resolve_contact(
-    shape: &Shape,
-    p: Vec3,
-    previous: Vec3,
-    radius: f32,
-    friction: Friction,
-    sums: &mut ContactSums,
-    dt: f32,
-) -> Option<Vec3> {
-    penetration(shape, p, radius).map(|contact| push_out(p, contact, previous, friction, sums, dt))
-}
-
 /// What the obstacle contacts keep over one step: the positions at its start (friction measures
 /// slides from there), and per contact the sums [`Friction`] judges. A contact is a vertex and a
 /// shape; each vertex has [`Self::SLOTS`] contacts' room, claimed by shape in the order the
@@ -691,6 +677,20 @@ impl Hooks for ContactHooks<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`penetration`] then [`push_out`]: the corrected position, or `None` (and `sums` left) when
+    /// the vertex does not touch `shape`.
+    fn resolve_contact(
+        shape: &Shape,
+        p: Vec3,
+        previous: Vec3,
+        radius: f32,
+        friction: Friction,
+        sums: &mut ContactSums,
+        dt: f32,
+    ) -> Option<Vec3> {
+        penetration(shape, p, radius).map(|contact| push_out(p, contact, previous, friction, sums, dt))
+    }
 
     #[test]
     fn threaded_vertices_are_found_held_behind_their_floor_and_released() {

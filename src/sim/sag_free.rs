@@ -36,7 +36,7 @@ use crate::groom::{Attribute, AttributeRate, Groom, GroomError};
 pub const REST_DARBOUX: &str = "rest_darboux";
 
 /// The attribute that carries each strand's zero-stress rest curve (written by `write_to_groom`).
-pub const REST_CURVES: &str = "rest";
+pub use crate::io::usda::names::REST as REST_CURVES;
 
 /// How far, relative to its own length, a written rest curve's edge may be from the strand's for
 /// the curve to give the strand its rest lengths: a settled strand's edges are strained by
